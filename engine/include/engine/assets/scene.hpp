@@ -1,0 +1,54 @@
+#pragma once
+// A scene is an ECS registry plus the things a frame needs to find in it: the camera, the sun, and
+// named views (camera pose + light direction) that tests and the benchmark select by index.
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "engine/core/components.hpp"
+
+namespace engine {
+
+// Thrown by every loader: what() is one line naming the file (or scene) and the problem.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SceneView {
+  std::string name;
+  glm::vec3 eye{0.0f};
+  glm::vec3 target{0.0f, 0.0f, -1.0f};
+  glm::vec3 light_direction{-0.4f, -1.0f, -0.3f};  // direction light travels, normalised on use
+  float vertical_fov = glm::radians(60.0f);
+};
+
+struct Scene {
+  std::string name;
+  Registry registry;
+  Entity camera = kNullEntity;
+  Entity light = kNullEntity;
+  std::vector<SceneView> views;  // at least one
+
+  // Bounds of all meshes in world space (after update_world_transforms).
+  Aabb world_bounds();
+  // Moves the camera and turns the light to views[index]; throws SceneError when out of range.
+  void apply_view(size_t index);
+  size_t triangle_count();
+};
+
+// The procedural scenes built in code: "contact", "atrium", "foliage".
+std::vector<std::string> procedural_scene_names();
+std::unique_ptr<Scene> build_procedural_scene(const std::string& name);
+
+// Loads a .gltf or .glb file into a new scene. Cameras in the file become views; a file without
+// cameras gets two default views derived from its bounds (0: overview from above, 1: inside at eye
+// height) and a default sun.
+std::unique_ptr<Scene> load_gltf_scene(const std::filesystem::path& path);
+
+// A procedural scene name, or a path to a glTF file.
+std::unique_ptr<Scene> load_scene(const std::string& name_or_path);
+
+}  // namespace engine

@@ -1,0 +1,107 @@
+#pragma once
+// The components every part of the engine and its modules agree on.
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "engine/core/ecs.hpp"
+
+namespace engine {
+
+struct Name {
+  std::string value;
+};
+
+// Local transform relative to `parent` (or the world when parent is null). `world` is derived each
+// frame by the transform system; read it, do not write it.
+struct Transform {
+  glm::vec3 translation{0.0f};
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+  glm::vec3 scale{1.0f};
+  Entity parent = kNullEntity;
+  glm::mat4 world{1.0f};
+
+  glm::mat4 local_matrix() const;
+};
+
+struct Aabb {
+  glm::vec3 min{std::numeric_limits<float>::max()};
+  glm::vec3 max{-std::numeric_limits<float>::max()};
+  void extend(const glm::vec3& p) {
+    min = glm::min(min, p);
+    max = glm::max(max, p);
+  }
+  void extend(const Aabb& b) {
+    if (b.valid()) {
+      extend(b.min);
+      extend(b.max);
+    }
+  }
+  bool valid() const { return min.x <= max.x && min.y <= max.y && min.z <= max.z; }
+  glm::vec3 center() const { return (min + max) * 0.5f; }
+  glm::vec3 extent() const { return max - min; }
+  Aabb transformed(const glm::mat4& m) const;
+};
+
+struct Vertex {
+  glm::vec3 position;
+  glm::vec3 normal;
+  glm::vec2 uv;
+};
+static_assert(sizeof(Vertex) == 32);
+
+// CPU copy of a triangle mesh, kept after upload: the reference tracer, the automatic CSM choice and
+// the tests read it.
+struct MeshData {
+  std::string name;
+  std::vector<Vertex> vertices;
+  std::vector<uint32_t> indices;  // triangle list
+  Aabb bounds;
+  void compute_bounds();
+  size_t triangle_count() const { return indices.size() / 3; }
+};
+
+struct Mesh {
+  std::shared_ptr<const MeshData> data;
+  uint32_t gpu_mesh = UINT32_MAX;  // slot in the renderer's geometry buffers, assigned at upload
+};
+
+enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
+
+struct Material {
+  glm::vec4 base_color{0.8f, 0.8f, 0.8f, 1.0f};
+  AlphaMode alpha_mode = AlphaMode::Opaque;
+  float alpha_cutoff = 0.5f;
+};
+
+struct Camera {
+  float vertical_fov = glm::radians(60.0f);
+  float near_plane = 0.05f;
+  float far_plane = 200.0f;
+  // Derived each frame from the entity's world transform and the output aspect ratio.
+  glm::mat4 view{1.0f};
+  glm::mat4 projection{1.0f};
+};
+
+// A sun: light travels along `direction` (pointing from the light into the scene).
+struct DirectionalLight {
+  glm::vec3 direction{-0.4f, -1.0f, -0.3f};
+  glm::vec3 color{1.0f, 0.97f, 0.9f};
+  float intensity = 3.0f;
+};
+
+// Whether this mesh enters the conservative shadow map z-prepass.
+enum class CsmChoice : uint32_t { Off = 0, On = 1, Auto = 2 };
+
+struct ShadowCaster {
+  bool casts_shadow = true;
+  bool receives_shadow = true;
+  CsmChoice csm = CsmChoice::Auto;
+};
+
+}  // namespace engine

@@ -1,0 +1,58 @@
+// The geometric conventions every shadow technique and the Embree reference share, defined once.
+#ifndef SHADOW_COMMON_H
+#define SHADOW_COMMON_H
+#include "shared_prelude.h"
+
+SHARED_BEGIN
+
+// World-space distance a shadow ray's origin is pushed off its surface along the geometric normal
+// (the side facing the camera). It hides depth-reconstruction error; every technique and the reference
+// start their rays at shadow_ray_origin() and count any hit with t > 0 as an occluder.
+SHARED_CONST float kShadowNormalOffset = 2.0e-3f;
+
+SHARED_INLINE vec3 shadow_ray_origin(SHARED_IN(vec3) position, SHARED_IN(vec3) geometric_normal) {
+  return position + geometric_normal * kShadowNormalOffset;
+}
+
+// 32 sample offsets inside a pixel, in [0,1)^2, for the 32-samples-per-pixel mode: a jittered 8x4 grid
+// (one sample per cell, fixed jitter) so coverage is well stratified.
+SHARED_CONST uint kSamplesPerPixel = 32u;
+#ifdef __cplusplus
+inline constexpr vec2 kSamplePattern[32] = {
+#else
+const vec2 kSamplePattern[32] = vec2[32](
+#endif
+    vec2(0.0703f, 0.1641f), vec2(0.1797f, 0.0391f), vec2(0.3047f, 0.2109f), vec2(0.4297f, 0.0859f),
+    vec2(0.5547f, 0.1953f), vec2(0.6797f, 0.0547f), vec2(0.8047f, 0.2266f), vec2(0.9297f, 0.1016f),
+    vec2(0.0234f, 0.3359f), vec2(0.1641f, 0.4609f), vec2(0.2891f, 0.3203f), vec2(0.4141f, 0.4766f),
+    vec2(0.5391f, 0.3516f), vec2(0.6641f, 0.4453f), vec2(0.7891f, 0.2891f), vec2(0.9141f, 0.4141f),
+    vec2(0.1016f, 0.5859f), vec2(0.2266f, 0.7109f), vec2(0.3516f, 0.5547f), vec2(0.4766f, 0.6797f),
+    vec2(0.6016f, 0.5391f), vec2(0.7266f, 0.6641f), vec2(0.8516f, 0.5703f), vec2(0.9766f, 0.7266f),
+    vec2(0.0547f, 0.8203f), vec2(0.1953f, 0.9453f), vec2(0.3203f, 0.7891f), vec2(0.4453f, 0.9141f),
+    vec2(0.5703f, 0.8047f), vec2(0.6953f, 0.9297f), vec2(0.8203f, 0.7734f), vec2(0.9453f, 0.8984f)
+#ifdef __cplusplus
+};
+#else
+);
+#endif
+
+// The μQuad: sample `sample_offset` of pixel `pixel` is where the camera ray through that sub-pixel
+// position meets the tangent plane of the pixel's shading point. `inv_view_proj` maps NDC (Vulkan,
+// y down, depth in [0,1]) to world; `viewport` is the render size in pixels.
+SHARED_INLINE vec3 micro_quad_sample(SHARED_IN(vec2) pixel, SHARED_IN(vec2) sample_offset,
+                                     SHARED_IN(vec2) viewport, SHARED_IN(mat4) inv_view_proj,
+                                     SHARED_IN(vec3) plane_point, SHARED_IN(vec3) plane_normal) {
+  vec2 ndc = ((pixel + sample_offset) / viewport) * 2.0f - 1.0f;
+  vec4 near_h = inv_view_proj * vec4(ndc.x, ndc.y, 1.0f, 1.0f);  // reversed depth: 1 is near
+  vec4 far_h = inv_view_proj * vec4(ndc.x, ndc.y, 0.5f, 1.0f);
+  vec3 ray_origin = vec3(near_h) / near_h.w;
+  vec3 ray_dir = vec3(far_h) / far_h.w - ray_origin;
+  float denom = dot(plane_normal, ray_dir);
+  // A plane seen edge-on: keep the shading point rather than shoot to infinity.
+  if (abs(denom) < 1.0e-12f) return plane_point;
+  float t = dot(plane_normal, plane_point - ray_origin) / denom;
+  return ray_origin + ray_dir * t;
+}
+
+SHARED_END
+#endif
