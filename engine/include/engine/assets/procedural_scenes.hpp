@@ -1,6 +1,9 @@
 #pragma once
-// Dimensions of the procedural scenes, shared with the tests that check analytic answers.
+// Dimensions of the procedural scenes, shared with the tests that check analytic answers, and the
+// small mesh builders the scenes are made of.
 #include <glm/glm.hpp>
+
+#include "engine/core/components.hpp"
 
 namespace engine::procedural {
 // `contact`: a ground plane at y = 0 with objects standing on it; light from above, slightly slanted.
@@ -15,5 +18,48 @@ inline constexpr glm::vec3 kSphereCenter{3.0f, 1.0f, 2.5f};
 inline constexpr float kSphereRadius = 1.0f;
 inline constexpr glm::vec3 kPlateCenter{-2.5f, 1.5f, -3.0f};  // floating plate 2 x 0.1 x 2
 inline constexpr glm::vec3 kPlateHalfExtent{1.0f, 0.05f, 1.0f};
+inline constexpr glm::vec3 kLightDirection{-0.35f, -1.0f, -0.25f};  // views 0 and 2 (normalised on use)
 }  // namespace contact
+
+// `atrium`: a walled courtyard with galleries along x = +-kColonnadeX and a roof at kWallHeight with
+// two openings, so the floor gets a few sunlit patches and is shadowed elsewhere.
+namespace atrium {
+inline constexpr float kHalfSize = 8.0f;        // inner floor spans [-8,8] in x and z, top at y = 0
+inline constexpr float kWallThickness = 0.4f;   // walls stand outside the floor square
+inline constexpr float kWallHeight = 8.0f;      // roof slabs span y in [8, 8.3]
+inline constexpr float kRoofThickness = 0.3f;
+inline constexpr float kColonnadeX = 5.0f;      // columns at x = +-5, z = -6, -3, 0, 3, 6
+inline constexpr float kColumnRadius = 0.3f;
+inline constexpr float kColumnHeight = 4.0f;
+// The two roof openings: x in [-4,4], z in [-4.5,-2] and [2,4.5].
+inline constexpr float kOpeningHalfX = 4.0f;
+inline constexpr float kOpeningInnerZ = 2.0f;
+inline constexpr float kOpeningOuterZ = 4.5f;
+inline constexpr glm::vec3 kLightDirection{-0.3f, -1.0f, -0.2f};
+}  // namespace atrium
+
+// `foliage`: a ground plane and a field of small plants made of thin branches and leaf cards.
+namespace foliage {
+inline constexpr float kGroundHalfSize = 15.0f;
+inline constexpr int kPlantCount = 30;
+inline constexpr unsigned kSeed = 0x5eed1e5u;
+inline constexpr glm::vec3 kLightDirection{-0.4f, -1.0f, -0.3f};
+}  // namespace foliage
+
+// Mesh builders. All produce outward normals and counter-clockwise front faces seen from outside
+// (right-handed, +Y up), so back-face culling and shadow biasing behave the same for every shape.
+
+// Axis-aligned box: 24 vertices (flat normals), 12 triangles.
+MeshData make_box(const glm::vec3& half_extent, const glm::vec3& center = glm::vec3(0.0f));
+// Planar grid spanning center +- u +- v, facing normalize(cross(u, v)); 2 * subdivisions^2 triangles.
+MeshData make_quad(const glm::vec3& center, const glm::vec3& u, const glm::vec3& v, int subdivisions = 1);
+// Horizontal plane at height y facing +Y, spanning [-half_x, half_x] x [-half_z, half_z].
+MeshData make_ground(float half_x, float half_z, float y = 0.0f, int subdivisions = 1);
+// Cylinder from `base` to `top` (any direction), smooth sides, optional flat caps.
+MeshData make_cylinder(const glm::vec3& base, const glm::vec3& top, float radius, int segments, bool caps = true);
+MeshData make_uv_sphere(const glm::vec3& center, float radius, int slices, int stacks);
+// A quad emitted twice (front and back with opposite winding and normals) so culling never drops it.
+MeshData make_double_sided_quad(const glm::vec3& center, const glm::vec3& u, const glm::vec3& v);
+// Appends `src` transformed by `transform` (normals by its inverse transpose) to `dst`.
+void append_mesh(MeshData& dst, const MeshData& src, const glm::mat4& transform = glm::mat4(1.0f));
 }  // namespace engine::procedural

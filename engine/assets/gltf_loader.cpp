@@ -1,0 +1,585 @@
+// glTF 2.0 (.gltf / .glb) into a Scene. tinygltf parses; everything it leaves unchecked (ranges,
+// component types, index bounds, finite values) is validated here so a bad file produces one
+// SceneError line instead of undefined behaviour later in the renderer.
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <map>
+#include <sstream>
+
+#include <glm/gtc/constants.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "engine/assets/scene.hpp"
+#include "engine/core/transform_system.hpp"
+
+namespace engine {
+
+namespace {
+
+// tinygltf messages span several lines; what() must stay on one.
+std::string one_line(const std::string& text) {
+  std::string out;
+  bool pending_separator = false;
+  for (char c : text) {
+    if (c == '\n' || c == '\r') {
+      pending_separator = !out.empty();
+      continue;
+    }
+    if (pending_separator) {
+      while (!out.empty() && (out.back() == ' ' || out.back() == '\t')) out.pop_back();
+      if (!out.empty() && out.back() != ';' && out.back() != '.') out += ';';
+      out += ' ';
+      pending_separator = false;
+    }
+    out += c;
+  }
+  while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
+  return out;
+}
+
+class Loader {
+ public:
+  explicit Loader(const std::filesystem::path& path) : path_(path), file_(path.string()) {}
+
+  std::unique_ptr<Scene> load();
+
+ private:
+  [[noreturn]] void fail(const std::string& problem) const { throw SceneError(file_ + ": " + one_line(problem)); }
+
+  void parse();
+  struct AccessorSpan {
+    const unsigned char* data = nullptr;
+    size_t count = 0;
+    size_t stride = 0;
+    int component_type = 0;
+    int components = 0;
+    bool normalized = false;
+  };
+  AccessorSpan resolve_accessor(int index, const std::string& what) const;
+  std::vector<glm::vec3> read_vec3(int accessor, const std::string& what) const;
+  std::vector<glm::vec2> read_texcoords(int accessor, const std::string& what) const;
+  std::vector<uint32_t> read_indices(int accessor, const std::string& what) const;
+  std::shared_ptr<const MeshData> build_primitive(int mesh_index, int primitive_index);
+  Transform node_transform(const tinygltf::Node& node, int node_index) const;
+  Material material_for(int material_index, const std::string& what) const;
+  void add_nodes(Scene& scene);
+  void add_views(Scene& scene);
+
+  std::filesystem::path path_;
+  std::string file_;
+  tinygltf::Model model_;
+  std::map<std::pair<int, int>, std::shared_ptr<const MeshData>> primitive_cache_;
+  std::vector<std::pair<Entity, int>> camera_nodes_;  // node entity, camera index
+  size_t skipped_primitives_ = 0;
+  size_t skipped_cameras_ = 0;
+};
+
+// Textures are not used by the engine; skipping their decode keeps loading fast and lets files whose
+// images are missing or in unusual formats still load.
+bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                  void*) {
+  return true;
+}
+
+void Loader::parse() {
+  std::error_code ec;
+  if (!std::filesystem::exists(path_, ec)) fail("file not found");
+  if (!std::filesystem::is_regular_file(path_, ec)) fail("not a regular file");
+  std::ifstream in(path_, std::ios::binary);
+  if (!in) fail("cannot open file");
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.empty()) fail("file is empty");
+  if (bytes.size() > UINT32_MAX) fail("file is larger than 4 GiB");
+
+  tinygltf::TinyGLTF gltf;
+  gltf.SetImageLoader(ignore_image, nullptr);
+  std::string err, warn;
+  const std::string base_dir = path_.parent_path().string();
+  const bool is_binary = bytes.compare(0, 4, "glTF") == 0;
+  bool ok = false;
+  try {
+    if (is_binary) {
+      ok = gltf.LoadBinaryFromMemory(&model_, &err, &warn, reinterpret_cast<const unsigned char*>(bytes.data()),
+                                     static_cast<unsigned int>(bytes.size()), base_dir);
+    } else {
+      ok = gltf.LoadASCIIFromString(&model_, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()),
+                                    base_dir);
+    }
+  } catch (const std::exception& e) {
+    fail(std::string("parse error: ") + e.what());
+  }
+  if (!ok) fail(err.empty() ? std::string("not a valid glTF file") : err);
+  if (!warn.empty()) std::cerr << file_ << ": warning: " << one_line(warn) << "\n";
+}
+
+Loader::AccessorSpan Loader::resolve_accessor(int index, const std::string& what) const {
+  const std::string label = what + " accessor " + std::to_string(index);
+  if (index < 0 || size_t(index) >= model_.accessors.size()) {
+    fail(label + " out of range (" + std::to_string(model_.accessors.size()) + " accessors)");
+  }
+  const tinygltf::Accessor& acc = model_.accessors[size_t(index)];
+  if (acc.sparse.isSparse) fail(label + " is sparse, which is not supported");
+  if (acc.bufferView < 0 || size_t(acc.bufferView) >= model_.bufferViews.size()) {
+    fail(label + " refers to bufferView " + std::to_string(acc.bufferView) + " out of range (" +
+         std::to_string(model_.bufferViews.size()) + " bufferViews)");
+  }
+  const tinygltf::BufferView& view = model_.bufferViews[size_t(acc.bufferView)];
+  const std::string view_label = "bufferView " + std::to_string(acc.bufferView);
+  if (view.buffer < 0 || size_t(view.buffer) >= model_.buffers.size()) {
+    fail(view_label + " refers to buffer " + std::to_string(view.buffer) + " out of range");
+  }
+  const tinygltf::Buffer& buffer = model_.buffers[size_t(view.buffer)];
+  if (view.byteOffset > buffer.data.size() || view.byteLength > buffer.data.size() - view.byteOffset) {
+    fail(view_label + " (offset " + std::to_string(view.byteOffset) + ", length " +
+         std::to_string(view.byteLength) + ") exceeds buffer " + std::to_string(view.buffer) + " of " +
+         std::to_string(buffer.data.size()) + " bytes");
+  }
+  const int component_size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(acc.componentType));
+  const int components = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type));
+  if (component_size <= 0) fail(label + " has invalid componentType " + std::to_string(acc.componentType));
+  if (components <= 0) fail(label + " has invalid type " + std::to_string(acc.type));
+  const size_t element = size_t(component_size) * size_t(components);
+  const size_t stride = view.byteStride ? view.byteStride : element;
+  if (stride < element) fail(view_label + " byteStride " + std::to_string(stride) + " is smaller than an element");
+
+  AccessorSpan span;
+  span.count = acc.count;
+  span.stride = stride;
+  span.component_type = acc.componentType;
+  span.components = components;
+  span.normalized = acc.normalized;
+  if (acc.count > 0) {
+    // Overflow-safe form of: offset + (count - 1) * stride + element <= length.
+    const size_t length = view.byteLength;
+    const bool fits = acc.byteOffset <= length && element <= length - acc.byteOffset &&
+                      (acc.count - 1) <= (length - acc.byteOffset - element) / stride;
+    if (!fits) {
+      fail(label + " (" + std::to_string(acc.count) + " elements at offset " + std::to_string(acc.byteOffset) +
+           ") reads past the end of " + view_label + " (" + std::to_string(length) + " bytes)");
+    }
+    span.data = buffer.data.data() + view.byteOffset + acc.byteOffset;
+  }
+  return span;
+}
+
+std::vector<glm::vec3> Loader::read_vec3(int accessor, const std::string& what) const {
+  const AccessorSpan s = resolve_accessor(accessor, what);
+  if (s.components != 3 || s.component_type != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+    fail(what + " accessor " + std::to_string(accessor) + " must be VEC3 of FLOAT (componentType " +
+         std::to_string(s.component_type) + ", " + std::to_string(s.components) + " components)");
+  }
+  std::vector<glm::vec3> out(s.count);
+  for (size_t i = 0; i < s.count; ++i) {
+    std::memcpy(&out[i], s.data + i * s.stride, sizeof(glm::vec3));  // glTF data need not be aligned
+    if (!std::isfinite(out[i].x) || !std::isfinite(out[i].y) || !std::isfinite(out[i].z)) {
+      fail(what + " accessor " + std::to_string(accessor) + " has a non-finite value at element " +
+           std::to_string(i));
+    }
+  }
+  return out;
+}
+
+std::vector<glm::vec2> Loader::read_texcoords(int accessor, const std::string& what) const {
+  const AccessorSpan s = resolve_accessor(accessor, what);
+  const bool is_float = s.component_type == TINYGLTF_COMPONENT_TYPE_FLOAT;
+  const bool is_unorm = s.normalized && (s.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                         s.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT);
+  if (s.components != 2 || !(is_float || is_unorm)) {
+    fail(what + " accessor " + std::to_string(accessor) +
+         " must be VEC2 of FLOAT or normalized UNSIGNED_BYTE/UNSIGNED_SHORT");
+  }
+  std::vector<glm::vec2> out(s.count);
+  for (size_t i = 0; i < s.count; ++i) {
+    const unsigned char* p = s.data + i * s.stride;
+    if (is_float) {
+      std::memcpy(&out[i], p, sizeof(glm::vec2));
+      if (!std::isfinite(out[i].x) || !std::isfinite(out[i].y)) {
+        fail(what + " accessor " + std::to_string(accessor) + " has a non-finite value at element " +
+             std::to_string(i));
+      }
+    } else if (s.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+      out[i] = glm::vec2(p[0], p[1]) / 255.0f;
+    } else {
+      uint16_t v[2];
+      std::memcpy(v, p, sizeof(v));
+      out[i] = glm::vec2(v[0], v[1]) / 65535.0f;
+    }
+  }
+  return out;
+}
+
+std::vector<uint32_t> Loader::read_indices(int accessor, const std::string& what) const {
+  const AccessorSpan s = resolve_accessor(accessor, what);
+  if (s.components != 1) fail(what + " accessor " + std::to_string(accessor) + " must be SCALAR");
+  std::vector<uint32_t> out(s.count);
+  for (size_t i = 0; i < s.count; ++i) {
+    const unsigned char* p = s.data + i * s.stride;
+    switch (s.component_type) {
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        out[i] = p[0];
+        break;
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        uint16_t v;
+        std::memcpy(&v, p, sizeof(v));
+        out[i] = v;
+        break;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+        std::memcpy(&out[i], p, sizeof(uint32_t));
+        break;
+      default:
+        fail(what + " accessor " + std::to_string(accessor) + " has componentType " +
+             std::to_string(s.component_type) + "; indices must be UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT");
+    }
+  }
+  return out;
+}
+
+std::shared_ptr<const MeshData> Loader::build_primitive(int mesh_index, int primitive_index) {
+  const auto key = std::make_pair(mesh_index, primitive_index);
+  if (auto it = primitive_cache_.find(key); it != primitive_cache_.end()) return it->second;
+
+  const tinygltf::Mesh& mesh = model_.meshes[size_t(mesh_index)];
+  const tinygltf::Primitive& prim = mesh.primitives[size_t(primitive_index)];
+  const std::string label = "mesh " + std::to_string(mesh_index) + " primitive " + std::to_string(primitive_index);
+
+  const auto attribute = [&](const char* name) {
+    const auto it = prim.attributes.find(name);
+    return it == prim.attributes.end() ? -1 : it->second;
+  };
+  const int position_accessor = attribute("POSITION");
+  if (position_accessor < 0) fail(label + " has no POSITION attribute");
+  const std::vector<glm::vec3> positions = read_vec3(position_accessor, label + " POSITION");
+  const size_t vertex_count = positions.size();
+
+  std::vector<glm::vec3> normals;
+  if (const int a = attribute("NORMAL"); a >= 0) {
+    normals = read_vec3(a, label + " NORMAL");
+    if (normals.size() != vertex_count) {
+      fail(label + " NORMAL has " + std::to_string(normals.size()) + " elements, POSITION has " +
+           std::to_string(vertex_count));
+    }
+  }
+  std::vector<glm::vec2> uvs;
+  if (const int a = attribute("TEXCOORD_0"); a >= 0) {
+    uvs = read_texcoords(a, label + " TEXCOORD_0");
+    if (uvs.size() != vertex_count) {
+      fail(label + " TEXCOORD_0 has " + std::to_string(uvs.size()) + " elements, POSITION has " +
+           std::to_string(vertex_count));
+    }
+  }
+
+  std::vector<uint32_t> indices;
+  if (prim.indices >= 0) {
+    indices = read_indices(prim.indices, label + " indices");
+    for (size_t i = 0; i < indices.size(); ++i) {
+      if (indices[i] >= vertex_count) {
+        fail(label + " index " + std::to_string(indices[i]) + " at position " + std::to_string(i) +
+             " is out of range (" + std::to_string(vertex_count) + " vertices)");
+      }
+    }
+  } else {
+    if (vertex_count > UINT32_MAX) fail(label + " has too many vertices");
+    indices.resize(vertex_count);
+    for (size_t i = 0; i < vertex_count; ++i) indices[i] = uint32_t(i);
+  }
+  if (indices.size() % 3 != 0) {
+    fail(label + " has " + std::to_string(indices.size()) + " indices, not a multiple of 3");
+  }
+
+  auto data = std::make_shared<MeshData>();
+  data->name = mesh.name.empty() ? "mesh_" + std::to_string(mesh_index) : mesh.name;
+  if (mesh.primitives.size() > 1) data->name += "_" + std::to_string(primitive_index);
+  if (!normals.empty()) {
+    data->vertices.resize(vertex_count);
+    for (size_t i = 0; i < vertex_count; ++i) {
+      const float len = glm::length(normals[i]);
+      data->vertices[i] = {positions[i], len > 0.0f ? normals[i] / len : glm::vec3(0.0f, 1.0f, 0.0f),
+                           uvs.empty() ? glm::vec2(0.0f) : uvs[i]};
+    }
+    data->indices = std::move(indices);
+  } else {
+    // The glTF spec asks for flat normals when none are given, so every triangle gets its own corners.
+    data->vertices.reserve(indices.size());
+    data->indices.reserve(indices.size());
+    for (size_t t = 0; t < indices.size(); t += 3) {
+      const glm::vec3 a = positions[indices[t]], b = positions[indices[t + 1]], c = positions[indices[t + 2]];
+      glm::vec3 n = glm::cross(b - a, c - a);
+      const float len = glm::length(n);
+      n = (len > 0.0f && std::isfinite(len)) ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t src = indices[t + size_t(k)];
+        data->indices.push_back(uint32_t(data->vertices.size()));
+        data->vertices.push_back({positions[src], n, uvs.empty() ? glm::vec2(0.0f) : uvs[src]});
+      }
+    }
+  }
+  data->compute_bounds();
+  std::shared_ptr<const MeshData> result = std::move(data);
+  primitive_cache_[key] = result;
+  return result;
+}
+
+Transform Loader::node_transform(const tinygltf::Node& node, int node_index) const {
+  const std::string label = "node " + std::to_string(node_index);
+  const auto all_finite = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double d) { return std::isfinite(d); });
+  };
+  Transform t;
+  if (!node.matrix.empty()) {
+    if (node.matrix.size() != 16 || !all_finite(node.matrix)) fail(label + " has an invalid matrix");
+    glm::mat4 m;
+    for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = float(node.matrix[size_t(i)]);  // both column-major
+    // Decompose into T * R * S (shear is not representable and is dropped).
+    t.translation = glm::vec3(m[3]);
+    glm::vec3 axes[3] = {glm::vec3(m[0]), glm::vec3(m[1]), glm::vec3(m[2])};
+    glm::vec3 scale{glm::length(axes[0]), glm::length(axes[1]), glm::length(axes[2])};
+    if (scale.x <= 0.0f || scale.y <= 0.0f || scale.z <= 0.0f) {
+      // A collapsed axis has no direction; keep the scale and leave the rotation as identity.
+      t.scale = scale;
+      return t;
+    }
+    for (int i = 0; i < 3; ++i) axes[i] /= scale[i];
+    if (glm::dot(glm::cross(axes[0], axes[1]), axes[2]) < 0.0f) {  // mirrored: fold into a negative scale
+      scale.x = -scale.x;
+      axes[0] = -axes[0];
+    }
+    t.rotation = glm::normalize(glm::quat_cast(glm::mat3(axes[0], axes[1], axes[2])));
+    t.scale = scale;
+    return t;
+  }
+  if (!all_finite(node.translation) || !all_finite(node.rotation) || !all_finite(node.scale)) {
+    fail(label + " has a non-finite transform");
+  }
+  if (!node.translation.empty()) {
+    if (node.translation.size() != 3) fail(label + " translation must have 3 values");
+    t.translation = glm::vec3(float(node.translation[0]), float(node.translation[1]), float(node.translation[2]));
+  }
+  if (!node.rotation.empty()) {
+    if (node.rotation.size() != 4) fail(label + " rotation must have 4 values");
+    // glTF stores quaternions as x, y, z, w; glm's constructor takes w first.
+    const glm::quat q(float(node.rotation[3]), float(node.rotation[0]), float(node.rotation[1]),
+                      float(node.rotation[2]));
+    if (glm::length(q) <= 0.0f) fail(label + " rotation is a zero quaternion");
+    t.rotation = glm::normalize(q);
+  }
+  if (!node.scale.empty()) {
+    if (node.scale.size() != 3) fail(label + " scale must have 3 values");
+    t.scale = glm::vec3(float(node.scale[0]), float(node.scale[1]), float(node.scale[2]));
+  }
+  return t;
+}
+
+Material Loader::material_for(int material_index, const std::string& what) const {
+  Material out;
+  if (material_index < 0) return out;
+  if (size_t(material_index) >= model_.materials.size()) {
+    fail(what + " material " + std::to_string(material_index) + " out of range (" +
+         std::to_string(model_.materials.size()) + " materials)");
+  }
+  const tinygltf::Material& m = model_.materials[size_t(material_index)];
+  const std::vector<double>& c = m.pbrMetallicRoughness.baseColorFactor;
+  if (c.size() == 4) {
+    if (!std::all_of(c.begin(), c.end(), [](double d) { return std::isfinite(d); })) {
+      fail("material " + std::to_string(material_index) + " has a non-finite baseColorFactor");
+    }
+    out.base_color = glm::clamp(glm::vec4(float(c[0]), float(c[1]), float(c[2]), float(c[3])), 0.0f, 1.0f);
+  }
+  if (m.alphaMode == "MASK") {
+    out.alpha_mode = AlphaMode::Mask;
+  } else if (m.alphaMode == "BLEND") {
+    out.alpha_mode = AlphaMode::Blend;
+  } else if (m.alphaMode == "OPAQUE" || m.alphaMode.empty()) {
+    out.alpha_mode = AlphaMode::Opaque;
+  } else {
+    fail("material " + std::to_string(material_index) + " has unknown alphaMode '" + m.alphaMode + "'");
+  }
+  if (!std::isfinite(m.alphaCutoff) || m.alphaCutoff < 0.0) {
+    fail("material " + std::to_string(material_index) + " has an invalid alphaCutoff");
+  }
+  out.alpha_cutoff = float(m.alphaCutoff);
+  return out;
+}
+
+void Loader::add_nodes(Scene& scene) {
+  Registry& r = scene.registry;
+  const size_t node_count = model_.nodes.size();
+
+  std::vector<int> roots;
+  if (!model_.scenes.empty()) {
+    const int scene_index = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+    if (size_t(scene_index) >= model_.scenes.size()) fail("default scene " + std::to_string(scene_index) + " out of range");
+    roots = model_.scenes[size_t(scene_index)].nodes;
+  } else {
+    // Without a scene list every node that is nobody's child is a root.
+    std::vector<bool> is_child(node_count, false);
+    for (const tinygltf::Node& n : model_.nodes) {
+      for (int c : n.children) {
+        if (c >= 0 && size_t(c) < node_count) is_child[size_t(c)] = true;
+      }
+    }
+    for (size_t i = 0; i < node_count; ++i) {
+      if (!is_child[i]) roots.push_back(int(i));
+    }
+  }
+
+  std::vector<bool> visited(node_count, false);
+  std::vector<std::pair<int, Entity>> stack;  // node index, parent entity
+  for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.push_back({*it, kNullEntity});
+  while (!stack.empty()) {
+    const auto [node_index, parent] = stack.back();
+    stack.pop_back();
+    if (node_index < 0 || size_t(node_index) >= node_count) {
+      fail("node " + std::to_string(node_index) + " out of range (" + std::to_string(node_count) + " nodes)");
+    }
+    // glTF node graphs must be forests; a second visit means a cycle or a shared child.
+    if (visited[size_t(node_index)]) fail("node " + std::to_string(node_index) + " is reachable more than once");
+    visited[size_t(node_index)] = true;
+    const tinygltf::Node& node = model_.nodes[size_t(node_index)];
+
+    const Entity e = r.create();
+    const std::string node_name = node.name.empty() ? "node_" + std::to_string(node_index) : node.name;
+    r.emplace<Name>(e, Name{node_name});
+    Transform t = node_transform(node, node_index);
+    t.parent = parent;
+    r.emplace<Transform>(e, t);
+
+    if (node.mesh >= 0) {
+      if (size_t(node.mesh) >= model_.meshes.size()) {
+        fail("node " + std::to_string(node_index) + " mesh " + std::to_string(node.mesh) + " out of range (" +
+             std::to_string(model_.meshes.size()) + " meshes)");
+      }
+      const tinygltf::Mesh& mesh = model_.meshes[size_t(node.mesh)];
+      std::vector<std::pair<int, std::shared_ptr<const MeshData>>> parts;
+      for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+        const int mode = mesh.primitives[p].mode;
+        if (mode != -1 && mode != TINYGLTF_MODE_TRIANGLES) {
+          ++skipped_primitives_;
+          continue;
+        }
+        auto data = build_primitive(node.mesh, int(p));
+        if (data->triangle_count() > 0) parts.push_back({int(p), std::move(data)});
+      }
+      // One primitive lives on the node itself; several become children so each keeps its material.
+      for (auto& [p, data] : parts) {
+        Entity target = e;
+        if (parts.size() > 1) {
+          target = r.create();
+          r.emplace<Name>(target, Name{node_name + "_" + std::to_string(p)});
+          Transform child;
+          child.parent = e;
+          r.emplace<Transform>(target, child);
+        }
+        const Material material = material_for(mesh.primitives[size_t(p)].material,
+                                               "mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(p));
+        r.emplace<Mesh>(target, Mesh{std::move(data)});
+        r.emplace<Material>(target, material);
+        r.emplace<ShadowCaster>(target);
+      }
+    }
+    if (node.camera >= 0) {
+      if (size_t(node.camera) >= model_.cameras.size()) {
+        fail("node " + std::to_string(node_index) + " camera " + std::to_string(node.camera) + " out of range");
+      }
+      if (model_.cameras[size_t(node.camera)].type == "perspective") {
+        camera_nodes_.push_back({e, node.camera});
+      } else {
+        ++skipped_cameras_;
+      }
+    }
+    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.push_back({*c, e});
+  }
+}
+
+// Default framing when the file brings no camera:
+//  - near = diag * 1e-3, far = diag * 3, diag = length of the world bounds' extent; the farthest
+//    point seen from the overview eye is about 1.9 diag away.
+//  - view 0 "overview": looks at the bounds' center from the direction normalize(0.6, 0.75, 0.8)
+//    (above, outside, both horizontal axes), far enough that the bounding sphere fits the 60 degree
+//    vertical field of view with 5 % margin.
+//  - view 1 "inside": eye at min.y + 0.12 * extent.y above the center, backed off a quarter of the
+//    extent along the longest horizontal axis and looking along it at the same height.
+//  - sun for both: normalize(-0.3, -1, -0.2), steep enough to reach the floor of an enclosed atrium.
+constexpr float kDefaultFov = glm::radians(60.0f);
+constexpr glm::vec3 kDefaultSun{-0.3f, -1.0f, -0.2f};
+
+void Loader::add_views(Scene& scene) {
+  const Aabb bounds = scene.world_bounds();
+  if (!bounds.valid()) fail("contains no triangle geometry");
+  const glm::vec3 center = bounds.center();
+  const glm::vec3 ext = bounds.extent();
+  const float diag = std::max(glm::length(ext), 1e-3f);
+
+  Registry& r = scene.registry;
+  scene.camera = r.create();
+  r.emplace<Name>(scene.camera, Name{"camera"});
+  r.emplace<Transform>(scene.camera);
+  Camera cam;
+  cam.near_plane = diag * 1e-3f;
+  cam.far_plane = diag * 3.0f;
+  r.emplace<Camera>(scene.camera, cam);
+  scene.light = r.create();
+  r.emplace<Name>(scene.light, Name{"sun"});
+  r.emplace<DirectionalLight>(scene.light);
+
+  for (const auto& [node_entity, camera_index] : camera_nodes_) {
+    const tinygltf::Camera& c = model_.cameras[size_t(camera_index)];
+    const glm::mat4& world = r.get<Transform>(node_entity).world;
+    const glm::vec3 eye{world[3]};
+    glm::vec3 forward = -glm::vec3(world[2]);  // glTF cameras look down their local -Z
+    const float len = glm::length(forward);
+    forward = len > 0.0f ? forward / len : glm::vec3(0.0f, 0.0f, -1.0f);
+    SceneView view;
+    view.name = !c.name.empty() ? c.name : r.get<Name>(node_entity).value;
+    view.eye = eye;
+    view.target = eye + forward * (0.5f * diag);  // camera roll is not kept: views are eye + target
+    view.light_direction = kDefaultSun;
+    const double yfov = c.perspective.yfov;
+    view.vertical_fov = (std::isfinite(yfov) && yfov > 1e-3 && yfov < glm::pi<double>()) ? float(yfov) : kDefaultFov;
+    scene.views.push_back(view);
+  }
+
+  if (scene.views.empty()) {
+    const float radius = 0.5f * diag;
+    const float distance = 1.05f * radius / std::sin(0.5f * kDefaultFov);
+    const glm::vec3 direction = glm::normalize(glm::vec3(0.6f, 0.75f, 0.8f));
+    scene.views.push_back({"overview", center + direction * distance, center, kDefaultSun, kDefaultFov});
+
+    const glm::vec3 axis = ext.x >= ext.z ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 0.0f, 1.0f);
+    const float along = std::max(ext.x, ext.z);
+    glm::vec3 eye{center.x, bounds.min.y + 0.12f * ext.y, center.z};
+    eye -= axis * (0.25f * along);
+    scene.views.push_back({"inside", eye, eye + axis * (0.5f * along), kDefaultSun, kDefaultFov});
+  }
+}
+
+std::unique_ptr<Scene> Loader::load() {
+  parse();
+  auto scene = std::make_unique<Scene>();
+  scene->name = path_.stem().string();
+  add_nodes(*scene);
+  update_world_transforms(scene->registry);
+  add_views(*scene);
+  // One summary line per kind rather than one per primitive: large files can have thousands.
+  if (skipped_primitives_ > 0) {
+    std::cerr << file_ << ": warning: skipped " << skipped_primitives_ << " non-triangle primitive(s)\n";
+  }
+  if (skipped_cameras_ > 0) {
+    std::cerr << file_ << ": warning: skipped " << skipped_cameras_ << " non-perspective camera(s)\n";
+  }
+  scene->apply_view(0);
+  update_world_transforms(scene->registry);
+  return scene;
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> load_gltf_scene(const std::filesystem::path& path) { return Loader(path).load(); }
+
+}  // namespace engine

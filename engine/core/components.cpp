@@ -1,0 +1,31 @@
+#include "engine/core/components.hpp"
+
+namespace engine {
+
+glm::mat4 Transform::local_matrix() const {
+  // T * R * S built directly: scale the rotation's basis columns, then set the translation column.
+  glm::mat4 m = glm::mat4_cast(glm::normalize(rotation));
+  m[0] *= scale.x;
+  m[1] *= scale.y;
+  m[2] *= scale.z;
+  m[3] = glm::vec4(translation, 1.0f);
+  return m;
+}
+
+Aabb Aabb::transformed(const glm::mat4& m) const {
+  Aabb out;
+  if (!valid()) return out;
+  // Rotations make any corner a potential extreme, so all eight are transformed.
+  for (int i = 0; i < 8; ++i) {
+    const glm::vec3 corner{(i & 1) ? max.x : min.x, (i & 2) ? max.y : min.y, (i & 4) ? max.z : min.z};
+    out.extend(glm::vec3(m * glm::vec4(corner, 1.0f)));
+  }
+  return out;
+}
+
+void MeshData::compute_bounds() {
+  bounds = Aabb{};
+  for (const Vertex& v : vertices) bounds.extend(v.position);
+}
+
+}  // namespace engine

@@ -1,0 +1,271 @@
+#include "engine/gpu/pipeline.hpp"
+
+#include <fstream>
+#include <unistd.h>
+
+#include "engine/core/components.hpp"
+
+namespace engine::gpu {
+
+std::filesystem::path shader_directory() {
+  if (const char* env = std::getenv("ENGINE_SHADER_DIR"); env && *env) return env;
+  std::error_code ec;
+  auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return ENGINE_SHADER_DIR_NAME;
+  return exe.parent_path() / ENGINE_SHADER_DIR_NAME;
+}
+
+ShaderModule::ShaderModule(const Context& ctx, const std::string& name) : ctx_(ctx) {
+  const auto path = shader_directory() / (name + ".spv");
+  std::ifstream file(path, std::ios::binary | std::ios::ate);
+  if (!file) throw VulkanError("cannot open shader " + path.string() + " (was the project built?)");
+  const auto size = static_cast<size_t>(file.tellg());
+  if (size == 0 || size % 4 != 0) throw VulkanError("shader " + path.string() + " is not valid SPIR-V");
+  std::vector<uint32_t> code(size / 4);
+  file.seekg(0);
+  file.read(reinterpret_cast<char*>(code.data()), static_cast<std::streamsize>(size));
+  VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  info.codeSize = size;
+  info.pCode = code.data();
+  VK_CHECK(vkCreateShaderModule(ctx.device(), &info, nullptr, &module_));
+  ctx.set_name(module_, VK_OBJECT_TYPE_SHADER_MODULE, name);
+}
+
+ShaderModule::~ShaderModule() {
+  if (module_) vkDestroyShaderModule(ctx_.device(), module_, nullptr);
+}
+
+Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
+  if (this != &o) {
+    reset();
+    ctx_ = o.ctx_;
+    pipeline_ = std::exchange(o.pipeline_, VK_NULL_HANDLE);
+    layout_ = std::exchange(o.layout_, VK_NULL_HANDLE);
+    set_layout_ = std::exchange(o.set_layout_, VK_NULL_HANDLE);
+    bind_point_ = o.bind_point_;
+  }
+  return *this;
+}
+
+void Pipeline::reset() {
+  if (!ctx_) return;
+  VkDevice d = ctx_->device();
+  if (pipeline_) vkDestroyPipeline(d, pipeline_, nullptr);
+  if (layout_) vkDestroyPipelineLayout(d, layout_, nullptr);
+  if (set_layout_) vkDestroyDescriptorSetLayout(d, set_layout_, nullptr);
+  pipeline_ = VK_NULL_HANDLE;
+  layout_ = VK_NULL_HANDLE;
+  set_layout_ = VK_NULL_HANDLE;
+}
+
+void PipelineFactory::make_layout(Pipeline& p, const std::vector<Binding>& bindings, uint32_t push_size) const {
+  p.ctx_ = &ctx_;
+  std::vector<VkDescriptorSetLayoutBinding> vk_bindings;
+  for (const auto& b : bindings) vk_bindings.push_back({b.binding, b.type, 1, b.stages, nullptr});
+  VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  set_info.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
+  set_info.bindingCount = static_cast<uint32_t>(vk_bindings.size());
+  set_info.pBindings = vk_bindings.data();
+  VK_CHECK(vkCreateDescriptorSetLayout(ctx_.device(), &set_info, nullptr, &p.set_layout_));
+  VkPushConstantRange range{VK_SHADER_STAGE_ALL, 0, push_size};
+  VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  layout_info.setLayoutCount = 1;
+  layout_info.pSetLayouts = &p.set_layout_;
+  layout_info.pushConstantRangeCount = push_size ? 1 : 0;
+  layout_info.pPushConstantRanges = &range;
+  VK_CHECK(vkCreatePipelineLayout(ctx_.device(), &layout_info, nullptr, &p.layout_));
+}
+
+namespace {
+struct Specialization {
+  std::vector<VkSpecializationMapEntry> entries;
+  std::vector<uint32_t> data;
+  VkSpecializationInfo info{};
+  explicit Specialization(const std::vector<SpecializationConstant>& constants) {
+    for (size_t i = 0; i < constants.size(); ++i) {
+      entries.push_back({constants[i].id, static_cast<uint32_t>(i * 4), 4});
+      data.push_back(constants[i].value);
+    }
+    info.mapEntryCount = static_cast<uint32_t>(entries.size());
+    info.pMapEntries = entries.data();
+    info.dataSize = data.size() * 4;
+    info.pData = data.data();
+  }
+  const VkSpecializationInfo* get() const { return entries.empty() ? nullptr : &info; }
+};
+}  // namespace
+
+Pipeline PipelineFactory::compute(const ComputePipelineDesc& desc) const {
+  Pipeline p;
+  make_layout(p, desc.bindings, desc.push_constant_size);
+  p.bind_point_ = VK_PIPELINE_BIND_POINT_COMPUTE;
+  ShaderModule module(ctx_, desc.shader);
+  Specialization spec(desc.specialization);
+  VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+  info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+  info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  info.stage.module = module.handle();
+  info.stage.pName = "main";
+  info.stage.pSpecializationInfo = spec.get();
+  info.layout = p.layout_;
+  VK_CHECK(vkCreateComputePipelines(ctx_.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_));
+  ctx_.set_name(p.pipeline_, VK_OBJECT_TYPE_PIPELINE, desc.shader);
+  return p;
+}
+
+Pipeline PipelineFactory::graphics(const GraphicsPipelineDesc& desc) const {
+  Pipeline p;
+  make_layout(p, desc.bindings, desc.push_constant_size);
+  p.bind_point_ = VK_PIPELINE_BIND_POINT_GRAPHICS;
+  Specialization spec(desc.specialization);
+
+  std::vector<std::unique_ptr<ShaderModule>> modules;
+  std::vector<VkPipelineShaderStageCreateInfo> stages;
+  auto add_stage = [&](const std::string& name, VkShaderStageFlagBits stage) {
+    if (name.empty()) return;
+    modules.push_back(std::make_unique<ShaderModule>(ctx_, name));
+    VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    s.stage = stage;
+    s.module = modules.back()->handle();
+    s.pName = "main";
+    s.pSpecializationInfo = spec.get();
+    stages.push_back(s);
+  };
+  add_stage(desc.vertex_shader, VK_SHADER_STAGE_VERTEX_BIT);
+  add_stage(desc.geometry_shader, VK_SHADER_STAGE_GEOMETRY_BIT);
+  add_stage(desc.fragment_shader, VK_SHADER_STAGE_FRAGMENT_BIT);
+
+  VkVertexInputBindingDescription vb{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
+  VkVertexInputAttributeDescription attrs[3] = {
+      {0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, position)},
+      {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, normal)},
+      {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(Vertex, uv)},
+  };
+  VkPipelineVertexInputStateCreateInfo vertex_input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+  if (desc.vertex_input != VertexInput::None) {
+    vertex_input.vertexBindingDescriptionCount = 1;
+    vertex_input.pVertexBindingDescriptions = &vb;
+    vertex_input.vertexAttributeDescriptionCount = desc.vertex_input == VertexInput::PositionOnly ? 1 : 3;
+    vertex_input.pVertexAttributeDescriptions = attrs;
+  }
+  VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+  assembly.topology = desc.topology;
+  VkPipelineViewportStateCreateInfo viewport{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+  viewport.viewportCount = 1;
+  viewport.scissorCount = 1;
+
+  VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+  raster.polygonMode = VK_POLYGON_MODE_FILL;
+  raster.cullMode = desc.cull_mode;
+  raster.frontFace = desc.front_face;
+  raster.lineWidth = 1.0f;
+  raster.depthClampEnable = desc.depth_clamp;
+  raster.depthBiasEnable = desc.depth_bias;
+  raster.depthBiasConstantFactor = desc.depth_bias_constant;
+  raster.depthBiasSlopeFactor = desc.depth_bias_slope;
+  VkPipelineRasterizationConservativeStateCreateInfoEXT conservative{
+      VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_CONSERVATIVE_STATE_CREATE_INFO_EXT};
+  if (desc.conservative != ConservativeMode::Off) {
+    if (!ctx_.features().conservative_rasterization)
+      throw VulkanError("pipeline " + desc.name + " needs VK_EXT_conservative_rasterization, which this device lacks");
+    conservative.conservativeRasterizationMode = desc.conservative == ConservativeMode::Overestimate
+                                                     ? VK_CONSERVATIVE_RASTERIZATION_MODE_OVERESTIMATE_EXT
+                                                     : VK_CONSERVATIVE_RASTERIZATION_MODE_UNDERESTIMATE_EXT;
+    conservative.extraPrimitiveOverestimationSize = desc.conservative_extra_size;
+    raster.pNext = &conservative;
+  }
+
+  VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+  multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  VkPipelineDepthStencilStateCreateInfo depth{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  depth.depthTestEnable = desc.depth_test && desc.depth_format != VK_FORMAT_UNDEFINED;
+  depth.depthWriteEnable = desc.depth_write && desc.depth_format != VK_FORMAT_UNDEFINED;
+  depth.depthCompareOp = desc.depth_compare;
+
+  std::vector<VkPipelineColorBlendAttachmentState> blends(desc.color_formats.size());
+  for (auto& b : blends) {
+    b.colorWriteMask = desc.color_write ? (VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                                           VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT)
+                                        : 0;
+    if (desc.alpha_blend) {
+      b.blendEnable = VK_TRUE;
+      b.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA;
+      b.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+      b.colorBlendOp = VK_BLEND_OP_ADD;
+      b.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+      b.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+      b.alphaBlendOp = VK_BLEND_OP_ADD;
+    }
+  }
+  VkPipelineColorBlendStateCreateInfo blend{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+  blend.attachmentCount = static_cast<uint32_t>(blends.size());
+  blend.pAttachments = blends.data();
+
+  VkDynamicState dynamic_states[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+  VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+  dynamic.dynamicStateCount = 2;
+  dynamic.pDynamicStates = dynamic_states;
+
+  VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+  rendering.colorAttachmentCount = static_cast<uint32_t>(desc.color_formats.size());
+  rendering.pColorAttachmentFormats = desc.color_formats.data();
+  rendering.depthAttachmentFormat = desc.depth_format;
+
+  VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+  info.pNext = &rendering;
+  info.stageCount = static_cast<uint32_t>(stages.size());
+  info.pStages = stages.data();
+  info.pVertexInputState = &vertex_input;
+  info.pInputAssemblyState = &assembly;
+  info.pViewportState = &viewport;
+  info.pRasterizationState = &raster;
+  info.pMultisampleState = &multisample;
+  info.pDepthStencilState = &depth;
+  info.pColorBlendState = &blend;
+  info.pDynamicState = &dynamic;
+  info.layout = p.layout_;
+  VK_CHECK(vkCreateGraphicsPipelines(ctx_.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_));
+  ctx_.set_name(p.pipeline_, VK_OBJECT_TYPE_PIPELINE, desc.name.empty() ? desc.vertex_shader : desc.name);
+  return p;
+}
+
+DescriptorWriter& DescriptorWriter::storage_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset,
+                                                   VkDeviceSize range) {
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {buffer, offset, range}, {}});
+  return *this;
+}
+DescriptorWriter& DescriptorWriter::uniform_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset,
+                                                   VkDeviceSize range) {
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {buffer, offset, range}, {}});
+  return *this;
+}
+DescriptorWriter& DescriptorWriter::storage_image(uint32_t binding, VkImageView view) {
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {}, {VK_NULL_HANDLE, view, VK_IMAGE_LAYOUT_GENERAL}});
+  return *this;
+}
+DescriptorWriter& DescriptorWriter::sampled_image(uint32_t binding, VkImageView view, VkSampler sampler,
+                                                  VkImageLayout layout) {
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {}, {sampler, view, layout}});
+  return *this;
+}
+
+void DescriptorWriter::push(const Context& ctx, VkCommandBuffer cmd, const Pipeline& pipeline) {
+  std::vector<VkWriteDescriptorSet> writes;
+  writes.reserve(entries_.size());
+  for (auto& e : entries_) {
+    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstBinding = e.binding;
+    w.descriptorCount = 1;
+    w.descriptorType = e.type;
+    if (e.type == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER || e.type == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER)
+      w.pBufferInfo = &e.buffer;
+    else
+      w.pImageInfo = &e.image;
+    writes.push_back(w);
+  }
+  ctx.cmd_push_descriptor_set(cmd, pipeline.bind_point(), pipeline.layout(), 0,
+                              static_cast<uint32_t>(writes.size()), writes.data());
+  entries_.clear();
+}
+
+}  // namespace engine::gpu

@@ -1,0 +1,88 @@
+#include "engine/gpu/profiler.hpp"
+
+#include <algorithm>
+
+namespace engine::gpu {
+
+GpuProfiler::GpuProfiler(const Context& ctx, uint32_t max_regions) : ctx_(ctx), capacity_(max_regions * 2) {
+  if (!ctx.features().timestamps) return;  // profiler stays disabled; times read as 0
+  VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+  info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+  info.queryCount = capacity_;
+  VK_CHECK(vkCreateQueryPool(ctx.device(), &info, nullptr, &pool_));
+  ctx.set_name(pool_, VK_OBJECT_TYPE_QUERY_POOL, "gpu profiler timestamps");
+}
+
+GpuProfiler::~GpuProfiler() {
+  if (pool_) vkDestroyQueryPool(ctx_.device(), pool_, nullptr);
+}
+
+void GpuProfiler::begin_frame(VkCommandBuffer cmd) {
+  used_ = 0;
+  regions_.clear();
+  if (pool_) vkCmdResetQueryPool(cmd, pool_, 0, capacity_);
+}
+
+void GpuProfiler::begin(VkCommandBuffer cmd, const std::string& name) {
+  if (!pool_ || used_ + 2 > capacity_) return;
+  regions_.push_back({name, used_++});
+  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, regions_.back().begin_query);
+  if (std::find(order_.begin(), order_.end(), name) == order_.end()) order_.push_back(name);
+}
+
+void GpuProfiler::end(VkCommandBuffer cmd, const std::string& name) {
+  if (!pool_) return;
+  for (auto it = regions_.rbegin(); it != regions_.rend(); ++it) {
+    if (it->name == name && it->end_query == UINT32_MAX) {
+      it->end_query = used_++;
+      vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, it->end_query);
+      return;
+    }
+  }
+}
+
+void GpuProfiler::collect() {
+  last_frame_.clear();
+  if (!pool_ || used_ == 0) return;
+  std::vector<uint64_t> stamps(used_);
+  VK_CHECK(vkGetQueryPoolResults(ctx_.device(), pool_, 0, used_, stamps.size() * sizeof(uint64_t), stamps.data(),
+                                 sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+  const double ns = ctx_.features().timestamp_period_ns;
+  std::map<std::string, double> frame;
+  for (const auto& r : regions_) {
+    if (r.end_query == UINT32_MAX) continue;
+    const double ms = double(stamps[r.end_query] - stamps[r.begin_query]) * ns * 1e-6;
+    frame[r.name] += ms;  // a region recorded twice in a frame sums
+  }
+  for (const auto& name : order_) {
+    auto it = frame.find(name);
+    if (it == frame.end()) continue;
+    last_frame_.emplace_back(name, it->second);
+    history_[name].push_back(it->second);
+  }
+}
+
+double GpuProfiler::average_ms(const std::string& name, size_t last_n) const {
+  auto it = history_.find(name);
+  if (it == history_.end() || it->second.empty()) return 0.0;
+  const auto& v = it->second;
+  const size_t n = last_n ? std::min(last_n, v.size()) : v.size();
+  double sum = 0;
+  for (size_t i = v.size() - n; i < v.size(); ++i) sum += v[i];
+  return sum / double(n);
+}
+
+double GpuProfiler::median_ms(const std::string& name) const {
+  auto it = history_.find(name);
+  if (it == history_.end() || it->second.empty()) return 0.0;
+  auto v = it->second;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+void GpuProfiler::clear_history() {
+  history_.clear();
+}
+
+}  // namespace engine::gpu

@@ -1,0 +1,255 @@
+#include "engine/gpu/resources.hpp"
+
+namespace engine::gpu {
+
+Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool host_visible,
+               const std::string& name)
+    : ctx_(&ctx), size_(size) {
+  VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  info.size = size > 0 ? size : 4;
+  info.usage = usage;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VK_CHECK(vkCreateBuffer(ctx.device(), &info, nullptr, &buffer_));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(ctx.device(), buffer_, &req);
+  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = req.size;
+  alloc.memoryTypeIndex = ctx.find_memory_type(
+      req.memoryTypeBits, host_visible ? (VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
+                                       : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  VK_CHECK(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_));
+  VK_CHECK(vkBindBufferMemory(ctx.device(), buffer_, memory_, 0));
+  if (host_visible) VK_CHECK(vkMapMemory(ctx.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+  ctx.set_name(buffer_, VK_OBJECT_TYPE_BUFFER, name);
+}
+
+Buffer& Buffer::operator=(Buffer&& o) noexcept {
+  if (this != &o) {
+    reset();
+    ctx_ = o.ctx_;
+    buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
+    memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
+    size_ = std::exchange(o.size_, 0);
+    mapped_ = std::exchange(o.mapped_, nullptr);
+  }
+  return *this;
+}
+
+void Buffer::reset() {
+  if (!ctx_) return;
+  if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
+  if (memory_) vkFreeMemory(ctx_->device(), memory_, nullptr);
+  buffer_ = VK_NULL_HANDLE;
+  memory_ = VK_NULL_HANDLE;
+  mapped_ = nullptr;
+  size_ = 0;
+}
+
+Buffer upload_buffer(const Context& ctx, const void* data, VkDeviceSize bytes, VkBufferUsageFlags usage,
+                     const std::string& name) {
+  Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, name + " staging");
+  if (bytes) staging.write(data, bytes);
+  Buffer out(ctx, bytes, usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, name);
+  if (bytes) {
+    ctx.immediate_submit([&](VkCommandBuffer cmd) {
+      VkBufferCopy copy{0, 0, bytes};
+      vkCmdCopyBuffer(cmd, staging.handle(), out.handle(), 1, &copy);
+    });
+  }
+  return out;
+}
+
+std::vector<uint8_t> read_buffer(const Context& ctx, const Buffer& buffer, VkDeviceSize bytes) {
+  if (bytes == VK_WHOLE_SIZE) bytes = buffer.size();
+  Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "readback staging");
+  ctx.immediate_submit([&](VkCommandBuffer cmd) {
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkBufferCopy copy{0, 0, bytes};
+    vkCmdCopyBuffer(cmd, buffer.handle(), staging.handle(), 1, &copy);
+  });
+  std::vector<uint8_t> out(bytes);
+  std::memcpy(out.data(), staging.mapped(), bytes);
+  return out;
+}
+
+bool is_depth_format(VkFormat format) {
+  return format == VK_FORMAT_D32_SFLOAT || format == VK_FORMAT_D16_UNORM || format == VK_FORMAT_D24_UNORM_S8_UINT ||
+         format == VK_FORMAT_D32_SFLOAT_S8_UINT;
+}
+
+Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage, const std::string& name,
+             uint32_t mip_levels, uint32_t layers)
+    : ctx_(&ctx), format_(format), extent_(extent), mip_levels_(mip_levels), layers_(layers) {
+  aspect_ = is_depth_format(format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+  VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  info.imageType = VK_IMAGE_TYPE_2D;
+  info.format = format;
+  info.extent = {extent.width, extent.height, 1};
+  info.mipLevels = mip_levels;
+  info.arrayLayers = layers;
+  info.samples = VK_SAMPLE_COUNT_1_BIT;
+  info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  info.usage = usage;
+  info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  VK_CHECK(vkCreateImage(ctx.device(), &info, nullptr, &image_));
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(ctx.device(), image_, &req);
+  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = req.size;
+  alloc.memoryTypeIndex = ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  VK_CHECK(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_));
+  VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
+
+  auto make_view = [&](uint32_t base_mip, uint32_t mips, uint32_t base_layer, uint32_t layer_count) {
+    VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    v.image = image_;
+    v.viewType = layer_count > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
+    v.format = format;
+    v.subresourceRange = {aspect_, base_mip, mips, base_layer, layer_count};
+    VkImageView view;
+    VK_CHECK(vkCreateImageView(ctx.device(), &v, nullptr, &view));
+    return view;
+  };
+  view_ = make_view(0, mip_levels, 0, layers);
+  if (mip_levels > 1)
+    for (uint32_t m = 0; m < mip_levels; ++m) mip_views_.push_back(make_view(m, 1, 0, layers));
+  if (layers > 1)
+    for (uint32_t l = 0; l < layers; ++l) {
+      VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+      v.image = image_;
+      v.viewType = VK_IMAGE_VIEW_TYPE_2D;
+      v.format = format;
+      v.subresourceRange = {aspect_, 0, 1, l, 1};
+      VkImageView view;
+      VK_CHECK(vkCreateImageView(ctx.device(), &v, nullptr, &view));
+      layer_views_.push_back(view);
+    }
+  ctx.set_name(image_, VK_OBJECT_TYPE_IMAGE, name);
+  ctx.set_name(view_, VK_OBJECT_TYPE_IMAGE_VIEW, name + " view");
+}
+
+Image& Image::operator=(Image&& o) noexcept {
+  if (this != &o) {
+    reset();
+    ctx_ = o.ctx_;
+    image_ = std::exchange(o.image_, VK_NULL_HANDLE);
+    memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
+    view_ = std::exchange(o.view_, VK_NULL_HANDLE);
+    mip_views_ = std::move(o.mip_views_);
+    layer_views_ = std::move(o.layer_views_);
+    format_ = o.format_;
+    extent_ = o.extent_;
+    aspect_ = o.aspect_;
+    mip_levels_ = o.mip_levels_;
+    layers_ = o.layers_;
+    layout_ = o.layout_;
+  }
+  return *this;
+}
+
+void Image::reset() {
+  if (!ctx_) return;
+  VkDevice d = ctx_->device();
+  for (VkImageView v : mip_views_) vkDestroyImageView(d, v, nullptr);
+  for (VkImageView v : layer_views_) vkDestroyImageView(d, v, nullptr);
+  mip_views_.clear();
+  layer_views_.clear();
+  if (view_) vkDestroyImageView(d, view_, nullptr);
+  if (image_) vkDestroyImage(d, image_, nullptr);
+  if (memory_) vkFreeMemory(d, memory_, nullptr);
+  view_ = VK_NULL_HANDLE;
+  image_ = VK_NULL_HANDLE;
+  memory_ = VK_NULL_HANDLE;
+  layout_ = VK_IMAGE_LAYOUT_UNDEFINED;
+}
+
+void Image::transition(VkCommandBuffer cmd, VkImageLayout new_layout, VkPipelineStageFlags2 src_stage,
+                       VkAccessFlags2 src_access, VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
+  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+  b.srcStageMask = src_stage;
+  b.srcAccessMask = src_access;
+  b.dstStageMask = dst_stage;
+  b.dstAccessMask = dst_access;
+  b.oldLayout = layout_;
+  b.newLayout = new_layout;
+  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image_;
+  b.subresourceRange = {aspect_, 0, mip_levels_, 0, layers_};
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.imageMemoryBarrierCount = 1;
+  dep.pImageMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &dep);
+  layout_ = new_layout;
+}
+
+Sampler::Sampler(const Context& ctx, VkFilter filter, VkSamplerAddressMode address, const std::string& name,
+                 bool depth_compare)
+    : ctx_(&ctx) {
+  VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  info.magFilter = filter;
+  info.minFilter = filter;
+  info.mipmapMode = filter == VK_FILTER_LINEAR ? VK_SAMPLER_MIPMAP_MODE_LINEAR : VK_SAMPLER_MIPMAP_MODE_NEAREST;
+  info.addressModeU = info.addressModeV = info.addressModeW = address;
+  info.maxLod = VK_LOD_CLAMP_NONE;
+  info.borderColor = VK_BORDER_COLOR_FLOAT_OPAQUE_WHITE;
+  info.compareEnable = depth_compare;
+  info.compareOp = VK_COMPARE_OP_GREATER_OR_EQUAL;
+  VK_CHECK(vkCreateSampler(ctx.device(), &info, nullptr, &sampler_));
+  ctx.set_name(sampler_, VK_OBJECT_TYPE_SAMPLER, name);
+}
+
+Sampler& Sampler::operator=(Sampler&& o) noexcept {
+  if (this != &o) {
+    reset();
+    ctx_ = o.ctx_;
+    sampler_ = std::exchange(o.sampler_, VK_NULL_HANDLE);
+  }
+  return *this;
+}
+
+void Sampler::reset() {
+  if (ctx_ && sampler_) vkDestroySampler(ctx_->device(), sampler_, nullptr);
+  sampler_ = VK_NULL_HANDLE;
+}
+
+void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
+                    VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access) {
+  VkMemoryBarrier2 b{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  b.srcStageMask = src_stage;
+  b.srcAccessMask = src_access;
+  b.dstStageMask = dst_stage;
+  b.dstAccessMask = dst_access;
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.memoryBarrierCount = 1;
+  dep.pMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+void full_barrier(VkCommandBuffer cmd) {
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+}
+
+std::vector<uint8_t> read_image(const Context& ctx, Image& image, uint32_t texel_bytes) {
+  const VkDeviceSize bytes = VkDeviceSize(image.extent().width) * image.extent().height * texel_bytes;
+  Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "image readback");
+  ctx.immediate_submit([&](VkCommandBuffer cmd) {
+    const VkImageLayout original = image.layout();
+    image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                     VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {image.aspect(), 0, 0, 1};
+    copy.imageExtent = {image.extent().width, image.extent().height, 1};
+    vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.handle(), 1, &copy);
+    if (original != VK_IMAGE_LAYOUT_UNDEFINED)
+      image.transition(cmd, original, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                     VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+  });
+  std::vector<uint8_t> out(bytes);
+  std::memcpy(out.data(), staging.mapped(), bytes);
+  return out;
+}
+
+}  // namespace engine::gpu

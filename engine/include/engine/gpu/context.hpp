@@ -1,0 +1,128 @@
+#pragma once
+// The Vulkan instance, the chosen physical device, one universal queue, and the record of which
+// optional features the device offers. Every other part of the engine asks `features()` rather than
+// querying Vulkan itself.
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "engine/gpu/vk_check.hpp"
+
+namespace engine::gpu {
+
+struct DeviceFeatures {
+  bool conservative_rasterization = false;       // VK_EXT_conservative_rasterization
+  bool conservative_underestimation = false;     // primitiveUnderestimation
+  bool fully_covered_fragment_input = false;     // gl_FragFullyCoveredNV available
+  float conservative_overestimation_size = 0.0f; // extraPrimitiveOverestimationSize ceiling in px
+  bool fragment_shader_barycentric = false;      // VK_KHR_fragment_shader_barycentric
+  bool geometry_shader = false;
+  bool timestamps = false;                       // timestampComputeAndGraphics on the queue
+  float timestamp_period_ns = 1.0f;
+  bool ray_tracing_pipeline = false;             // VK_KHR_ray_tracing_pipeline (recorded, unused)
+  bool shader_int64 = false;
+  bool fragment_stores_and_atomics = false;
+  bool vertex_stores_and_atomics = false;
+  uint32_t subgroup_size = 0;
+};
+
+struct ContextOptions {
+  // "gpu" (first discrete/integrated GPU), "lavapipe" (Mesa's CPU driver), a device index, or empty
+  // for automatic: a GPU if there is one, else lavapipe.
+  std::string device;
+  // Khronos validation + debug messenger. Also forced on by ENGINE_VALIDATION=1, and on in debug builds.
+  bool validation = false;
+  std::vector<const char*> instance_extensions;  // e.g. from the window system
+  bool swapchain = false;                        // enable VK_KHR_swapchain on the device
+  std::string application_name = "shadow_engine";
+};
+
+class Context {
+ public:
+  explicit Context(const ContextOptions& options);
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  VkInstance instance() const { return instance_; }
+  VkPhysicalDevice physical_device() const { return physical_device_; }
+  VkDevice device() const { return device_; }
+  VkQueue queue() const { return queue_; }
+  uint32_t queue_family() const { return queue_family_; }
+  VkCommandPool command_pool() const { return command_pool_; }
+  const DeviceFeatures& features() const { return features_; }
+  const VkPhysicalDeviceProperties& properties() const { return properties_; }
+  std::string device_name() const { return properties_.deviceName; }
+  std::string driver_description() const { return driver_description_; }
+  bool validation_enabled() const { return validation_enabled_; }
+
+  // Count of validation/debug messages of warning or error severity since creation (or the last reset).
+  uint32_t validation_message_count() const { return validation_messages_.load(); }
+  void reset_validation_message_count() { validation_messages_ = 0; }
+  std::vector<std::string> validation_messages() const;
+
+  uint32_t find_memory_type(uint32_t type_bits, VkMemoryPropertyFlags properties) const;
+
+  // Records commands into a fresh command buffer, submits it and waits. For uploads, readbacks, tests.
+  void immediate_submit(const std::function<void(VkCommandBuffer)>& record) const;
+
+  // VK_EXT_debug_utils names (no-ops when the extension is absent).
+  void set_name(VkObjectType type, uint64_t handle, const std::string& name) const;
+  template <typename T>
+  void set_name(T handle, VkObjectType type, const std::string& name) const {
+    set_name(type, reinterpret_cast<uint64_t>(handle), name);
+  }
+  void begin_label(VkCommandBuffer cmd, const char* name) const;
+  void end_label(VkCommandBuffer cmd) const;
+
+  // Extension entry points fetched at device creation.
+  PFN_vkCmdPushDescriptorSetKHR cmd_push_descriptor_set = nullptr;
+
+ private:
+  void create_instance(const ContextOptions& options);
+  void pick_physical_device(const ContextOptions& options);
+  void create_device(const ContextOptions& options);
+
+  VkInstance instance_ = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+  VkPhysicalDevice physical_device_ = VK_NULL_HANDLE;
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkQueue queue_ = VK_NULL_HANDLE;
+  uint32_t queue_family_ = 0;
+  VkCommandPool command_pool_ = VK_NULL_HANDLE;
+  VkPhysicalDeviceProperties properties_{};
+  VkPhysicalDeviceMemoryProperties memory_properties_{};
+  DeviceFeatures features_;
+  std::string driver_description_;
+  bool validation_enabled_ = false;
+  bool debug_utils_ = false;
+  std::atomic<uint32_t> validation_messages_{0};
+  mutable std::vector<std::string> message_log_;
+  PFN_vkSetDebugUtilsObjectNameEXT set_object_name_ = nullptr;
+  PFN_vkCmdBeginDebugUtilsLabelEXT cmd_begin_label_ = nullptr;
+  PFN_vkCmdEndDebugUtilsLabelEXT cmd_end_label_ = nullptr;
+
+  friend VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT,
+                                                       VkDebugUtilsMessageTypeFlagsEXT,
+                                                       const VkDebugUtilsMessengerCallbackDataEXT*, void*);
+};
+
+// RAII command-buffer region label.
+class ScopedLabel {
+ public:
+  ScopedLabel(const Context& ctx, VkCommandBuffer cmd, const char* name) : ctx_(ctx), cmd_(cmd) {
+    ctx_.begin_label(cmd_, name);
+  }
+  ~ScopedLabel() { ctx_.end_label(cmd_); }
+  ScopedLabel(const ScopedLabel&) = delete;
+  ScopedLabel& operator=(const ScopedLabel&) = delete;
+
+ private:
+  const Context& ctx_;
+  VkCommandBuffer cmd_;
+};
+
+}  // namespace engine::gpu

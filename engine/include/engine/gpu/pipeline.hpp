@@ -1,0 +1,143 @@
+#pragma once
+// Shader modules, pipeline layouts with one push-descriptor set, compute and graphics pipelines, and a
+// writer that pushes descriptors at record time (no pools, no set lifetime to manage).
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+#include <memory>
+
+#include "engine/gpu/context.hpp"
+
+namespace engine::gpu {
+
+// Where compiled SPIR-V lives: $ENGINE_SHADER_DIR if set, else "shaders/" next to the executable.
+std::filesystem::path shader_directory();
+
+class ShaderModule {
+ public:
+  // `name` is the source file name, e.g. "gbuffer.vert"; loads <shader_directory>/<name>.spv.
+  ShaderModule(const Context& ctx, const std::string& name);
+  ~ShaderModule();
+  ShaderModule(const ShaderModule&) = delete;
+  ShaderModule& operator=(const ShaderModule&) = delete;
+  VkShaderModule handle() const { return module_; }
+
+ private:
+  const Context& ctx_;
+  VkShaderModule module_ = VK_NULL_HANDLE;
+};
+
+struct Binding {
+  uint32_t binding;
+  VkDescriptorType type;
+  VkShaderStageFlags stages = VK_SHADER_STAGE_ALL;
+};
+
+struct SpecializationConstant {
+  uint32_t id;
+  uint32_t value;
+};
+
+class Pipeline {
+ public:
+  Pipeline() = default;
+  ~Pipeline() { reset(); }
+  Pipeline(Pipeline&& o) noexcept { *this = std::move(o); }
+  Pipeline& operator=(Pipeline&& o) noexcept;
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+  void reset();
+
+  VkPipeline handle() const { return pipeline_; }
+  VkPipelineLayout layout() const { return layout_; }
+  VkPipelineBindPoint bind_point() const { return bind_point_; }
+  bool valid() const { return pipeline_ != VK_NULL_HANDLE; }
+  void bind(VkCommandBuffer cmd) const { vkCmdBindPipeline(cmd, bind_point_, pipeline_); }
+  template <typename T>
+  void push_constants(VkCommandBuffer cmd, const T& value) const {
+    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_ALL, 0, sizeof(T), &value);
+  }
+
+ private:
+  friend class PipelineFactory;
+  const Context* ctx_ = nullptr;
+  VkPipeline pipeline_ = VK_NULL_HANDLE;
+  VkPipelineLayout layout_ = VK_NULL_HANDLE;
+  VkDescriptorSetLayout set_layout_ = VK_NULL_HANDLE;
+  VkPipelineBindPoint bind_point_ = VK_PIPELINE_BIND_POINT_COMPUTE;
+};
+
+struct ComputePipelineDesc {
+  std::string shader;  // e.g. "shading_points.comp"
+  std::vector<Binding> bindings;
+  uint32_t push_constant_size = 0;
+  std::vector<SpecializationConstant> specialization;
+};
+
+enum class VertexInput { None, StandardVertex /* engine::Vertex: position, normal, uv */, PositionOnly };
+
+enum class ConservativeMode { Off, Overestimate, Underestimate };
+
+struct GraphicsPipelineDesc {
+  std::string vertex_shader;
+  std::string fragment_shader;  // empty: depth-only
+  std::string geometry_shader;  // optional
+  std::vector<Binding> bindings;
+  uint32_t push_constant_size = 0;
+  std::vector<SpecializationConstant> specialization;
+  VertexInput vertex_input = VertexInput::StandardVertex;
+  VkPrimitiveTopology topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+  std::vector<VkFormat> color_formats;
+  VkFormat depth_format = VK_FORMAT_UNDEFINED;
+  bool depth_test = true;
+  bool depth_write = true;
+  VkCompareOp depth_compare = VK_COMPARE_OP_GREATER_OR_EQUAL;  // reversed Z by default
+  VkCullModeFlags cull_mode = VK_CULL_MODE_BACK_BIT;
+  VkFrontFace front_face = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+  bool depth_clamp = false;
+  bool depth_bias = false;
+  float depth_bias_constant = 0.0f;
+  float depth_bias_slope = 0.0f;
+  ConservativeMode conservative = ConservativeMode::Off;
+  float conservative_extra_size = 0.0f;
+  bool alpha_blend = false;
+  bool color_write = true;
+  std::string name;
+};
+
+class PipelineFactory {
+ public:
+  explicit PipelineFactory(const Context& ctx) : ctx_(ctx) {}
+  Pipeline compute(const ComputePipelineDesc& desc) const;
+  Pipeline graphics(const GraphicsPipelineDesc& desc) const;
+
+ private:
+  void make_layout(Pipeline& p, const std::vector<Binding>& bindings, uint32_t push_size) const;
+  const Context& ctx_;
+};
+
+// Collects descriptor writes for binding set 0 of a pipeline and pushes them in one call.
+class DescriptorWriter {
+ public:
+  DescriptorWriter& storage_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset = 0,
+                                   VkDeviceSize range = VK_WHOLE_SIZE);
+  DescriptorWriter& uniform_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset = 0,
+                                   VkDeviceSize range = VK_WHOLE_SIZE);
+  DescriptorWriter& storage_image(uint32_t binding, VkImageView view);
+  DescriptorWriter& sampled_image(uint32_t binding, VkImageView view, VkSampler sampler,
+                                  VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  void push(const Context& ctx, VkCommandBuffer cmd, const Pipeline& pipeline);
+
+ private:
+  struct Entry {
+    uint32_t binding;
+    VkDescriptorType type;
+    VkDescriptorBufferInfo buffer;
+    VkDescriptorImageInfo image;
+  };
+  std::vector<Entry> entries_;
+};
+
+}  // namespace engine::gpu

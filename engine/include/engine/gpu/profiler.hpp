@@ -1,0 +1,70 @@
+#pragma once
+// GPU time per named pass from timestamp queries. Regions may nest; each frame's results are read
+// after its fence, and history is kept so callers can ask for averages or medians over frames.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/gpu/context.hpp"
+
+namespace engine::gpu {
+
+class GpuProfiler {
+ public:
+  explicit GpuProfiler(const Context& ctx, uint32_t max_regions = 64);
+  ~GpuProfiler();
+  GpuProfiler(const GpuProfiler&) = delete;
+  GpuProfiler& operator=(const GpuProfiler&) = delete;
+
+  bool enabled() const { return pool_ != VK_NULL_HANDLE; }
+  void begin_frame(VkCommandBuffer cmd);
+  void begin(VkCommandBuffer cmd, const std::string& name);
+  void end(VkCommandBuffer cmd, const std::string& name);
+  // Call after the frame's commands completed; appends this frame's times to the history.
+  void collect();
+
+  // Milliseconds per region in the last collected frame, in first-seen order.
+  const std::vector<std::pair<std::string, double>>& last_frame() const { return last_frame_; }
+  double average_ms(const std::string& name, size_t last_n = 0) const;
+  double median_ms(const std::string& name) const;
+  std::vector<std::string> region_names() const { return order_; }
+  void clear_history();
+
+ private:
+  const Context& ctx_;
+  VkQueryPool pool_ = VK_NULL_HANDLE;
+  uint32_t capacity_ = 0;
+  uint32_t used_ = 0;
+  struct Open {
+    std::string name;
+    uint32_t begin_query;
+    uint32_t end_query = UINT32_MAX;
+  };
+  std::vector<Open> regions_;
+  std::vector<std::string> order_;
+  std::map<std::string, std::vector<double>> history_;
+  std::vector<std::pair<std::string, double>> last_frame_;
+};
+
+class ScopedGpuRegion {
+ public:
+  ScopedGpuRegion(const Context& ctx, GpuProfiler& profiler, VkCommandBuffer cmd, const std::string& name)
+      : ctx_(ctx), profiler_(profiler), cmd_(cmd), name_(name) {
+    ctx_.begin_label(cmd_, name_.c_str());
+    profiler_.begin(cmd_, name_);
+  }
+  ~ScopedGpuRegion() {
+    profiler_.end(cmd_, name_);
+    ctx_.end_label(cmd_);
+  }
+  ScopedGpuRegion(const ScopedGpuRegion&) = delete;
+  ScopedGpuRegion& operator=(const ScopedGpuRegion&) = delete;
+
+ private:
+  const Context& ctx_;
+  GpuProfiler& profiler_;
+  VkCommandBuffer cmd_;
+  std::string name_;
+};
+
+}  // namespace engine::gpu

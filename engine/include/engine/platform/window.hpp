@@ -1,0 +1,51 @@
+#pragma once
+// A GLFW window with a Vulkan swapchain that shows the renderer's output and an ImGui overlay.
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/gpu/context.hpp"
+#include "engine/render/renderer.hpp"
+
+namespace engine::platform {
+
+struct WindowOptions {
+  std::string title = "shadow engine";
+  uint32_t width = 1280;
+  uint32_t height = 720;
+};
+
+class Window {
+ public:
+  // Initialises GLFW and creates the window; throws std::runtime_error with one line on failure.
+  explicit Window(const WindowOptions& options);
+  ~Window();
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+
+  // Instance extensions the window system needs; pass them in ContextOptions::instance_extensions.
+  static std::vector<const char*> required_instance_extensions();
+
+  // Creates the surface, swapchain and ImGui state for `ctx` (which must have swapchain enabled).
+  void attach(gpu::Context& ctx);
+  bool should_close() const;
+  void poll_events();
+  // Framebuffer size in pixels (0 x 0 while minimised).
+  VkExtent2D framebuffer_extent() const;
+  void set_size(uint32_t width, uint32_t height);
+
+  // One frame: update + record the renderer, blit its output to the swapchain, draw ImGui built by
+  // `build_ui`, present. Handles resize and minimise (skips drawing while minimised). Returns false
+  // if the frame was skipped.
+  bool draw_frame(Renderer& renderer, const std::function<void()>& build_ui, float dt);
+  // Reads back the last presented swapchain image (scene + overlay) as RGBA8.
+  std::vector<uint8_t> read_last_frame(uint32_t& width, uint32_t& height);
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace engine::platform

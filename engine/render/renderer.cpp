@@ -1,0 +1,431 @@
+#include "engine/render/renderer.hpp"
+
+#include <cstring>
+#include <stdexcept>
+#include <unordered_map>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <stb_image_write.h>
+
+#include "engine/core/transform_system.hpp"
+#include "shared/frame.h"
+
+namespace engine {
+
+using namespace gpu;
+
+namespace {
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+constexpr VkFormat kAlbedoFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
+constexpr VkFormat kWorldPositionFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkFormat kShadowFormat = VK_FORMAT_R32_SFLOAT;
+constexpr VkFormat kOutputFormat = VK_FORMAT_R8G8B8A8_UNORM;
+
+uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
+
+const VkPipelineStageFlags2 kAllStages = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+const VkAccessFlags2 kAllAccess = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
+}  // namespace
+
+SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
+  std::vector<Vertex> vertices;
+  std::vector<uint32_t> indices;
+  std::unordered_map<const MeshData*, uint32_t> slots;
+  registry.each<Mesh>([&](Entity, Mesh& mesh) {
+    if (!mesh.data) return;
+    auto it = slots.find(mesh.data.get());
+    if (it != slots.end()) {
+      mesh.gpu_mesh = it->second;
+      return;
+    }
+    GpuMeshRange range;
+    range.first_index = static_cast<uint32_t>(indices.size());
+    range.index_count = static_cast<uint32_t>(mesh.data->indices.size());
+    range.vertex_offset = static_cast<int32_t>(vertices.size());
+    range.vertex_count = static_cast<uint32_t>(mesh.data->vertices.size());
+    vertices.insert(vertices.end(), mesh.data->vertices.begin(), mesh.data->vertices.end());
+    indices.insert(indices.end(), mesh.data->indices.begin(), mesh.data->indices.end());
+    mesh.gpu_mesh = static_cast<uint32_t>(meshes_.size());
+    slots[mesh.data.get()] = mesh.gpu_mesh;
+    meshes_.push_back(range);
+  });
+  total_indices_ = indices.size();
+  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  vertices_ = upload_buffer(ctx, vertices.data(), vertices.size() * sizeof(Vertex),
+                            usage | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "scene vertices");
+  indices_ = upload_buffer(ctx, indices.data(), indices.size() * sizeof(uint32_t),
+                           usage | VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "scene indices");
+}
+
+Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(extent), profiler_(ctx) {
+  if (extent.width == 0 || extent.height == 0) throw std::invalid_argument("render size must be non-zero");
+  frame_uniforms_ = Buffer(ctx, sizeof(gpu_shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
+                           "frame uniforms");
+  nearest_sampler_ = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "nearest clamp");
+
+  PipelineFactory factory(ctx);
+  GraphicsPipelineDesc g;
+  g.name = "gbuffer";
+  g.vertex_shader = "gbuffer.vert";
+  g.fragment_shader = "gbuffer.frag";
+  g.bindings = {{gpu_shared::GBUFFER_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+                {gpu_shared::GBUFFER_BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                {gpu_shared::GBUFFER_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+  g.push_constant_size = sizeof(gpu_shared::DrawPush);
+  g.color_formats = {kAlbedoFormat, kNormalFormat, kNormalFormat};
+  g.depth_format = kDepthFormat;
+  g.cull_mode = VK_CULL_MODE_NONE;  // glTF single-sided surfaces still occlude and must be seen from both sides
+  gbuffer_pipeline_ = factory.graphics(g);
+
+  shading_points_pipeline_ = factory.compute(
+      {"shading_points.comp",
+       {{gpu_shared::SHADING_POINTS_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+        {gpu_shared::SHADING_POINTS_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+        {gpu_shared::SHADING_POINTS_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+       0});
+  lighting_pipeline_ = factory.compute({"lighting.comp",
+                                        {{gpu_shared::LIGHTING_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+                                         {gpu_shared::LIGHTING_BINDING_ALBEDO, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                         {gpu_shared::LIGHTING_BINDING_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                         {gpu_shared::LIGHTING_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                         {gpu_shared::LIGHTING_BINDING_SHADOW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                         {gpu_shared::LIGHTING_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                         {gpu_shared::LIGHTING_BINDING_OUTPUT, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                                        0});
+
+  VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  alloc.commandPool = ctx.command_pool();
+  alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  alloc.commandBufferCount = 1;
+  VK_CHECK(vkAllocateCommandBuffers(ctx.device(), &alloc, &frame_cmd_));
+  VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VK_CHECK(vkCreateFence(ctx.device(), &fence_info, nullptr, &frame_fence_));
+  create_targets();
+}
+
+Renderer::~Renderer() {
+  vkDeviceWaitIdle(ctx_.device());
+  features_.clear();
+  if (frame_fence_) vkDestroyFence(ctx_.device(), frame_fence_, nullptr);
+  if (frame_cmd_) vkFreeCommandBuffers(ctx_.device(), ctx_.command_pool(), 1, &frame_cmd_);
+}
+
+void Renderer::create_targets() {
+  const VkExtent2D e = extent_;
+  const VkImageUsageFlags color = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+                                  VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  const VkImageUsageFlags storage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                                    VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  gbuffer_.extent = e;
+  gbuffer_.depth = Image(ctx_, e, kDepthFormat,
+                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                             VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                         "gbuffer depth");
+  gbuffer_.albedo = Image(ctx_, e, kAlbedoFormat, color, "gbuffer albedo");
+  gbuffer_.normal = Image(ctx_, e, kNormalFormat, color, "gbuffer normal");
+  gbuffer_.geometric_normal = Image(ctx_, e, kNormalFormat, color, "gbuffer geometric normal");
+  gbuffer_.world_position = Image(ctx_, e, kWorldPositionFormat, storage, "world position");
+  shadow_term_ = Image(ctx_, e, kShadowFormat, storage, "shadow term");
+  overlay_ = Image(ctx_, e, kOutputFormat, storage, "debug overlay");
+  output_ = Image(ctx_, e, kOutputFormat, storage | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, "lit output");
+  ctx_.immediate_submit([&](VkCommandBuffer cmd) {
+    for (Image* img : {&gbuffer_.depth, &gbuffer_.albedo, &gbuffer_.normal, &gbuffer_.geometric_normal,
+                       &gbuffer_.world_position, &shadow_term_, &overlay_, &output_})
+      img->transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAllStages, kAllAccess);
+  });
+}
+
+void Renderer::resize(VkExtent2D extent) {
+  if (extent.width == 0 || extent.height == 0) return;
+  if (extent.width == extent_.width && extent.height == extent_.height) return;
+  vkDeviceWaitIdle(ctx_.device());
+  extent_ = extent;
+  create_targets();
+  use_external_shadow_ = false;
+  for (auto& f : features_) f->on_resize(ctx_, extent_);
+}
+
+void Renderer::set_scene(Scene& scene) {
+  vkDeviceWaitIdle(ctx_.device());
+  scene_ = &scene;
+  update_world_transforms(scene.registry);
+  geometry_ = std::make_unique<SceneGeometry>(ctx_, scene.registry);
+  for (auto& f : features_) f->on_scene(ctx_, scene, *geometry_);
+}
+
+void Renderer::add_feature(std::shared_ptr<RenderFeature> feature) {
+  if (scene_) feature->on_scene(ctx_, *scene_, *geometry_);
+  feature->on_resize(ctx_, extent_);
+  features_.push_back(std::move(feature));
+}
+
+void Renderer::build_draw_list() {
+  draws_.clear();
+  scene_->registry.each<Mesh, Transform>([&](Entity e, Mesh& mesh, Transform& t) {
+    if (mesh.gpu_mesh == UINT32_MAX) return;
+    DrawItem d;
+    d.entity = e;
+    d.world = t.world;
+    d.mesh = mesh.gpu_mesh;
+    if (const auto* m = scene_->registry.try_get<Material>(e)) {
+      d.base_color = m->base_color;
+      d.alpha_mode = m->alpha_mode;
+      d.alpha_cutoff = m->alpha_cutoff;
+    }
+    if (const auto* s = scene_->registry.try_get<ShadowCaster>(e)) d.shadow = *s;
+    draws_.push_back(d);
+  });
+}
+
+void Renderer::update(float dt) {
+  if (!scene_) throw std::logic_error("Renderer::update before set_scene");
+  systems_.run(scene_->registry, dt);
+  update_world_transforms(scene_->registry);
+  const float aspect = float(extent_.width) / float(extent_.height);
+  update_camera(scene_->registry, scene_->camera, aspect);
+  build_draw_list();
+
+  const auto& cam = scene_->registry.get<Camera>(scene_->camera);
+  const auto& cam_t = scene_->registry.get<Transform>(scene_->camera);
+  view_.view = cam.view;
+  view_.projection = cam.projection;
+  view_.view_projection = cam.projection * cam.view;
+  view_.inverse_view_projection = glm::inverse(view_.view_projection);
+  view_.camera_position = glm::vec3(cam_t.world[3]);
+  view_.near_plane = cam.near_plane;
+  view_.far_plane = cam.far_plane;
+  view_.vertical_fov = cam.vertical_fov;
+  view_.extent = extent_;
+  if (scene_->light.valid() && scene_->registry.has<DirectionalLight>(scene_->light)) {
+    const auto& light = scene_->registry.get<DirectionalLight>(scene_->light);
+    view_.light_direction = glm::normalize(light.direction);
+    view_.light_radiance = light.color * light.intensity;
+  }
+
+  gpu_shared::FrameUniforms u{};
+  u.view = view_.view;
+  u.projection = view_.projection;
+  u.view_projection = view_.view_projection;
+  u.inverse_view_projection = view_.inverse_view_projection;
+  u.camera_position = glm::vec4(view_.camera_position, 1.0f);
+  u.light_direction = glm::vec4(view_.light_direction, 0.0f);
+  u.light_radiance = glm::vec4(view_.light_radiance, 0.0f);
+  u.ambient = glm::vec4(0.22f, 0.25f, 0.30f, 0.0f);
+  u.extent = glm::uvec4(extent_.width, extent_.height, uint32_t(view_.frame_index), 0u);
+  frame_uniforms_.write(&u, sizeof(u));
+}
+
+void Renderer::record(VkCommandBuffer cmd) {
+  profiler_.begin_frame(cmd);
+  {
+    ScopedGpuRegion total(ctx_, profiler_, cmd, "frame");
+    // G-buffer.
+    {
+      ScopedGpuRegion region(ctx_, profiler_, cmd, "gbuffer");
+      VkRenderingAttachmentInfo colors[3];
+      Image* targets[3] = {&gbuffer_.albedo, &gbuffer_.normal, &gbuffer_.geometric_normal};
+      for (int i = 0; i < 3; ++i) {
+        colors[i] = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+        colors[i].imageView = targets[i]->view();
+        colors[i].imageLayout = VK_IMAGE_LAYOUT_GENERAL;
+        colors[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+        colors[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+        colors[i].clearValue.color = {{0.0f, 0.0f, 0.0f, 0.0f}};
+      }
+      VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+      depth.imageView = gbuffer_.depth.view();
+      depth.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
+      depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+      depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+      depth.clearValue.depthStencil = {0.0f, 0};  // reversed Z: 0 is the far plane
+      VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+      info.renderArea = {{0, 0}, extent_};
+      info.layerCount = 1;
+      info.colorAttachmentCount = 3;
+      info.pColorAttachments = colors;
+      info.pDepthAttachment = &depth;
+      vkCmdBeginRendering(cmd, &info);
+      VkViewport viewport{0, 0, float(extent_.width), float(extent_.height), 0.0f, 1.0f};
+      VkRect2D scissor{{0, 0}, extent_};
+      vkCmdSetViewport(cmd, 0, 1, &viewport);
+      vkCmdSetScissor(cmd, 0, 1, &scissor);
+      gbuffer_pipeline_.bind(cmd);
+      DescriptorWriter()
+          .uniform_buffer(gpu_shared::GBUFFER_BINDING_FRAME, frame_uniforms_.handle())
+          .storage_buffer(gpu_shared::GBUFFER_BINDING_VERTICES, geometry_->vertices().handle())
+          .storage_buffer(gpu_shared::GBUFFER_BINDING_INDICES, geometry_->indices().handle())
+          .push(ctx_, cmd, gbuffer_pipeline_);
+      VkDeviceSize offset = 0;
+      VkBuffer vb = geometry_->vertices().handle();
+      vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+      vkCmdBindIndexBuffer(cmd, geometry_->indices().handle(), 0, VK_INDEX_TYPE_UINT32);
+      for (const auto& d : draws_) {
+        const auto& range = geometry_->mesh(d.mesh);
+        if (range.index_count == 0) continue;
+        gpu_shared::DrawPush push{};
+        push.model = d.world;
+        push.base_color = d.base_color;
+        push.first_index = range.first_index;
+        push.vertex_offset = range.vertex_offset;
+        push.flags = (d.alpha_mode == AlphaMode::Mask ? gpu_shared::DRAW_FLAG_ALPHA_MASK : 0u) |
+                     (d.shadow.receives_shadow ? gpu_shared::DRAW_FLAG_RECEIVES_SHADOW : 0u);
+        push.alpha_cutoff = d.alpha_cutoff;
+        gbuffer_pipeline_.push_constants(cmd, push);
+        vkCmdDrawIndexed(cmd, range.index_count, 1, range.first_index, range.vertex_offset, 0);
+      }
+      vkCmdEndRendering(cmd);
+    }
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                   VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, kAllStages,
+                   kAllAccess);
+    // World positions from depth, exactly as every shadow pass and the reference will read them.
+    {
+      ScopedGpuRegion region(ctx_, profiler_, cmd, "shading_points");
+      shading_points_pipeline_.bind(cmd);
+      DescriptorWriter()
+          .uniform_buffer(gpu_shared::SHADING_POINTS_BINDING_FRAME, frame_uniforms_.handle())
+          .sampled_image(gpu_shared::SHADING_POINTS_BINDING_DEPTH, gbuffer_.depth.view(), nearest_sampler_.handle(),
+                         VK_IMAGE_LAYOUT_GENERAL)
+          .storage_image(gpu_shared::SHADING_POINTS_BINDING_WORLD_POSITION, gbuffer_.world_position.view())
+          .push(ctx_, cmd, shading_points_pipeline_);
+      vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
+    }
+    // Shadow term starts lit; the overlay starts empty.
+    VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}};
+    VkClearColorValue zero{{0.0f, 0.0f, 0.0f, 0.0f}};
+    VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    vkCmdClearColorImage(cmd, overlay_.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+    if (use_external_shadow_) {
+      VkBufferImageCopy copy{};
+      copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+      copy.imageExtent = {extent_.width, extent_.height, 1};
+      vkCmdCopyBufferToImage(cmd, external_shadow_.handle(), shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
+    } else {
+      vkCmdClearColorImage(cmd, shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, &one, 1, &range);
+    }
+    full_barrier(cmd);
+
+    if (!use_external_shadow_) {
+      FrameContext frame{ctx_,      cmd,        profiler_, view_,      gbuffer_,          shadow_term_,
+                         overlay_,  frame_uniforms_, *geometry_, draws_, scene_->registry};
+      for (auto& f : features_) {
+        f->record(frame);
+        full_barrier(cmd);
+      }
+    }
+
+    {
+      ScopedGpuRegion region(ctx_, profiler_, cmd, "lighting");
+      lighting_pipeline_.bind(cmd);
+      DescriptorWriter()
+          .uniform_buffer(gpu_shared::LIGHTING_BINDING_FRAME, frame_uniforms_.handle())
+          .storage_image(gpu_shared::LIGHTING_BINDING_ALBEDO, gbuffer_.albedo.view())
+          .storage_image(gpu_shared::LIGHTING_BINDING_NORMAL, gbuffer_.normal.view())
+          .storage_image(gpu_shared::LIGHTING_BINDING_WORLD_POSITION, gbuffer_.world_position.view())
+          .storage_image(gpu_shared::LIGHTING_BINDING_SHADOW, shadow_term_.view())
+          .storage_image(gpu_shared::LIGHTING_BINDING_OVERLAY, overlay_.view())
+          .storage_image(gpu_shared::LIGHTING_BINDING_OUTPUT, output_.view())
+          .push(ctx_, cmd, lighting_pipeline_);
+      vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
+    }
+    full_barrier(cmd);
+  }
+}
+
+void Renderer::after_frame() {
+  profiler_.collect();
+  for (auto& f : features_) f->after_frame(ctx_);
+  ++view_.frame_index;
+}
+
+void Renderer::render_frame(float dt) {
+  update(dt);
+  VK_CHECK(vkResetCommandBuffer(frame_cmd_, 0));
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  VK_CHECK(vkBeginCommandBuffer(frame_cmd_, &begin));
+  record(frame_cmd_);
+  VK_CHECK(vkEndCommandBuffer(frame_cmd_));
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &frame_cmd_;
+  VK_CHECK(vkResetFences(ctx_.device(), 1, &frame_fence_));
+  VK_CHECK(vkQueueSubmit(ctx_.queue(), 1, &submit, frame_fence_));
+  VK_CHECK(vkWaitForFences(ctx_.device(), 1, &frame_fence_, VK_TRUE, UINT64_MAX));
+  after_frame();
+}
+
+void Renderer::set_external_shadow_term(std::vector<float> term) {
+  if (term.empty()) {
+    use_external_shadow_ = false;
+    return;
+  }
+  if (term.size() != size_t(extent_.width) * extent_.height)
+    throw std::invalid_argument("external shadow term has the wrong size");
+  for (float& v : term) v = v < 0.0f ? 1.0f : v;  // background pixels: unshadowed
+  external_shadow_ = Buffer(ctx_, term.size() * sizeof(float), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true,
+                            "external shadow term");
+  external_shadow_.write(term.data(), term.size() * sizeof(float));
+  use_external_shadow_ = true;
+}
+
+std::vector<uint8_t> Renderer::read_output_rgba8() { return read_image(ctx_, output_, 4); }
+
+std::vector<glm::vec4> Renderer::read_world_positions() {
+  auto bytes = read_image(ctx_, gbuffer_.world_position, 16);
+  std::vector<glm::vec4> out(bytes.size() / 16);
+  std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+
+std::vector<glm::vec4> Renderer::read_geometric_normals() {
+  // RGBA16F on the GPU; widened here.
+  Image wide(ctx_, extent_, VK_FORMAT_R32G32B32A32_SFLOAT,
+             VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, "normal readback");
+  ctx_.immediate_submit([&](VkCommandBuffer cmd) {
+    wide.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    memory_barrier(cmd, kAllStages, kAllAccess, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkImageBlit blit{};
+    blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    blit.srcOffsets[1] = {int32_t(extent_.width), int32_t(extent_.height), 1};
+    blit.dstOffsets[1] = {int32_t(extent_.width), int32_t(extent_.height), 1};
+    vkCmdBlitImage(cmd, gbuffer_.geometric_normal.handle(), VK_IMAGE_LAYOUT_GENERAL, wide.handle(),
+                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, VK_FILTER_NEAREST);
+    wide.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                    VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+  });
+  auto bytes = read_image(ctx_, wide, 16);
+  std::vector<glm::vec4> out(bytes.size() / 16);
+  std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+
+std::vector<float> Renderer::read_depth() {
+  auto bytes = read_image(ctx_, gbuffer_.depth, 4);
+  std::vector<float> out(bytes.size() / 4);
+  std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+
+std::vector<float> Renderer::read_shadow_term() {
+  auto bytes = read_image(ctx_, shadow_term_, 4);
+  std::vector<float> out(bytes.size() / 4);
+  std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
+
+void write_rgba8_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const uint8_t* rgba) {
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  if (!stbi_write_png(path.c_str(), int(width), int(height), 4, rgba, int(width * 4)))
+    throw std::runtime_error("cannot write PNG " + path.string());
+}
+
+void Renderer::write_png(const std::filesystem::path& path) {
+  auto pixels = read_output_rgba8();
+  write_rgba8_png(path, extent_.width, extent_.height, pixels.data());
+}
+
+}  // namespace engine

@@ -1,0 +1,44 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "frame.h"
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = LIGHTING_BINDING_FRAME) uniform Frame { FrameUniforms frame; };
+layout(set = 0, binding = LIGHTING_BINDING_ALBEDO, rgba8) readonly uniform image2D albedo_image;
+layout(set = 0, binding = LIGHTING_BINDING_NORMAL, rgba16f) readonly uniform image2D normal_image;
+layout(set = 0, binding = LIGHTING_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position_image;
+layout(set = 0, binding = LIGHTING_BINDING_SHADOW, r32f) readonly uniform image2D shadow_image;
+layout(set = 0, binding = LIGHTING_BINDING_OVERLAY, rgba8) readonly uniform image2D overlay_image;
+layout(set = 0, binding = LIGHTING_BINDING_OUTPUT, rgba8) writeonly uniform image2D output_image;
+
+vec3 linear_to_srgb(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
+}
+
+void main() {
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(uvec2(pixel), frame.extent.xy))) return;
+  vec4 position = imageLoad(world_position_image, pixel);
+  vec3 color;
+  if (position.w == 0.0) {
+    // Sky: a vertical gradient.
+    vec2 ndc = (vec2(pixel) + 0.5) / vec2(frame.extent.xy) * 2.0 - 1.0;
+    vec4 far_point = frame.inverse_view_projection * vec4(ndc, 0.0001, 1.0);
+    vec3 dir = normalize(far_point.xyz / far_point.w - frame.camera_position.xyz);
+    color = mix(vec3(0.60, 0.68, 0.78), vec3(0.25, 0.42, 0.70), clamp(dir.y, 0.0, 1.0));
+  } else {
+    vec4 albedo = imageLoad(albedo_image, pixel);
+    vec3 n = normalize(imageLoad(normal_image, pixel).xyz);
+    vec3 l = -frame.light_direction.xyz;
+    float shadow = albedo.a > 0.5 ? imageLoad(shadow_image, pixel).r : 1.0;
+    float n_dot_l = max(dot(n, l), 0.0);
+    float sky = 0.5 + 0.5 * n.y;
+    color = albedo.rgb * (frame.light_radiance.rgb * n_dot_l * shadow + frame.ambient.rgb * sky);
+    color = color / (1.0 + color * 0.25);  // gentle tone curve keeps bright sun from clipping
+  }
+  vec4 overlay = imageLoad(overlay_image, pixel);
+  color = linear_to_srgb(color);
+  color = mix(color, overlay.rgb, overlay.a);
+  imageStore(output_image, pixel, vec4(color, 1.0));
+}

@@ -1,0 +1,21 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "frame.h"
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = SHADING_POINTS_BINDING_FRAME) uniform Frame { FrameUniforms frame; };
+layout(set = 0, binding = SHADING_POINTS_BINDING_DEPTH) uniform sampler2D depth_image;
+layout(set = 0, binding = SHADING_POINTS_BINDING_WORLD_POSITION, rgba32f) writeonly uniform image2D world_position;
+
+void main() {
+  uvec2 pixel = gl_GlobalInvocationID.xy;
+  if (any(greaterThanEqual(pixel, frame.extent.xy))) return;
+  float depth = texelFetch(depth_image, ivec2(pixel), 0).r;
+  if (depth <= 0.0) {  // reversed Z: cleared to 0 where nothing was drawn
+    imageStore(world_position, ivec2(pixel), vec4(0.0));
+    return;
+  }
+  vec2 ndc = (vec2(pixel) + 0.5) / vec2(frame.extent.xy) * 2.0 - 1.0;
+  vec4 world = frame.inverse_view_projection * vec4(ndc, depth, 1.0);
+  imageStore(world_position, ivec2(pixel), vec4(world.xyz / world.w, 1.0));
+}

@@ -1,0 +1,60 @@
+// Per-frame data and the G-buffer/lighting bindings, shared by C++ and GLSL.
+#ifndef FRAME_H
+#define FRAME_H
+#include "shared_prelude.h"
+
+SHARED_BEGIN
+
+struct FrameUniforms {
+  mat4 view;
+  mat4 projection;
+  mat4 view_projection;
+  mat4 inverse_view_projection;  // NDC (y down, reversed depth) -> world
+  vec4 camera_position;          // xyz
+  vec4 light_direction;          // xyz: direction the light travels, unit
+  vec4 light_radiance;           // rgb: colour * intensity
+  vec4 ambient;                  // rgb: sky fill light
+  uvec4 extent;                  // x, y: render size in pixels; z: frame index
+};
+
+// Push constants of one mesh draw in the G-buffer pass.
+struct DrawPush {
+  mat4 model;
+  vec4 base_color;
+  uint first_index;   // of the mesh in the scene index buffer, to fetch the triangle for its face normal
+  int vertex_offset;
+  uint flags;         // DRAW_FLAG_*
+  float alpha_cutoff;
+};
+
+SHARED_CONST uint DRAW_FLAG_ALPHA_MASK = 1u;
+SHARED_CONST uint DRAW_FLAG_RECEIVES_SHADOW = 2u;
+
+// G-buffer pass bindings.
+SHARED_CONST uint GBUFFER_BINDING_FRAME = 0u;
+SHARED_CONST uint GBUFFER_BINDING_VERTICES = 1u;
+SHARED_CONST uint GBUFFER_BINDING_INDICES = 2u;
+
+// Shading-point pass: depth -> world position.
+SHARED_CONST uint SHADING_POINTS_BINDING_FRAME = 0u;
+SHARED_CONST uint SHADING_POINTS_BINDING_DEPTH = 1u;
+SHARED_CONST uint SHADING_POINTS_BINDING_WORLD_POSITION = 2u;
+
+// Lighting pass.
+SHARED_CONST uint LIGHTING_BINDING_FRAME = 0u;
+SHARED_CONST uint LIGHTING_BINDING_ALBEDO = 1u;
+SHARED_CONST uint LIGHTING_BINDING_NORMAL = 2u;
+SHARED_CONST uint LIGHTING_BINDING_WORLD_POSITION = 3u;
+SHARED_CONST uint LIGHTING_BINDING_SHADOW = 4u;
+SHARED_CONST uint LIGHTING_BINDING_OVERLAY = 5u;
+SHARED_CONST uint LIGHTING_BINDING_OUTPUT = 6u;
+
+SHARED_CONST uint kVertexFloats = 8u;  // engine::Vertex: position(3) normal(3) uv(2)
+
+SHARED_END
+
+#ifdef __cplusplus
+static_assert(sizeof(gpu_shared::FrameUniforms) == 4 * 64 + 5 * 16);
+static_assert(sizeof(gpu_shared::DrawPush) == 96);
+#endif
+#endif
