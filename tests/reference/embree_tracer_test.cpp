@@ -1,0 +1,250 @@
+// The reference tracer checked against shadows worked out by hand, on scenes built in code.
+#include "reference/embree_tracer.hpp"
+
+#include <gtest/gtest.h>
+#include <shared/shadow_common.h>
+
+#include <cmath>
+#include <glm/gtc/matrix_transform.hpp>
+#include <stdexcept>
+
+#include "reference/synthetic.hpp"
+
+namespace {
+
+using reference::EmbreeTracer;
+using reference::ShadingPoints;
+
+constexpr glm::vec3 kUp(0.0f, 1.0f, 0.0f);
+constexpr glm::vec3 kDown(0.0f, -1.0f, 0.0f);
+constexpr uint32_t kSize = 16;  // 16 x 16 pixels over [-4, 4]^2: each pixel is 0.5 world units wide
+
+// Ground y = 0 over [-4, 4]^2, occluder y = 1 over [-1, 1]^2: with light straight down, pixels 6..9
+// in both x and y are under the occluder.
+void add_ground_and_occluder(engine::Registry& reg) {
+  reference::add_mesh_entity(reg, reference::make_quad_y(0.0f, glm::vec2(-4.0f), glm::vec2(4.0f)));
+  reference::add_mesh_entity(reg, reference::make_quad_y(1.0f, glm::vec2(-1.0f), glm::vec2(1.0f)));
+}
+
+glm::mat4 camera() { return reference::top_down_inv_view_proj(glm::vec2(0.0f), glm::vec2(4.0f)); }
+
+bool under_occluder(uint32_t x, uint32_t y) { return x >= 6 && x <= 9 && y >= 6 && y <= 9; }
+
+float at(const std::vector<float>& v, uint32_t x, uint32_t y) { return v[size_t(y) * kSize + x]; }
+
+TEST(EmbreeTracer, TakesMeshesWithTransformThatCastShadows) {
+  engine::Registry reg;
+  add_ground_and_occluder(reg);  // no ShadowCaster: cast
+  const auto caster = reference::add_mesh_entity(
+      reg, reference::make_quad_y(2.0f, glm::vec2(0.0f), glm::vec2(1.0f)));
+  reg.emplace<engine::ShadowCaster>(caster, engine::ShadowCaster{.casts_shadow = true});
+  const auto hidden = reference::add_mesh_entity(
+      reg, reference::make_quad_y(3.0f, glm::vec2(0.0f), glm::vec2(1.0f)));
+  reg.emplace<engine::ShadowCaster>(hidden, engine::ShadowCaster{.casts_shadow = false});
+  const auto no_transform = reg.create();
+  reg.emplace<engine::Mesh>(
+      no_transform, engine::Mesh{reference::make_quad_y(4.0f, glm::vec2(0.0f), glm::vec2(1.0f))});
+  reg.emplace<engine::Transform>(reg.create());
+  reference::add_mesh_entity(reg, nullptr);  // a Mesh without data
+
+  const EmbreeTracer tracer(reg);
+  EXPECT_EQ(tracer.triangle_count(), 6u);
+  // The quad at y = 3 was left out; the one at y = 2 was not.
+  EXPECT_TRUE(tracer.occluded(glm::vec3(0.5f, 2.5f, 0.5f), kDown));
+  EXPECT_FALSE(tracer.occluded(glm::vec3(0.5f, 2.5f, 0.5f), kUp));
+}
+
+TEST(EmbreeTracer, AppliesWorldMatrixAndSeesBothFaces) {
+  engine::Registry reg;
+  // A unit quad at the origin, scaled to [-1, 1]^2 and lifted to y = 1 by its world matrix alone.
+  const glm::mat4 world =
+      glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.0f, 0.0f)), glm::vec3(2.0f));
+  reference::add_mesh_entity(reg, reference::make_quad_y(0.0f, glm::vec2(-0.5f), glm::vec2(0.5f)),
+                             world);
+  const EmbreeTracer tracer(reg);
+  EXPECT_EQ(tracer.triangle_count(), 2u);
+  EXPECT_TRUE(tracer.occluded(glm::vec3(0.9f, 0.0f, -0.9f), kUp));    // hits the back face
+  EXPECT_TRUE(tracer.occluded(glm::vec3(-0.9f, 2.0f, 0.9f), kDown));  // hits the front face
+  EXPECT_FALSE(tracer.occluded(glm::vec3(1.1f, 0.0f, 0.0f), kUp));
+  EXPECT_FALSE(tracer.occluded(glm::vec3(0.0f, 0.0f, 0.0f), kDown));
+  EXPECT_FALSE(tracer.occluded(glm::vec3(0.0f, 1.5f, 0.0f), kUp));
+}
+
+TEST(EmbreeTracer, OneSampleGroundShadowBackgroundAndBackFacing) {
+  engine::Registry reg;
+  add_ground_and_occluder(reg);
+  const EmbreeTracer tracer(reg);
+  ShadingPoints sp = reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0.0f), kUp);
+  for (uint32_t x = 0; x < kSize; ++x) sp.position[sp.index(x, 0)].w = 0.0f;  // a background row
+  sp.normal[sp.index(2, 3)] = glm::vec4(kDown, 0.0f);  // faces away from the sun
+  sp.normal[sp.index(7, 7)] = glm::vec4(kDown, 0.0f);  // faces away and is under the occluder
+
+  const std::vector<float> vis = tracer.visibility_1spp(sp, glm::vec3(0.0f, -2.0f, 0.0f));
+  ASSERT_EQ(vis.size(), size_t(kSize) * kSize);
+  for (uint32_t y = 0; y < kSize; ++y) {
+    for (uint32_t x = 0; x < kSize; ++x) {
+      SCOPED_TRACE(testing::Message() << "pixel " << x << "," << y);
+      float expected = under_occluder(x, y) ? 0.0f : 1.0f;
+      if (y == 0) expected = -1.0f;
+      if (x == 2 && y == 3) expected = 0.0f;
+      EXPECT_EQ(at(vis, x, y), expected);
+    }
+  }
+  // The occluder's edges fall on pixel boundaries, so all 32 samples of a pixel agree.
+  EXPECT_EQ(tracer.visibility_32spp(sp, glm::vec3(0.0f, -2.0f, 0.0f)), vis);
+}
+
+TEST(EmbreeTracer, RayStartsAtSharedNormalOffset) {
+  engine::Registry reg;
+  reference::add_mesh_entity(reg, reference::make_quad_y(1.0f, glm::vec2(-1.0f), glm::vec2(1.0f)));
+  const EmbreeTracer tracer(reg);
+  const float k = gpu_shared::kShadowNormalOffset;
+  ShadingPoints sp;
+  sp.resize(4, 1);
+  // Just under the surface, within the offset: the pushed origin clears it.
+  sp.position[0] = glm::vec4(0.0f, 1.0f - 0.5f * k, 0.0f, 1.0f);
+  // Under the surface by more than the offset: still below it, so shadowed.
+  sp.position[1] = glm::vec4(0.0f, 1.0f - 2.0f * k, 0.0f, 1.0f);
+  // Exactly on it: no self-shadowing.
+  sp.position[2] = glm::vec4(0.0f, 1.0f, 0.0f, 1.0f);
+  // Normal perpendicular to the light counts as facing away.
+  sp.position[3] = glm::vec4(5.0f, 0.0f, 0.0f, 1.0f);
+  for (int i = 0; i < 3; ++i) sp.normal[i] = glm::vec4(kUp, 0.0f);
+  sp.normal[3] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+  const std::vector<float> vis = tracer.visibility_1spp(sp, kDown);
+  EXPECT_EQ(vis, (std::vector<float>{1.0f, 0.0f, 1.0f, 0.0f}));
+  // With an identity inv_view_proj the camera rays run parallel to these planes, so every μQuad
+  // sample stays at its shading point and 32 samples must give the same answers.
+  EXPECT_EQ(tracer.visibility_32spp(sp, kDown), vis);
+}
+
+TEST(EmbreeTracer, FlippedLightFlipsPointsUnderTheOccluder) {
+  engine::Registry reg;
+  reference::add_mesh_entity(reg, reference::make_quad_y(1.0f, glm::vec2(-1.0f), glm::vec2(1.0f)));
+  const EmbreeTracer tracer(reg);
+  // Receivers floating at y = 0.5, below the occluder, with nothing under them.
+  const ShadingPoints facing_up =
+      reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0, 0.5f, 0), kUp);
+  const ShadingPoints facing_down =
+      reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0, 0.5f, 0), kDown);
+  const std::vector<float> sun_above = tracer.visibility_1spp(facing_up, kDown);
+  const std::vector<float> sun_below = tracer.visibility_1spp(facing_down, kUp);
+  const std::vector<float> sun_below_facing_up = tracer.visibility_1spp(facing_up, kUp);
+  // Above the occluder looking down on it, with the sun below: its front face shadows.
+  const ShadingPoints above =
+      reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0, 1.5f, 0), kDown);
+  const std::vector<float> above_sun_below = tracer.visibility_1spp(above, kUp);
+  for (uint32_t y = 0; y < kSize; ++y) {
+    for (uint32_t x = 0; x < kSize; ++x) {
+      SCOPED_TRACE(testing::Message() << "pixel " << x << "," << y);
+      EXPECT_EQ(at(sun_above, x, y), under_occluder(x, y) ? 0.0f : 1.0f);
+      EXPECT_EQ(at(sun_below, x, y), 1.0f);
+      EXPECT_EQ(at(sun_below_facing_up, x, y), 0.0f);
+      EXPECT_EQ(at(above_sun_below, x, y), under_occluder(x, y) ? 0.0f : 1.0f);
+    }
+  }
+}
+
+TEST(EmbreeTracer, MicroQuadSamplesLandWhereTheCameraPutsThem) {
+  const glm::vec2 viewport{float(kSize)};
+  const glm::vec3 s =
+      gpu_shared::micro_quad_sample(glm::vec2(6.0f, 9.0f), gpu_shared::kSamplePattern[5], viewport,
+                                    camera(), glm::vec3(1.0f, 0.0f, 2.0f), kUp);
+  EXPECT_NEAR(s.x, -4.0f + 0.5f * (6.0f + gpu_shared::kSamplePattern[5].x), 1e-5f);
+  EXPECT_NEAR(s.y, 0.0f, 1e-5f);
+  EXPECT_NEAR(s.z, -4.0f + 0.5f * (9.0f + gpu_shared::kSamplePattern[5].y), 1e-5f);
+}
+
+// 32 samples under a tilted sun: the shadow of the occluder's x edges falls inside pixel columns 6
+// and 10, so those are fractional; every value must match an analytic ray/plane test per sample.
+TEST(EmbreeTracer, ThirtyTwoSamplesMatchAnalyticShadow) {
+  engine::Registry reg;
+  add_ground_and_occluder(reg);
+  const EmbreeTracer tracer(reg);
+  const glm::vec3 light(0.3f, -1.0f, 0.0f);
+  const ShadingPoints sp =
+      reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0.0f), kUp);
+  const std::vector<float> vis = tracer.visibility_32spp(sp, light);
+  const std::vector<float> one = tracer.visibility_1spp(sp, light);
+
+  const glm::vec3 to_light = -glm::normalize(light);
+  auto lit_analytic = [&](glm::vec3 surface) {
+    const glm::vec3 o = gpu_shared::shadow_ray_origin(surface, kUp);
+    const glm::vec3 h = o + to_light * ((1.0f - o.y) / to_light.y);
+    return !(std::abs(h.x) <= 1.0f && std::abs(h.z) <= 1.0f);
+  };
+  int fractional = 0;
+  for (uint32_t y = 0; y < kSize; ++y) {
+    for (uint32_t x = 0; x < kSize; ++x) {
+      SCOPED_TRACE(testing::Message() << "pixel " << x << "," << y);
+      int lit = 0;
+      for (const glm::vec2& offset : gpu_shared::kSamplePattern) {
+        lit += lit_analytic(glm::vec3(-4.0f + 0.5f * (float(x) + offset.x), 0.0f,
+                                      -4.0f + 0.5f * (float(y) + offset.y)));
+      }
+      EXPECT_FLOAT_EQ(at(vis, x, y), float(lit) / 32.0f);
+      EXPECT_EQ(at(one, x, y), lit_analytic(glm::vec3(sp.position[sp.index(x, y)])) ? 1.0f : 0.0f);
+      const bool edge_column = (x == 6 || x == 10) && y >= 6 && y <= 9;
+      if (edge_column) {
+        EXPECT_GT(at(vis, x, y), 0.0f);
+        EXPECT_LT(at(vis, x, y), 1.0f);
+        ++fractional;
+      } else {
+        EXPECT_TRUE(at(vis, x, y) == 0.0f || at(vis, x, y) == 1.0f);
+      }
+    }
+  }
+  EXPECT_EQ(fractional, 8);
+  // Counted by hand from kSamplePattern: the shadow edge sits at x = -0.7006 (19 samples left of
+  // it, lit) and x = 1.2994 (19 samples left of it, shadowed).
+  EXPECT_FLOAT_EQ(at(vis, 6, 8), 19.0f / 32.0f);
+  EXPECT_FLOAT_EQ(at(vis, 10, 8), 13.0f / 32.0f);
+  EXPECT_EQ(at(one, 6, 8), 1.0f);
+  EXPECT_EQ(at(one, 10, 8), 0.0f);
+}
+
+TEST(EmbreeTracer, PacketResultsAgreeWithSingleRays) {
+  engine::Registry reg;
+  add_ground_and_occluder(reg);
+  reference::add_mesh_entity(
+      reg, reference::make_quad_y(2.0f, glm::vec2(1.5f, -3.0f), glm::vec2(3.0f, 0.5f)));
+  const EmbreeTracer tracer(reg);
+  const glm::vec3 light = glm::normalize(glm::vec3(-0.7f, -1.0f, 0.45f));
+  const ShadingPoints sp =
+      reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0.0f), kUp);
+  const std::vector<float> vis = tracer.visibility_1spp(sp, light);
+  int shadowed = 0;
+  for (size_t i = 0; i < vis.size(); ++i) {
+    const glm::vec3 o = gpu_shared::shadow_ray_origin(glm::vec3(sp.position[i]), kUp);
+    EXPECT_EQ(vis[i], tracer.occluded(o, -light) ? 0.0f : 1.0f) << "pixel " << i;
+    shadowed += vis[i] == 0.0f;
+  }
+  EXPECT_GT(shadowed, 20);
+}
+
+TEST(EmbreeTracer, EmptySceneLightsEverything) {
+  engine::Registry reg;
+  const EmbreeTracer tracer(reg);
+  EXPECT_EQ(tracer.triangle_count(), 0u);
+  const ShadingPoints sp = reference::plane_shading_points(4, 4, camera(), glm::vec3(0.0f), kUp);
+  EXPECT_EQ(tracer.visibility_32spp(sp, kDown), std::vector<float>(16, 1.0f));
+}
+
+TEST(EmbreeTracer, RejectsBadInput) {
+  engine::Registry reg;
+  auto bad = reference::make_quad_y(0.0f, glm::vec2(0.0f), glm::vec2(1.0f));
+  bad->indices.push_back(0);
+  bad->indices.push_back(1);
+  bad->indices.push_back(7);
+  reference::add_mesh_entity(reg, bad);
+  EXPECT_THROW(EmbreeTracer{reg}, std::runtime_error);
+
+  engine::Registry empty;
+  const EmbreeTracer tracer(empty);
+  ShadingPoints sp = reference::plane_shading_points(4, 4, camera(), glm::vec3(0.0f), kUp);
+  EXPECT_THROW(tracer.visibility_1spp(sp, glm::vec3(0.0f)), std::invalid_argument);
+  sp.normal.pop_back();
+  EXPECT_THROW(tracer.visibility_32spp(sp, kDown), std::invalid_argument);
+}
+
+}  // namespace

@@ -1,0 +1,56 @@
+#pragma once
+// Ground truth for sun shadows: an Embree scene of every shadow-casting triangle, queried with the
+// same shading points and the same ray conventions (shared/shadow_common.h) the GPU techniques use.
+//
+// Rules of every visibility_* result (one float per pixel, index y * width + x):
+//  * background pixel (position.w == 0)                       -> -1 (excluded from comparisons)
+//  * covered pixel whose normal faces away from the light,
+//    dot(n, -normalize(light_direction)) <= 0                 -> 0  (the GPU passes skip such
+//    points)
+//  * otherwise, visibility_1spp: one ray from gpu_shared::shadow_ray_origin(p, n) towards the
+//  light;
+//    occluded -> 0, else 1.
+//  * otherwise, visibility_32spp: for each i < 32, s_i = gpu_shared::micro_quad_sample(vec2(x, y),
+//    kSamplePattern[i], vec2(width, height), inv_view_proj, p, n); one ray from
+//    shadow_ray_origin(s_i, n); the value is the unoccluded fraction k / 32.
+// A ray (tnear = 0, tfar = inf) is occluded by any hit on either face of any triangle (no backface
+// culling).
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <memory>
+#include <vector>
+
+#include "engine/core/ecs.hpp"
+#include "reference/shading_points.hpp"
+
+namespace reference {
+
+class EmbreeTracer {
+ public:
+  // Takes every entity with Mesh + Transform, skipping those whose ShadowCaster says
+  // casts_shadow = false (no ShadowCaster means it casts). Vertices go through Transform::world as
+  // it stands: run the transform system first. Throws std::runtime_error (one line) on an Embree
+  // error or a mesh index out of range.
+  explicit EmbreeTracer(engine::Registry& registry);
+  ~EmbreeTracer();
+  EmbreeTracer(EmbreeTracer&&) noexcept;
+  EmbreeTracer& operator=(EmbreeTracer&&) noexcept;
+  EmbreeTracer(const EmbreeTracer&) = delete;
+  EmbreeTracer& operator=(const EmbreeTracer&) = delete;
+
+  uint32_t triangle_count() const;
+
+  // True when the ray origin + t * dir_to_light, t in [0, inf), hits either face of any triangle.
+  bool occluded(glm::vec3 origin, glm::vec3 dir_to_light) const;
+
+  // light_direction: the direction light travels (from the sun into the scene); need not be unit.
+  // Throws std::invalid_argument when it is zero or the buffers do not match width * height.
+  std::vector<float> visibility_1spp(const ShadingPoints& points, glm::vec3 light_direction) const;
+  std::vector<float> visibility_32spp(const ShadingPoints& points, glm::vec3 light_direction) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace reference

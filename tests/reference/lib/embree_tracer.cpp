@@ -1,0 +1,324 @@
+#include "reference/embree_tracer.hpp"
+
+#include <embree3/rtcore.h>
+#include <shared/shadow_common.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "engine/core/components.hpp"
+
+namespace reference {
+namespace {
+
+const char* error_name(RTCError e) {
+  switch (e) {
+    case RTC_ERROR_NONE:
+      return "none";
+    case RTC_ERROR_UNKNOWN:
+      return "unknown";
+    case RTC_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION:
+      return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU:
+      return "unsupported CPU";
+    case RTC_ERROR_CANCELLED:
+      return "cancelled";
+  }
+  return "unrecognised";
+}
+
+struct DeviceDeleter {
+  void operator()(RTCDevice d) const { rtcReleaseDevice(d); }
+};
+struct SceneDeleter {
+  void operator()(RTCScene s) const { rtcReleaseScene(s); }
+};
+using DeviceHandle = std::unique_ptr<RTCDeviceTy, DeviceDeleter>;
+using SceneHandle = std::unique_ptr<RTCSceneTy, SceneDeleter>;
+
+constexpr int kPacket = 16;
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+glm::vec3 to_light_dir(glm::vec3 light_direction) {
+  const float len = glm::length(light_direction);
+  if (!(len > 0.0f) || !std::isfinite(len)) {
+    throw std::invalid_argument("light direction must be finite and non-zero");
+  }
+  return -light_direction / len;
+}
+
+void check_points(const ShadingPoints& points) {
+  const size_t n = points.pixel_count();
+  if (points.position.size() != n || points.normal.size() != n) {
+    throw std::invalid_argument(
+        "shading points: position/normal sizes differ from width * height (" +
+        std::to_string(points.width) + "x" + std::to_string(points.height) + ")");
+  }
+}
+
+// Runs row_fn(y) for every row, rows handed out one at a time so uneven rows balance.
+template <typename Fn>
+void for_each_row(uint32_t height, Fn&& row_fn) {
+  const uint32_t workers = std::max(1u, std::min(std::thread::hardware_concurrency(), height));
+  std::atomic<uint32_t> next{0};
+  auto work = [&] {
+    for (uint32_t y = next.fetch_add(1); y < height; y = next.fetch_add(1)) row_fn(y);
+  };
+  std::vector<std::thread> threads;
+  for (uint32_t i = 1; i < workers; ++i) threads.emplace_back(work);
+  work();
+  for (auto& t : threads) t.join();
+}
+
+}  // namespace
+
+struct EmbreeTracer::Impl {
+  DeviceHandle device;
+  SceneHandle scene;
+  uint32_t triangles = 0;
+  bool packets = false;
+  std::string last_message;  // filled by the device error callback
+
+  void check(const char* what) {
+    const RTCError e = rtcGetDeviceError(device.get());
+    if (e == RTC_ERROR_NONE) return;
+    std::string msg = std::string("Embree error (") + error_name(e) + ") while " + what;
+    if (!last_message.empty()) msg += ": " + last_message;
+    std::replace(msg.begin(), msg.end(), '\n', ' ');
+    throw std::runtime_error(msg);
+  }
+
+  // Tests `count` (<= 16) rays sharing a direction; writes 1 to hit[i] when ray i is occluded.
+  void occluded_batch(int count, const glm::vec3* origins, glm::vec3 dir, uint8_t* hit) const {
+    if (!packets) {
+      for (int i = 0; i < count; ++i) hit[i] = occluded1(origins[i], dir) ? 1 : 0;
+      return;
+    }
+    alignas(64) int valid[kPacket];
+    alignas(64) RTCRay16 rays;
+    for (int i = 0; i < kPacket; ++i) {
+      const bool on = i < count;
+      valid[i] = on ? -1 : 0;
+      const glm::vec3 o = on ? origins[i] : glm::vec3(0.0f);
+      rays.org_x[i] = o.x;
+      rays.org_y[i] = o.y;
+      rays.org_z[i] = o.z;
+      rays.tnear[i] = 0.0f;
+      rays.dir_x[i] = dir.x;
+      rays.dir_y[i] = dir.y;
+      rays.dir_z[i] = dir.z;
+      rays.time[i] = 0.0f;
+      rays.tfar[i] = kInf;
+      rays.mask[i] = 0xFFFFFFFFu;
+      rays.id[i] = static_cast<unsigned>(i);
+      rays.flags[i] = 0;
+    }
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    // Rays of one pixel or one row segment share a direction and nearly an origin.
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcOccluded16(valid, scene.get(), &ctx, &rays);
+    // Embree sets tfar to -inf for every occluded ray.
+    for (int i = 0; i < count; ++i) hit[i] = rays.tfar[i] < 0.0f ? 1 : 0;
+  }
+
+  bool occluded1(glm::vec3 origin, glm::vec3 dir) const {
+    RTCRay ray{};
+    ray.org_x = origin.x;
+    ray.org_y = origin.y;
+    ray.org_z = origin.z;
+    ray.tnear = 0.0f;
+    ray.dir_x = dir.x;
+    ray.dir_y = dir.y;
+    ray.dir_z = dir.z;
+    ray.time = 0.0f;
+    ray.tfar = kInf;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded1(scene.get(), &ctx, &ray);
+    return ray.tfar < 0.0f;
+  }
+};
+
+EmbreeTracer::EmbreeTracer(engine::Registry& registry) : impl_(std::make_unique<Impl>()) {
+  Impl& im = *impl_;
+  im.device.reset(rtcNewDevice(nullptr));
+  if (!im.device) {
+    throw std::runtime_error(std::string("Embree error (") +
+                             error_name(rtcGetDeviceError(nullptr)) +
+                             ") while creating the device");
+  }
+  rtcSetDeviceErrorFunction(
+      im.device.get(),
+      [](void* user, RTCError, const char* str) {
+        static_cast<Impl*>(user)->last_message = str ? str : "";
+      },
+      &im);
+
+  // All casters go into one world-space triangle soup: the reference needs no instancing.
+  std::vector<glm::vec3> vertices;
+  std::vector<uint32_t> indices;
+  registry.each<engine::Mesh, engine::Transform>(
+      [&](engine::Entity e, engine::Mesh& mesh, engine::Transform& transform) {
+        if (const auto* caster = registry.try_get<engine::ShadowCaster>(e);
+            caster && !caster->casts_shadow) {
+          return;
+        }
+        if (!mesh.data) return;
+        const engine::MeshData& data = *mesh.data;
+        const size_t base = vertices.size();
+        for (const engine::Vertex& v : data.vertices) {
+          vertices.push_back(glm::vec3(transform.world * glm::vec4(v.position, 1.0f)));
+        }
+        const size_t whole = data.indices.size() / 3 * 3;
+        for (size_t i = 0; i < whole; ++i) {
+          const uint32_t idx = data.indices[i];
+          if (idx >= data.vertices.size()) {
+            throw std::runtime_error("mesh '" + data.name + "': index " + std::to_string(idx) +
+                                     " out of range (" + std::to_string(data.vertices.size()) +
+                                     " vertices)");
+          }
+          indices.push_back(static_cast<uint32_t>(base + idx));
+        }
+      });
+  if (vertices.size() > UINT32_MAX)
+    throw std::runtime_error("reference scene has too many vertices");
+
+  im.scene.reset(rtcNewScene(im.device.get()));
+  im.check("creating the scene");
+  rtcSetSceneFlags(im.scene.get(), RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(im.scene.get(), RTC_BUILD_QUALITY_HIGH);
+
+  im.triangles = static_cast<uint32_t>(indices.size() / 3);
+  if (im.triangles > 0) {
+    RTCGeometry geom = rtcNewGeometry(im.device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    im.check("creating the triangle geometry");
+    rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);
+    // rtcSetNewGeometryBuffer pads the allocation as Embree's SIMD loads require.
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices.size()));
+    auto* ib = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), im.triangles));
+    if (!vb || !ib) {
+      rtcReleaseGeometry(geom);
+      im.check("allocating geometry buffers");
+      throw std::runtime_error("Embree error while allocating geometry buffers");
+    }
+    for (size_t i = 0; i < vertices.size(); ++i) {
+      vb[3 * i + 0] = vertices[i].x;
+      vb[3 * i + 1] = vertices[i].y;
+      vb[3 * i + 2] = vertices[i].z;
+    }
+    std::copy(indices.begin(), indices.end(), ib);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(im.scene.get(), geom);
+    rtcReleaseGeometry(geom);  // the scene keeps its own reference
+    im.check("adding the triangle geometry");
+  }
+  rtcCommitScene(im.scene.get());
+  im.check("building the scene");
+
+  // Packets of 16 depend on how Embree was built; probe once and fall back to single rays.
+  im.packets = true;
+  const glm::vec3 probe_origin(0.0f);
+  uint8_t probe_hit[kPacket];
+  im.occluded_batch(1, &probe_origin, glm::vec3(0.0f, 1.0f, 0.0f), probe_hit);
+  if (rtcGetDeviceError(im.device.get()) != RTC_ERROR_NONE) {
+    im.packets = false;
+    im.last_message.clear();
+  }
+}
+
+EmbreeTracer::~EmbreeTracer() = default;
+EmbreeTracer::EmbreeTracer(EmbreeTracer&&) noexcept = default;
+EmbreeTracer& EmbreeTracer::operator=(EmbreeTracer&&) noexcept = default;
+
+uint32_t EmbreeTracer::triangle_count() const { return impl_->triangles; }
+
+bool EmbreeTracer::occluded(glm::vec3 origin, glm::vec3 dir_to_light) const {
+  return impl_->occluded1(origin, dir_to_light);
+}
+
+std::vector<float> EmbreeTracer::visibility_1spp(const ShadingPoints& points,
+                                                 glm::vec3 light_direction) const {
+  check_points(points);
+  const glm::vec3 to_light = to_light_dir(light_direction);
+  std::vector<float> out(points.pixel_count(), -1.0f);
+  for_each_row(points.height, [&](uint32_t y) {
+    // Lit-facing pixels of the row are gathered into packets; the rest are settled without a ray.
+    glm::vec3 origins[kPacket];
+    size_t slots[kPacket];
+    uint8_t hit[kPacket];
+    int count = 0;
+    auto flush = [&] {
+      impl_->occluded_batch(count, origins, to_light, hit);
+      for (int i = 0; i < count; ++i) out[slots[i]] = hit[i] ? 0.0f : 1.0f;
+      count = 0;
+    };
+    for (uint32_t x = 0; x < points.width; ++x) {
+      const size_t i = points.index(x, y);
+      if (!points.covered(i)) continue;
+      const glm::vec3 p(points.position[i]);
+      const glm::vec3 n(points.normal[i]);
+      if (glm::dot(n, to_light) <= 0.0f) {
+        out[i] = 0.0f;
+        continue;
+      }
+      origins[count] = gpu_shared::shadow_ray_origin(p, n);
+      slots[count] = i;
+      if (++count == kPacket) flush();
+    }
+    if (count > 0) flush();
+  });
+  return out;
+}
+
+std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points,
+                                                  glm::vec3 light_direction) const {
+  check_points(points);
+  const glm::vec3 to_light = to_light_dir(light_direction);
+  static_assert(gpu_shared::kSamplesPerPixel % kPacket == 0);
+  constexpr uint32_t kSamples = gpu_shared::kSamplesPerPixel;
+  const glm::vec2 viewport{float(points.width), float(points.height)};
+  std::vector<float> out(points.pixel_count(), -1.0f);
+  for_each_row(points.height, [&](uint32_t y) {
+    glm::vec3 origins[kSamples];
+    uint8_t hit[kSamples];
+    for (uint32_t x = 0; x < points.width; ++x) {
+      const size_t i = points.index(x, y);
+      if (!points.covered(i)) continue;
+      const glm::vec3 p(points.position[i]);
+      const glm::vec3 n(points.normal[i]);
+      if (glm::dot(n, to_light) <= 0.0f) {
+        out[i] = 0.0f;
+        continue;
+      }
+      const glm::vec2 pixel{float(x), float(y)};
+      for (uint32_t s = 0; s < kSamples; ++s) {
+        const glm::vec3 q = gpu_shared::micro_quad_sample(pixel, gpu_shared::kSamplePattern[s],
+                                                          viewport, points.inv_view_proj, p, n);
+        origins[s] = gpu_shared::shadow_ray_origin(q, n);
+      }
+      for (uint32_t s = 0; s < kSamples; s += kPacket)
+        impl_->occluded_batch(kPacket, origins + s, to_light, hit + s);
+      uint32_t lit = 0;
+      for (uint32_t s = 0; s < kSamples; ++s) lit += hit[s] ? 0u : 1u;
+      out[i] = float(lit) / float(kSamples);
+    }
+  });
+  return out;
+}
+
+}  // namespace reference
