@@ -35,7 +35,7 @@ void main() {
     float n_dot_l = max(dot(n, l), 0.0);
     float sky = 0.5 + 0.5 * n.y;
     color = albedo.rgb * (frame.light_radiance.rgb * n_dot_l * shadow + frame.ambient.rgb * sky);
-    color = color / (1.0 + color * 0.25);  // gentle tone curve keeps bright sun from clipping
+    color = color / (1.0 + color);  // Reinhard: bright sunlit surfaces keep their gradation
   }
   vec4 overlay = imageLoad(overlay_image, pixel);
   color = linear_to_srgb(color);

@@ -330,9 +330,9 @@ std::unique_ptr<Scene> build_atrium() {
   add_mesh(*scene, "roof", std::move(roof), stone);
 
   add_camera_and_light(*scene, 0.05f, 150.0f);
-  scene->views.push_back({"inside", {0.0f, 1.7f, 7.0f}, {0.0f, 1.0f, -6.0f}, kLightDirection, glm::radians(70.0f)});
-  // The line of sight to the target passes through the southern roof opening.
-  scene->views.push_back({"above", {1.5f, 18.0f, 8.0f}, {-0.5f, 0.0f, 0.5f}, kLightDirection, glm::radians(50.0f)});
+  scene->views.push_back({"inside", {3.0f, 1.7f, 7.0f}, {-1.5f, 0.6f, -2.0f}, kLightDirection, glm::radians(70.0f)});
+  // Sees the whole roof; the line of sight to the target passes through the southern opening.
+  scene->views.push_back({"above", {2.0f, 24.0f, 6.0f}, {0.0f, 0.0f, 0.5f}, kLightDirection, glm::radians(60.0f)});
   scene->views.push_back(
       {"gallery", {6.6f, 1.7f, -7.4f}, {6.4f, 1.4f, 7.0f}, kLightDirection, glm::radians(60.0f)});
   finish(*scene);

@@ -1,0 +1,147 @@
+#pragma once
+// The shadow module's public API. A game installs it into the renderer once, then reads and changes
+// its settings and reads its statistics; everything else is internal.
+//
+//   auto shadows = shadows::install(renderer, shadows::Settings{});
+//   shadows->settings().technique = shadows::Technique::Izb;
+//   ... after a frame: shadows->stats().nodes_inserted
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/render/renderer.hpp"
+
+namespace shadows {
+
+enum class Technique {
+  Off,        // everything lit
+  ShadowMap,  // one plain shadow map fitted to the scene, one tap: the aliasing baseline ("sm")
+  Cascades,   // cascaded filtered shadow maps ("cascades")
+  Izb,        // frustum-traced irregular z-buffer hard shadows ("izb"; with IzbSettings::csm: "izb+csm")
+  Hybrid,     // IZB near the camera blended into cascades far away ("hybrid")
+};
+
+// Full-coverage test of the conservative shadow map pass.
+enum class CsmTest {
+  Hertel,         // texel centre's distance to every edge >= circumscribed radius (geometry shader)
+  Barycentric,    // barycentrics at the texel's four corners all positive (geometry shader)
+  BarycentricHw,  // the same with VK_KHR_fragment_shader_barycentric
+  InnerHw,        // conservative rasterization underestimation (fully covered fragments only)
+};
+
+enum class Masking { Off, Edge, DepthExtent };
+
+enum class DebugView { None, VisibilityMask, ListLength, Cascades, CsmCoverage, ExpensivePath };
+
+// Which rasterizer produces the trace pass's conservative fragments.
+enum class ConservativeRaster { Auto, Hardware, Software };
+
+struct ShadowMapSettings {
+  uint32_t size = 1024;
+  float constant_bias = 1.0e-4f;  // in light depth units ([0,1] over the fitted depth range)
+  float slope_bias = 1.0f;        // rasterizer slope-scaled bias
+};
+
+struct CascadeSettings {
+  uint32_t count = 4;                 // 1..4
+  uint32_t map_size = 1024;           // per cascade, square
+  float lambda = 0.75f;               // split blend: 0 uniform, 1 logarithmic
+  float max_distance = 60.0f;         // world units from the camera; the last cascade fades out here
+  float blend_band = 0.1f;            // fraction of a cascade's depth range blended into the next
+  float constant_bias = 0.5f;         // in texels of depth (scaled with each cascade's texel size)
+  float slope_bias = 1.5f;            // rasterizer slope-scaled bias
+  float normal_offset = 1.0f;         // in texels, along the geometric normal
+  bool cull_front_faces = false;      // render back faces into the maps (closed meshes only)
+  float kernel_radius = 0.08f;        // PCF disk radius in world units (same across cascades)
+  Masking masking = Masking::Edge;    // where the 12-tap filter may be skipped
+  bool blur = true;                   // 5x5 blur on pixels whose taps disagreed
+};
+
+struct IzbSettings {
+  uint32_t resolution = 1024;         // light-space grid, square
+  uint32_t samples_per_pixel = 1;     // 1 (ray per pixel) or 32 (frustum per pixel footprint)
+  float max_distance = 0.0f;          // 0: every visible point; else only points nearer the camera
+  bool csm = false;                   // conservative shadow map z-prepass culls certainly shadowed points
+  CsmTest csm_test = CsmTest::Barycentric;
+  ConservativeRaster raster = ConservativeRaster::Auto;
+  bool depth_cull = true;             // cull trace fragments behind the farthest node of their texel
+  bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed
+  float node_pool_factor = 1.25f;     // pool size = factor * pixels * (1 or expected texels per μQuad)
+  uint32_t node_pool_override = 0;    // nonzero: fixed pool size in nodes (tests of overflow)
+};
+
+struct Settings {
+  Technique technique = Technique::Hybrid;
+  ShadowMapSettings shadow_map;
+  CascadeSettings cascades;
+  IzbSettings izb;
+  DebugView debug = DebugView::None;
+};
+
+// Why the automatic CSM choice took or left an entity.
+struct CsmDecision {
+  engine::Entity entity;
+  std::string name;
+  bool in_csm = false;
+  bool automatic = false;
+  double large_triangle_area_share = 0.0;  // share of light-space area in triangles >= kLargeTexels
+  std::string reason;
+};
+
+struct Stats {
+  // IZB
+  uint64_t shading_points = 0;        // covered pixels
+  uint64_t lit_candidates = 0;        // covered, receiving, facing the light, inside the IZB range
+  uint64_t nodes_inserted = 0;
+  uint64_t csm_culled = 0;            // candidates the CSM proved shadowed
+  double culling_rate = 0.0;          // csm_culled / lit_candidates
+  uint64_t csm_texels_covered = 0;
+  uint64_t node_pool_size = 0;
+  uint64_t node_overflow = 0;         // insertions that found the pool full (fallback used)
+  uint64_t list_length_max = 0;
+  double list_length_average = 0.0;   // over non-empty texels
+  uint64_t nonempty_texels = 0;
+  uint64_t trace_fragments_before_cull = 0;
+  uint64_t trace_fragments_after_cull = 0;
+  uint64_t triangle_tests = 0;        // ray/frustum-triangle tests
+  double triangle_tests_per_pixel = 0.0;
+  bool hardware_conservative = false;
+  // Cascades
+  double expensive_path_fraction = 0.0;
+  uint64_t expensive_path_pixels = 0;
+  uint64_t blurred_pixels = 0;
+  std::vector<float> cascade_splits;
+  // CSM caster choice
+  std::vector<CsmDecision> csm_decisions;
+};
+
+class ShadowModule : public engine::RenderFeature {
+ public:
+  virtual Settings& settings() = 0;
+  virtual const Stats& stats() const = 0;
+  // Statistics are read back every frame only while enabled (costs a small readback).
+  virtual void set_collect_stats(bool enabled) = 0;
+  // Names of the GPU passes the current settings record, in order (profiler region names).
+  virtual std::vector<std::string> pass_names() const = 0;
+  // Whether a coverage test / technique can run on this device, and why not.
+  virtual bool supported(CsmTest test, std::string* why = nullptr) const = 0;
+  // Per-pixel visibility of the last frame (1 lit .. 0 shadowed, -1 background), for tests/tools.
+  virtual std::vector<float> read_visibility() = 0;
+};
+
+// Creates the module, adds it to the renderer, and returns it.
+std::shared_ptr<ShadowModule> install(engine::Renderer& renderer, const Settings& settings = {});
+
+// Parsing/printing helpers for command lines and JSON ("sm", "cascades", "izb", "izb+csm", "hybrid").
+std::optional<Settings> parse_mode(const std::string& mode, Settings base);
+std::string mode_name(const Settings& settings);
+std::optional<CsmTest> parse_csm_test(const std::string& name);
+std::string csm_test_name(CsmTest test);
+std::optional<Masking> parse_masking(const std::string& name);
+std::string masking_name(Masking masking);
+std::optional<DebugView> parse_debug_view(const std::string& name);
+
+}  // namespace shadows

@@ -1,0 +1,46 @@
+#include "light_space.hpp"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace shadows::detail {
+
+glm::mat4 light_view_matrix(const glm::vec3& light_direction) {
+  const glm::vec3 forward = glm::normalize(light_direction);
+  // Any up vector not parallel to the light works; the choice only rotates the grid about the light.
+  const glm::vec3 up = std::abs(forward.y) > 0.99f ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+  return glm::lookAtRH(glm::vec3(0.0f), forward, up);
+}
+
+glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box, float margin) {
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  for (int i = 0; i < 8; ++i) {
+    glm::vec3 corner((i & 1) ? box.max.x : box.min.x, (i & 2) ? box.max.y : box.min.y,
+                     (i & 4) ? box.max.z : box.min.z);
+    glm::vec3 v = glm::vec3(light_view * glm::vec4(corner, 1.0f));
+    lo = glm::min(lo, v);
+    hi = glm::max(hi, v);
+  }
+  lo -= glm::vec3(margin);
+  hi += glm::vec3(margin);
+  // View space looks down -Z: the nearest point to the light has the largest z.
+  return glm::orthoRH_ZO(lo.x, hi.x, lo.y, hi.y, -hi.z, -lo.z);
+}
+
+engine::Aabb caster_bounds(const engine::FrameContext& frame) {
+  engine::Aabb bounds;
+  for (const auto& d : frame.draws) {
+    if (!d.shadow.casts_shadow) continue;
+    const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
+    if (mesh && mesh->data) bounds.extend(mesh->data->bounds.transformed(d.world));
+  }
+  return bounds;
+}
+
+void set_viewport(VkCommandBuffer cmd, VkExtent2D extent) {
+  VkViewport viewport{0, 0, float(extent.width), float(extent.height), 0.0f, 1.0f};
+  VkRect2D scissor{{0, 0}, extent};
+  vkCmdSetViewport(cmd, 0, 1, &viewport);
+  vkCmdSetScissor(cmd, 0, 1, &scissor);
+}
+
+}  // namespace shadows::detail

@@ -1,0 +1,39 @@
+#pragma once
+// Light-space helpers shared by the module's passes.
+#include <glm/glm.hpp>
+
+#include "engine/core/components.hpp"
+#include "engine/gpu/pipeline.hpp"
+#include "engine/render/renderer.hpp"
+
+namespace shadows::detail {
+
+// Rotation-only view matrix looking along `light_direction` (the direction light travels).
+glm::mat4 light_view_matrix(const glm::vec3& light_direction);
+
+// Orthographic projection (Vulkan depth 0..1, 0 nearest the light) enclosing `box` seen through
+// `light_view`, with `margin` world units of slack on every side.
+glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box, float margin = 0.0f);
+
+// World bounds of every shadow-casting draw.
+engine::Aabb caster_bounds(const engine::FrameContext& frame);
+
+// Issues one indexed draw per shadow-casting item; `push` is called before each with its model matrix.
+template <typename PushFn>
+void draw_casters(VkCommandBuffer cmd, const engine::FrameContext& frame, PushFn&& push) {
+  VkDeviceSize offset = 0;
+  VkBuffer vb = frame.geometry.vertices().handle();
+  vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+  vkCmdBindIndexBuffer(cmd, frame.geometry.indices().handle(), 0, VK_INDEX_TYPE_UINT32);
+  for (const auto& d : frame.draws) {
+    if (!d.shadow.casts_shadow) continue;
+    const auto& range = frame.geometry.mesh(d.mesh);
+    if (range.index_count == 0) continue;
+    push(d, range);
+    vkCmdDrawIndexed(cmd, range.index_count, 1, range.first_index, range.vertex_offset, 0);
+  }
+}
+
+void set_viewport(VkCommandBuffer cmd, VkExtent2D extent);
+
+}  // namespace shadows::detail

@@ -1,0 +1,84 @@
+#include "shadows/shadows.hpp"
+
+namespace shadows {
+
+std::optional<Settings> parse_mode(const std::string& mode, Settings base) {
+  if (mode == "off") {
+    base.technique = Technique::Off;
+  } else if (mode == "sm") {
+    base.technique = Technique::ShadowMap;
+  } else if (mode == "cascades") {
+    base.technique = Technique::Cascades;
+  } else if (mode == "izb") {
+    base.technique = Technique::Izb;
+    base.izb.csm = false;
+  } else if (mode == "izb+csm") {
+    base.technique = Technique::Izb;
+    base.izb.csm = true;
+  } else if (mode == "hybrid") {
+    base.technique = Technique::Hybrid;
+  } else if (mode == "hybrid+csm") {
+    base.technique = Technique::Hybrid;
+    base.izb.csm = true;
+  } else {
+    return std::nullopt;
+  }
+  return base;
+}
+
+std::string mode_name(const Settings& s) {
+  switch (s.technique) {
+    case Technique::Off: return "off";
+    case Technique::ShadowMap: return "sm";
+    case Technique::Cascades: return "cascades";
+    case Technique::Izb: return s.izb.csm ? "izb+csm" : "izb";
+    case Technique::Hybrid: return s.izb.csm ? "hybrid+csm" : "hybrid";
+  }
+  return "?";
+}
+
+std::optional<CsmTest> parse_csm_test(const std::string& name) {
+  if (name == "hertel") return CsmTest::Hertel;
+  if (name == "bary") return CsmTest::Barycentric;
+  if (name == "bary-hw") return CsmTest::BarycentricHw;
+  if (name == "inner-hw") return CsmTest::InnerHw;
+  return std::nullopt;
+}
+
+std::string csm_test_name(CsmTest test) {
+  switch (test) {
+    case CsmTest::Hertel: return "hertel";
+    case CsmTest::Barycentric: return "bary";
+    case CsmTest::BarycentricHw: return "bary-hw";
+    case CsmTest::InnerHw: return "inner-hw";
+  }
+  return "?";
+}
+
+std::optional<Masking> parse_masking(const std::string& name) {
+  if (name == "off") return Masking::Off;
+  if (name == "edge") return Masking::Edge;
+  if (name == "depth-extent") return Masking::DepthExtent;
+  return std::nullopt;
+}
+
+std::string masking_name(Masking masking) {
+  switch (masking) {
+    case Masking::Off: return "off";
+    case Masking::Edge: return "edge";
+    case Masking::DepthExtent: return "depth-extent";
+  }
+  return "?";
+}
+
+std::optional<DebugView> parse_debug_view(const std::string& name) {
+  if (name == "none") return DebugView::None;
+  if (name == "visibility") return DebugView::VisibilityMask;
+  if (name == "list-length") return DebugView::ListLength;
+  if (name == "cascades") return DebugView::Cascades;
+  if (name == "csm") return DebugView::CsmCoverage;
+  if (name == "expensive") return DebugView::ExpensivePath;
+  return std::nullopt;
+}
+
+}  // namespace shadows

@@ -1,0 +1,99 @@
+#include "shadow_map_pass.hpp"
+
+#include "light_space.hpp"
+#include "shared/shadows.h"
+
+namespace shadows::detail {
+
+using namespace engine::gpu;
+
+namespace {
+constexpr VkFormat kMapFormat = VK_FORMAT_D32_SFLOAT;
+}
+
+ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
+  params_ = Buffer(ctx, sizeof(gpu_shared::ShadowMapResolveParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
+                   "sm resolve params");
+  sampler_ = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "sm sampler");
+  PipelineFactory factory(ctx);
+  GraphicsPipelineDesc d;
+  d.name = "sm depth";
+  d.vertex_shader = "shadow_map.vert";
+  d.vertex_input = engine::gpu::VertexInput::PositionOnly;
+  d.push_constant_size = sizeof(gpu_shared::ShadowMapPush);
+  d.depth_format = kMapFormat;
+  d.depth_compare = VK_COMPARE_OP_LESS_OR_EQUAL;
+  d.cull_mode = VK_CULL_MODE_NONE;
+  d.depth_bias = true;
+  resolve_pipeline_ = factory.compute({"shadow_map_resolve.comp",
+                                       {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+                                        {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                        {gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                        {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                                        {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                                       0});
+  depth_pipeline_ = factory.graphics(d);
+}
+
+void ShadowMapPass::ensure_map(uint32_t size) {
+  if (map_.valid() && map_.extent().width == size) return;
+  map_ = Image(ctx_, {size, size}, kMapFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+               "sm depth map");
+  ctx_.immediate_submit([&](VkCommandBuffer cmd) {
+    map_.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+  });
+}
+
+void ShadowMapPass::record(engine::FrameContext& frame, const ShadowMapSettings& settings) {
+  ensure_map(settings.size);
+  VkCommandBuffer cmd = frame.cmd;
+  const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
+  const engine::Aabb bounds = caster_bounds(frame);
+  const glm::mat4 light_vp =
+      fit_orthographic(light_view, bounds, 0.01f * glm::length(bounds.extent())) * light_view;
+
+  {
+    ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_depth");
+    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth.imageView = map_.view();
+    depth.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
+    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    depth.clearValue.depthStencil = {1.0f, 0};
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, map_.extent()};
+    info.layerCount = 1;
+    info.pDepthAttachment = &depth;
+    vkCmdBeginRendering(cmd, &info);
+    set_viewport(cmd, map_.extent());
+    vkCmdSetDepthBias(cmd, 0.0f, 0.0f, settings.slope_bias);
+    depth_pipeline_.bind(cmd);
+    draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
+      gpu_shared::ShadowMapPush push{d.world, light_vp};
+      depth_pipeline_.push_constants(cmd, push);
+    });
+    vkCmdEndRendering(cmd);
+  }
+  full_barrier(cmd);
+  {
+    ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_resolve");
+    gpu_shared::ShadowMapResolveParams p{};
+    p.light_view_projection = light_vp;
+    p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
+    p.bias = glm::vec4(settings.constant_bias, 0.0f, 0.0f, 0.0f);
+    p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
+    params_.write(&p, sizeof(p));
+    resolve_pipeline_.bind(cmd);
+    DescriptorWriter()
+        .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
+        .storage_image(gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
+        .storage_image(gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+        .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .storage_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, frame.shadow_term.view())
+        .push(ctx_, cmd, resolve_pipeline_);
+    vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
+  }
+}
+
+}  // namespace shadows::detail

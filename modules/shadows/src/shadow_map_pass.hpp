@@ -1,0 +1,23 @@
+#pragma once
+#include "engine/gpu/resources.hpp"
+#include "shadows/shadows.hpp"
+
+namespace shadows::detail {
+
+// The "sm" baseline: one depth map fitted to the casters' bounds, resolved with one tap.
+class ShadowMapPass {
+ public:
+  explicit ShadowMapPass(engine::gpu::Context& ctx);
+  void record(engine::FrameContext& frame, const ShadowMapSettings& settings);
+
+ private:
+  void ensure_map(uint32_t size);
+  engine::gpu::Context& ctx_;
+  engine::gpu::Image map_;
+  engine::gpu::Buffer params_;
+  engine::gpu::Sampler sampler_;
+  engine::gpu::Pipeline depth_pipeline_;
+  engine::gpu::Pipeline resolve_pipeline_;
+};
+
+}  // namespace shadows::detail

@@ -1,0 +1,143 @@
+// The walkthrough: loads a scene, installs the shadow module and walks the camera through the scene's
+// views. Windowed with an ImGui panel when a display exists; otherwise headless, writing PNGs.
+#include <charconv>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include <imgui.h>
+
+#include "engine/assets/scene.hpp"
+#include "engine/platform/headless.hpp"
+#include "engine/platform/window.hpp"
+#include "engine/render/renderer.hpp"
+#include "shadows/shadows.hpp"
+#include "walkthrough.hpp"
+
+namespace {
+
+struct Options {
+  std::string scene = "contact";
+  uint32_t width = 1280, height = 720;
+  int frames = -1;  // -1: until the window closes (windowed) or 4 (headless)
+  bool headless = false;
+  std::string screenshot;
+  std::string out_dir = "walkthrough_out";
+  std::string device;
+  std::string mode = "hybrid";
+  float seconds_per_view = 6.0f;
+};
+
+const char* kUsage =
+    "usage: walkthrough [--scene contact|atrium|foliage|FILE.gltf] [--size WxH] [--frames N] [--headless]\n"
+    "                   [--screenshot FILE.png] [--out DIR] [--device gpu|lavapipe|INDEX]\n"
+    "                   [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm] [--seconds-per-view S]\n";
+
+bool parse_size(const std::string& s, uint32_t& w, uint32_t& h) {
+  const auto x = s.find('x');
+  if (x == std::string::npos) return false;
+  auto r1 = std::from_chars(s.data(), s.data() + x, w);
+  auto r2 = std::from_chars(s.data() + x + 1, s.data() + s.size(), h);
+  return r1.ec == std::errc() && r2.ec == std::errc() && r1.ptr == s.data() + x && r2.ptr == s.data() + s.size() &&
+         w > 0 && h > 0 && w <= 16384 && h <= 16384;
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--scene") o.scene = value();
+    else if (a == "--size") {
+      const std::string v = value();
+      if (!parse_size(v, o.width, o.height)) throw std::runtime_error("--size '" + v + "': expected WxH");
+    } else if (a == "--frames") o.frames = std::stoi(value());
+    else if (a == "--headless") o.headless = true;
+    else if (a == "--screenshot") o.screenshot = value();
+    else if (a == "--out") o.out_dir = value();
+    else if (a == "--device") o.device = value();
+    else if (a == "--mode") o.mode = value();
+    else if (a == "--seconds-per-view") o.seconds_per_view = std::stof(value());
+    else if (a == "--help" || a == "-h") {
+      std::fputs(kUsage, stdout);
+      std::exit(0);
+    } else throw std::runtime_error("unknown option " + a);
+  }
+  return o;
+}
+
+int run_headless(const Options& o, engine::Scene& scene) {
+  engine::gpu::Context ctx({.device = o.device});
+  engine::Renderer renderer(ctx, {o.width, o.height});
+  renderer.set_scene(scene);
+  auto settings = shadows::parse_mode(o.mode, {});
+  auto module = shadows::install(renderer, *settings);
+  walkthrough::CameraPath path(scene, o.seconds_per_view);
+  renderer.systems().add("camera path", [&](engine::Registry&, float dt) { path.update(dt); });
+
+  const int frames = o.frames > 0 ? o.frames : 4;
+  const float dt = o.seconds_per_view * float(scene.views.size()) / float(frames);  // one loop over all views
+  std::filesystem::create_directories(o.out_dir);
+  std::printf("headless: %s on %s (%s), %ux%u, mode %s\n", scene.name.c_str(), ctx.device_name().c_str(),
+              ctx.driver_description().c_str(), o.width, o.height, o.mode.c_str());
+  for (int f = 0; f < frames; ++f) {
+    renderer.render_frame(f == 0 ? 0.0f : dt);
+    char name[64];
+    std::snprintf(name, sizeof(name), "frame_%03d.png", f);
+    const auto path_png = std::filesystem::path(o.out_dir) / name;
+    renderer.write_png(path_png);
+    std::printf("  wrote %s  (gpu frame %.2f ms)\n", path_png.c_str(), renderer.profiler().average_ms("frame", 1));
+  }
+  if (!o.screenshot.empty()) {
+    renderer.write_png(o.screenshot);
+    std::printf("  wrote %s\n", o.screenshot.c_str());
+  }
+  return 0;
+}
+
+int run_windowed(const Options& o, engine::Scene& scene) {
+  engine::platform::Window window({.title = "shadow engine walkthrough: " + scene.name, .width = o.width, .height = o.height});
+  engine::gpu::Context ctx({.device = o.device,
+                            .instance_extensions = engine::platform::Window::required_instance_extensions(),
+                            .swapchain = true});
+  window.attach(ctx);
+  const VkExtent2D extent = window.framebuffer_extent();
+  engine::Renderer renderer(ctx, {std::max(extent.width, 1u), std::max(extent.height, 1u)});
+  renderer.set_scene(scene);
+  auto module = shadows::install(renderer, *shadows::parse_mode(o.mode, {}));
+  walkthrough::CameraPath path(scene, o.seconds_per_view);
+  renderer.systems().add("camera path", [&](engine::Registry&, float dt) { path.update(dt); });
+  int frame = 0;
+  while (!window.should_close() && (o.frames < 0 || frame < o.frames)) {
+    window.poll_events();
+    if (window.draw_frame(renderer, [&] { walkthrough::draw_panel(renderer, *module, path); }, 1.0f / 60.0f)) ++frame;
+  }
+  if (!o.screenshot.empty()) {
+    uint32_t w = 0, h = 0;
+    auto pixels = window.read_last_frame(w, h);
+    engine::write_rgba8_png(o.screenshot, w, h, pixels.data());
+    std::printf("wrote %s\n", o.screenshot.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    Options o = parse(argc, argv);
+    if (!shadows::parse_mode(o.mode, {})) throw std::runtime_error("--mode '" + o.mode + "' is not a shadow mode");
+    auto scene = engine::load_scene(o.scene);
+    if (o.headless || !engine::platform::display_available()) {
+      if (!o.headless) std::printf("no display found: running headless\n");
+      return run_headless(o, *scene);
+    }
+    return run_windowed(o, *scene);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "walkthrough: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,33 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows.h"
+#include "shadow_common.h"
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = SM_RESOLVE_BINDING_PARAMS) uniform Params { ShadowMapResolveParams params; };
+layout(set = 0, binding = SM_RESOLVE_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
+layout(set = 0, binding = SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly uniform image2D geometric_normal;
+layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_MAP) uniform sampler2D shadow_map;
+layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
+
+// One tap, no filtering: the baseline whose aliasing the other techniques remove.
+void main() {
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
+  vec4 p = imageLoad(world_position, pixel);
+  if (p.w == 0.0) return;
+  vec3 n = imageLoad(geometric_normal, pixel).xyz;
+  float visibility = 0.0;
+  if (dot(n, -params.light_direction.xyz) > 0.0) {
+    vec4 light = params.light_view_projection * vec4(shadow_ray_origin(p.xyz, n), 1.0);
+    vec2 uv = light.xy * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) {
+      visibility = 1.0;
+    } else {
+      ivec2 texel = clamp(ivec2(uv * vec2(params.extent.zw)), ivec2(0), ivec2(params.extent.zw) - 1);
+      float stored = texelFetch(shadow_map, texel, 0).r;
+      visibility = light.z <= stored + params.bias.x ? 1.0 : 0.0;
+    }
+  }
+  imageStore(shadow_term, pixel, vec4(visibility));
+}

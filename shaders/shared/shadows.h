@@ -1,0 +1,31 @@
+// Structs and bindings of the shadow module's passes, shared by C++ and GLSL.
+#ifndef SHADOWS_H
+#define SHADOWS_H
+#include "shared_prelude.h"
+
+SHARED_BEGIN
+
+// ---- Plain shadow map ("sm") ----
+struct ShadowMapPush {
+  mat4 model;
+  mat4 light_view_projection;
+};
+struct ShadowMapResolveParams {
+  mat4 light_view_projection;
+  vec4 light_direction;  // xyz travel direction
+  vec4 bias;             // x: constant depth bias
+  uvec4 extent;          // xy render size, zw map size
+};
+SHARED_CONST uint SM_RESOLVE_BINDING_PARAMS = 0u;
+SHARED_CONST uint SM_RESOLVE_BINDING_WORLD_POSITION = 1u;
+SHARED_CONST uint SM_RESOLVE_BINDING_GEOMETRIC_NORMAL = 2u;
+SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_MAP = 3u;
+SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_TERM = 4u;
+
+SHARED_END
+
+#ifdef __cplusplus
+static_assert(sizeof(gpu_shared::ShadowMapPush) == 128);
+static_assert(sizeof(gpu_shared::ShadowMapResolveParams) == 64 + 48);
+#endif
+#endif

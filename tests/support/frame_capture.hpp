@@ -1,0 +1,18 @@
+#pragma once
+// Glue between a rendered frame and the reference: reads the shading points the shadow passes used,
+// and runs the Embree reference on them.
+#include "engine/render/renderer.hpp"
+#include "reference/comparator.hpp"
+#include "reference/embree_tracer.hpp"
+#include "reference/shading_points.hpp"
+
+namespace support {
+
+// World positions and geometric normals exactly as the GPU passes read them this frame.
+reference::ShadingPoints capture_shading_points(engine::Renderer& renderer);
+
+// Reference visibility (1 lit, 0 shadowed, fraction at 32 spp, -1 background) for the last frame.
+std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
+                                        uint32_t samples_per_pixel);
+
+}  // namespace support

@@ -1,0 +1,297 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "engine/assets/scene.hpp"
+#include "engine/core/transform_system.hpp"
+
+namespace {
+
+using namespace engine;
+namespace fs = std::filesystem;
+
+fs::path test_file(const std::string& name) { return fs::path(ENGINE_SOURCE_DIR) / "content" / "test_gltf" / name; }
+
+Entity find_named(Scene& scene, const std::string& name) {
+  Entity found = kNullEntity;
+  scene.registry.each<Name>([&](Entity e, Name& n) {
+    if (n.value == name) found = e;
+  });
+  return found;
+}
+
+size_t mesh_entities(Scene& scene) { return scene.registry.count<Mesh>(); }
+
+glm::vec3 project(const Camera& c, const glm::vec3& p) {
+  const glm::vec4 clip = c.projection * c.view * glm::vec4(p, 1.0f);
+  return glm::vec3(clip) / clip.w;
+}
+
+// Writes a .glb container: 12-byte header, JSON chunk (space padded), BIN chunk (zero padded).
+void write_glb(const fs::path& path, std::string json, std::string bin) {
+  while (json.size() % 4) json += ' ';
+  while (bin.size() % 4) bin += '\0';
+  auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+  const uint32_t total = 12 + 8 + uint32_t(json.size()) + (bin.empty() ? 0 : 8 + uint32_t(bin.size()));
+  std::string out = "glTF" + u32(2) + u32(total);
+  out += u32(uint32_t(json.size())) + "JSON" + json;
+  if (!bin.empty()) out += u32(uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+  std::ofstream(path, std::ios::binary).write(out.data(), std::streamsize(out.size()));
+}
+
+std::string float_bytes(std::initializer_list<float> values) {
+  std::string s;
+  for (float v : values) s.append(reinterpret_cast<const char*>(&v), 4);
+  return s;
+}
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() /
+            ("engine_gltf_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+TEST(GltfLoader, LoadsTriangleWithHierarchyAndMaterial) {
+  auto scene = load_gltf_scene(test_file("triangle.gltf"));
+  EXPECT_EQ(scene->name, "triangle");
+  EXPECT_EQ(scene->triangle_count(), 1u);
+  EXPECT_EQ(mesh_entities(*scene), 1u);
+  const Entity tri = find_named(*scene, "triangle");
+  const Entity root = find_named(*scene, "root");
+  ASSERT_TRUE(tri.valid());
+  ASSERT_TRUE(root.valid());
+  Registry& r = scene->registry;
+  EXPECT_EQ(r.get<Transform>(tri).parent, root);
+  ASSERT_TRUE(r.has<Mesh>(tri));
+  EXPECT_TRUE(r.has<ShadowCaster>(tri));
+  const Material& m = r.get<Material>(tri);
+  EXPECT_FLOAT_EQ(m.base_color.r, 0.2f);
+  EXPECT_FLOAT_EQ(m.base_color.b, 0.6f);
+  EXPECT_EQ(m.alpha_mode, AlphaMode::Mask);
+  EXPECT_FLOAT_EQ(m.alpha_cutoff, 0.25f);
+  const MeshData& d = *r.get<Mesh>(tri).data;
+  ASSERT_EQ(d.vertices.size(), 3u);
+  EXPECT_EQ(d.indices, (std::vector<uint32_t>{0, 1, 2}));
+  EXPECT_EQ(d.vertices[1].position, glm::vec3(1, 0, 0));
+  EXPECT_EQ(d.vertices[2].normal, glm::vec3(0, 0, 1));
+
+  // root translates by (1,2,3), the triangle node scales by 2.
+  const Aabb b = scene->world_bounds();
+  EXPECT_NEAR(b.min.x, 1.0f, 1e-5f);
+  EXPECT_NEAR(b.min.y, 2.0f, 1e-5f);
+  EXPECT_NEAR(b.max.x, 3.0f, 1e-5f);
+  EXPECT_NEAR(b.max.y, 4.0f, 1e-5f);
+  EXPECT_NEAR(b.max.z, 3.0f, 1e-5f);
+
+  EXPECT_TRUE(r.has<Camera>(scene->camera));
+  EXPECT_TRUE(r.has<DirectionalLight>(scene->light));
+}
+
+TEST(GltfLoader, FileWithoutCamerasGetsOverviewAndInsideViews) {
+  auto scene = load_gltf_scene(test_file("triangle.gltf"));
+  ASSERT_EQ(scene->views.size(), 2u);
+  EXPECT_EQ(scene->views[0].name, "overview");
+  EXPECT_EQ(scene->views[1].name, "inside");
+  const Aabb b = scene->world_bounds();
+  const SceneView& overview = scene->views[0];
+  EXPECT_GT(overview.eye.y, b.max.y);
+  EXPECT_NEAR(glm::distance(overview.target, b.center()), 0.0f, 1e-4f);
+  const SceneView& inside = scene->views[1];
+  EXPECT_NEAR(inside.eye.y, b.min.y + 0.12f * b.extent().y, 1e-4f);
+  EXPECT_NEAR(inside.eye.y, inside.target.y, 1e-5f);  // looks horizontally along the long axis (x)
+  EXPECT_GT(std::abs(inside.target.x - inside.eye.x), 0.0f);
+  EXPECT_NEAR(inside.target.z, inside.eye.z, 1e-5f);
+  for (const SceneView& v : scene->views) {
+    EXPECT_LT(glm::normalize(v.light_direction).y, -0.7f);
+  }
+  const Camera& cam = scene->registry.get<Camera>(scene->camera);
+  const float diag = glm::length(b.extent());
+  EXPECT_NEAR(cam.near_plane, diag * 1e-3f, 1e-6f);
+  EXPECT_NEAR(cam.far_plane, diag * 3.0f, 1e-4f);
+}
+
+TEST(GltfLoader, LoadsCamerasMatricesAndMultiplePrimitives) {
+  testing::internal::CaptureStderr();
+  auto scene = load_gltf_scene(test_file("camera.gltf"));
+  const std::string log = testing::internal::GetCapturedStderr();
+  EXPECT_NE(log.find("skipped 1 non-triangle primitive"), std::string::npos) << log;
+
+  // The quad (2 triangles, uint8 indices) and the unindexed triangle; the POINTS primitive is dropped.
+  EXPECT_EQ(scene->triangle_count(), 3u);
+  EXPECT_EQ(mesh_entities(*scene), 2u);
+  const Entity model = find_named(*scene, "model");
+  ASSERT_TRUE(model.valid());
+  EXPECT_FALSE(scene->registry.has<Mesh>(model));
+  size_t children = 0;
+  bool saw_blend = false;
+  scene->registry.each<Transform, Mesh>([&](Entity e, Transform& t, Mesh& m) {
+    EXPECT_EQ(t.parent, model);
+    ++children;
+    // No NORMAL attribute: flat normals from the winding, +z for both primitives.
+    for (const Vertex& v : m.data->vertices) EXPECT_NEAR(v.normal.z, 1.0f, 1e-6f);
+    if (scene->registry.get<Material>(e).alpha_mode == AlphaMode::Blend) saw_blend = true;
+  });
+  EXPECT_EQ(children, 2u);
+  EXPECT_TRUE(saw_blend);
+  EXPECT_NEAR(scene->registry.get<Transform>(model).translation.z, -5.0f, 1e-6f);
+  const Aabb b = scene->world_bounds();
+  EXPECT_NEAR(b.min.z, -6.0f, 1e-5f);
+  EXPECT_NEAR(b.max.z, -5.0f, 1e-5f);
+
+  ASSERT_EQ(scene->views.size(), 1u);
+  const SceneView& v = scene->views[0];
+  EXPECT_EQ(v.name, "main_cam");
+  EXPECT_EQ(v.eye, glm::vec3(0, 1, 10));
+  EXPECT_NEAR(v.target.x, 0.0f, 1e-5f);
+  EXPECT_NEAR(v.target.y, 1.0f, 1e-5f);
+  EXPECT_LT(v.target.z, 10.0f);
+  EXPECT_FLOAT_EQ(v.vertical_fov, 0.8f);
+}
+
+TEST(GltfLoader, DefaultOverviewShowsTheWholeModel) {
+  auto tri = load_gltf_scene(test_file("triangle.gltf"));
+  tri->apply_view(0);
+  update_world_transforms(tri->registry);
+  update_camera(tri->registry, tri->camera, 1.0f);
+  const Aabb b = tri->world_bounds();
+  const Camera& cam = tri->registry.get<Camera>(tri->camera);
+  for (int i = 0; i < 8; ++i) {
+    const glm::vec3 corner{(i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z};
+    const glm::vec3 ndc = project(cam, corner);
+    EXPECT_LT(std::abs(ndc.x), 1.0f);
+    EXPECT_LT(std::abs(ndc.y), 1.0f);
+    EXPECT_GT(ndc.z, 0.0f);
+    EXPECT_LT(ndc.z, 1.0f);
+  }
+}
+
+TEST(GltfLoader, LoadsBinaryGlb) {
+  TempDir dir;
+  const std::string bin = float_bytes({0, 0, 0, 4, 0, 0, 0, 0, -4}) + std::string("\0\0\1\0\2\0", 6);
+  const std::string json = R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],
+    "nodes":[{"name":"floor_tri","mesh":0}],
+    "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
+    "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"},
+                 {"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}],
+    "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":6}],
+    "buffers":[{"byteLength":42}]})";
+  const fs::path path = dir.path() / "floor.glb";
+  write_glb(path, json, bin);
+  auto scene = load_scene(path.string());
+  EXPECT_EQ(scene->name, "floor");
+  EXPECT_EQ(scene->triangle_count(), 1u);
+  const Entity e = find_named(*scene, "floor_tri");
+  ASSERT_TRUE(e.valid());
+  const MeshData& d = *scene->registry.get<Mesh>(e).data;
+  // (0,0,0), (4,0,0), (0,0,-4) winds counter-clockwise seen from +y, so the flat normal points up.
+  for (const Vertex& v : d.vertices) EXPECT_NEAR(v.normal.y, 1.0f, 1e-6f);
+  EXPECT_EQ(scene->world_bounds().max.x, 4.0f);
+
+  // The same container with its binary chunk cut short must be rejected with the file name.
+  const fs::path truncated = dir.path() / "truncated.glb";
+  write_glb(truncated, json, bin.substr(0, 20));
+  try {
+    load_gltf_scene(truncated);
+    ADD_FAILURE() << "truncated glb loaded";
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("truncated.glb"), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}
+
+struct BrokenCase {
+  std::string file;
+  std::string expected_fragment;  // part of the problem description
+};
+
+void PrintTo(const BrokenCase& c, std::ostream* os) { *os << c.file; }
+
+class BrokenGltf : public ::testing::TestWithParam<BrokenCase> {};
+
+TEST_P(BrokenGltf, ThrowsOneLineSceneErrorNamingTheFile) {
+  const BrokenCase& c = GetParam();
+  const fs::path path = test_file(c.file);
+  try {
+    load_gltf_scene(path);
+    FAIL() << c.file << " loaded without error";
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind(path.string() + ": ", 0), 0u) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    EXPECT_EQ(what.find('\r'), std::string::npos) << what;
+    EXPECT_NE(what.find(c.expected_fragment), std::string::npos) << what;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Files, BrokenGltf,
+    ::testing::Values(BrokenCase{"does_not_exist.gltf", "file not found"}, BrokenCase{"broken_json.gltf", ""},
+                      BrokenCase{"index_out_of_range.gltf", "index 5"},
+                      BrokenCase{"nan_position.gltf", "non-finite"},
+                      BrokenCase{"accessor_out_of_range.gltf", "reads past the end"},
+                      BrokenCase{"bad_accessor_index.gltf", "accessor 7 out of range"},
+                      BrokenCase{"wrong_component_type.gltf", "must be VEC3 of FLOAT"},
+                      BrokenCase{"buffer_view_out_of_range.gltf", "exceeds buffer"},
+                      BrokenCase{"missing_buffer.gltf", ""}),
+    [](const ::testing::TestParamInfo<BrokenCase>& info) {
+      std::string name = info.param.file.substr(0, info.param.file.find('.'));
+      for (char& ch : name)
+        if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+      return name;
+    });
+
+TEST(SceneLoading, DispatchesByNameOrPath) {
+  EXPECT_EQ(load_scene("contact")->name, "contact");
+  EXPECT_EQ(load_scene(test_file("triangle.gltf").string())->triangle_count(), 1u);
+  try {
+    load_scene("nonsense");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_STREQ(e.what(), "unknown scene 'nonsense': expected one of contact, atrium, foliage or a .gltf/.glb file");
+  }
+  // A missing glTF path reaches the loader, so the error names the file rather than the scene list.
+  try {
+    load_scene("no/such/model.GLB");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("model.GLB: file not found"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneLoading, Sponza) {
+  const fs::path path = fs::path(ENGINE_SOURCE_DIR "/../shared/content/sponza/sponza.gltf");
+  if (!fs::exists(path)) GTEST_SKIP() << "sponza not present at " << path;
+  auto scene = load_scene(path.string());
+  EXPECT_EQ(scene->triangle_count(), 66454u);
+  EXPECT_EQ(mesh_entities(*scene), 34u);
+  ASSERT_EQ(scene->views.size(), 2u);
+  const Aabb b = scene->world_bounds();
+  ASSERT_TRUE(b.valid());
+  // The interior eye is inside the building's bounds.
+  const glm::vec3 eye = scene->views[1].eye;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_GT(eye[k], b.min[k]);
+    EXPECT_LT(eye[k], b.max[k]);
+  }
+  scene->registry.each<Mesh>([](Entity, Mesh& m) {
+    for (uint32_t i : m.data->indices) ASSERT_LT(i, m.data->vertices.size());
+  });
+}
+
+}  // namespace
