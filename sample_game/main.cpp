@@ -24,7 +24,7 @@ struct Options {
   std::string screenshot;
   std::string out_dir = "walkthrough_out";
   std::string device;
-  std::string mode = "hybrid";
+  std::string mode = "sm";
   float seconds_per_view = 6.0f;
 };
 

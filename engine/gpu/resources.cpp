@@ -111,6 +111,12 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
     VK_CHECK(vkCreateImageView(ctx.device(), &v, nullptr, &view));
     return view;
   };
+  const VkImageUsageFlags viewable = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+                                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+  if (!(usage & viewable)) {  // transfer-only images (readback staging) have no views
+    ctx.set_name(image_, VK_OBJECT_TYPE_IMAGE, name);
+    return;
+  }
   view_ = make_view(0, mip_levels, 0, layers);
   if (mip_levels > 1)
     for (uint32_t m = 0; m < mip_levels; ++m) mip_views_.push_back(make_view(m, 1, 0, layers));
