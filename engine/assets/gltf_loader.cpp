@@ -10,7 +10,6 @@
 #include <iostream>
 #include <iterator>
 #include <map>
-#include <sstream>
 
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/type_ptr.hpp>

@@ -1,5 +1,6 @@
 #include "engine/assets/procedural_scenes.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -63,7 +64,6 @@ MeshData make_box(const glm::vec3& half_extent, const glm::vec3& center) {
     const glm::vec3 v_axis = glm::cross(n, u_axis);
     append_mesh(m, make_quad(center + n * half_extent, u_axis * half_extent, v_axis * half_extent));
   }
-  m.name = "box";
   return m;
 }
 
