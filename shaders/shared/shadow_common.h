@@ -36,13 +36,15 @@ const vec2 kSamplePattern[32] = vec2[32](
 );
 #endif
 
-// The μQuad: sample `sample_offset` of pixel `pixel` is where the camera ray through that sub-pixel
-// position meets the tangent plane of the pixel's shading point. `inv_view_proj` maps NDC (Vulkan,
-// y down, depth in [0,1]) to world; `viewport` is the render size in pixels.
-SHARED_INLINE vec3 micro_quad_sample(SHARED_IN(vec2) pixel, SHARED_IN(vec2) sample_offset,
-                                     SHARED_IN(vec2) viewport, SHARED_IN(mat4) inv_view_proj,
-                                     SHARED_IN(vec3) plane_point, SHARED_IN(vec3) plane_normal) {
-  vec2 ndc = ((pixel + sample_offset) / viewport) * 2.0f - 1.0f;
+// The μQuad: the pixel's footprint on the tangent plane of its shading point. Its four corners are
+// where the camera rays through the pixel's corners meet that plane; sample `sample_offset` (in
+// [0,1]^2 of the pixel) is the bilinear blend of those corners, so a trace pass can rebuild all 32
+// samples from the corners alone. `inv_view_proj` maps NDC (Vulkan, y down, reversed depth in [0,1])
+// to world; `viewport` is the render size in pixels.
+SHARED_INLINE vec3 micro_quad_corner(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
+                                     SHARED_IN(mat4) inv_view_proj, SHARED_IN(vec3) plane_point,
+                                     SHARED_IN(vec3) plane_normal) {
+  vec2 ndc = (pixel_corner / viewport) * 2.0f - 1.0f;
   vec4 near_h = inv_view_proj * vec4(ndc.x, ndc.y, 1.0f, 1.0f);  // reversed depth: 1 is near
   vec4 far_h = inv_view_proj * vec4(ndc.x, ndc.y, 0.5f, 1.0f);
   vec3 ray_origin = vec3(near_h) / near_h.w;
@@ -52,6 +54,21 @@ SHARED_INLINE vec3 micro_quad_sample(SHARED_IN(vec2) pixel, SHARED_IN(vec2) samp
   if (abs(denom) < 1.0e-12f) return plane_point;
   float t = dot(plane_normal, plane_point - ray_origin) / denom;
   return ray_origin + ray_dir * t;
+}
+
+SHARED_INLINE vec3 micro_quad_blend(SHARED_IN(vec3) c00, SHARED_IN(vec3) c10, SHARED_IN(vec3) c01,
+                                    SHARED_IN(vec3) c11, SHARED_IN(vec2) offset) {
+  return mix(mix(c00, c10, offset.x), mix(c01, c11, offset.x), offset.y);
+}
+
+SHARED_INLINE vec3 micro_quad_sample(SHARED_IN(vec2) pixel, SHARED_IN(vec2) sample_offset,
+                                     SHARED_IN(vec2) viewport, SHARED_IN(mat4) inv_view_proj,
+                                     SHARED_IN(vec3) plane_point, SHARED_IN(vec3) plane_normal) {
+  vec3 c00 = micro_quad_corner(pixel, viewport, inv_view_proj, plane_point, plane_normal);
+  vec3 c10 = micro_quad_corner(pixel + vec2(1.0f, 0.0f), viewport, inv_view_proj, plane_point, plane_normal);
+  vec3 c01 = micro_quad_corner(pixel + vec2(0.0f, 1.0f), viewport, inv_view_proj, plane_point, plane_normal);
+  vec3 c11 = micro_quad_corner(pixel + vec2(1.0f, 1.0f), viewport, inv_view_proj, plane_point, plane_normal);
+  return micro_quad_blend(c00, c10, c01, c11, sample_offset);
 }
 
 SHARED_END

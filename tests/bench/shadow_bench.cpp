@@ -170,6 +170,7 @@ json stats_json(const shadows::Stats& s) {
   c["csm_texels_covered"] = s.csm_texels_covered;
   c["node_pool_size"] = s.node_pool_size;
   c["node_overflow"] = s.node_overflow;
+  c["overflow_pixels"] = s.overflow_pixels;
   c["list_length_max"] = s.list_length_max;
   c["list_length_average"] = s.list_length_average;
   c["nonempty_texels"] = s.nonempty_texels;

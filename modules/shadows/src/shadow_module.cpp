@@ -1,6 +1,8 @@
 #include <stdexcept>
 
+#include "cascades_pass.hpp"
 #include "engine/gpu/profiler.hpp"
+#include "izb_pass.hpp"
 #include "shadow_map_pass.hpp"
 #include "shadows/shadows.hpp"
 
@@ -19,20 +21,26 @@ class ShadowModuleImpl final : public ShadowModule {
   void set_collect_stats(bool enabled) override { collect_stats_ = enabled; }
 
   std::vector<std::string> pass_names() const override {
+    std::vector<std::string> izb = {"light_frustum", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"};
+    if (settings_.izb.csm) izb.insert(izb.begin() + 1, "csm");
     switch (settings_.technique) {
       case Technique::Off: return {};
       case Technique::ShadowMap: return {"sm_depth", "sm_resolve"};
-      default: return {};
+      case Technique::Cascades: return {"cascades"};
+      case Technique::Izb: return izb;
+      case Technique::Hybrid: {
+        izb.insert(izb.begin(), "cascades");
+        return izb;
+      }
     }
+    return {};
   }
 
-  bool supported(CsmTest, std::string* why) const override {
-    if (why) *why = "not implemented";
-    return false;
-  }
+  bool supported(CsmTest test, std::string* why) const override { return izb().csm_test_supported(test, why); }
 
   void record(engine::FrameContext& frame) override {
     engine::gpu::ScopedGpuRegion region(ctx_, frame.profiler, frame.cmd, "shadows");
+    active_ = settings_.technique;
     switch (settings_.technique) {
       case Technique::Off:
         break;
@@ -40,9 +48,27 @@ class ShadowModuleImpl final : public ShadowModule {
         if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(ctx_);
         shadow_map_->record(frame, settings_.shadow_map);
         break;
-      default:
-        throw std::runtime_error("shadow technique not available yet");
+      case Technique::Cascades:
+        cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
+        break;
+      case Technique::Izb:
+        izb().record(frame, settings_.izb, settings_.debug, false);
+        break;
+      case Technique::Hybrid: {
+        cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
+        engine::gpu::full_barrier(frame.cmd);
+        IzbSettings near = settings_.izb;
+        near.max_distance = settings_.hybrid_izb_distance;
+        izb().record(frame, near, settings_.debug, true);
+        break;
+      }
     }
+  }
+
+  void after_frame(engine::gpu::Context&) override {
+    if (!collect_stats_) return;
+    if ((active_ == Technique::Izb || active_ == Technique::Hybrid) && izb_) izb_->after_frame(stats_);
+    if ((active_ == Technique::Cascades || active_ == Technique::Hybrid) && cascades_) cascades_->after_frame(stats_);
   }
 
   std::vector<float> read_visibility() override {
@@ -54,12 +80,24 @@ class ShadowModuleImpl final : public ShadowModule {
   }
 
  private:
+  IzbPass& izb() const {
+    if (!izb_) izb_ = std::make_unique<IzbPass>(ctx_);
+    return *izb_;
+  }
+  CascadesPass& cascades() {
+    if (!cascades_) cascades_ = std::make_unique<CascadesPass>(ctx_);
+    return *cascades_;
+  }
+
   engine::Renderer& renderer_;
   engine::gpu::Context& ctx_;
   Settings settings_;
   Stats stats_;
+  Technique active_ = Technique::Off;
   bool collect_stats_ = true;
   std::unique_ptr<ShadowMapPass> shadow_map_;
+  mutable std::unique_ptr<IzbPass> izb_;
+  std::unique_ptr<CascadesPass> cascades_;
 };
 
 }  // namespace detail

@@ -71,6 +71,9 @@ struct IzbSettings {
   bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed
   float node_pool_factor = 1.25f;     // pool size = factor * pixels * (1 or expected texels per μQuad)
   uint32_t node_pool_override = 0;    // nonzero: fixed pool size in nodes (tests of overflow)
+  // Validation path: no lists at all; every candidate is tested against every caster triangle by the
+  // same exact test (the overflow fallback). Slow; for checking the trace.
+  bool brute_force = false;
 };
 
 struct Settings {
@@ -79,6 +82,9 @@ struct Settings {
   CascadeSettings cascades;
   IzbSettings izb;
   DebugView debug = DebugView::None;
+  // Hybrid: the IZB covers points up to this distance from the camera (fading over its last tenth
+  // into the cascades, which cover the rest up to cascades.max_distance).
+  float hybrid_izb_distance = 20.0f;
 };
 
 // Why the automatic CSM choice took or left an entity.
@@ -100,7 +106,8 @@ struct Stats {
   double culling_rate = 0.0;          // csm_culled / lit_candidates
   uint64_t csm_texels_covered = 0;
   uint64_t node_pool_size = 0;
-  uint64_t node_overflow = 0;         // insertions that found the pool full (fallback used)
+  uint64_t node_overflow = 0;         // insertions that found the pool full
+  uint64_t overflow_pixels = 0;       // pixels resolved by the exact fallback because of that
   uint64_t list_length_max = 0;
   double list_length_average = 0.0;   // over non-empty texels
   uint64_t nonempty_texels = 0;

@@ -1,0 +1,364 @@
+#include "cascades_pass.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <glm/gtc/packing.hpp>
+
+#include "cascade_fit.hpp"
+#include "light_space.hpp"
+#include "shared/cascades.h"
+
+namespace shadows::detail {
+
+using namespace engine::gpu;
+namespace gs = gpu_shared;
+
+namespace {
+
+constexpr VkFormat kMapFormat = VK_FORMAT_D32_SFLOAT;
+constexpr VkFormat kMaskFormat = VK_FORMAT_R32_UINT;
+// A neighbour step steeper than this many texels of depth per texel counts as an edge.
+constexpr float kEdgeSlopeTexels = 2.0f;
+
+uint32_t mip_count(uint32_t size) {
+  uint32_t levels = 1;
+  while ((size >> levels) > 0) ++levels;
+  return levels;
+}
+
+void to_general(const Context& ctx, Image& image) {
+  ctx.immediate_submit([&](VkCommandBuffer cmd) {
+    image.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                     VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+  });
+}
+
+}  // namespace
+
+struct CascadesPass::Impl {
+  explicit Impl(Context& c) : ctx(c) {}
+
+  Context& ctx;
+  uint32_t map_size = 0;
+  Image depth;        // D32 array, one layer per cascade
+  Image edges;        // r32ui array + mips: 1 where a depth step is near
+  Image extents;      // r32ui array + mips: packed [min, max] light depth of the neighbourhood
+  Image rotation;     // kRotationTileSize^2 RG16F (cos, sin)
+  Image unblurred;    // R32F frame-sized copy of the filter's output, read by the blur
+  VkExtent2D frame_extent{};
+  Buffer params;
+  Buffer counters;    // host-readable: counters + indirect dispatch args
+  Buffer blur_list;
+  Sampler nearest;
+  Pipeline depth_pipeline[2];  // [cull_front_faces]
+  Pipeline edges_pipeline;
+  Pipeline reduce_pipeline;
+  Pipeline filter_pipeline;
+  Pipeline blur_args_pipeline;
+  Pipeline blur_pipeline;
+  CascadeFit fit;
+  bool recorded = false;
+  bool blur_enabled = false;
+
+  void create_pipelines() {
+    PipelineFactory factory(ctx);
+    for (int cull = 0; cull < 2; ++cull) {
+      GraphicsPipelineDesc d;
+      d.name = cull ? "cascade depth (front culled)" : "cascade depth";
+      d.vertex_shader = "cascade_depth.vert";
+      d.vertex_input = VertexInput::PositionOnly;
+      d.push_constant_size = sizeof(gs::CascadeDepthPush);
+      d.depth_format = kMapFormat;
+      d.depth_compare = VK_COMPARE_OP_LESS_OR_EQUAL;
+      // The light projection keeps y up, which mirrors winding in Vulkan's y-down framebuffer: faces
+      // turned toward the light arrive clockwise, hence front = clockwise.
+      d.front_face = VK_FRONT_FACE_CLOCKWISE;
+      d.cull_mode = cull ? VK_CULL_MODE_FRONT_BIT : VK_CULL_MODE_NONE;
+      d.depth_bias = true;
+      depth_pipeline[cull] = factory.graphics(d);
+    }
+    edges_pipeline = factory.compute({"cascade_edges.comp",
+                                      {{gs::CASCADE_MASK_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+                                       {gs::CASCADE_MASK_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                                       {gs::CASCADE_MASK_BINDING_EDGE_DST, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                       {gs::CASCADE_MASK_BINDING_EXTENT_DST, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                                      0});
+    reduce_pipeline = factory.compute({"cascade_reduce.comp",
+                                       {{gs::CASCADE_REDUCE_BINDING_SRC, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                        {gs::CASCADE_REDUCE_BINDING_DST, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                                       sizeof(gs::CascadeMaskPush)});
+    filter_pipeline = factory.compute(
+        {"cascade_filter.comp",
+         {{gs::CASCADE_FILTER_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+          {gs::CASCADE_FILTER_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gs::CASCADE_FILTER_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {gs::CASCADE_FILTER_BINDING_EDGE, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {gs::CASCADE_FILTER_BINDING_EXTENT, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {gs::CASCADE_FILTER_BINDING_ROTATION, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {gs::CASCADE_FILTER_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gs::CASCADE_FILTER_BINDING_UNBLURRED, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gs::CASCADE_FILTER_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gs::CASCADE_FILTER_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+          {gs::CASCADE_FILTER_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+         0});
+    blur_args_pipeline = factory.compute(
+        {"cascade_blur_args.comp", {{gs::CASCADE_BLUR_ARGS_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}, 0});
+    blur_pipeline = factory.compute({"cascade_blur.comp",
+                                     {{gs::CASCADE_BLUR_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                      {gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                      {gs::CASCADE_BLUR_BINDING_UNBLURRED, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                      {gs::CASCADE_BLUR_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                      {gs::CASCADE_BLUR_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                                      {gs::CASCADE_BLUR_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+                                     sizeof(gs::CascadeBlurPush)});
+  }
+
+  // Per-pixel rotations (cos, sin) from a fixed seed, so frames and runs are reproducible.
+  void create_rotation_texture() {
+    constexpr uint32_t n = gs::kRotationTileSize;
+    std::mt19937 rng(0x0c5ca1du);
+    std::uniform_real_distribution<float> angle(0.0f, 6.2831853f);
+    std::vector<uint32_t> texels(n * n);
+    for (auto& t : texels) {
+      const float a = angle(rng);
+      t = glm::packHalf2x16(glm::vec2(std::cos(a), std::sin(a)));
+    }
+    Buffer staging(ctx, texels.size() * 4, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "cascade rotation staging");
+    staging.write(texels.data(), texels.size() * 4);
+    rotation = Image(ctx, {n, n}, VK_FORMAT_R16G16_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                     "cascade rotation");
+    ctx.immediate_submit([&](VkCommandBuffer cmd) {
+      rotation.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                          VK_ACCESS_2_TRANSFER_WRITE_BIT);
+      VkBufferImageCopy copy{};
+      copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+      copy.imageExtent = {n, n, 1};
+      vkCmdCopyBufferToImage(cmd, staging.handle(), rotation.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
+      memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
+    });
+  }
+
+  void ensure_maps(uint32_t size) {
+    if (map_size == size) return;
+    map_size = size;
+    // Always kMaxCascades layers: the views stay 2D arrays whatever the cascade count.
+    depth = Image(ctx, {size, size}, kMapFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                  "cascade depth", 1, kMaxCascadeCount);
+    const uint32_t mips = mip_count(size);
+    edges = Image(ctx, {size, size}, kMaskFormat, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                  "cascade edge mask", mips, kMaxCascadeCount);
+    extents = Image(ctx, {size, size}, kMaskFormat, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                    "cascade depth extent", mips, kMaxCascadeCount);
+    to_general(ctx, depth);
+    to_general(ctx, edges);
+    to_general(ctx, extents);
+  }
+
+  void ensure_frame(VkExtent2D extent) {
+    if (unblurred.valid() && frame_extent.width == extent.width && frame_extent.height == extent.height) return;
+    frame_extent = extent;
+    unblurred = Image(ctx, extent, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT, "cascade unblurred");
+    to_general(ctx, unblurred);
+    blur_list = Buffer(ctx, std::max<VkDeviceSize>(4, VkDeviceSize(extent.width) * extent.height * 4),
+                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade blur list");
+  }
+
+  gs::CascadeParams make_params(const engine::FrameContext& frame, const CascadeSettings& s, DebugView debug,
+                                uint32_t* max_level) const {
+    gs::CascadeParams p{};
+    const float size = float(map_size);
+    const uint32_t top_level = mip_count(map_size) - 1;
+    *max_level = 0;
+    for (uint32_t c = 0; c < kMaxCascadeCount; ++c) {
+      const uint32_t k = std::min(c, fit.count - 1);  // unused slots repeat the last cascade
+      const float texel = fit.texel_world[k];
+      const float range = fit.depth_range[k];
+      p.light_view_projection[c] = fit.light_view_projection[k];
+      p.light_normal_matrix[c] = glm::transpose(glm::inverse(glm::mat4(glm::mat3(fit.light_view_projection[k]))));
+      p.split_far[c] = fit.splits[k + 1];
+      p.blend_start[c] = fit.blend_start[k];
+      p.texel_world[c] = texel;
+      const float kernel = std::max(s.kernel_radius, 0.0f) / texel;
+      p.kernel_texels[c] = kernel;
+      p.depth_bias[c] = s.constant_bias * texel / range;
+      p.normal_offset[c] = s.normal_offset * texel;
+      p.edge_threshold[c] = kEdgeSlopeTexels * texel / range;
+      // Smallest level whose texels are at least as wide as the kernel: its footprint then spans at
+      // most 2x2 texels there.
+      const float width = std::max(2.0f * kernel, 1.0f);
+      const uint32_t level = std::min(uint32_t(std::ceil(std::log2(width) - 1e-4f)), top_level);
+      p.mask_level[c] = int(level);
+      if (c < fit.count) *max_level = std::max(*max_level, level);
+    }
+    (void)size;
+    const glm::mat4& v = frame.view.view;
+    p.camera_position = glm::vec4(frame.view.camera_position, 1.0f);
+    p.camera_forward = glm::vec4(-glm::vec3(v[0][2], v[1][2], v[2][2]), 0.0f);
+    p.light_direction = glm::vec4(glm::normalize(frame.view.light_direction), 0.0f);
+    p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, map_size, fit.count);
+    uint32_t masking = gs::CASCADE_MASKING_OFF;
+    if (s.masking == Masking::Edge) masking = gs::CASCADE_MASKING_EDGE;
+    if (s.masking == Masking::DepthExtent) masking = gs::CASCADE_MASKING_DEPTH_EXTENT;
+    uint32_t view = gs::CASCADE_DEBUG_NONE;
+    if (debug == DebugView::Cascades) view = gs::CASCADE_DEBUG_CASCADES;
+    if (debug == DebugView::ExpensivePath) view = gs::CASCADE_DEBUG_EXPENSIVE;
+    p.mode = glm::uvec4(masking, s.blur ? 1u : 0u, view, 0u);
+    return p;
+  }
+
+  void record_depth(engine::FrameContext& frame, const CascadeSettings& s) {
+    VkCommandBuffer cmd = frame.cmd;
+    ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_depth");
+    const Pipeline& pipeline = depth_pipeline[s.cull_front_faces ? 1 : 0];
+    for (uint32_t c = 0; c < fit.count; ++c) {
+      VkRenderingAttachmentInfo attachment{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+      attachment.imageView = depth.layer_view(c);
+      attachment.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
+      attachment.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+      attachment.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+      attachment.clearValue.depthStencil = {1.0f, 0};
+      VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+      info.renderArea = {{0, 0}, depth.extent()};
+      info.layerCount = 1;
+      info.pDepthAttachment = &attachment;
+      vkCmdBeginRendering(cmd, &info);
+      set_viewport(cmd, depth.extent());
+      pipeline.bind(cmd);
+      // Constant bias is applied in the filter (scaled per cascade); the rasterizer adds the slope part.
+      vkCmdSetDepthBias(cmd, 0.0f, 0.0f, s.slope_bias);
+      draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
+        gs::CascadeDepthPush push{d.world, fit.light_view_projection[c]};
+        pipeline.push_constants(cmd, push);
+      });
+      vkCmdEndRendering(cmd);
+    }
+  }
+
+  void record_chain(VkCommandBuffer cmd, Image& chain, uint32_t max_level, bool depth_extent) {
+    for (uint32_t level = 1; level <= max_level; ++level) {
+      memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+      const uint32_t dst_size = std::max(map_size >> level, 1u);
+      gs::CascadeMaskPush push{std::max(map_size >> (level - 1), 1u), dst_size, fit.count, depth_extent ? 1u : 0u};
+      reduce_pipeline.bind(cmd);
+      DescriptorWriter()
+          .storage_image(gs::CASCADE_REDUCE_BINDING_SRC, chain.mip_view(level - 1))
+          .storage_image(gs::CASCADE_REDUCE_BINDING_DST, chain.mip_view(level))
+          .push(ctx, cmd, reduce_pipeline);
+      reduce_pipeline.push_constants(cmd, push);
+      vkCmdDispatch(cmd, (dst_size + 7) / 8, (dst_size + 7) / 8, fit.count);
+    }
+  }
+};
+
+CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {
+  Impl& m = *impl_;
+  m.params = Buffer(ctx, sizeof(gs::CascadeParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "cascade params");
+  m.counters = Buffer(ctx, gs::CASCADE_COUNTER_WORDS * 4,
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                          VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                      true, "cascade counters");
+  std::memset(m.counters.mapped(), 0, gs::CASCADE_COUNTER_WORDS * 4);
+  m.nearest = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "cascade nearest");
+  m.create_pipelines();
+  m.create_rotation_texture();
+}
+
+CascadesPass::~CascadesPass() = default;
+
+void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& settings, Image& out, DebugView debug) {
+  Impl& m = *impl_;
+  VkCommandBuffer cmd = frame.cmd;
+  m.ensure_maps(std::max(settings.map_size, 16u));
+  m.ensure_frame(frame.view.extent);
+  m.fit = fit_cascades(frame.view, settings, caster_bounds(frame));
+  uint32_t max_level = 0;
+  const gs::CascadeParams p = m.make_params(frame, settings, debug, &max_level);
+  m.params.write(&p, sizeof(p));
+  m.blur_enabled = settings.blur;
+
+  vkCmdFillBuffer(cmd, m.counters.handle(), 0, gs::CASCADE_COUNTER_WORDS * 4, 0);
+  m.record_depth(frame, settings);
+  full_barrier(cmd);
+  if (settings.masking != Masking::Off) {
+    const bool extent = settings.masking == Masking::DepthExtent;
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_masks");
+    m.edges_pipeline.bind(cmd);
+    DescriptorWriter()
+        .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, m.params.handle())
+        .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .storage_image(gs::CASCADE_MASK_BINDING_EDGE_DST, m.edges.mip_view(0))
+        .storage_image(gs::CASCADE_MASK_BINDING_EXTENT_DST, m.extents.mip_view(0))
+        .push(m.ctx, cmd, m.edges_pipeline);
+    vkCmdDispatch(cmd, (m.map_size + 7) / 8, (m.map_size + 7) / 8, m.fit.count);
+    m.record_chain(cmd, m.edges, max_level, false);
+    if (extent) m.record_chain(cmd, m.extents, max_level, true);
+    full_barrier(cmd);
+  }
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_filter");
+    m.filter_pipeline.bind(cmd);
+    DescriptorWriter()
+        .uniform_buffer(gs::CASCADE_FILTER_BINDING_PARAMS, m.params.handle())
+        .storage_image(gs::CASCADE_FILTER_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
+        .storage_image(gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+        .sampled_image(gs::CASCADE_FILTER_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .sampled_image(gs::CASCADE_FILTER_BINDING_EDGE, m.edges.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .sampled_image(gs::CASCADE_FILTER_BINDING_EXTENT, m.extents.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .sampled_image(gs::CASCADE_FILTER_BINDING_ROTATION, m.rotation.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .storage_image(gs::CASCADE_FILTER_BINDING_SHADOW_TERM, out.view())
+        .storage_image(gs::CASCADE_FILTER_BINDING_UNBLURRED, m.unblurred.view())
+        .storage_image(gs::CASCADE_FILTER_BINDING_OVERLAY, frame.overlay.view())
+        .storage_buffer(gs::CASCADE_FILTER_BINDING_COUNTERS, m.counters.handle())
+        .storage_buffer(gs::CASCADE_FILTER_BINDING_BLUR_LIST, m.blur_list.handle())
+        .push(m.ctx, cmd, m.filter_pipeline);
+    vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
+  }
+  full_barrier(cmd);
+  if (settings.blur) {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_blur");
+    m.blur_args_pipeline.bind(cmd);
+    DescriptorWriter()
+        .storage_buffer(gs::CASCADE_BLUR_ARGS_BINDING_COUNTERS, m.counters.handle())
+        .push(m.ctx, cmd, m.blur_args_pipeline);
+    vkCmdDispatch(cmd, 1, 1, 1);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    m.blur_pipeline.bind(cmd);
+    DescriptorWriter()
+        .storage_image(gs::CASCADE_BLUR_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
+        .storage_image(gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+        .storage_image(gs::CASCADE_BLUR_BINDING_UNBLURRED, m.unblurred.view())
+        .storage_image(gs::CASCADE_BLUR_BINDING_SHADOW_TERM, out.view())
+        .storage_buffer(gs::CASCADE_BLUR_BINDING_COUNTERS, m.counters.handle())
+        .storage_buffer(gs::CASCADE_BLUR_BINDING_BLUR_LIST, m.blur_list.handle())
+        .push(m.ctx, cmd, m.blur_pipeline);
+    gs::CascadeBlurPush push{glm::vec4(frame.view.camera_position, 1.0f),
+                             glm::uvec4(frame.view.extent.width, frame.view.extent.height, 0u, 0u)};
+    m.blur_pipeline.push_constants(cmd, push);
+    vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH * 4);
+  }
+  full_barrier(cmd);
+  // The counters are read on the host after the frame's fence.
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                 VK_ACCESS_2_HOST_READ_BIT);
+  m.recorded = true;
+}
+
+void CascadesPass::after_frame(Stats& stats) {
+  Impl& m = *impl_;
+  if (!m.recorded) return;
+  const uint32_t* c = m.counters.as<uint32_t>();
+  stats.expensive_path_pixels = c[gs::CASCADE_COUNTER_EXPENSIVE];
+  stats.blurred_pixels = m.blur_enabled ? c[gs::CASCADE_COUNTER_BLUR] : 0;
+  const uint64_t facing = c[gs::CASCADE_COUNTER_FACING];
+  stats.expensive_path_fraction = facing ? double(stats.expensive_path_pixels) / double(facing) : 0.0;
+  stats.cascade_splits.assign(m.fit.splits.begin(), m.fit.splits.begin() + m.fit.count + 1);
+}
+
+}  // namespace shadows::detail

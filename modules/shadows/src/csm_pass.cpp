@@ -1,0 +1,292 @@
+#include "csm_pass.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "engine/gpu/profiler.hpp"
+#include "light_space.hpp"
+#include "shared/csm.h"
+#include "shared/izb.h"
+
+namespace shadows::detail {
+
+using namespace engine::gpu;
+
+CsmChoiceMeasure measure_csm_suitability(const engine::MeshData& mesh, const glm::mat4& world,
+                                         const glm::vec3& light_direction, float texel_size) {
+  CsmChoiceMeasure out;
+  const glm::mat3 to_light = glm::mat3(light_view_matrix(light_direction));
+  const double circumradius = 0.70710678 * texel_size;
+  double coverable = 0.0;
+  for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+    glm::dvec2 p[3];
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 w = glm::vec3(world * glm::vec4(mesh.vertices[mesh.indices[i + k]].position, 1.0f));
+      p[k] = glm::dvec2(to_light * w);
+    }
+    const double area = 0.5 * std::abs((p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[2].x - p[0].x) * (p[1].y - p[0].y));
+    const double perimeter = glm::length(p[1] - p[0]) + glm::length(p[2] - p[1]) + glm::length(p[0] - p[2]);
+    ++out.triangles;
+    if (area <= 0.0 || perimeter <= 0.0) continue;
+    out.projected_area += area;
+    // Shrinking a triangle by distance d scales it about its incentre by (r - d) / r.
+    const double inradius = 2.0 * area / perimeter;
+    if (inradius > circumradius) {
+      const double scale = (inradius - circumradius) / inradius;
+      coverable += area * scale * scale;
+    }
+  }
+  out.coverable_share = out.projected_area > 0.0 ? coverable / out.projected_area : 0.0;
+  return out;
+}
+
+namespace {
+std::vector<Binding> csm_bindings() {
+  return {{gpu_shared::CSM_BINDING_FRAME, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+          {gpu_shared::CSM_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+          {gpu_shared::CSM_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+}
+}  // namespace
+
+struct CsmPass::Impl {
+  Context& ctx;
+  Image depth;
+  Sampler nearest;
+  Buffer counters, readback;
+  std::map<CsmTest, Pipeline> pipelines;
+  Pipeline coverage;
+  bool collected = false;
+  struct Cached {
+    glm::mat4 world;
+    glm::vec3 light;
+    float texel;
+    CsmChoiceMeasure measure;
+  };
+  std::map<uint32_t, Cached> cache;  // by entity index
+  std::vector<CsmDecision> decisions;
+  std::vector<bool> in_csm;  // per draw, this frame
+
+  explicit Impl(Context& c) : ctx(c) {
+    nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "csm nearest");
+    counters = Buffer(c, gpu_shared::CSM_COUNTER_COUNT * 4,
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                      false, "csm counters");
+    readback = Buffer(c, gpu_shared::CSM_COUNTER_COUNT * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "csm readback");
+    std::memset(readback.mapped(), 0, readback.size());
+    ensure_depth(1);
+    PipelineFactory factory(c);
+    coverage = factory.compute({"csm_coverage.comp", csm_bindings(), 0});
+  }
+
+  void ensure_depth(uint32_t resolution) {
+    if (depth.valid() && depth.extent().width == resolution) return;
+    depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
+                  VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                      VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                  "conservative shadow map");
+    ctx.immediate_submit([&](VkCommandBuffer cmd) {
+      depth.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                       VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+      VkClearDepthStencilValue far{1.0f, 0};
+      VkImageSubresourceRange range{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+      vkCmdClearDepthStencilImage(cmd, depth.handle(), VK_IMAGE_LAYOUT_GENERAL, &far, 1, &range);
+    });
+  }
+
+  bool supported(CsmTest test, std::string* why) const {
+    const auto& f = ctx.features();
+    auto fail = [&](const std::string& reason) {
+      if (why) *why = reason;
+      return false;
+    };
+    switch (test) {
+      case CsmTest::Hertel:
+      case CsmTest::Barycentric:
+        if (!f.geometry_shader) return fail("needs geometry shaders, which " + ctx.device_name() + " lacks");
+        return true;
+      case CsmTest::BarycentricHw:
+        if (!f.fragment_shader_barycentric)
+          return fail("needs VK_KHR_fragment_shader_barycentric, which " + ctx.device_name() + " lacks");
+        return true;
+      case CsmTest::InnerHw:
+        if (!f.conservative_rasterization || !f.conservative_underestimation || !f.fully_covered_fragment_input)
+          return fail("needs VK_EXT_conservative_rasterization with underestimation and the fully-covered input, "
+                      "which " + ctx.device_name() + " lacks");
+        return true;
+    }
+    return fail("unknown test");
+  }
+
+  const Pipeline& pipeline(CsmTest test) {
+    auto it = pipelines.find(test);
+    if (it != pipelines.end()) return it->second;
+    GraphicsPipelineDesc d;
+    d.name = "csm " + csm_test_name(test);
+    d.vertex_shader = "csm.vert";
+    d.bindings = csm_bindings();
+    d.push_constant_size = sizeof(gpu_shared::IzbDrawPush);
+    d.vertex_input = VertexInput::PositionOnly;
+    d.depth_format = VK_FORMAT_D32_SFLOAT;
+    d.depth_compare = VK_COMPARE_OP_LESS;  // several covering triangles: the nearest bound culls most
+    d.cull_mode = VK_CULL_MODE_NONE;
+    switch (test) {
+      case CsmTest::Hertel:
+        d.geometry_shader = "csm.geom";
+        d.fragment_shader = "csm.frag";
+        d.specialization = {{0, gpu_shared::CSM_TEST_HERTEL}};
+        break;
+      case CsmTest::Barycentric:
+        d.geometry_shader = "csm.geom";
+        d.fragment_shader = "csm.frag";
+        d.specialization = {{0, gpu_shared::CSM_TEST_BARYCENTRIC}};
+        break;
+      case CsmTest::BarycentricHw:
+        d.fragment_shader = "csm_bary_hw.frag";
+        break;
+      case CsmTest::InnerHw:
+        d.fragment_shader = "csm_inner_hw.frag";
+        d.conservative = ConservativeMode::Underestimate;
+        break;
+    }
+    return pipelines.emplace(test, PipelineFactory(ctx).graphics(d)).first->second;
+  }
+
+  // Texel size estimate for the automatic choice: the IZB window is fitted on the GPU to the visible
+  // points, so the CPU uses the casters' light-space extent, an upper bound (decisions err toward
+  // leaving a mesh out, never toward a wrong shadow).
+  float estimate_texel_size(const engine::FrameContext& frame, uint32_t resolution) const {
+    const engine::Aabb box = caster_bounds(frame);
+    if (!box.valid()) return 1.0f;
+    const glm::mat4 view = light_view_matrix(frame.view.light_direction);
+    glm::vec2 lo(1e30f), hi(-1e30f);
+    for (int i = 0; i < 8; ++i) {
+      glm::vec3 corner((i & 1) ? box.max.x : box.min.x, (i & 2) ? box.max.y : box.min.y, (i & 4) ? box.max.z : box.min.z);
+      const glm::vec2 v = glm::vec2(view * glm::vec4(corner, 1.0f));
+      lo = glm::min(lo, v);
+      hi = glm::max(hi, v);
+    }
+    return std::max(hi.x - lo.x, hi.y - lo.y) / float(resolution);
+  }
+
+  void choose(const engine::FrameContext& frame, uint32_t resolution) {
+    decisions.clear();
+    in_csm.assign(frame.draws.size(), false);
+    const float texel = estimate_texel_size(frame, resolution);
+    for (size_t i = 0; i < frame.draws.size(); ++i) {
+      const auto& d = frame.draws[i];
+      if (!d.shadow.casts_shadow) continue;
+      CsmDecision decision;
+      decision.entity = d.entity;
+      if (const auto* n = frame.registry.try_get<engine::Name>(d.entity)) decision.name = n->value;
+      const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
+      if (d.shadow.csm == engine::CsmChoice::On) {
+        decision.in_csm = true;
+        decision.reason = "on: chosen for the entity";
+      } else if (d.shadow.csm == engine::CsmChoice::Off) {
+        decision.reason = "off: chosen for the entity";
+      } else if (mesh && mesh->data) {
+        decision.automatic = true;
+        auto& cached = cache[d.entity.index];
+        // Re-measure only when the light, the texel size or the entity's transform changed.
+        if (cached.world != d.world || cached.light != frame.view.light_direction || cached.texel != texel) {
+          cached = {d.world, frame.view.light_direction, texel,
+                    measure_csm_suitability(*mesh->data, d.world, frame.view.light_direction, texel)};
+        }
+        decision.large_triangle_area_share = cached.measure.coverable_share;
+        decision.in_csm = cached.measure.coverable_share >= kCsmAutoThreshold;
+        std::ostringstream reason;
+        reason.precision(3);
+        reason << "auto: " << cached.measure.coverable_share * 100.0 << "% of its light-space area can fully cover "
+               << resolution << "^2 texels of ~" << texel << " units (" << (decision.in_csm ? ">=" : "<") << " "
+               << kCsmAutoThreshold * 100.0 << "%)";
+        decision.reason = reason.str();
+      }
+      in_csm[i] = decision.in_csm;
+      decisions.push_back(std::move(decision));
+    }
+  }
+};
+
+CsmPass::CsmPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
+CsmPass::~CsmPass() = default;
+VkImageView CsmPass::depth_view() const { return impl_->depth.view(); }
+bool CsmPass::supported(CsmTest test, std::string* why) const { return impl_->supported(test, why); }
+
+void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, const Buffer& izb_frame,
+                     uint32_t resolution) {
+  Impl& m = *impl_;
+  std::string why;
+  if (!m.supported(settings.csm_test, &why))
+    throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " is unavailable: " + why);
+  m.ensure_depth(resolution);
+  m.choose(frame, resolution);
+  VkCommandBuffer cmd = frame.cmd;
+  const Pipeline& p = m.pipeline(settings.csm_test);
+  vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm");
+    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth.imageView = m.depth.view();
+    depth.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
+    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    depth.clearValue.depthStencil = {1.0f, 0};
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {resolution, resolution}};
+    info.layerCount = 1;
+    info.pDepthAttachment = &depth;
+    vkCmdBeginRendering(cmd, &info);
+    set_viewport(cmd, {resolution, resolution});
+    p.bind(cmd);
+    DescriptorWriter()
+        .storage_buffer(gpu_shared::CSM_BINDING_FRAME, izb_frame.handle())
+        .storage_buffer(gpu_shared::CSM_BINDING_COUNTERS, m.counters.handle())
+        .push(m.ctx, cmd, p);
+    VkDeviceSize offset = 0;
+    VkBuffer vb = frame.geometry.vertices().handle();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+    vkCmdBindIndexBuffer(cmd, frame.geometry.indices().handle(), 0, VK_INDEX_TYPE_UINT32);
+    for (size_t i = 0; i < frame.draws.size(); ++i) {
+      if (!m.in_csm[i]) continue;
+      const auto& d = frame.draws[i];
+      const auto& range = frame.geometry.mesh(d.mesh);
+      if (range.index_count == 0) continue;
+      gpu_shared::IzbDrawPush push{d.world, range.first_index, range.vertex_offset, 0u, 0u};
+      p.push_constants(cmd, push);
+      vkCmdDrawIndexed(cmd, range.index_count, 1, range.first_index, range.vertex_offset, 0);
+    }
+    vkCmdEndRendering(cmd);
+  }
+  full_barrier(cmd);
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm_coverage");
+    m.coverage.bind(cmd);
+    DescriptorWriter()
+        .storage_buffer(gpu_shared::CSM_BINDING_FRAME, izb_frame.handle())
+        .storage_buffer(gpu_shared::CSM_BINDING_COUNTERS, m.counters.handle())
+        .sampled_image(gpu_shared::CSM_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .push(m.ctx, cmd, m.coverage);
+    vkCmdDispatch(cmd, (resolution + 7) / 8, (resolution + 7) / 8, 1);
+  }
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+  VkBufferCopy copy{0, 0, m.counters.size()};
+  vkCmdCopyBuffer(cmd, m.counters.handle(), m.readback.handle(), 1, &copy);
+  m.collected = true;
+}
+
+void CsmPass::after_frame(Stats& stats) {
+  Impl& m = *impl_;
+  if (!m.collected) {
+    stats.csm_texels_covered = 0;
+    stats.csm_decisions.clear();
+    return;
+  }
+  m.collected = false;
+  stats.csm_texels_covered = m.readback.as<uint32_t>()[gpu_shared::CSM_COUNTER_TEXELS];
+  stats.csm_decisions = m.decisions;
+}
+
+}  // namespace shadows::detail

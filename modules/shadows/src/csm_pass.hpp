@@ -1,0 +1,42 @@
+#pragma once
+#include <map>
+#include <memory>
+#include <string>
+
+#include "engine/gpu/resources.hpp"
+#include "shadows/shadows.hpp"
+
+namespace shadows::detail {
+
+// Decides whether an entity's mesh belongs in the CSM: only triangles large enough to cover whole
+// texels can ever write a depth, so a mesh of small triangles costs raster time and culls nothing.
+// The measure: of the mesh's area projected along the light, the share that lies at least a
+// circumscribed texel radius (√2/2 texel) inside its triangle's edges — the area that can be fully
+// covered. `texel_size` is the world size of one CSM texel.
+struct CsmChoiceMeasure {
+  double coverable_share = 0.0;
+  double projected_area = 0.0;
+  uint64_t triangles = 0;
+};
+CsmChoiceMeasure measure_csm_suitability(const engine::MeshData& mesh, const glm::mat4& world,
+                                         const glm::vec3& light_direction, float texel_size);
+// Entities whose coverable share reaches this enter the CSM under CsmChoice::Auto.
+inline constexpr double kCsmAutoThreshold = 0.5;
+
+class CsmPass {
+ public:
+  explicit CsmPass(engine::gpu::Context& ctx);
+  ~CsmPass();
+  VkImageView depth_view() const;
+  bool supported(CsmTest test, std::string* why) const;
+  // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`.
+  void record(engine::FrameContext& frame, const IzbSettings& settings, const engine::gpu::Buffer& izb_frame,
+              uint32_t resolution);
+  void after_frame(Stats& stats);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace shadows::detail

@@ -1,0 +1,375 @@
+#include "izb_pass.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+#include "csm_pass.hpp"
+#include "engine/gpu/profiler.hpp"
+#include "light_space.hpp"
+#include "shared/frame.h"
+#include "shared/izb.h"
+
+namespace shadows::detail {
+
+using namespace engine::gpu;
+
+namespace {
+const VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+const VkAccessFlags2 kAllAccess = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
+
+std::vector<Binding> izb_bindings() {
+  using gpu_shared::uint;
+  const VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  return {{gpu_shared::IZB_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+          {gpu_shared::IZB_BINDING_FRAME, storage},
+          {gpu_shared::IZB_BINDING_COUNTERS, storage},
+          {gpu_shared::IZB_BINDING_HEADS, storage},
+          {gpu_shared::IZB_BINDING_FARTHEST, storage},
+          {gpu_shared::IZB_BINDING_NODES, storage},
+          {gpu_shared::IZB_BINDING_MASK, storage},
+          {gpu_shared::IZB_BINDING_PIXEL_STATE, storage},
+          {gpu_shared::IZB_BINDING_QUADS, storage},
+          {gpu_shared::IZB_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gpu_shared::IZB_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gpu_shared::IZB_BINDING_ALBEDO, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gpu_shared::IZB_BINDING_VERTICES, storage},
+          {gpu_shared::IZB_BINDING_INDICES, storage},
+          {gpu_shared::IZB_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gpu_shared::IZB_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gpu_shared::IZB_BINDING_TRIANGLES, storage},
+          {gpu_shared::IZB_BINDING_OVERFLOW_LIST, storage},
+          {gpu_shared::IZB_BINDING_CSM_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+}
+
+uint32_t debug_code(DebugView debug) {
+  switch (debug) {
+    case DebugView::VisibilityMask: return 1;
+    case DebugView::ListLength: return 2;
+    case DebugView::CsmCoverage: return 4;
+    default: return 0;
+  }
+}
+}  // namespace
+
+struct IzbPass::Impl {
+  Context& ctx;
+  PipelineFactory factory;
+  Pipeline fit, setup, build, fallback, resolve, list_stats;
+  Pipeline trace_software, trace_hardware;
+  Buffer params, frame_data, counters, counters_readback;
+  Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles;
+  Sampler nearest;
+  std::unique_ptr<CsmPass> csm;
+  uint32_t resolution = 0;
+  uint32_t samples = 0;
+  VkExtent2D extent{};
+  uint64_t pool_size = 0;
+  uint64_t pool_demand = 0;
+  uint32_t triangle_count = 0;
+  std::vector<glm::mat4> triangle_source_matrices;  // detects when caster transforms change
+  std::vector<uint32_t> triangle_source_meshes;
+  bool used_hardware = false;
+  bool collected = false;
+  uint32_t last_candidates = 0;
+
+  explicit Impl(Context& c) : ctx(c), factory(c) {
+    const auto bindings = izb_bindings();
+    const uint32_t push = sizeof(gpu_shared::IzbComputePush);
+    fit = factory.compute({"izb_fit.comp", bindings, push});
+    setup = factory.compute({"izb_setup.comp", bindings, push});
+    build = factory.compute({"izb_build.comp", bindings, push});
+    fallback = factory.compute({"izb_fallback.comp", bindings, push});
+    resolve = factory.compute({"izb_resolve.comp", bindings, push});
+    list_stats = factory.compute({"izb_list_stats.comp", bindings, push});
+    GraphicsPipelineDesc trace;
+    trace.name = "izb trace (software conservative)";
+    trace.vertex_shader = "izb_trace.vert";
+    trace.geometry_shader = "izb_trace.geom";
+    trace.fragment_shader = "izb_trace.frag";
+    trace.bindings = bindings;
+    trace.push_constant_size = sizeof(gpu_shared::IzbDrawPush);
+    trace.vertex_input = VertexInput::PositionOnly;
+    trace.cull_mode = VK_CULL_MODE_NONE;
+    trace.depth_test = false;
+    trace.depth_write = false;
+    if (c.features().geometry_shader) trace_software = factory.graphics(trace);
+    if (c.features().conservative_rasterization) {
+      trace.name = "izb trace (hardware conservative)";
+      trace.geometry_shader.clear();
+      trace.conservative = ConservativeMode::Overestimate;
+      trace_hardware = factory.graphics(trace);
+    }
+    if (!trace_software.valid() && !trace_hardware.valid())
+      throw VulkanError("the IZB needs conservative rasterization or geometry shaders; device " + c.device_name() +
+                        " has neither");
+    params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "izb params");
+    frame_data = Buffer(c, sizeof(gpu_shared::IzbFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb frame");
+    const VkDeviceSize counter_bytes = gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t);
+    counters = Buffer(c, counter_bytes,
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
+                      false, "izb counters");
+    counters_readback = Buffer(c, counter_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "izb counters readback");
+    std::memset(counters_readback.mapped(), 0, counter_bytes);
+    nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "izb nearest");
+    csm = std::make_unique<CsmPass>(c);
+  }
+
+  void ensure_buffers(const engine::FrameContext& frame, const IzbSettings& s) {
+    const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    const uint32_t spp = s.samples_per_pixel == 32 ? 32 : 1;
+    if (resolution != s.resolution) {
+      resolution = s.resolution;
+      const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
+      heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
+      farthest = Buffer(ctx, texels * 4, usage, false, "izb farthest node depth");
+    }
+    const VkExtent2D e = frame.view.extent;
+    const VkDeviceSize pixels = VkDeviceSize(e.width) * e.height;
+    if (e.width != extent.width || e.height != extent.height || spp != samples) {
+      extent = e;
+      samples = spp;
+      mask = Buffer(ctx, pixels * 4, usage, false, "izb visibility mask");
+      pixel_state = Buffer(ctx, pixels * 4, usage, false, "izb pixel state");
+      overflow_list = Buffer(ctx, pixels * 4, usage, false, "izb overflow pixels");
+      const uint32_t stride = spp == 32 ? gpu_shared::kIzbQuadFloats32 : gpu_shared::kIzbQuadFloats1;
+      quads = Buffer(ctx, pixels * stride * 4, usage, false, "izb pixel light-space data");
+      pool_size = 0;
+    }
+    uint64_t wanted;
+    if (s.brute_force) {
+      wanted = 0;
+    } else if (s.node_pool_override) {
+      wanted = s.node_pool_override;
+    } else {
+      // 1 spp needs at most one node per pixel; at 32 spp a μQuad usually spans one to four texels.
+      const double per_pixel = spp == 32 ? 2.0 : 1.0;
+      wanted = std::max<uint64_t>(uint64_t(double(pixels) * per_pixel * s.node_pool_factor), 1024);
+      wanted = std::max(wanted, pool_demand);
+    }
+    if (wanted != pool_size || !nodes.valid()) {
+      pool_size = wanted;
+      nodes = Buffer(ctx, std::max<uint64_t>(pool_size, 1) * 8, usage, false, "izb nodes");
+    }
+  }
+
+  void ensure_triangles(const engine::FrameContext& frame) {
+    std::vector<glm::mat4> matrices;
+    std::vector<uint32_t> meshes;
+    for (const auto& d : frame.draws) {
+      if (!d.shadow.casts_shadow) continue;
+      matrices.push_back(d.world);
+      meshes.push_back(d.mesh);
+    }
+    if (triangles.valid() && matrices == triangle_source_matrices && meshes == triangle_source_meshes) return;
+    // World-space caster triangles for the overflow fallback, rebuilt only when casters move.
+    std::vector<glm::vec4> data;
+    for (const auto& d : frame.draws) {
+      if (!d.shadow.casts_shadow) continue;
+      const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
+      if (!mesh || !mesh->data) continue;
+      const auto& m = *mesh->data;
+      for (size_t i = 0; i + 2 < m.indices.size(); i += 3)
+        for (int k = 0; k < 3; ++k)
+          data.push_back(d.world * glm::vec4(m.vertices[m.indices[i + k]].position, 1.0f));
+    }
+    triangle_count = uint32_t(data.size() / 3);
+    if (data.empty()) data.push_back(glm::vec4(0.0f));
+    triangles = upload_buffer(ctx, data.data(), data.size() * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                              "izb caster triangles");
+    triangle_source_matrices = std::move(matrices);
+    triangle_source_meshes = std::move(meshes);
+  }
+
+  void push_all(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p) {
+    DescriptorWriter()
+        .uniform_buffer(gpu_shared::IZB_BINDING_PARAMS, params.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_FRAME, frame_data.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_COUNTERS, counters.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_HEADS, heads.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_FARTHEST, farthest.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_NODES, nodes.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_MASK, mask.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_PIXEL_STATE, pixel_state.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_QUADS, quads.handle())
+        .storage_image(gpu_shared::IZB_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
+        .storage_image(gpu_shared::IZB_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+        .storage_image(gpu_shared::IZB_BINDING_ALBEDO, frame.gbuffer.albedo.view())
+        .storage_buffer(gpu_shared::IZB_BINDING_VERTICES, frame.geometry.vertices().handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_INDICES, frame.geometry.indices().handle())
+        .storage_image(gpu_shared::IZB_BINDING_SHADOW_TERM, frame.shadow_term.view())
+        .storage_image(gpu_shared::IZB_BINDING_OVERLAY, frame.overlay.view())
+        .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLES, triangles.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_OVERFLOW_LIST, overflow_list.handle())
+        .sampled_image(gpu_shared::IZB_BINDING_CSM_DEPTH, csm->depth_view(), nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .push(ctx, cmd, p);
+  }
+
+  void dispatch_pixels(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+                       gpu_shared::IzbComputePush push) {
+    p.bind(cmd);
+    push_all(cmd, frame, p);
+    p.push_constants(cmd, push);
+    vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
+  }
+};
+
+IzbPass::IzbPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
+IzbPass::~IzbPass() = default;
+
+bool IzbPass::hardware_raster_available() const { return impl_->trace_hardware.valid(); }
+
+bool IzbPass::csm_test_supported(CsmTest test, std::string* why) const { return impl_->csm->supported(test, why); }
+
+void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid) {
+  Impl& m = *impl_;
+  VkCommandBuffer cmd = frame.cmd;
+  if (settings.resolution == 0 || settings.resolution > 16384)
+    throw std::invalid_argument("IZB resolution must be in 1..16384");
+  m.ensure_buffers(frame, settings);
+  m.ensure_triangles(frame);
+
+  const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
+                            (settings.raster == ConservativeRaster::Auto && m.trace_hardware.valid());
+  if (use_hardware && !m.trace_hardware.valid())
+    throw std::runtime_error("hardware conservative rasterization requested but " + m.ctx.device_name() +
+                             " lacks VK_EXT_conservative_rasterization");
+  if (!use_hardware && !m.trace_software.valid())
+    throw std::runtime_error("software conservative rasterization needs geometry shaders, which " +
+                             m.ctx.device_name() + " lacks");
+  m.used_hardware = use_hardware;
+
+  // CPU side of the frustum: the light's rotation and the casters' depth range along it.
+  const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
+  engine::Aabb depth_box = caster_bounds(frame);
+  for (const auto& d : frame.draws) {
+    const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
+    if (mesh && mesh->data) depth_box.extend(mesh->data->bounds.transformed(d.world));
+  }
+  float near_d = 0.0f, far_d = 1.0f;
+  if (depth_box.valid()) {
+    float lo = std::numeric_limits<float>::max(), hi = -lo;
+    for (int i = 0; i < 8; ++i) {
+      glm::vec3 corner((i & 1) ? depth_box.max.x : depth_box.min.x, (i & 2) ? depth_box.max.y : depth_box.min.y,
+                       (i & 4) ? depth_box.max.z : depth_box.min.z);
+      const float d = -(light_view * glm::vec4(corner, 1.0f)).z;
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+    const float margin = 0.01f * (hi - lo) + 1e-3f;
+    near_d = lo - margin;
+    far_d = hi + margin;
+  }
+
+  uint32_t flags = gpu_shared::IZB_FLAG_STATS;
+  if (settings.csm) flags |= gpu_shared::IZB_FLAG_CSM;
+  if (settings.depth_cull) flags |= gpu_shared::IZB_FLAG_DEPTH_CULL;
+  if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
+  if (!use_hardware) flags |= gpu_shared::IZB_FLAG_SOFTWARE_RASTER;
+  gpu_shared::IzbParams p{};
+  p.light_view = light_view;
+  p.inverse_view_projection = frame.view.inverse_view_projection;
+  p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
+  p.camera_position = glm::vec4(frame.view.camera_position, settings.max_distance);
+  p.depth_range = glm::vec4(near_d, far_d, 0.0f, 0.0f);
+  p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.resolution, m.samples);
+  p.limits = glm::uvec4(uint32_t(std::min<uint64_t>(m.pool_size, UINT32_MAX)), flags, 0u, 0u);
+  m.params.write(&p, sizeof(p));
+  const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, 0u};
+
+  // Reset: counters, bounds (min slots to the largest ordered value), lists, farthest depths.
+  vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
+  vkCmdFillBuffer(cmd, m.counters.handle(), gpu_shared::IZB_COUNTER_BOUNDS * 4, 8, 0xffffffffu);
+  vkCmdFillBuffer(cmd, m.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
+  vkCmdFillBuffer(cmd, m.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
+  full_barrier(cmd);
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
+    m.dispatch_pixels(cmd, frame, m.fit, push);
+    full_barrier(cmd);
+    m.setup.bind(cmd);
+    m.push_all(cmd, frame, m.setup);
+    m.setup.push_constants(cmd, push);
+    vkCmdDispatch(cmd, 1, 1, 1);
+  }
+  full_barrier(cmd);
+  if (settings.csm) {
+    m.csm->record(frame, settings, m.frame_data, m.resolution);
+    full_barrier(cmd);
+  }
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
+    m.dispatch_pixels(cmd, frame, m.build, push);
+  }
+  full_barrier(cmd);
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
+    const Pipeline& trace = use_hardware ? m.trace_hardware : m.trace_software;
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {m.resolution, m.resolution}};
+    info.layerCount = 1;
+    vkCmdBeginRendering(cmd, &info);
+    set_viewport(cmd, {m.resolution, m.resolution});
+    trace.bind(cmd);
+    m.push_all(cmd, frame, trace);
+    draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
+      gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset, 0u, 0u};
+      trace.push_constants(cmd, dp);
+    });
+    vkCmdEndRendering(cmd);
+  }
+  full_barrier(cmd);
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_fallback");
+    m.fallback.bind(cmd);
+    m.push_all(cmd, frame, m.fallback);
+    m.fallback.push_constants(cmd, push);
+    vkCmdDispatchIndirect(cmd, m.counters.handle(), gpu_shared::IZB_COUNTER_DISPATCH * 4);
+  }
+  full_barrier(cmd);
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_resolve");
+    m.dispatch_pixels(cmd, frame, m.resolve, push);
+  }
+  full_barrier(cmd);
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_list_stats");
+    m.list_stats.bind(cmd);
+    m.push_all(cmd, frame, m.list_stats);
+    m.list_stats.push_constants(cmd, push);
+    vkCmdDispatch(cmd, (m.resolution + 7) / 8, (m.resolution + 7) / 8, 1);
+  }
+  memory_barrier(cmd, kAll, kAllAccess, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+  VkBufferCopy copy{0, 0, m.counters.size()};
+  vkCmdCopyBuffer(cmd, m.counters.handle(), m.counters_readback.handle(), 1, &copy);
+  m.collected = true;
+}
+
+void IzbPass::after_frame(Stats& s) {
+  Impl& m = *impl_;
+  if (!m.collected) return;
+  m.collected = false;
+  const auto* c = m.counters_readback.as<uint32_t>();
+  s.shading_points = c[gpu_shared::IZB_COUNTER_SHADING_POINTS];
+  s.lit_candidates = c[gpu_shared::IZB_COUNTER_CANDIDATES];
+  const uint64_t requested = c[gpu_shared::IZB_COUNTER_NODES];
+  s.node_pool_size = m.pool_size;
+  s.nodes_inserted = std::min<uint64_t>(requested, m.pool_size);
+  s.node_overflow = c[gpu_shared::IZB_COUNTER_OVERFLOW];
+  s.overflow_pixels = c[gpu_shared::IZB_COUNTER_OVERFLOW_PIXELS];
+  s.csm_culled = c[gpu_shared::IZB_COUNTER_CSM_CULLED];
+  s.culling_rate = s.lit_candidates ? double(s.csm_culled) / double(s.lit_candidates) : 0.0;
+  s.trace_fragments_before_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS];
+  s.trace_fragments_after_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS_KEPT];
+  s.triangle_tests = c[gpu_shared::IZB_COUNTER_TRIANGLE_TESTS];
+  s.triangle_tests_per_pixel = s.lit_candidates ? double(s.triangle_tests) / double(s.lit_candidates) : 0.0;
+  s.list_length_max = c[gpu_shared::IZB_COUNTER_LIST_MAX];
+  s.nonempty_texels = c[gpu_shared::IZB_COUNTER_NONEMPTY];
+  s.list_length_average = s.nonempty_texels ? double(c[gpu_shared::IZB_COUNTER_LIST_SUM]) / double(s.nonempty_texels) : 0.0;
+  s.hardware_conservative = m.used_hardware;
+  m.csm->after_frame(s);
+  // Grow the pool for the next frame when this one overflowed (unless a fixed size was asked for).
+  if (requested > m.pool_size) m.pool_demand = uint64_t(double(requested) * 1.25);
+}
+
+}  // namespace shadows::detail

@@ -1,0 +1,29 @@
+#pragma once
+#include <memory>
+
+#include "engine/gpu/resources.hpp"
+#include "shadows/shadows.hpp"
+
+namespace shadows::detail {
+
+class CsmPass;
+
+// The frustum-traced irregular z-buffer: light frustum fit, (CSM culling), IZB build, conservative
+// frustum trace, overflow fallback and resolve into the shadow term. One object owns all of it; the
+// stages live in their own shaders and are recorded in order by record().
+class IzbPass {
+ public:
+  explicit IzbPass(engine::gpu::Context& ctx);
+  ~IzbPass();
+  // hybrid: the term already holds the cascades; the IZB overwrites its range and fades at the limit.
+  void record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid);
+  void after_frame(Stats& stats);
+  bool hardware_raster_available() const;
+  bool csm_test_supported(CsmTest test, std::string* why) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace shadows::detail

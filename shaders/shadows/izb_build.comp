@@ -1,0 +1,108 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows/izb_prelude.glsl"
+#include "shadows/izb_pixel.glsl"
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
+
+// Inserts a node into a texel's list; false when the pool is full.
+bool insert_node(uint texel, uint pixel_index, float depth) {
+  uint node = atomicAdd(counters[IZB_COUNTER_NODES], 1u);
+  if (node >= params.limits.x) {
+    atomicAdd(counters[IZB_COUNTER_OVERFLOW], 1u);
+    return false;
+  }
+  uint previous = atomicExchange(heads[texel], node);
+  nodes[node] = uvec2(previous, pixel_index);
+  atomicMax(farthest[texel], float_to_ordered(depth));
+  return true;
+}
+
+// The CSM holds, where one triangle fully covers a texel, a depth no nearer the light than that
+// triangle anywhere over the texel: a point beyond it (plus the shared offset already in `g`) is
+// certainly shadowed.
+bool csm_proves_shadowed(vec3 g) {
+  if (!izb_flag(IZB_FLAG_CSM)) return false;
+  float stored = texelFetch(csm_depth, grid_texel(g), 0).r;
+  return g.z > stored;
+}
+
+void main() {
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
+  uint covered = 0u, candidate = 0u, culled = 0u;
+  if (inside) {
+    uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
+    PixelPoint p = load_pixel(pixel);
+    uint state = 0u;
+    uint mask = 0u;
+    covered = p.covered ? 1u : 0u;
+    if (p.candidate) {
+      candidate = 1u;
+      state = IZB_PIXEL_CANDIDATE;
+      if (izb_samples() == 1u) {
+        vec3 g = to_grid(shadow_ray_origin(p.position, p.normal));
+        store_quad_point(index, 0u, g);
+        if (csm_proves_shadowed(g)) {
+          state |= IZB_PIXEL_CSM_CULLED;
+          mask = 1u;
+          culled = 1u;
+        } else if (!insert_node(texel_index(grid_texel(g)), index, g.z)) {
+          state |= IZB_PIXEL_OVERFLOW;
+        }
+      } else {
+        vec3 c[4];
+        micro_quad_corners(pixel, p, c);
+        vec3 g[4];
+        float far_depth = -1.0e30;
+        for (int i = 0; i < 4; ++i) {
+          g[i] = to_grid(c[i]);
+          store_quad_point(index, uint(i), g[i]);
+          far_depth = max(far_depth, g[i].z);
+        }
+        // The footprint that matters is the set of texels holding one of the 32 samples: a triangle
+        // shadows a sample only if it covers the sample's texel, so no other texel needs the node.
+        uint texels[32];
+        uint count = 0u;
+        for (uint s = 0u; s < 32u; ++s) {
+          vec3 q = micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]);
+          if (csm_proves_shadowed(q)) {  // this sample is settled: shadowed, no list needs it
+            mask |= 1u << s;
+            continue;
+          }
+          uint t = texel_index(grid_texel(q));
+          bool seen = false;
+          for (uint k = 0u; k < count; ++k) seen = seen || texels[k] == t;
+          if (!seen) texels[count++] = t;
+        }
+        if (mask == 0xffffffffu) {
+          state |= IZB_PIXEL_CSM_CULLED;
+          culled = 1u;
+        }
+        for (uint k = 0u; k < count; ++k) {
+          if (!insert_node(texels[k], index, far_depth)) {
+            state |= IZB_PIXEL_OVERFLOW;
+            break;
+          }
+        }
+      }
+    }
+    if ((state & IZB_PIXEL_OVERFLOW) != 0u) {
+      // The fallback pass resolves this pixel exactly by testing every caster triangle.
+      uint slot = atomicAdd(counters[IZB_COUNTER_OVERFLOW_PIXELS], 1u);
+      overflow_pixels[slot] = index;
+      atomicMax(counters[IZB_COUNTER_DISPATCH], slot / 64u + 1u);
+    }
+    pixel_state[index] = state;
+    visibility_mask[index] = mask;
+  }
+  uint covered_sum = subgroupAdd(covered);
+  uint candidate_sum = subgroupAdd(candidate);
+  uint culled_sum = subgroupAdd(culled);
+  if (subgroupElect()) {
+    if (covered_sum > 0u) atomicAdd(counters[IZB_COUNTER_SHADING_POINTS], covered_sum);
+    if (candidate_sum > 0u) atomicAdd(counters[IZB_COUNTER_CANDIDATES], candidate_sum);
+    if (culled_sum > 0u) atomicAdd(counters[IZB_COUNTER_CSM_CULLED], culled_sum);
+  }
+}

@@ -1,0 +1,93 @@
+// Declarations shared by the IZB passes. Include after "izb.h", "frame.h" and "shadow_common.h".
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+
+layout(set = 0, binding = IZB_BINDING_PARAMS) uniform Params { IzbParams params; };
+layout(set = 0, binding = IZB_BINDING_FRAME, std430) buffer FrameBuffer { IzbFrame izb; };
+layout(set = 0, binding = IZB_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
+layout(set = 0, binding = IZB_BINDING_HEADS, std430) buffer Heads { uint heads[]; };
+layout(set = 0, binding = IZB_BINDING_FARTHEST, std430) buffer Farthest { uint farthest[]; };
+layout(set = 0, binding = IZB_BINDING_NODES, std430) buffer Nodes { uvec2 nodes[]; };
+layout(set = 0, binding = IZB_BINDING_MASK, std430) buffer Mask { uint visibility_mask[]; };
+layout(set = 0, binding = IZB_BINDING_PIXEL_STATE, std430) buffer PixelState { uint pixel_state[]; };
+layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer Quads { float quads[]; };
+layout(set = 0, binding = IZB_BINDING_VERTICES, std430) readonly buffer Vertices { float vertex_floats[]; };
+layout(set = 0, binding = IZB_BINDING_INDICES, std430) readonly buffer Indices { uint indices[]; };
+layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Triangles { vec4 world_triangles[]; };
+layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
+
+uint izb_resolution() { return params.extent.z; }
+uint izb_samples() { return params.extent.w; }
+bool izb_flag(uint flag) { return (params.limits.y & flag) != 0u; }
+
+// World position -> (grid x, grid y, light depth): grid in texels of the IZB, depth in [0,1].
+vec3 to_grid(vec3 world) {
+  vec4 clip = izb.light_view_projection * vec4(world, 1.0);
+  float res = float(izb_resolution());
+  return vec3((clip.xy * 0.5 + 0.5) * res, clip.z);
+}
+
+ivec2 grid_texel(vec3 g) {
+  int res = int(izb_resolution());
+  return clamp(ivec2(floor(g.xy)), ivec2(0), ivec2(res - 1));
+}
+
+uint texel_index(ivec2 t) { return uint(t.y) * izb_resolution() + uint(t.x); }
+
+// Floats compare like their bit patterns once mapped to this order (for atomic min/max).
+uint float_to_ordered(float f) {
+  uint u = floatBitsToUint(f);
+  return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
+}
+float ordered_to_float(uint u) {
+  return uintBitsToFloat((u & 0x80000000u) != 0u ? (u & 0x7fffffffu) : ~u);
+}
+
+uint quad_stride() { return izb_samples() == 32u ? kIzbQuadFloats32 : kIzbQuadFloats1; }
+vec3 quad_point(uint pixel, uint corner) {
+  uint base = pixel * quad_stride() + corner * 3u;
+  return vec3(quads[base], quads[base + 1u], quads[base + 2u]);
+}
+void store_quad_point(uint pixel, uint corner, vec3 v) {
+  uint base = pixel * quad_stride() + corner * 3u;
+  quads[base] = v.x;
+  quads[base + 1u] = v.y;
+  quads[base + 2u] = v.z;
+}
+
+// Shadowed-sample bits that a grid-space triangle (a, b, c) casts on `pixel`. A sample is shadowed
+// when its projection along the light lies inside the triangle (edges inclusive) and the triangle is
+// nearer the light there: exactly the reference ray's hit with t > 0.
+float edge_fn(vec2 p, vec2 a, vec2 b) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
+
+bool shadows_point(vec3 s, vec3 a, vec3 b, vec3 c, float inv_area) {
+  float w0 = edge_fn(s.xy, b.xy, c.xy) * inv_area;
+  float w1 = edge_fn(s.xy, c.xy, a.xy) * inv_area;
+  float w2 = edge_fn(s.xy, a.xy, b.xy) * inv_area;
+  if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) return false;
+  float depth = w0 * a.z + w1 * b.z + w2 * c.z;
+  return depth < s.z;
+}
+
+uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area) {
+  if (izb_samples() == 1u) return shadows_point(quad_point(pixel, 0u), a, b, c, inv_area) ? 1u : 0u;
+  vec3 c00 = quad_point(pixel, 0u);
+  vec3 c10 = quad_point(pixel, 1u);
+  vec3 c01 = quad_point(pixel, 2u);
+  vec3 c11 = quad_point(pixel, 3u);
+  // Whole-quad reject: no sample can be inside if the quad's bounds miss the triangle's bounds.
+  vec2 qmin = min(min(c00.xy, c10.xy), min(c01.xy, c11.xy));
+  vec2 qmax = max(max(c00.xy, c10.xy), max(c01.xy, c11.xy));
+  vec2 tmin = min(min(a.xy, b.xy), c.xy);
+  vec2 tmax = max(max(a.xy, b.xy), c.xy);
+  if (any(lessThan(qmax, tmin)) || any(greaterThan(qmin, tmax))) return 0u;
+  uint bits = 0u;
+  for (uint i = 0u; i < 32u; ++i) {
+    vec3 s = micro_quad_blend(c00, c10, c01, c11, kSamplePattern[i]);
+    if (shadows_point(s, a, b, c, inv_area)) bits |= 1u << i;
+  }
+  return bits;
+}
+
+uint full_mask() { return izb_samples() == 32u ? 0xffffffffu : 1u; }

@@ -1,0 +1,26 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows/izb_prelude.glsl"
+layout(local_size_x = 64) in;
+
+layout(push_constant) uniform Push { IzbComputePush push; };
+
+// Pixels whose nodes did not fit the pool: every caster triangle is tested against the pixel's
+// samples with the same exact test the trace uses, so the answer does not depend on the pool.
+void main() {
+  uint slot = gl_GlobalInvocationID.x;
+  if (slot >= counters[IZB_COUNTER_OVERFLOW_PIXELS]) return;
+  uint pixel = overflow_pixels[slot];
+  uint triangle_count = push.pad0;
+  uint bits = visibility_mask[pixel];
+  uint full = full_mask();
+  for (uint t = 0u; t < triangle_count && bits != full; ++t) {
+    vec3 a = to_grid(world_triangles[3u * t].xyz);
+    vec3 b = to_grid(world_triangles[3u * t + 1u].xyz);
+    vec3 c = to_grid(world_triangles[3u * t + 2u].xyz);
+    float area = edge_fn(c.xy, a.xy, b.xy);
+    if (abs(area) <= 1.0e-10) continue;
+    bits |= occluded_samples(pixel, a, b, c, 1.0 / area);
+  }
+  visibility_mask[pixel] = bits;
+}

@@ -1,0 +1,37 @@
+// Per-pixel classification shared by the fit and build passes.
+layout(set = 0, binding = IZB_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position_image;
+layout(set = 0, binding = IZB_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly uniform image2D geometric_normal_image;
+layout(set = 0, binding = IZB_BINDING_ALBEDO, rgba8) readonly uniform image2D albedo_image;
+
+struct PixelPoint {
+  bool covered;
+  bool candidate;  // covered, receiving, facing the light, inside the IZB range
+  vec3 position;
+  vec3 normal;
+};
+
+PixelPoint load_pixel(ivec2 pixel) {
+  PixelPoint p;
+  vec4 pos = imageLoad(world_position_image, pixel);
+  p.covered = pos.w > 0.5;
+  p.position = pos.xyz;
+  p.normal = imageLoad(geometric_normal_image, pixel).xyz;
+  p.candidate = false;
+  if (!p.covered) return p;
+  bool receives = imageLoad(albedo_image, pixel).a > 0.5;
+  bool facing = dot(p.normal, -params.light_direction.xyz) > 0.0;
+  float max_distance = params.camera_position.w;
+  bool in_range = max_distance <= 0.0 || distance(p.position, params.camera_position.xyz) <= max_distance;
+  p.candidate = receives && facing && in_range;
+  return p;
+}
+
+// The μQuad corners of `pixel` with the shadow-ray offset applied (world space).
+void micro_quad_corners(ivec2 pixel, PixelPoint p, out vec3 c[4]) {
+  vec2 viewport = vec2(params.extent.xy);
+  vec2 base = vec2(pixel);
+  c[0] = shadow_ray_origin(micro_quad_corner(base, viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
+  c[1] = shadow_ray_origin(micro_quad_corner(base + vec2(1, 0), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
+  c[2] = shadow_ray_origin(micro_quad_corner(base + vec2(0, 1), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
+  c[3] = shadow_ray_origin(micro_quad_corner(base + vec2(1, 1), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
+}

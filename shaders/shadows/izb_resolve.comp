@@ -1,0 +1,59 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows/izb_prelude.glsl"
+#include "shadows/izb_pixel.glsl"
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(push_constant) uniform Push { IzbComputePush push; };
+layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
+layout(set = 0, binding = IZB_BINDING_OVERLAY, rgba8) uniform image2D overlay;
+
+const uint kDebugVisibility = 1u;
+const uint kDebugListLength = 2u;
+const uint kDebugCsm = 4u;
+
+vec3 heat(float t) {
+  t = clamp(t, 0.0, 1.0);
+  return clamp(vec3(1.5 - abs(4.0 * t - 3.0), 1.5 - abs(4.0 * t - 2.0), 1.5 - abs(4.0 * t - 1.0)), 0.0, 1.0);
+}
+
+// Visibility mask -> shadow term. push.mode 1 (hybrid): near the IZB range limit the hard result
+// fades into the term already there (the cascades'), over the last tenth of the range.
+void main() {
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
+  uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
+  PixelPoint p = load_pixel(pixel);
+  if (!p.covered) return;
+  uint state = pixel_state[index];
+  uint mask = visibility_mask[index];
+  float visibility;
+  bool facing = dot(p.normal, -params.light_direction.xyz) > 0.0;
+  float max_distance = params.camera_position.w;
+  float dist = distance(p.position, params.camera_position.xyz);
+  if ((state & IZB_PIXEL_CANDIDATE) != 0u) {
+    visibility = 1.0 - float(bitCount(mask)) / float(izb_samples());
+  } else if (!facing) {
+    visibility = 0.0;
+  } else if (max_distance > 0.0 && dist > max_distance) {
+    return;  // beyond the IZB: the cascades' term stays
+  } else {
+    visibility = 1.0;  // does not receive shadows
+  }
+  if (push.mode == 1u && max_distance > 0.0) {
+    float fade = clamp((dist - 0.9 * max_distance) / (0.1 * max_distance), 0.0, 1.0);
+    visibility = mix(visibility, imageLoad(shadow_term, pixel).r, fade);
+  }
+  imageStore(shadow_term, pixel, vec4(visibility));
+
+  if (push.debug == kDebugVisibility && (state & IZB_PIXEL_CANDIDATE) != 0u) {
+    imageStore(overlay, pixel, vec4(mix(vec3(1.0, 0.2, 0.1), vec3(0.1, 1.0, 0.2), visibility), 0.6));
+  } else if (push.debug == kDebugListLength && (state & IZB_PIXEL_CANDIDATE) != 0u) {
+    ivec2 t = grid_texel(quad_point(index, 0u));
+    uint length = 0u;
+    for (uint node = heads[texel_index(t)]; node != kIzbEndOfList && length < 64u; node = nodes[node].x) ++length;
+    imageStore(overlay, pixel, vec4(heat(log2(float(length) + 1.0) / 6.0), 0.7));
+  } else if (push.debug == kDebugCsm && (state & IZB_PIXEL_CSM_CULLED) != 0u) {
+    imageStore(overlay, pixel, vec4(0.1, 0.4, 1.0, 0.6));
+  }
+}

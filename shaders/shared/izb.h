@@ -1,0 +1,107 @@
+// The irregular z-buffer's data layout and bindings, shared by C++ and GLSL.
+#ifndef IZB_H
+#define IZB_H
+#include "shared_prelude.h"
+
+SHARED_BEGIN
+
+SHARED_CONST uint kIzbEndOfList = 0xffffffffu;
+
+// Written on the GPU by the light-frustum pass each frame; read by every later IZB pass.
+struct IzbFrame {
+  mat4 light_view_projection;  // world -> light clip space (orthographic, depth 0 nearest the light)
+  vec4 grid;                   // x: resolution (texels per side), y: 1/resolution, z: world size of a texel, w: points found (as float)
+};
+
+// Per-frame constants from the CPU.
+struct IzbParams {
+  mat4 light_view;           // rotation only, looking along the light
+  mat4 inverse_view_projection;
+  vec4 light_direction;      // xyz: travel direction
+  vec4 camera_position;      // xyz; w: max IZB distance from the camera (0: unlimited)
+  vec4 depth_range;          // x: near, y: far light-view distance of the casters (for the projection)
+  uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (1 or 32)
+  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*); z: mask of all samples; w: pool of μQuads
+};
+
+SHARED_CONST uint IZB_FLAG_CSM = 1u;
+SHARED_CONST uint IZB_FLAG_DEPTH_CULL = 2u;
+SHARED_CONST uint IZB_FLAG_PROGRESSIVE = 4u;
+SHARED_CONST uint IZB_FLAG_SOFTWARE_RASTER = 8u;
+SHARED_CONST uint IZB_FLAG_STATS = 16u;
+
+// A list node is a uvec2 {next node, pixel}. Each pixel's light-space data lives once in the
+// "quads" buffer: 1 spp: its ray origin (grid x, grid y, light depth); 32 spp: the four μQuad corners
+// (c00, c10, c01, c11) as 12 floats, from which the trace rebuilds every sample.
+SHARED_CONST uint kIzbQuadFloats1 = 4u;
+SHARED_CONST uint kIzbQuadFloats32 = 12u;
+
+// Counters read back for statistics (and the node allocator).
+SHARED_CONST uint IZB_COUNTER_NODES = 0u;          // nodes requested (may exceed the pool)
+SHARED_CONST uint IZB_COUNTER_OVERFLOW = 1u;       // insertions refused: pool full
+SHARED_CONST uint IZB_COUNTER_CANDIDATES = 2u;     // lit candidates (facing, receiving, in range)
+SHARED_CONST uint IZB_COUNTER_SHADING_POINTS = 3u; // covered pixels
+SHARED_CONST uint IZB_COUNTER_FRAGMENTS = 4u;      // trace fragments before depth culling
+SHARED_CONST uint IZB_COUNTER_FRAGMENTS_KEPT = 5u; // after depth culling
+SHARED_CONST uint IZB_COUNTER_TRIANGLE_TESTS = 6u; // node-triangle tests
+SHARED_CONST uint IZB_COUNTER_CSM_CULLED = 7u;     // candidates proved shadowed by the CSM
+SHARED_CONST uint IZB_COUNTER_OVERFLOW_PIXELS = 8u;// pixels resolved by the fallback
+SHARED_CONST uint IZB_COUNTER_LIST_MAX = 9u;
+SHARED_CONST uint IZB_COUNTER_LIST_SUM = 10u;
+SHARED_CONST uint IZB_COUNTER_NONEMPTY = 11u;
+SHARED_CONST uint IZB_COUNTER_CSM_TEXELS = 12u;
+SHARED_CONST uint IZB_COUNTER_BOUNDS = 16u;        // 4 uints: ordered min x, min y, max x, max y
+SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
+SHARED_CONST uint IZB_COUNTER_COUNT = 24u;
+
+// Per-pixel state bits beside the visibility mask.
+SHARED_CONST uint IZB_PIXEL_CANDIDATE = 1u;
+SHARED_CONST uint IZB_PIXEL_OVERFLOW = 2u;
+SHARED_CONST uint IZB_PIXEL_CSM_CULLED = 4u;
+
+// Bindings (one layout shared by all IZB passes, so every pass sees the same buffers).
+SHARED_CONST uint IZB_BINDING_PARAMS = 0u;
+SHARED_CONST uint IZB_BINDING_FRAME = 1u;
+SHARED_CONST uint IZB_BINDING_COUNTERS = 2u;
+SHARED_CONST uint IZB_BINDING_HEADS = 3u;
+SHARED_CONST uint IZB_BINDING_FARTHEST = 4u;
+SHARED_CONST uint IZB_BINDING_NODES = 5u;
+SHARED_CONST uint IZB_BINDING_MASK = 6u;
+SHARED_CONST uint IZB_BINDING_PIXEL_STATE = 7u;
+SHARED_CONST uint IZB_BINDING_QUADS = 8u;
+SHARED_CONST uint IZB_BINDING_WORLD_POSITION = 9u;
+SHARED_CONST uint IZB_BINDING_GEOMETRIC_NORMAL = 10u;
+SHARED_CONST uint IZB_BINDING_ALBEDO = 11u;
+SHARED_CONST uint IZB_BINDING_VERTICES = 12u;
+SHARED_CONST uint IZB_BINDING_INDICES = 13u;
+SHARED_CONST uint IZB_BINDING_SHADOW_TERM = 14u;
+SHARED_CONST uint IZB_BINDING_OVERLAY = 15u;
+SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;
+SHARED_CONST uint IZB_BINDING_OVERFLOW_LIST = 17u;
+SHARED_CONST uint IZB_BINDING_CSM_DEPTH = 18u;
+
+// Push constants of the trace and CSM draws.
+struct IzbDrawPush {
+  mat4 model;
+  uint first_index;
+  int vertex_offset;
+  uint flags;
+  uint debug;
+};
+
+// Push constants of compute passes.
+struct IzbComputePush {
+  uint mode;   // pass-specific selector
+  uint debug;  // DebugView as uint
+  uint pad0;
+  uint pad1;
+};
+
+SHARED_END
+
+#ifdef __cplusplus
+static_assert(sizeof(gpu_shared::IzbFrame) == 80);
+static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 2 * 16);
+static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
+#endif
+#endif
