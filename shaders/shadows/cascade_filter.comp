@@ -72,11 +72,15 @@ Result evaluate(int c, vec3 p, vec3 n, vec2 rot) {
   // centre, so a planar receiver agrees with its own stored depth at every tap.
   vec3 nc = mat3(params.light_normal_matrix[c]) * n;
   float max_slope = 8.0 * params.edge_threshold[c];
-  vec2 gradient = abs(nc.z) > 1.0e-8 ? clamp(-nc.xy / nc.z * (2.0 / size), vec2(-max_slope), vec2(max_slope)) : vec2(0.0);
+  vec2 slope = abs(nc.z) > 1.0e-8 ? -nc.xy / nc.z * (2.0 / size) : vec2(1.0e8);
+  vec2 gradient = clamp(slope, vec2(-max_slope), vec2(max_slope));
+  // Near-grazing receivers get a clamped plane that no longer tracks the map, so their taps can
+  // disagree on a smooth map: they always take the kernel, which keeps masking exact.
+  bool grazing = any(greaterThan(abs(slope), vec2(max_slope)));
   float r = params.kernel_texels[c];
   float bias = params.depth_bias[c];
   float spread = (abs(gradient.x) + abs(gradient.y)) * (r + 1.0);
-  result.expensive = needs_kernel(c, t, r, z - spread, z + spread);
+  result.expensive = grazing || needs_kernel(c, t, r, z - spread, z + spread);
   int last = int(size) - 1;
   if (!result.expensive) {
     ivec2 texel = ivec2(floor(t));

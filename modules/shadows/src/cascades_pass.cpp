@@ -1,3 +1,19 @@
+// Cascaded filtered shadow maps. Per frame: fit the cascades (cascade_fit.cpp) -> cascade_depth (one
+// D32 layer per cascade) -> cascade_masks (edge mask and depth-extent mip chains) -> cascade_filter
+// (rotated 12-tap Poisson PCF or one tap, per pixel) -> cascade_blur (5x5 on pixels whose taps
+// disagreed, over a compacted list with an indirect dispatch).
+//
+// When skipping the kernel is exact. Every tap compares the receiver's tangent plane, evaluated at
+// the tap texel's centre, with that texel's stored depth. A pixel skips the 12 taps only when no edge
+// texel (a 3x3 depth step steeper than two texels of depth per texel) lies in any mask texel its
+// kernel footprint overlaps, at the level whose texels are as wide as the kernel; near-grazing
+// receivers never skip. Depth-extent masking skips additionally only when the receiver's depth range
+// over the kernel lies wholly in front of, or wholly behind, every stored depth in the footprint, so
+// it always reproduces the edge-masked result exactly. Masked and unmasked agree except where a
+// receiver's tangent plane, extended over the kernel, crosses an edge-free stretch of the map (a
+// concave crease, e.g. a wall meeting the roof slab above it): there the full kernel lets a few taps
+// through and the single tap does not. Such pixels differ by fewer than half the taps, so they never
+// change between lit and shadowed at a 0.5 threshold.
 #include "cascades_pass.hpp"
 
 #include <algorithm>
