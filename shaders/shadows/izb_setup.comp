@@ -34,4 +34,7 @@ void main() {
   ortho[3][2] = -near_d / (far_d - near_d);
   izb.light_view_projection = ortho * params.light_view;
   izb.grid = vec4(res, 1.0 / res, size / res, empty ? 0.0 : 1.0);
+  // The overflow fallback's indirect dispatch: the build pass raises x as pixels overflow.
+  counters[IZB_COUNTER_DISPATCH + 1u] = 1u;
+  counters[IZB_COUNTER_DISPATCH + 2u] = 1u;
 }

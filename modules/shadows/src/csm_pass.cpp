@@ -211,6 +211,7 @@ struct CsmPass::Impl {
 
 CsmPass::CsmPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
 CsmPass::~CsmPass() = default;
+void CsmPass::prepare(uint32_t resolution) { impl_->ensure_depth(resolution); }
 VkImageView CsmPass::depth_view() const { return impl_->depth.view(); }
 bool CsmPass::supported(CsmTest test, std::string* why) const { return impl_->supported(test, why); }
 
@@ -220,7 +221,7 @@ void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, c
   std::string why;
   if (!m.supported(settings.csm_test, &why))
     throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " is unavailable: " + why);
-  m.ensure_depth(resolution);
+  if (m.depth.extent().width != resolution) throw std::logic_error("CsmPass::prepare was not called");
   m.choose(frame, resolution);
   VkCommandBuffer cmd = frame.cmd;
   const Pipeline& p = m.pipeline(settings.csm_test);

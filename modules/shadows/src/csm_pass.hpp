@@ -27,6 +27,8 @@ class CsmPass {
  public:
   explicit CsmPass(engine::gpu::Context& ctx);
   ~CsmPass();
+  // Sizes the CSM for `resolution`; call before recording anything that binds depth_view().
+  void prepare(uint32_t resolution);
   VkImageView depth_view() const;
   bool supported(CsmTest test, std::string* why) const;
   // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`.

@@ -228,6 +228,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     throw std::invalid_argument("IZB resolution must be in 1..16384");
   m.ensure_buffers(frame, settings);
   m.ensure_triangles(frame);
+  m.csm->prepare(settings.csm ? m.resolution : 1);
 
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
                             (settings.raster == ConservativeRaster::Auto && m.trace_hardware.valid());

@@ -67,8 +67,10 @@ class ShadowModuleImpl final : public ShadowModule {
 
   void after_frame(engine::gpu::Context&) override {
     if (!collect_stats_) return;
-    if ((active_ == Technique::Izb || active_ == Technique::Hybrid) && izb_) izb_->after_frame(stats_);
-    if ((active_ == Technique::Cascades || active_ == Technique::Hybrid) && cascades_) cascades_->after_frame(stats_);
+    Stats fresh;  // only the techniques that ran this frame report
+    if ((active_ == Technique::Izb || active_ == Technique::Hybrid) && izb_) izb_->after_frame(fresh);
+    if ((active_ == Technique::Cascades || active_ == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh);
+    stats_ = std::move(fresh);
   }
 
   std::vector<float> read_visibility() override {
