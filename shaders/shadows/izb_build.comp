@@ -80,11 +80,10 @@ void main() {
           state |= IZB_PIXEL_CSM_CULLED;
           culled = 1u;
         }
+        // Every texel is requested even after a refusal, so the counter measures the true demand
+        // the pool is grown to.
         for (uint k = 0u; k < count; ++k) {
-          if (!insert_node(texels[k], index, far_depth)) {
-            state |= IZB_PIXEL_OVERFLOW;
-            break;
-          }
+          if (!insert_node(texels[k], index, far_depth)) state |= IZB_PIXEL_OVERFLOW;
         }
       }
     }

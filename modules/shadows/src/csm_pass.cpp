@@ -84,7 +84,7 @@ struct CsmPass::Impl {
     if (depth.valid() && depth.extent().width == resolution) return;
     depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
-                      VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                      VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                   "conservative shadow map");
     ctx.immediate_submit([&](VkCommandBuffer cmd) {
       depth.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
@@ -290,4 +290,13 @@ void CsmPass::after_frame(Stats& stats) {
   stats.csm_decisions = m.decisions;
 }
 
+}  // namespace shadows::detail
+
+namespace shadows::detail {
+std::vector<float> CsmPass::read_depth() {
+  auto bytes = engine::gpu::read_image(impl_->ctx, impl_->depth, 4);
+  std::vector<float> out(bytes.size() / 4);
+  std::memcpy(out.data(), bytes.data(), bytes.size());
+  return out;
+}
 }  // namespace shadows::detail

@@ -21,7 +21,8 @@ struct CsmChoiceMeasure {
 CsmChoiceMeasure measure_csm_suitability(const engine::MeshData& mesh, const glm::mat4& world,
                                          const glm::vec3& light_direction, float texel_size);
 // Entities whose coverable share reaches this enter the CSM under CsmChoice::Auto.
-inline constexpr double kCsmAutoThreshold = 0.5;
+// A fifth is enough: a mesh's CSM raster cost is small next to the trace work each culled point saves.
+inline constexpr double kCsmAutoThreshold = 0.2;
 
 class CsmPass {
  public:
@@ -35,6 +36,7 @@ class CsmPass {
   void record(engine::FrameContext& frame, const IzbSettings& settings, const engine::gpu::Buffer& izb_frame,
               uint32_t resolution);
   void after_frame(Stats& stats);
+  std::vector<float> read_depth();
 
  private:
   struct Impl;

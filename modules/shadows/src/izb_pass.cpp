@@ -69,6 +69,7 @@ struct IzbPass::Impl {
   std::vector<glm::mat4> triangle_source_matrices;  // detects when caster transforms change
   std::vector<uint32_t> triangle_source_meshes;
   bool used_hardware = false;
+  bool last_used_csm = false;
   bool collected = false;
   uint32_t last_candidates = 0;
 
@@ -103,7 +104,8 @@ struct IzbPass::Impl {
       throw VulkanError("the IZB needs conservative rasterization or geometry shaders; device " + c.device_name() +
                         " has neither");
     params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "izb params");
-    frame_data = Buffer(c, sizeof(gpu_shared::IzbFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb frame");
+    frame_data = Buffer(c, sizeof(gpu_shared::IzbFrame),
+                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb frame");
     const VkDeviceSize counter_bytes = gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t);
     counters = Buffer(c, counter_bytes,
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
@@ -142,8 +144,10 @@ struct IzbPass::Impl {
     } else if (s.node_pool_override) {
       wanted = s.node_pool_override;
     } else {
-      // 1 spp needs at most one node per pixel; at 32 spp a μQuad usually spans one to four texels.
-      const double per_pixel = spp == 32 ? 2.0 : 1.0;
+      // 1 spp needs at most one node per pixel. At 32 spp a μQuad spans about (texels per pixel)
+      // texels, at least one; the pool then grows to the measured demand if a frame overflows.
+      const double texels_per_pixel = double(s.resolution) * s.resolution / double(pixels);
+      const double per_pixel = spp == 32 ? std::max(2.0, 2.0 * texels_per_pixel) : 1.0;
       wanted = std::max<uint64_t>(uint64_t(double(pixels) * per_pixel * s.node_pool_factor), 1024);
       wanted = std::max(wanted, pool_demand);
     }
@@ -239,6 +243,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     throw std::runtime_error("software conservative rasterization needs geometry shaders, which " +
                              m.ctx.device_name() + " lacks");
   m.used_hardware = use_hardware;
+  m.last_used_csm = settings.csm;
 
   // CPU side of the frustum: the light's rotation and the casters' depth range along it.
   const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
@@ -344,6 +349,19 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   VkBufferCopy copy{0, 0, m.counters.size()};
   vkCmdCopyBuffer(cmd, m.counters.handle(), m.counters_readback.handle(), 1, &copy);
   m.collected = true;
+}
+
+ShadowModule::CsmSnapshot IzbPass::read_csm() {
+  Impl& m = *impl_;
+  ShadowModule::CsmSnapshot snapshot;
+  if (!m.last_used_csm) return snapshot;
+  snapshot.resolution = m.resolution;
+  snapshot.depth = m.csm->read_depth();
+  const auto frame_bytes = read_buffer(m.ctx, m.frame_data);
+  gpu_shared::IzbFrame frame;
+  std::memcpy(&frame, frame_bytes.data(), sizeof(frame));
+  snapshot.light_view_projection = frame.light_view_projection;
+  return snapshot;
 }
 
 void IzbPass::after_frame(Stats& s) {

@@ -20,6 +20,7 @@ class IzbPass {
   void after_frame(Stats& stats);
   bool hardware_raster_available() const;
   bool csm_test_supported(CsmTest test, std::string* why) const;
+  ShadowModule::CsmSnapshot read_csm();
 
  private:
   struct Impl;

@@ -81,6 +81,8 @@ class ShadowModuleImpl final : public ShadowModule {
     return term;
   }
 
+  CsmSnapshot read_csm() override { return izb_ ? izb_->read_csm() : CsmSnapshot{}; }
+
  private:
   IzbPass& izb() const {
     if (!izb_) izb_ = std::make_unique<IzbPass>(ctx_);

@@ -137,6 +137,14 @@ class ShadowModule : public engine::RenderFeature {
   virtual bool supported(CsmTest test, std::string* why = nullptr) const = 0;
   // Per-pixel visibility of the last frame (1 lit .. 0 shadowed, -1 background), for tests/tools.
   virtual std::vector<float> read_visibility() = 0;
+  // The last frame's conservative shadow map (row-major, resolution^2 depths, 1 = nothing stored) and
+  // the GPU-fitted world -> light clip transform it was rendered with. Empty when the CSM did not run.
+  struct CsmSnapshot {
+    uint32_t resolution = 0;
+    std::vector<float> depth;
+    glm::mat4 light_view_projection{1.0f};
+  };
+  virtual CsmSnapshot read_csm() = 0;
 };
 
 // Creates the module, adds it to the renderer, and returns it.

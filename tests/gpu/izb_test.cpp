@@ -1,0 +1,271 @@
+// The frustum-traced IZB and the CSM z-prepass against the Embree reference, on lavapipe.
+#include <cmath>
+#include <filesystem>
+
+#include "frame_capture.hpp"
+#include "gpu_fixture.hpp"
+#include "shadows/shadows.hpp"
+
+namespace {
+
+constexpr uint32_t kSize = 128;
+constexpr uint32_t kGrid = 256;
+
+struct Rendered {
+  std::vector<float> visibility;
+  std::vector<float> reference;
+  shadows::Stats stats;
+};
+
+class IzbTest : public GpuTest {
+ protected:
+  // Renders `scene` at `view` with `settings` (two frames: the second sees a grown pool if any)
+  // and, when asked, the reference for the same shading points.
+  Rendered render(const std::string& scene, size_t view, shadows::Settings settings, bool with_reference = true,
+                  int frames = 1, uint32_t size = kSize) {
+    auto& r = make_renderer(scene, view, size, size);
+    module_ = shadows::install(r, settings);
+    for (int i = 0; i < frames; ++i) r.render_frame(0.0f);
+    Rendered out;
+    out.visibility = module_->read_visibility();
+    out.stats = module_->stats();
+    if (with_reference) {
+      reference::EmbreeTracer tracer(scene_->registry);
+      out.reference = support::reference_visibility(r, tracer, settings.izb.samples_per_pixel);
+    }
+    return out;
+  }
+
+  static shadows::Settings izb(uint32_t spp, bool csm = false, shadows::CsmTest test = shadows::CsmTest::Barycentric) {
+    shadows::Settings s;
+    s.technique = shadows::Technique::Izb;
+    s.izb.resolution = kGrid;
+    s.izb.samples_per_pixel = spp;
+    s.izb.csm = csm;
+    s.izb.csm_test = test;
+    return s;
+  }
+
+  void TearDown() override {
+    module_.reset();  // before the context goes
+    GpuTest::TearDown();
+  }
+
+  std::shared_ptr<shadows::ShadowModule> module_;
+};
+
+struct SceneView {
+  std::string scene;
+  size_t view;
+};
+std::string name_of(const testing::TestParamInfo<SceneView>& info) {
+  return info.param.scene + "_view" + std::to_string(info.param.view);
+}
+
+class IzbSceneTest : public IzbTest, public testing::WithParamInterface<SceneView> {};
+
+TEST_P(IzbSceneTest, OneSampleMatchesReference) {
+  const auto r = render(GetParam().scene, GetParam().view, izb(1));
+  const auto cmp = reference::compare_visibility(r.visibility, r.reference);
+  EXPECT_GT(cmp.pixels, kSize * kSize / 4);
+  EXPECT_LE(cmp.mismatch_rate, 0.0002) << cmp.mismatched << " of " << cmp.pixels << " pixels differ";
+  EXPECT_GT(r.stats.nodes_inserted, 0u);
+  EXPECT_EQ(r.stats.node_overflow, 0u);
+}
+
+TEST_P(IzbSceneTest, ThirtyTwoSamplesMatchReferenceCoverage) {
+  const auto r = render(GetParam().scene, GetParam().view, izb(32));
+  const auto cmp = reference::compare_visibility(r.visibility, r.reference);
+  EXPECT_LE(cmp.coverage_mae, 1.0 / 64.0);
+  EXPECT_LE(cmp.mismatch_rate, 0.001);
+}
+
+// The CSM may only cull points that are truly shadowed, so visibility is the plain IZB's exactly.
+TEST_P(IzbSceneTest, CsmCullingIsConservativeForEveryAvailableTest) {
+  const auto plain = render(GetParam().scene, GetParam().view, izb(1));
+  double hertel_rate = -1, bary_rate = -1;
+  for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric, shadows::CsmTest::BarycentricHw,
+                    shadows::CsmTest::InnerHw}) {
+    std::string why;
+    {
+      auto& r = make_renderer(GetParam().scene, GetParam().view, kSize, kSize);
+      auto probe = shadows::install(r, izb(1));
+      if (!probe->supported(test, &why)) {
+        EXPECT_FALSE(why.empty());
+        continue;
+      }
+    }
+    const auto culled = render(GetParam().scene, GetParam().view, izb(1, true, test), false);
+    const auto cmp = reference::compare_visibility(culled.visibility, plain.reference);
+    EXPECT_EQ(cmp.false_shadowed, 0u) << shadows::csm_test_name(test);
+    EXPECT_EQ(culled.visibility, plain.visibility) << shadows::csm_test_name(test);
+    EXPECT_LE(culled.stats.nodes_inserted, plain.stats.nodes_inserted);
+    if (test == shadows::CsmTest::Hertel) hertel_rate = culled.stats.culling_rate;
+    if (test == shadows::CsmTest::Barycentric) bary_rate = culled.stats.culling_rate;
+  }
+  ASSERT_GE(hertel_rate, 0.0);
+  ASSERT_GE(bary_rate, 0.0);
+  EXPECT_GE(bary_rate, hertel_rate);  // four corners inside is a weaker demand than the circle test
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, IzbSceneTest,
+                         testing::Values(SceneView{"contact", 0}, SceneView{"contact", 1}, SceneView{"atrium", 0},
+                                         SceneView{"atrium", 1}, SceneView{"foliage", 0}, SceneView{"foliage", 1}),
+                         name_of);
+
+TEST_F(IzbTest, SoftwareConservativeRasterMatchesBruteForce) {
+  for (const char* scene : {"foliage", "atrium"}) {
+    for (uint32_t spp : {1u, 32u}) {
+      auto software = izb(spp);
+      software.izb.raster = shadows::ConservativeRaster::Software;
+      auto brute = izb(spp);
+      brute.izb.brute_force = true;
+      // Small: the brute force tests every caster triangle for every pixel.
+      const auto a = render(scene, 0, software, false, 1, 48);
+      const auto b = render(scene, 0, brute, false, 1, 48);
+      EXPECT_EQ(a.visibility, b.visibility) << scene << " spp " << spp;
+      EXPECT_GT(a.stats.nodes_inserted, 0u);
+      EXPECT_EQ(b.stats.nodes_inserted, 0u);
+      EXPECT_GT(b.stats.overflow_pixels, 0u);
+    }
+  }
+}
+
+TEST_F(IzbTest, DepthCullingRemovesFragmentsWithoutChangingTheResult) {
+  auto culled = izb(1);
+  auto unculled = izb(1);
+  unculled.izb.depth_cull = false;
+  const auto a = render("atrium", 0, culled, false);
+  const auto b = render("atrium", 0, unculled, false);
+  EXPECT_EQ(a.visibility, b.visibility);
+  EXPECT_GT(a.stats.trace_fragments_before_cull, 0u);
+  EXPECT_LT(a.stats.trace_fragments_after_cull, a.stats.trace_fragments_before_cull);
+  EXPECT_LT(a.stats.triangle_tests, b.stats.triangle_tests);
+}
+
+TEST_F(IzbTest, TinyNodePoolOverflowsIntoTheExactFallback) {
+  auto tiny = izb(1);
+  tiny.izb.node_pool_override = 64;
+  const auto r = render("contact", 0, tiny);
+  EXPECT_EQ(r.stats.node_pool_size, 64u);
+  EXPECT_GT(r.stats.node_overflow, 0u);
+  EXPECT_GT(r.stats.overflow_pixels, 1000u);
+  const auto cmp = reference::compare_visibility(r.visibility, r.reference);
+  EXPECT_LE(cmp.mismatch_rate, 0.0002);
+}
+
+TEST_F(IzbTest, NodePoolGrowsAfterAnOverflow) {
+  auto small = izb(32);
+  small.izb.node_pool_factor = 0.01f;  // far too small: the first frame overflows
+  auto& r = make_renderer("contact", 0, kSize, kSize);
+  module_ = shadows::install(r, small);
+  r.render_frame(0.0f);
+  const auto first = module_->stats();
+  r.render_frame(0.0f);
+  const auto second = module_->stats();
+  EXPECT_GT(first.node_overflow, 0u);
+  EXPECT_GT(second.node_pool_size, first.node_pool_size);
+  EXPECT_EQ(second.node_overflow, 0u);
+}
+
+// Every texel the CSM filled must be fully covered by a caster triangle whose farthest depth over
+// the texel is no farther than what was stored (checked in double precision on the CPU).
+TEST_F(IzbTest, CsmDepthIsAtLeastTheCoveringTrianglesFarthestDepth) {
+  for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric}) {
+    auto& r = make_renderer("atrium", 0, kSize, kSize);
+    module_ = shadows::install(r, izb(1, true, test));
+    r.render_frame(0.0f);
+    const auto csm = module_->read_csm();
+    ASSERT_EQ(csm.resolution, kGrid);
+    // Caster triangles in grid space.
+    std::vector<glm::dvec3> tris;
+    for (const auto& d : r.draws()) {
+      if (d.shadow.csm == engine::CsmChoice::Off) continue;
+      const auto& mesh = *scene_->registry.get<engine::Mesh>(d.entity).data;
+      for (size_t i = 0; i < mesh.indices.size(); ++i) {
+        const glm::dvec4 clip = glm::dmat4(csm.light_view_projection) * glm::dmat4(d.world) *
+                                glm::dvec4(glm::dvec3(mesh.vertices[mesh.indices[i]].position), 1.0);
+        tris.push_back({(clip.x * 0.5 + 0.5) * kGrid, (clip.y * 0.5 + 0.5) * kGrid, clip.z});
+      }
+    }
+    size_t checked = 0;
+    for (uint32_t y = 0; y < kGrid; y += 3) {
+      for (uint32_t x = 0; x < kGrid; x += 3) {
+        const float stored = csm.depth[size_t(y) * kGrid + x];
+        if (stored >= 1.0f) continue;
+        double best = 1e30;  // smallest farthest-depth among triangles that fully cover the texel
+        for (size_t t = 0; t + 2 < tris.size(); t += 3) {
+          const auto &a = tris[t], &b = tris[t + 1], &c = tris[t + 2];
+          const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+          if (std::abs(area) < 1e-12) continue;
+          bool covers = true;
+          double far_depth = -1e30;
+          for (int k = 0; k < 4 && covers; ++k) {
+            const glm::dvec2 p(x + (k & 1), y + (k >> 1));
+            const double w0 = ((c.x - b.x) * (p.y - b.y) - (c.y - b.y) * (p.x - b.x)) / area;
+            const double w1 = ((a.x - c.x) * (p.y - c.y) - (a.y - c.y) * (p.x - c.x)) / area;
+            const double w2 = 1.0 - w0 - w1;
+            covers = w0 >= 0 && w1 >= 0 && w2 >= 0;
+            far_depth = std::max(far_depth, w0 * a.z + w1 * b.z + w2 * c.z);
+          }
+          if (covers) best = std::min(best, far_depth);
+        }
+        ASSERT_LT(best, 1e29) << "texel " << x << "," << y << " holds a depth but no triangle covers it";
+        EXPECT_GE(double(stored), best - 1e-6) << "texel " << x << "," << y;
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 200u) << shadows::csm_test_name(test);
+  }
+}
+
+TEST_F(IzbTest, AutomaticCsmChoiceTakesArchitectureAndLeavesFoliage) {
+  for (const char* scene : {"atrium", "foliage"}) {
+    auto& r = make_renderer(scene, 0, kSize, kSize);
+    module_ = shadows::install(r, izb(1, true));
+    r.render_frame(0.0f);
+    const auto& decisions = module_->stats().csm_decisions;
+    ASSERT_FALSE(decisions.empty());
+    size_t leaves = 0, leaves_in = 0, architecture = 0, architecture_in = 0;
+    for (const auto& d : decisions) {
+      EXPECT_TRUE(d.automatic);
+      EXPECT_FALSE(d.reason.empty());
+      if (d.name.rfind("leaves", 0) == 0) {
+        ++leaves;
+        leaves_in += d.in_csm;
+      } else if (d.name == "floor" || d.name.find("wall") != std::string::npos ||
+                 d.name.find("roof") != std::string::npos) {
+        // The big slabs; thin column shafts may rightly stay out at this grid size.
+        ++architecture;
+        architecture_in += d.in_csm;
+      }
+    }
+    if (std::string(scene) == "atrium") {
+      EXPECT_GT(architecture, 3u);
+      EXPECT_EQ(architecture_in, architecture);
+    } else {
+      EXPECT_GT(leaves, 10u);
+      EXPECT_EQ(leaves_in, 0u);
+    }
+  }
+}
+
+TEST_F(IzbTest, SponzaCsmIsConservative) {
+  const std::string path = std::string(ENGINE_SOURCE_DIR) + "/../shared/content/sponza/sponza.gltf";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "Sponza not found at " << path;
+  uint64_t culled_points = 0;
+  for (size_t view : {0u, 1u}) {
+    const auto plain = render(path, view, izb(1));
+    for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric}) {
+      const auto culled = render(path, view, izb(1, true, test), false);
+      const auto cmp = reference::compare_visibility(culled.visibility, plain.reference);
+      EXPECT_EQ(cmp.false_shadowed, 0u) << "view " << view;
+      EXPECT_EQ(culled.visibility, plain.visibility) << "view " << view;
+      culled_points += culled.stats.csm_culled;
+    }
+    EXPECT_LE(reference::compare_visibility(plain.visibility, plain.reference).mismatch_rate, 0.0002);
+  }
+  EXPECT_GT(culled_points, 0u);  // view 1 looks into the shaded galleries
+}
+
+}  // namespace
