@@ -264,6 +264,7 @@ void Context::create_device(const ContextOptions& options) {
   enable2.features.pipelineStatisticsQuery = f2.features.pipelineStatisticsQuery;
 
   features_.geometry_shader = f2.features.geometryShader;
+  features_.depth_clamp = f2.features.depthClamp;
   features_.fragment_stores_and_atomics = f2.features.fragmentStoresAndAtomics;
   features_.vertex_stores_and_atomics = f2.features.vertexPipelineStoresAndAtomics;
   features_.shader_int64 = f2.features.shaderInt64;

@@ -202,10 +202,12 @@ Pipeline PipelineFactory::graphics(const GraphicsPipelineDesc& desc) const {
   blend.pAttachments = blends.data();
 
   // With depth bias on, the bias values are dynamic so settings can change without a rebuild.
-  VkDynamicState dynamic_states[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_DEPTH_BIAS};
+  std::vector<VkDynamicState> dynamic_states = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+  if (desc.depth_bias) dynamic_states.push_back(VK_DYNAMIC_STATE_DEPTH_BIAS);
+  if (desc.dynamic_depth_compare) dynamic_states.push_back(VK_DYNAMIC_STATE_DEPTH_COMPARE_OP);
   VkPipelineDynamicStateCreateInfo dynamic{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-  dynamic.dynamicStateCount = desc.depth_bias ? 3 : 2;
-  dynamic.pDynamicStates = dynamic_states;
+  dynamic.dynamicStateCount = static_cast<uint32_t>(dynamic_states.size());
+  dynamic.pDynamicStates = dynamic_states.data();
 
   VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
   rendering.colorAttachmentCount = static_cast<uint32_t>(desc.color_formats.size());

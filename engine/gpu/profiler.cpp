@@ -81,6 +81,11 @@ double GpuProfiler::median_ms(const std::string& name) const {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+std::vector<double> GpuProfiler::history(const std::string& name) const {
+  auto it = history_.find(name);
+  return it == history_.end() ? std::vector<double>{} : it->second;
+}
+
 void GpuProfiler::clear_history() {
   history_.clear();
 }

@@ -15,7 +15,9 @@ bool insert_node(uint texel, uint pixel_index, float depth) {
   }
   uint previous = atomicExchange(heads[texel], node);
   nodes[node] = uvec2(previous, pixel_index);
-  atomicMax(farthest[texel], float_to_ordered(depth));
+  // Depths are clamped into [0,1], where float order is bit order: the buffer copies straight into
+  // the trace pass's depth attachment.
+  atomicMax(farthest[texel], floatBitsToUint(clamp(depth, 0.0, 1.0)));
   return true;
 }
 

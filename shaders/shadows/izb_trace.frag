@@ -2,8 +2,13 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
 
-// Frustum trace: one fragment per (caster triangle, light texel it touches). Tests the triangle
-// against every node in the texel's list and ORs the shadowed samples into the pixel's mask.
+// Frustum trace: one fragment per (caster triangle, light texel it touches) that survived the early
+// depth test against the texel's farthest node (the rasterizer's depth is biased to the triangle's
+// nearest depth over the texel). Tests the triangle against every node in the texel's list and ORs
+// the shadowed samples into the pixel's mask. With kCountOnly, only counts the fragments.
+layout(early_fragment_tests) in;
+layout(constant_id = 0) const uint kSoftware = 1u;
+layout(constant_id = 1) const uint kCountOnly = 0u;
 layout(push_constant) uniform Push { IzbDrawPush draw; };
 
 vec3 fetch_grid_vertex(uint corner) {
@@ -36,38 +41,21 @@ bool texel_touches_triangle(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orie
 
 void main() {
   ivec2 texel = ivec2(gl_FragCoord.xy);
+  // Fetched by primitive id rather than passed as flat varyings: on the CPU driver the fetch is far
+  // cheaper than geometry-shader varyings.
   vec3 a = fetch_grid_vertex(0u);
   vec3 b = fetch_grid_vertex(1u);
   vec3 c = fetch_grid_vertex(2u);
   float area = edge_fn(c.xy, a.xy, b.xy);
-  bool stats = izb_flag(IZB_FLAG_STATS);
-  uint fragment = 0u, kept = 0u, tests = 0u;
+  uint fragment = 0u, tests = 0u;
   if (abs(area) > 1.0e-10 &&
-      (!izb_flag(IZB_FLAG_SOFTWARE_RASTER) ||
-       texel_touches_triangle(vec2(texel), vec2(texel) + 1.0, a, b, c, sign(area)))) {
+      (kSoftware == 0u || texel_touches_triangle(vec2(texel), vec2(texel) + 1.0, a, b, c, sign(area)))) {
     fragment = 1u;
-    uint t = texel_index(texel);
-    bool keep = true;
-    if (izb_flag(IZB_FLAG_DEPTH_CULL)) {
-      // The triangle's nearest depth over this texel, conservatively: its plane's minimum over the
-      // texel square, but never nearer than its nearest vertex.
-      float det = area;
-      float dzdx = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / det;
-      float dzdy = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / det;
-      vec2 centre = vec2(texel) + 0.5;
-      float plane_min = a.z + dzdx * (centre.x - a.x) + dzdy * (centre.y - a.y) - 0.5 * (abs(dzdx) + abs(dzdy));
-      float nearest = max(plane_min, min(min(a.z, b.z), c.z));
-      uint far_bits = farthest[t];
-      keep = far_bits != 0u && nearest < ordered_to_float(far_bits);
-    } else {
-      keep = heads[t] != kIzbEndOfList;
-    }
-    if (keep) {
-      kept = 1u;
+    if (kCountOnly == 0u) {
       float inv_area = 1.0 / area;
       uint full = full_mask();
       bool progressive = izb_flag(IZB_FLAG_PROGRESSIVE);
-      for (uint node = heads[t]; node != kIzbEndOfList;) {
+      for (uint node = heads[texel_index(texel)]; node != kIzbEndOfList;) {
         uvec2 n = nodes[node];
         node = n.x;
         uint current = visibility_mask[n.y];
@@ -78,13 +66,11 @@ void main() {
       }
     }
   }
-  if (stats) {
+  if (izb_flag(IZB_FLAG_STATS)) {
     uint f = subgroupAdd(fragment);
-    uint k = subgroupAdd(kept);
     uint s = subgroupAdd(tests);
     if (subgroupElect()) {
-      if (f > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS], f);
-      if (k > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS_KEPT], k);
+      if (f > 0u) atomicAdd(counters[kCountOnly != 0u ? IZB_COUNTER_FRAGMENTS : IZB_COUNTER_FRAGMENTS_KEPT], f);
       if (s > 0u) atomicAdd(counters[IZB_COUNTER_TRIANGLE_TESTS], s);
     }
   }

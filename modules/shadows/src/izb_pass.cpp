@@ -55,7 +55,8 @@ struct IzbPass::Impl {
   Context& ctx;
   PipelineFactory factory;
   Pipeline fit, setup, build, fallback, resolve, list_stats;
-  Pipeline trace_software, trace_hardware;
+  Pipeline trace_software, trace_hardware, count_software, count_hardware, depth_fill;
+  Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles;
   Sampler nearest;
@@ -82,24 +83,59 @@ struct IzbPass::Impl {
     fallback = factory.compute({"izb_fallback.comp", bindings, push});
     resolve = factory.compute({"izb_resolve.comp", bindings, push});
     list_stats = factory.compute({"izb_list_stats.comp", bindings, push});
+    if (!c.features().depth_clamp)
+      throw VulkanError("the IZB trace needs the depthClamp feature, which " + c.device_name() + " lacks");
+    // Trace pipelines: software (geometry-shader quads + exact texel test) and hardware conservative
+    // rasterization, each also as a count-only variant for the before-culling fragment statistic.
+    // Depth: the attachment holds each texel's farthest node; the rasterized depth, biased by minus
+    // one slope unit, is the triangle plane's nearest depth over the texel, so LESS culls exactly the
+    // fragments behind every node. Depth clamp keeps biased depths below 0 from being clipped.
     GraphicsPipelineDesc trace;
-    trace.name = "izb trace (software conservative)";
-    trace.vertex_shader = "izb_trace.vert";
-    trace.geometry_shader = "izb_trace.geom";
-    trace.fragment_shader = "izb_trace.frag";
     trace.bindings = bindings;
     trace.push_constant_size = sizeof(gpu_shared::IzbDrawPush);
     trace.vertex_input = VertexInput::PositionOnly;
     trace.cull_mode = VK_CULL_MODE_NONE;
-    trace.depth_test = false;
+    trace.depth_format = VK_FORMAT_D32_SFLOAT;
+    trace.depth_test = true;
     trace.depth_write = false;
-    if (c.features().geometry_shader) trace_software = factory.graphics(trace);
+    trace.depth_compare = VK_COMPARE_OP_LESS;
+    trace.dynamic_depth_compare = true;
+    trace.depth_bias = true;
+    trace.depth_clamp = true;
+    trace.fragment_shader = "izb_trace.frag";
+    trace.vertex_shader = "izb_trace.vert";
+    if (c.features().geometry_shader) {
+      trace.name = "izb trace (software conservative)";
+      trace.geometry_shader = "izb_trace.geom";
+      trace.specialization = {{0, 1u}, {1, 0u}};
+      trace_software = factory.graphics(trace);
+      trace.name = "izb fragment count (software conservative)";
+      trace.specialization = {{0, 1u}, {1, 1u}};
+      count_software = factory.graphics(trace);
+    }
     if (c.features().conservative_rasterization) {
-      trace.name = "izb trace (hardware conservative)";
       trace.geometry_shader.clear();
       trace.conservative = ConservativeMode::Overestimate;
+      trace.name = "izb trace (hardware conservative)";
+      trace.specialization = {{0, 0u}, {1, 0u}};
       trace_hardware = factory.graphics(trace);
+      trace.name = "izb fragment count (hardware conservative)";
+      trace.specialization = {{0, 0u}, {1, 1u}};
+      count_hardware = factory.graphics(trace);
     }
+    GraphicsPipelineDesc fill;
+    fill.name = "izb farthest depth fill";
+    fill.vertex_shader = "izb_fullscreen.vert";
+    fill.fragment_shader = "izb_depth_fill.frag";
+    fill.bindings = bindings;
+    fill.push_constant_size = sizeof(gpu_shared::IzbDrawPush);
+    fill.depth_test = true;
+    fill.depth_write = true;
+    fill.vertex_input = VertexInput::None;
+    fill.cull_mode = VK_CULL_MODE_NONE;
+    fill.depth_format = VK_FORMAT_D32_SFLOAT;
+    fill.depth_compare = VK_COMPARE_OP_ALWAYS;
+    depth_fill = factory.graphics(fill);
     if (!trace_software.valid() && !trace_hardware.valid())
       throw VulkanError("the IZB needs conservative rasterization or geometry shaders; device " + c.device_name() +
                         " has neither");
@@ -125,6 +161,12 @@ struct IzbPass::Impl {
       const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
       heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
       farthest = Buffer(ctx, texels * 4, usage, false, "izb farthest node depth");
+      trace_depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
+                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                          "izb trace depth (farthest node)");
+      ctx.immediate_submit([&](VkCommandBuffer cmd) {
+        trace_depth.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAll, kAllAccess);
+      });
     }
     const VkExtent2D e = frame.view.extent;
     const VkDeviceSize pixels = VkDeviceSize(e.width) * e.height;
@@ -225,7 +267,8 @@ bool IzbPass::hardware_raster_available() const { return impl_->trace_hardware.v
 
 bool IzbPass::csm_test_supported(CsmTest test, std::string* why) const { return impl_->csm->supported(test, why); }
 
-void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid) {
+void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
+                     bool collect_stats) {
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
   if (settings.resolution == 0 || settings.resolution > 16384)
@@ -308,21 +351,39 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     m.dispatch_pixels(cmd, frame, m.build, push);
   }
   full_barrier(cmd);
-  {
-    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    const Pipeline& trace = use_hardware ? m.trace_hardware : m.trace_software;
+  auto draw_trace = [&](const Pipeline& trace, VkCompareOp compare, bool fill_depth) {
+    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth.imageView = m.trace_depth.view();
+    depth.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
+    depth.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {m.resolution, m.resolution}};
     info.layerCount = 1;
+    info.pDepthAttachment = &depth;
     vkCmdBeginRendering(cmd, &info);
     set_viewport(cmd, {m.resolution, m.resolution});
+    if (fill_depth) {
+      // Writes each texel's farthest node depth; the trace draws after it in the same pass see it
+      // (depth tests follow primitive order).
+      m.depth_fill.bind(cmd);
+      m.push_all(cmd, frame, m.depth_fill);
+      vkCmdDraw(cmd, 3, 1, 0, 0);
+    }
     trace.bind(cmd);
+    vkCmdSetDepthBias(cmd, -1.0f, 0.0f, -1.0f);
+    vkCmdSetDepthCompareOp(cmd, compare);
     m.push_all(cmd, frame, trace);
     draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
       gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset, 0u, 0u};
       trace.push_constants(cmd, dp);
     });
     vkCmdEndRendering(cmd);
+  };
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
+    draw_trace(use_hardware ? m.trace_hardware : m.trace_software,
+               settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
   }
   full_barrier(cmd);
   {
@@ -338,8 +399,11 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     m.dispatch_pixels(cmd, frame, m.resolve, push);
   }
   full_barrier(cmd);
-  {
-    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_list_stats");
+  if (collect_stats) {
+    // Statistics only (excluded from the technique's total): fragments before depth culling.
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_stats");
+    draw_trace(use_hardware ? m.count_hardware : m.count_software, VK_COMPARE_OP_ALWAYS, false);
+    full_barrier(cmd);
     m.list_stats.bind(cmd);
     m.push_all(cmd, frame, m.list_stats);
     m.list_stats.push_constants(cmd, push);

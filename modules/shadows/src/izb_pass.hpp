@@ -16,7 +16,9 @@ class IzbPass {
   explicit IzbPass(engine::gpu::Context& ctx);
   ~IzbPass();
   // hybrid: the term already holds the cascades; the IZB overwrites its range and fades at the limit.
-  void record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid);
+  // collect_stats adds the statistics passes (fragment count before culling, list lengths).
+  void record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
+              bool collect_stats);
   void after_frame(Stats& stats);
   bool hardware_raster_available() const;
   bool csm_test_supported(CsmTest test, std::string* why) const;

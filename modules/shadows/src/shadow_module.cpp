@@ -20,16 +20,18 @@ class ShadowModuleImpl final : public ShadowModule {
   const Stats& stats() const override { return stats_; }
   void set_collect_stats(bool enabled) override { collect_stats_ = enabled; }
 
+  // The technique's own passes (statistics-only passes such as izb_stats and csm_coverage excluded).
   std::vector<std::string> pass_names() const override {
     std::vector<std::string> izb = {"light_frustum", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"};
     if (settings_.izb.csm) izb.insert(izb.begin() + 1, "csm");
+    const std::vector<std::string> cascades = {"cascade_depth", "cascade_masks", "cascade_filter", "cascade_blur"};
     switch (settings_.technique) {
       case Technique::Off: return {};
       case Technique::ShadowMap: return {"sm_depth", "sm_resolve"};
-      case Technique::Cascades: return {"cascades"};
+      case Technique::Cascades: return cascades;
       case Technique::Izb: return izb;
       case Technique::Hybrid: {
-        izb.insert(izb.begin(), "cascades");
+        izb.insert(izb.begin(), cascades.begin(), cascades.end());
         return izb;
       }
     }
@@ -52,14 +54,14 @@ class ShadowModuleImpl final : public ShadowModule {
         cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
         break;
       case Technique::Izb:
-        izb().record(frame, settings_.izb, settings_.debug, false);
+        izb().record(frame, settings_.izb, settings_.debug, false, collect_stats_);
         break;
       case Technique::Hybrid: {
         cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
         engine::gpu::full_barrier(frame.cmd);
         IzbSettings near = settings_.izb;
         near.max_distance = settings_.hybrid_izb_distance;
-        izb().record(frame, near, settings_.debug, true);
+        izb().record(frame, near, settings_.debug, true, collect_stats_);
         break;
       }
     }

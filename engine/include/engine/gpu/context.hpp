@@ -20,6 +20,7 @@ struct DeviceFeatures {
   float conservative_overestimation_size = 0.0f; // extraPrimitiveOverestimationSize ceiling in px
   bool fragment_shader_barycentric = false;      // VK_KHR_fragment_shader_barycentric
   bool geometry_shader = false;
+  bool depth_clamp = false;
   bool timestamps = false;                       // timestampComputeAndGraphics on the queue
   float timestamp_period_ns = 1.0f;
   bool ray_tracing_pipeline = false;             // VK_KHR_ray_tracing_pipeline (recorded, unused)

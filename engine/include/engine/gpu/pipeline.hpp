@@ -97,7 +97,8 @@ struct GraphicsPipelineDesc {
   VkCullModeFlags cull_mode = VK_CULL_MODE_BACK_BIT;
   VkFrontFace front_face = VK_FRONT_FACE_COUNTER_CLOCKWISE;
   bool depth_clamp = false;
-  bool depth_bias = false;
+  bool depth_bias = false;  // when set, the bias values are dynamic state (vkCmdSetDepthBias)
+  bool dynamic_depth_compare = false;  // vkCmdSetDepthCompareOp
   float depth_bias_constant = 0.0f;
   float depth_bias_slope = 0.0f;
   ConservativeMode conservative = ConservativeMode::Off;

@@ -28,6 +28,8 @@ class GpuProfiler {
   double average_ms(const std::string& name, size_t last_n = 0) const;
   double median_ms(const std::string& name) const;
   std::vector<std::string> region_names() const { return order_; }
+  // Per-frame times of one region since the last clear_history() (empty if never recorded).
+  std::vector<double> history(const std::string& name) const;
   void clear_history();
 
  private:
