@@ -38,6 +38,7 @@ struct Options {
   std::string json_path;
   std::string diff_dir;
   std::string screenshot_dir;
+  std::string dump_dir;  // raw float32 visibility per run, for comparing runs offline
   uint32_t node_pool = 0;
   std::string raster;  // auto|hardware|software
 };
@@ -47,7 +48,7 @@ const char* kUsage =
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--frames N] [--warmup N] [--reference] [--device gpu|lavapipe|INDEX]\n"
-    "                    [--json FILE] [--diff DIR] [--screenshot DIR]\n"
+    "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm;\n"
     "  csm tests: hertel, bary, bary-hw, inner-hw.\n";
 
@@ -98,6 +99,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--json") o.json_path = value();
     else if (a == "--diff") o.diff_dir = value();
     else if (a == "--screenshot") o.screenshot_dir = value();
+    else if (a == "--dump") o.dump_dir = value();
     else if (a == "--help" || a == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);
@@ -282,6 +284,15 @@ int main(int argc, char** argv) {
           std::filesystem::create_directories(o.diff_dir);
           reference::write_diff_png(file, o.width, o.height, vis, reference_vis);
         }
+      }
+      if (!o.dump_dir.empty()) {
+        std::filesystem::create_directories(o.dump_dir);
+        const auto vis = module->read_visibility();
+        const std::string file = o.dump_dir + "/vis_" + scene->name + "_v" + std::to_string(o.view) + "_" + run.mode +
+                                 "_" + run.csm_test + "_spp" + std::to_string(o.spp) + "_" +
+                                 (o.raster.empty() ? "auto" : o.raster) + ".f32";
+        std::ofstream out(file, std::ios::binary);
+        out.write(reinterpret_cast<const char*>(vis.data()), std::streamsize(vis.size() * sizeof(float)));
       }
       if (!o.screenshot_dir.empty()) {
         std::filesystem::create_directories(o.screenshot_dir);
