@@ -24,7 +24,7 @@ struct Options {
   std::string screenshot;
   std::string out_dir = "walkthrough_out";
   std::string device;
-  std::string mode = "sm";
+  std::string mode = "hybrid";
   float seconds_per_view = 6.0f;
 };
 
@@ -108,6 +108,7 @@ int run_windowed(const Options& o, engine::Scene& scene) {
   engine::Renderer renderer(ctx, {std::max(extent.width, 1u), std::max(extent.height, 1u)});
   renderer.set_scene(scene);
   auto module = shadows::install(renderer, *shadows::parse_mode(o.mode, {}));
+  module->set_collect_stats(false);  // the panel's checkbox turns the statistics passes on
   walkthrough::CameraPath path(scene, o.seconds_per_view);
   renderer.systems().add("camera path", [&](engine::Registry&, float dt) { path.update(dt); });
   int frame = 0;

@@ -27,6 +27,7 @@ void CameraPath::update(float dt) {
 }
 
 void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, CameraPath& path) {
+  auto& shadows = module;
   ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
   ImGui::Begin("Shadows");
@@ -51,6 +52,8 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Camer
   const char* debug_views[] = {"none", "visibility mask", "IZB list length", "cascades", "CSM coverage", "expensive path"};
   int debug = int(s.debug);
   if (ImGui::Combo("overlay", &debug, debug_views, IM_ARRAYSIZE(debug_views))) s.debug = shadows::DebugView(debug);
+  static bool statistics = false;
+  if (ImGui::Checkbox("statistics (extra passes)", &statistics)) shadows.set_collect_stats(statistics);
   bool paused = path.paused();
   if (ImGui::Checkbox("pause camera", &paused)) path.set_paused(paused);
 

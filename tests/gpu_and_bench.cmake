@@ -20,3 +20,22 @@ engine_target_warnings(gpu_tests)
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
 
 add_subdirectory(window)
+
+# The walkthrough executable itself: headless run, and one-line errors for bad scene files.
+add_test(NAME walkthrough_headless_runs
+         COMMAND $<TARGET_FILE:walkthrough> --headless --scene contact --size 160x120 --frames 2 --mode hybrid
+                 --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_test_out)
+set_tests_properties(walkthrough_headless_runs PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe"
+                     PASS_REGULAR_EXPRESSION "wrote .*frame_001.png")
+foreach(bad missing_file broken_json index_out_of_range nan_position)
+  if(bad STREQUAL missing_file)
+    set(file ${PROJECT_SOURCE_DIR}/content/test_gltf/does_not_exist.gltf)
+  else()
+    set(file ${PROJECT_SOURCE_DIR}/content/test_gltf/${bad}.gltf)
+  endif()
+  add_test(NAME walkthrough_rejects_${bad}
+           COMMAND sh -c "out=$($0 --headless --scene $1 --frames 1 2>&1); rc=$?; echo \"$out\"; \
+[ $rc -ne 0 ] && [ $(printf '%s\\n' \"$out\" | wc -l) -eq 1 ] && printf '%s' \"$out\" | grep -q \"$(basename $1)\""
+                   $<TARGET_FILE:walkthrough> ${file})
+  set_tests_properties(walkthrough_rejects_${bad} PROPERTIES LABELS unit)
+endforeach()

@@ -54,11 +54,12 @@ void GpuProfiler::collect() {
     const double ms = double(stamps[r.end_query] - stamps[r.begin_query]) * ns * 1e-6;
     frame[r.name] += ms;  // a region recorded twice in a frame sums
   }
+  // A known region that did not run this frame counts 0 ms, so histories stay aligned by frame.
   for (const auto& name : order_) {
     auto it = frame.find(name);
-    if (it == frame.end()) continue;
-    last_frame_.emplace_back(name, it->second);
-    history_[name].push_back(it->second);
+    const double ms = it == frame.end() ? 0.0 : it->second;
+    if (it != frame.end()) last_frame_.emplace_back(name, ms);
+    history_[name].push_back(ms);
   }
 }
 

@@ -255,6 +255,7 @@ int main(int argc, char** argv) {
       entry["counts"] = stats_json(module->stats());
       entry["culling_rate"] = module->stats().culling_rate;
       entry["hardware_conservative"] = module->stats().hardware_conservative;
+      entry["csm_status"] = module->stats().csm_status;
       if (!module->stats().cascade_splits.empty()) entry["cascade_splits"] = module->stats().cascade_splits;
       json decisions = json::array();
       for (const auto& d : module->stats().csm_decisions)

@@ -58,6 +58,7 @@ struct SceneView {
   std::string scene;
   size_t view;
 };
+void PrintTo(const SceneView& v, std::ostream* os) { *os << v.scene << " view " << v.view; }
 std::string name_of(const testing::TestParamInfo<SceneView>& info) {
   return info.param.scene + "_view" + std::to_string(info.param.view);
 }

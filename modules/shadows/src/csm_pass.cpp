@@ -66,6 +66,15 @@ struct CsmPass::Impl {
   std::map<uint32_t, Cached> cache;  // by entity index
   std::vector<CsmDecision> decisions;
   std::vector<bool> in_csm;  // per draw, this frame
+  bool ran = false;
+  std::string status = "off";
+  // Adaptive skipping under Auto.
+  double last_yield = 1.0;
+  bool have_yield = false;
+  uint32_t frames_since_probe = 0;
+  std::vector<bool> last_choice;
+  glm::vec3 last_light{0.0f};
+  uint32_t last_resolution = 0;
 
   explicit Impl(Context& c) : ctx(c) {
     nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "csm nearest");
@@ -215,6 +224,50 @@ void CsmPass::prepare(uint32_t resolution) { impl_->ensure_depth(resolution); }
 VkImageView CsmPass::depth_view() const { return impl_->depth.view(); }
 bool CsmPass::supported(CsmTest test, std::string* why) const { return impl_->supported(test, why); }
 
+bool CsmPass::plan(const engine::FrameContext& frame, const IzbSettings& settings, uint32_t resolution) {
+  Impl& m = *impl_;
+  m.ran = false;
+  if (!settings.csm) {
+    m.status = "off";
+    m.decisions.clear();
+    return false;
+  }
+  m.choose(frame, resolution);
+  bool any = false, explicit_on = false;
+  for (const auto& d : m.decisions) {
+    any = any || d.in_csm;
+    explicit_on = explicit_on || (d.in_csm && !d.automatic);
+  }
+  if (!any) {
+    m.status = "skipped: no caster chosen for the CSM";
+    return false;
+  }
+  const bool changed = m.in_csm != m.last_choice || frame.view.light_direction != m.last_light ||
+                       resolution != m.last_resolution;
+  m.last_choice = m.in_csm;
+  m.last_light = frame.view.light_direction;
+  m.last_resolution = resolution;
+  if (changed) m.have_yield = false;
+  if (!explicit_on && m.have_yield && m.last_yield < kCsmMinimumYield && ++m.frames_since_probe < kCsmReprobeFrames) {
+    std::ostringstream why;
+    why.precision(3);
+    why << "skipped: auto choice culled " << m.last_yield * 100.0 << "% of points when last run (< "
+        << kCsmMinimumYield * 100.0 << "%)";
+    m.status = why.str();
+    return false;
+  }
+  m.frames_since_probe = 0;
+  m.status = "ran";
+  m.ran = true;
+  return true;
+}
+
+void CsmPass::note_yield(double culling_rate) {
+  if (!impl_->ran) return;
+  impl_->last_yield = culling_rate;
+  impl_->have_yield = true;
+}
+
 void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, const Buffer& izb_frame,
                      uint32_t resolution) {
   Impl& m = *impl_;
@@ -222,7 +275,6 @@ void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, c
   if (!m.supported(settings.csm_test, &why))
     throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " is unavailable: " + why);
   if (m.depth.extent().width != resolution) throw std::logic_error("CsmPass::prepare was not called");
-  m.choose(frame, resolution);
   VkCommandBuffer cmd = frame.cmd;
   const Pipeline& p = m.pipeline(settings.csm_test);
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
@@ -280,14 +332,12 @@ void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, c
 
 void CsmPass::after_frame(Stats& stats) {
   Impl& m = *impl_;
-  if (!m.collected) {
-    stats.csm_texels_covered = 0;
-    stats.csm_decisions.clear();
-    return;
-  }
+  stats.csm_decisions = m.decisions;
+  stats.csm_status = m.status;
+  stats.csm_texels_covered = 0;
+  if (!m.collected) return;
   m.collected = false;
   stats.csm_texels_covered = m.readback.as<uint32_t>()[gpu_shared::CSM_COUNTER_TEXELS];
-  stats.csm_decisions = m.decisions;
 }
 
 }  // namespace shadows::detail

@@ -24,6 +24,12 @@ CsmChoiceMeasure measure_csm_suitability(const engine::MeshData& mesh, const glm
 // A fifth is enough: a mesh's CSM raster cost is small next to the trace work each culled point saves.
 inline constexpr double kCsmAutoThreshold = 0.2;
 
+// Under CsmChoice::Auto the prepass must pay for itself: when the last frame it ran culled fewer
+// than this share of the candidate points, it is skipped, and probed again every kCsmReprobeFrames
+// frames or as soon as the light, the grid or a choice changes.
+inline constexpr double kCsmMinimumYield = 0.01;
+inline constexpr uint32_t kCsmReprobeFrames = 30;
+
 class CsmPass {
  public:
   explicit CsmPass(engine::gpu::Context& ctx);
@@ -32,6 +38,11 @@ class CsmPass {
   void prepare(uint32_t resolution);
   VkImageView depth_view() const;
   bool supported(CsmTest test, std::string* why) const;
+  // Chooses the casters for this frame and decides whether the prepass runs at all (see
+  // kCsmMinimumYield); call once per frame before prepare().
+  bool plan(const engine::FrameContext& frame, const IzbSettings& settings, uint32_t resolution);
+  // The culling rate the IZB measured on a frame the prepass ran.
+  void note_yield(double culling_rate);
   // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`.
   void record(engine::FrameContext& frame, const IzbSettings& settings, const engine::gpu::Buffer& izb_frame,
               uint32_t resolution);

@@ -275,7 +275,8 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     throw std::invalid_argument("IZB resolution must be in 1..16384");
   m.ensure_buffers(frame, settings);
   m.ensure_triangles(frame);
-  m.csm->prepare(settings.csm ? m.resolution : 1);
+  const bool run_csm = m.csm->plan(frame, settings, m.resolution);
+  m.csm->prepare(run_csm ? m.resolution : 1);
 
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
                             (settings.raster == ConservativeRaster::Auto && m.trace_hardware.valid());
@@ -286,7 +287,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     throw std::runtime_error("software conservative rasterization needs geometry shaders, which " +
                              m.ctx.device_name() + " lacks");
   m.used_hardware = use_hardware;
-  m.last_used_csm = settings.csm;
+  m.last_used_csm = run_csm;
 
   // CPU side of the frustum: the light's rotation and the casters' depth range along it.
   const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
@@ -311,7 +312,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   }
 
   uint32_t flags = gpu_shared::IZB_FLAG_STATS;
-  if (settings.csm) flags |= gpu_shared::IZB_FLAG_CSM;
+  if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.depth_cull) flags |= gpu_shared::IZB_FLAG_DEPTH_CULL;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
   if (!use_hardware) flags |= gpu_shared::IZB_FLAG_SOFTWARE_RASTER;
@@ -342,7 +343,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     vkCmdDispatch(cmd, 1, 1, 1);
   }
   full_barrier(cmd);
-  if (settings.csm) {
+  if (run_csm) {
     m.csm->record(frame, settings, m.frame_data, m.resolution);
     full_barrier(cmd);
   }
@@ -450,6 +451,7 @@ void IzbPass::after_frame(Stats& s) {
   s.nonempty_texels = c[gpu_shared::IZB_COUNTER_NONEMPTY];
   s.list_length_average = s.nonempty_texels ? double(c[gpu_shared::IZB_COUNTER_LIST_SUM]) / double(s.nonempty_texels) : 0.0;
   s.hardware_conservative = m.used_hardware;
+  m.csm->note_yield(s.culling_rate);
   m.csm->after_frame(s);
   // Grow the pool for the next frame when this one overflowed (unless a fixed size was asked for).
   if (requested > m.pool_size) m.pool_demand = uint64_t(double(requested) * 1.25);

@@ -121,8 +121,9 @@ struct Stats {
   uint64_t expensive_path_pixels = 0;
   uint64_t blurred_pixels = 0;
   std::vector<float> cascade_splits;
-  // CSM caster choice
+  // CSM caster choice, and whether the prepass ran this frame ("ran", "off", or "skipped: why")
   std::vector<CsmDecision> csm_decisions;
+  std::string csm_status = "off";
 };
 
 class ShadowModule : public engine::RenderFeature {
