@@ -1,6 +1,5 @@
 // The walkthrough: loads a scene, installs the shadow module and walks the camera through the scene's
 // views. Windowed with an ImGui panel when a display exists; otherwise headless, writing PNGs.
-#include <charconv>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -8,6 +7,7 @@
 #include <imgui.h>
 
 #include "engine/assets/scene.hpp"
+#include "engine/core/command_line.hpp"
 #include "engine/platform/headless.hpp"
 #include "engine/platform/window.hpp"
 #include "engine/render/renderer.hpp"
@@ -33,38 +33,24 @@ const char* kUsage =
     "                   [--screenshot FILE.png] [--out DIR] [--device gpu|lavapipe|INDEX]\n"
     "                   [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm] [--seconds-per-view S]\n";
 
-bool parse_size(const std::string& s, uint32_t& w, uint32_t& h) {
-  const auto x = s.find('x');
-  if (x == std::string::npos) return false;
-  auto r1 = std::from_chars(s.data(), s.data() + x, w);
-  auto r2 = std::from_chars(s.data() + x + 1, s.data() + s.size(), h);
-  return r1.ec == std::errc() && r2.ec == std::errc() && r1.ptr == s.data() + x && r2.ptr == s.data() + s.size() &&
-         w > 0 && h > 0 && w <= 16384 && h <= 16384;
-}
-
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--scene") o.scene = value();
-    else if (a == "--size") {
-      const std::string v = value();
-      if (!parse_size(v, o.width, o.height)) throw std::runtime_error("--size '" + v + "': expected WxH");
-    } else if (a == "--frames") o.frames = std::stoi(value());
+  engine::CommandLine args(argc, argv);
+  while (args.next()) {
+    const std::string& a = args.flag();
+    if (a == "--scene") o.scene = args.value();
+    else if (a == "--size") args.size_value(o.width, o.height);
+    else if (a == "--frames") o.frames = int(args.uint_value());
     else if (a == "--headless") o.headless = true;
-    else if (a == "--screenshot") o.screenshot = value();
-    else if (a == "--out") o.out_dir = value();
-    else if (a == "--device") o.device = value();
-    else if (a == "--mode") o.mode = value();
-    else if (a == "--seconds-per-view") o.seconds_per_view = std::stof(value());
+    else if (a == "--screenshot") o.screenshot = args.value();
+    else if (a == "--out") o.out_dir = args.value();
+    else if (a == "--device") o.device = args.value();
+    else if (a == "--mode") o.mode = args.value();
+    else if (a == "--seconds-per-view") o.seconds_per_view = std::stof(args.value());
     else if (a == "--help" || a == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);
-    } else throw std::runtime_error("unknown option " + a);
+    } else throw std::runtime_error("unknown option " + a + " (see --help)");
   }
   return o;
 }

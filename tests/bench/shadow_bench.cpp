@@ -2,7 +2,6 @@
 // timestamp queries (medians over frames after warm-up), optionally compares the visibility with the
 // Embree reference, and writes one JSON object per run.
 #include <algorithm>
-#include <charconv>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -13,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/assets/scene.hpp"
+#include "engine/core/command_line.hpp"
 #include "engine/render/renderer.hpp"
 #include "frame_capture.hpp"
 #include "shadows/shadows.hpp"
@@ -60,46 +60,30 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-uint32_t parse_uint(const std::string& flag, const std::string& v) {
-  uint32_t out = 0;
-  auto r = std::from_chars(v.data(), v.data() + v.size(), out);
-  if (r.ec != std::errc() || r.ptr != v.data() + v.size()) throw std::runtime_error(flag + " '" + v + "': expected a number");
-  return out;
-}
-
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--scene") o.scene = value();
-    else if (a == "--view") o.view = parse_uint(a, value());
-    else if (a == "--size") {
-      std::string v = value();
-      auto x = v.find('x');
-      if (x == std::string::npos) throw std::runtime_error("--size '" + v + "': expected WxH");
-      o.width = parse_uint(a, v.substr(0, x));
-      o.height = parse_uint(a, v.substr(x + 1));
-      if (!o.width || !o.height) throw std::runtime_error("--size must be non-zero");
-    } else if (a == "--izb") o.izb = parse_uint(a, value());
-    else if (a == "--mode") o.modes = split(value());
-    else if (a == "--spp") o.spp = parse_uint(a, value());
-    else if (a == "--csm-test") o.csm_tests = split(value());
-    else if (a == "--masking") o.masking = value();
-    else if (a == "--csm-choice") o.csm_choice = value();
-    else if (a == "--raster") o.raster = value();
-    else if (a == "--node-pool") o.node_pool = parse_uint(a, value());
-    else if (a == "--frames") o.frames = int(parse_uint(a, value()));
-    else if (a == "--warmup") o.warmup = int(parse_uint(a, value()));
+  engine::CommandLine args(argc, argv);
+  while (args.next()) {
+    const std::string& a = args.flag();
+    if (a == "--scene") o.scene = args.value();
+    else if (a == "--view") o.view = args.uint_value();
+    else if (a == "--size") args.size_value(o.width, o.height);
+    else if (a == "--izb") o.izb = args.uint_value();
+    else if (a == "--mode") o.modes = split(args.value());
+    else if (a == "--spp") o.spp = args.uint_value();
+    else if (a == "--csm-test") o.csm_tests = split(args.value());
+    else if (a == "--masking") o.masking = args.value();
+    else if (a == "--csm-choice") o.csm_choice = args.value();
+    else if (a == "--raster") o.raster = args.value();
+    else if (a == "--node-pool") o.node_pool = args.uint_value();
+    else if (a == "--frames") o.frames = int(args.uint_value());
+    else if (a == "--warmup") o.warmup = int(args.uint_value());
     else if (a == "--reference") o.reference = true;
-    else if (a == "--device") o.device = value();
-    else if (a == "--json") o.json_path = value();
-    else if (a == "--diff") o.diff_dir = value();
-    else if (a == "--screenshot") o.screenshot_dir = value();
-    else if (a == "--dump") o.dump_dir = value();
+    else if (a == "--device") o.device = args.value();
+    else if (a == "--json") o.json_path = args.value();
+    else if (a == "--diff") o.diff_dir = args.value();
+    else if (a == "--screenshot") o.screenshot_dir = args.value();
+    else if (a == "--dump") o.dump_dir = args.value();
     else if (a == "--help" || a == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);

@@ -231,18 +231,7 @@ struct CascadesPass::Impl {
     ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_depth");
     const Pipeline& pipeline = depth_pipeline[s.cull_front_faces ? 1 : 0];
     for (uint32_t c = 0; c < fit.count; ++c) {
-      VkRenderingAttachmentInfo attachment{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-      attachment.imageView = depth.layer_view(c);
-      attachment.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
-      attachment.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-      attachment.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-      attachment.clearValue.depthStencil = {1.0f, 0};
-      VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-      info.renderArea = {{0, 0}, depth.extent()};
-      info.layerCount = 1;
-      info.pDepthAttachment = &attachment;
-      vkCmdBeginRendering(cmd, &info);
-      set_viewport(cmd, depth.extent());
+      begin_depth_rendering(cmd, depth.layer_view(c), depth.extent(), true);
       pipeline.bind(cmd);
       // Constant bias is applied in the filter (scaled per cascade); the rasterizer adds the slope part.
       vkCmdSetDepthBias(cmd, 0.0f, 0.0f, s.slope_bias);

@@ -280,18 +280,7 @@ void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, c
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm");
-    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    depth.imageView = m.depth.view();
-    depth.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
-    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    depth.clearValue.depthStencil = {1.0f, 0};
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {resolution, resolution}};
-    info.layerCount = 1;
-    info.pDepthAttachment = &depth;
-    vkCmdBeginRendering(cmd, &info);
-    set_viewport(cmd, {resolution, resolution});
+    begin_depth_rendering(cmd, m.depth.view(), {resolution, resolution}, true);
     p.bind(cmd);
     DescriptorWriter()
         .storage_buffer(gpu_shared::CSM_BINDING_FRAME, izb_frame.handle())

@@ -353,17 +353,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   }
   full_barrier(cmd);
   auto draw_trace = [&](const Pipeline& trace, VkCompareOp compare, bool fill_depth) {
-    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    depth.imageView = m.trace_depth.view();
-    depth.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
-    depth.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
-    depth.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {m.resolution, m.resolution}};
-    info.layerCount = 1;
-    info.pDepthAttachment = &depth;
-    vkCmdBeginRendering(cmd, &info);
-    set_viewport(cmd, {m.resolution, m.resolution});
+    begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
     if (fill_depth) {
       // Writes each texel's farthest node depth; the trace draws after it in the same pass see it
       // (depth tests follow primitive order).

@@ -36,4 +36,8 @@ void draw_casters(VkCommandBuffer cmd, const engine::FrameContext& frame, PushFn
 
 void set_viewport(VkCommandBuffer cmd, VkExtent2D extent);
 
+// Begins depth-only dynamic rendering into `depth` (GENERAL layout) over `extent` and sets the
+// viewport; with `clear` the target starts at depth 1 (far), else its contents are kept.
+void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear);
+
 }  // namespace shadows::detail

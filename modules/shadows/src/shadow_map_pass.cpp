@@ -55,18 +55,7 @@ void ShadowMapPass::record(engine::FrameContext& frame, const ShadowMapSettings&
 
   {
     ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_depth");
-    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    depth.imageView = map_.view();
-    depth.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
-    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    depth.clearValue.depthStencil = {1.0f, 0};
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, map_.extent()};
-    info.layerCount = 1;
-    info.pDepthAttachment = &depth;
-    vkCmdBeginRendering(cmd, &info);
-    set_viewport(cmd, map_.extent());
+    begin_depth_rendering(cmd, map_.view(), map_.extent(), true);
     vkCmdSetDepthBias(cmd, 0.0f, 0.0f, settings.slope_bias);
     depth_pipeline_.bind(cmd);
     draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
