@@ -3,31 +3,89 @@
 #include "cascades.h"
 layout(local_size_x = 8, local_size_y = 8) in;
 
+layout(push_constant) uniform Push { CascadeMaskPush push; };
 layout(set = 0, binding = CASCADE_MASK_BINDING_PARAMS) uniform Params { CascadeParams params; };
 layout(set = 0, binding = CASCADE_MASK_BINDING_DEPTH) uniform sampler2DArray depth_map;
 layout(set = 0, binding = CASCADE_MASK_BINDING_EDGE_DST, r32ui) writeonly uniform uimage2DArray edge_dst;
 layout(set = 0, binding = CASCADE_MASK_BINDING_EXTENT_DST, r32ui) writeonly uniform uimage2DArray extent_dst;
 
-// Level 0 of both masks. A texel is an edge when any 3x3 neighbour's depth differs by more than a
-// slope of two texels per texel could explain; both sides of a step are flagged. The depth extent is
-// the 3x3 neighbourhood's [min, max] at every texel, so a footprint's range covers all its texels.
+// One cascade's masks at the only level the filter reads (mask_level), straight from the depth map.
+// A map texel is an edge when any 3x3 neighbour's depth differs by more than a slope of two texels
+// per texel could explain (both sides of a step are flagged); a mask texel is an edge when any map
+// texel of its footprint is. Its depth extent is the [min, max] over the footprint plus a one-texel
+// border, i.e. the union of every footprint texel's 3x3 range. Footprint + border is read once, in
+// 2x2 gathers (a quarter of the lookups), as strips of two rows: every adjacent pair is compared once
+// and counts when either end lies in the footprint. Clamping at the map's border only repeats
+// adjacent texels, so the result equals the per-texel 3x3 definition exactly.
+const int kMaxRow = (2 << CASCADE_MASK_MAX_LEVEL) + 2;
+
 void main() {
-  ivec3 id = ivec3(gl_GlobalInvocationID);
+  int c = int(push.cascade);
+  ivec4 rect = params.mask_rect[c];
+  ivec2 id = rect.xy + ivec2(gl_GlobalInvocationID.xy);
+  if (id.x > rect.z || id.y > rect.w) return;
   int size = int(params.extent.z);
-  if (id.x >= size || id.y >= size || id.z >= int(params.extent.w)) return;
-  float centre = texelFetch(depth_map, id, 0).r;
-  float lo = centre, hi = centre;
-  bool edge = false;
-  float threshold = params.edge_threshold[id.z];
-  for (int dy = -1; dy <= 1; ++dy) {
-    for (int dx = -1; dx <= 1; ++dx) {
-      ivec2 t = clamp(id.xy + ivec2(dx, dy), ivec2(0), ivec2(size - 1));
-      float d = texelFetch(depth_map, ivec3(t, id.z), 0).r;
-      lo = min(lo, d);
-      hi = max(hi, d);
-      edge = edge || abs(d - centre) > threshold;
+  int level = params.mask_level[c];
+  int level_size = max(size >> level, 1);
+  // Footprint [f0, f1]; the last mask texel of a row or column also takes any remainder of a map size
+  // that isn't a power of two, as the filter clamps its lookups there.
+  ivec2 f0 = id << level;
+  ivec2 f1 = min(f0 + (1 << level), ivec2(size)) - 1;
+  if (id.x == level_size - 1) f1.x = size - 1;
+  if (id.y == level_size - 1) f1.y = size - 1;
+  int width = min(f1.x - f0.x + 3, kMaxRow);  // columns of footprint + border
+  float above[kMaxRow];                       // the previous strip's lower row
+  float lo = 1.0e30, hi = -1.0e30;
+  float step = 0.0;  // largest depth step between adjacent texels with one in the footprint
+  vec2 inv_size = vec2(1.0 / float(size));
+  for (int y = f0.y - 1; y <= f1.y + 1; y += 2) {
+    // Rows y (a) and y + 1 (b); b lies past the border when the row count is odd.
+    bool a_row = y >= f0.y && y <= f1.y;
+    bool b_row = y + 1 >= f0.y && y + 1 <= f1.y;
+    bool b_valid = y + 1 <= f1.y + 1;
+    bool up_row = y - 1 >= f0.y && y - 1 <= f1.y;
+    bool first = y == f0.y - 1;
+    float left_a = 0.0, left_b = 0.0, up_left = 0.0;
+    for (int i = 0; i < width; i += 2) {
+      // Texels (i, y + 1), (i + 1, y + 1), (i + 1, y), (i, y) of footprint + border; clamp-to-edge.
+      vec4 g = textureGather(depth_map, vec3(vec2(f0.x + i, y + 1) * inv_size, float(c)));
+      for (int k = 0; k < 2; ++k) {
+        int col = i + k;
+        if (col >= width) break;
+        float a = k == 0 ? g.w : g.z;
+        float b = k == 0 ? g.x : g.y;
+        bool col_in = col >= 1 && col <= width - 2;
+        bool left_in = col >= 2;
+        bool a_in = a_row && col_in;
+        bool b_in = b_row && col_in;
+        lo = min(lo, a);
+        hi = max(hi, a);
+        if (b_valid) {
+          lo = min(lo, b);
+          hi = max(hi, b);
+        }
+        step = max(step, (a_in || b_in) ? abs(a - b) : 0.0);
+        if (col > 0) {
+          step = max(step, (a_in || (a_row && left_in)) ? abs(a - left_a) : 0.0);
+          step = max(step, (b_in || (b_row && left_in)) ? abs(b - left_b) : 0.0);
+          step = max(step, (a_in || (b_row && left_in)) ? abs(a - left_b) : 0.0);
+          step = max(step, (b_in || (a_row && left_in)) ? abs(b - left_a) : 0.0);
+        }
+        float up = above[col];
+        if (!first) {
+          step = max(step, (a_in || (up_row && col_in)) ? abs(a - up) : 0.0);
+          if (col > 0) step = max(step, (a_in || (up_row && left_in)) ? abs(a - up_left) : 0.0);
+          if (col + 1 < width)
+            step = max(step, (a_in || (up_row && col + 1 <= width - 2)) ? abs(a - above[col + 1]) : 0.0);
+        }
+        up_left = up;
+        above[col] = b;
+        left_a = a;
+        left_b = b;
+      }
     }
   }
-  imageStore(edge_dst, id, uvec4(edge ? 1u : 0u));
-  imageStore(extent_dst, id, uvec4(cascade_pack_extent(lo, hi)));
+  bool edge = step > params.edge_threshold[c];
+  imageStore(edge_dst, ivec3(id, c), uvec4(edge ? 1u : 0u));
+  if (push.depth_extent != 0u) imageStore(extent_dst, ivec3(id, c), uvec4(cascade_pack_extent(lo, hi)));
 }

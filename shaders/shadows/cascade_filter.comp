@@ -1,5 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "cascades.h"
 #include "shadow_common.h"
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -16,9 +18,6 @@ layout(set = 0, binding = CASCADE_FILTER_BINDING_UNBLURRED, r32f) writeonly unif
 layout(set = 0, binding = CASCADE_FILTER_BINDING_OVERLAY, rgba8) writeonly uniform image2D overlay;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_BLUR_LIST) writeonly buffer BlurList { uint blur_list[]; };
-
-shared uint group_expensive;
-shared uint group_facing;
 
 struct Result {
   float visibility;
@@ -40,6 +39,9 @@ bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
   ivec2 hi = clamp(ivec2(floor(t + r)), ivec2(0), ivec2(size - 1)) >> level;
   lo = min(lo, ivec2(level_size - 1));
   hi = min(hi, ivec2(level_size - 1));
+  // Masks exist only inside this frame's rectangle: elsewhere nothing is known, so take the kernel.
+  ivec4 rect = params.mask_rect[c];
+  if (any(lessThan(lo, rect.xy)) || any(greaterThan(hi, rect.zw))) return true;
   bool edge = false;
   uint d_lo = 0xffffu, d_hi = 0u;
   for (int y = lo.y; y <= hi.y; ++y) {
@@ -61,7 +63,7 @@ bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
   return !(all_lit || all_shadowed);
 }
 
-Result evaluate(int c, vec3 p, vec3 n, vec2 rot) {
+Result evaluate(int c, vec3 p, vec3 n, ivec2 pixel) {
   Result result = Result(1.0, false, false);
   vec3 q = shadow_ray_origin(p, n) + n * params.normal_offset[c];
   vec4 light = params.light_view_projection[c] * vec4(q, 1.0);
@@ -89,6 +91,8 @@ Result evaluate(int c, vec3 p, vec3 n, vec2 rot) {
     result.visibility = zt <= d + bias ? 1.0 : 0.0;
     return result;
   }
+  // Only the kernel needs the pixel's rotation.
+  vec2 rot = texelFetch(rotation, pixel % int(kRotationTileSize), 0).xy;
   uint lit = 0u;
   for (uint i = 0u; i < kPoissonTaps; ++i) {
     vec2 o = kPoissonDisk[i];
@@ -103,53 +107,45 @@ Result evaluate(int c, vec3 p, vec3 n, vec2 rot) {
   return result;
 }
 
+// Counters and the blur list are updated once per subgroup, not per pixel, and without shared
+// memory, so the workgroup needs no barrier (which costs a lot on CPU implementations).
 void main() {
-  if (gl_LocalInvocationIndex == 0u) {
-    group_expensive = 0u;
-    group_facing = 0u;
-  }
-  barrier();
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   vec4 p = inside ? imageLoad(world_position, pixel) : vec4(0.0);
+  bool facing = false, expensive = false, mixed = false;
   if (inside && p.w == 0.0) imageStore(unblurred, pixel, vec4(-1.0));
   if (inside && p.w != 0.0) {
     vec3 n = imageLoad(geometric_normal, pixel).xyz;
     float visibility = 0.0;
     int cascade = -1;
-    bool expensive = false;
     // Surfaces facing away from the light are shadowed by themselves: no lookups.
-    if (dot(n, -params.light_direction.xyz) > 0.0) {
-      atomicAdd(group_facing, 1u);
+    facing = dot(n, -params.light_direction.xyz) > 0.0;
+    if (facing) {
       float depth = dot(p.xyz - params.camera_position.xyz, params.camera_forward.xyz);
       uint count = params.extent.w;
       visibility = 1.0;
       if (depth < params.split_far[count - 1u]) {
         cascade = 0;
         while (cascade < int(count) - 1 && depth >= params.split_far[cascade]) ++cascade;
-        vec2 rot = texelFetch(rotation, pixel % int(kRotationTileSize), 0).xy;
-        Result a = evaluate(cascade, p.xyz, n, rot);
-        visibility = a.visibility;
-        expensive = a.expensive;
-        bool mixed = a.mixed;
         float start = params.blend_start[cascade];
-        if (depth > start) {
+        bool band = depth > start;
+        // Inside the band the next cascade takes over gradually; the last one fades to lit. One loop
+        // over one or two cascades keeps a single copy of the kernel in the shader.
+        int last = band && cascade + 1 < int(count) ? cascade + 1 : cascade;
+        float first = 1.0, next = 1.0;
+        for (int c = cascade; c <= last; ++c) {
+          Result r = evaluate(c, p.xyz, n, pixel);
+          if (c == cascade) first = r.visibility;
+          else next = r.visibility;
+          expensive = expensive || r.expensive;
+          mixed = mixed || r.mixed;
+        }
+        visibility = first;
+        if (band) {
           float w = (depth - start) / max(params.split_far[cascade] - start, 1.0e-6);
-          // Inside the band the next cascade takes over gradually; the last one fades to lit.
-          float next = 1.0;
-          if (cascade + 1 < int(count)) {
-            Result b = evaluate(cascade + 1, p.xyz, n, rot);
-            next = b.visibility;
-            expensive = expensive || b.expensive;
-            mixed = mixed || b.mixed;
-          }
-          visibility = mix(visibility, next, clamp(w, 0.0, 1.0));
+          visibility = mix(first, next, clamp(w, 0.0, 1.0));
         }
-        if (mixed && params.mode.y != 0u) {
-          uint slot = atomicAdd(counters[CASCADE_COUNTER_BLUR], 1u);
-          blur_list[slot] = uint(pixel.x) | (uint(pixel.y) << 16u);
-        }
-        if (expensive) atomicAdd(group_expensive, 1u);
       }
     }
     imageStore(shadow_term, pixel, vec4(visibility));
@@ -161,9 +157,17 @@ void main() {
       imageStore(overlay, pixel, vec4(1.0, 0.0, 1.0, 0.6));
     }
   }
-  barrier();
-  if (gl_LocalInvocationIndex == 0u) {
-    if (group_expensive != 0u) atomicAdd(counters[CASCADE_COUNTER_EXPENSIVE], group_expensive);
-    if (group_facing != 0u) atomicAdd(counters[CASCADE_COUNTER_FACING], group_facing);
+  bool blur = mixed && params.mode.y != 0u;
+  uint n_expensive = subgroupAdd(expensive ? 1u : 0u);
+  uint n_facing = subgroupAdd(facing ? 1u : 0u);
+  uint n_blur = subgroupAdd(blur ? 1u : 0u);
+  uint slot = subgroupExclusiveAdd(blur ? 1u : 0u);
+  uint base = 0u;
+  if (subgroupElect()) {
+    if (n_expensive != 0u) atomicAdd(counters[CASCADE_COUNTER_EXPENSIVE], n_expensive);
+    if (n_facing != 0u) atomicAdd(counters[CASCADE_COUNTER_FACING], n_facing);
+    if (n_blur != 0u) base = atomicAdd(counters[CASCADE_COUNTER_BLUR], n_blur);
   }
+  base = subgroupBroadcastFirst(base);
+  if (blur) blur_list[base + slot] = uint(pixel.x) | (uint(pixel.y) << 16u);
 }

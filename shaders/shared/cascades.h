@@ -43,6 +43,10 @@ SHARED_CONST uint CASCADE_COUNTER_WORDS = 8u;
 
 SHARED_CONST uint CASCADE_BLUR_GROUP = 64u;
 
+// Highest mask level: the mask pass keeps one footprint row (2^level texels, twice that at the end of
+// a map whose size isn't a power of two, plus the border) in registers.
+SHARED_CONST int CASCADE_MASK_MAX_LEVEL = 5;
+
 // The empty depth range of a mask texel with no edge nearby (packed min 0xffff, max 0).
 SHARED_CONST uint CASCADE_EXTENT_EMPTY = 0xffff0000u;
 
@@ -62,6 +66,7 @@ struct CascadeParams {
   vec4 normal_offset;           // world units along the geometric normal
   vec4 edge_threshold;          // light depth step between neighbours that counts as an edge
   ivec4 mask_level;             // mask mip level matching the kernel width
+  ivec4 mask_rect[4];           // mask texels built this frame (inclusive, at mask_level); empty: none
   vec4 camera_position;         // xyz
   vec4 camera_forward;          // xyz, unit
   vec4 light_direction;         // xyz: travel direction, unit
@@ -70,10 +75,10 @@ struct CascadeParams {
 };
 
 struct CascadeMaskPush {
-  uint src_size;      // source level's size (square)
-  uint dst_size;      // destination level's size
-  uint cascades;
-  uint depth_extent;  // reduce the packed depth-extent chain (min/max) instead of the edge chain (max)
+  uint cascade;       // the layer built by this dispatch, at its mask_level
+  uint depth_extent;  // also write the depth extent
+  uint pad0;
+  uint pad1;
 };
 
 struct CascadeBlurPush {
@@ -85,9 +90,6 @@ SHARED_CONST uint CASCADE_MASK_BINDING_PARAMS = 0u;
 SHARED_CONST uint CASCADE_MASK_BINDING_DEPTH = 1u;
 SHARED_CONST uint CASCADE_MASK_BINDING_EDGE_DST = 2u;
 SHARED_CONST uint CASCADE_MASK_BINDING_EXTENT_DST = 3u;
-// Reduction of one level: the same bindings serve both chains (both are r32ui).
-SHARED_CONST uint CASCADE_REDUCE_BINDING_SRC = 0u;
-SHARED_CONST uint CASCADE_REDUCE_BINDING_DST = 1u;
 
 SHARED_CONST uint CASCADE_FILTER_BINDING_PARAMS = 0u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_WORLD_POSITION = 1u;
@@ -122,7 +124,7 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::CascadeDepthPush) == 128);
-static_assert(sizeof(gpu_shared::CascadeParams) == 8 * 64 + 13 * 16);
+static_assert(sizeof(gpu_shared::CascadeParams) == 8 * 64 + 17 * 16);
 static_assert(sizeof(gpu_shared::CascadeMaskPush) == 16);
 static_assert(sizeof(gpu_shared::CascadeBlurPush) == 32);
 #endif

@@ -17,8 +17,10 @@
 #include "cascades_pass.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <glm/gtc/packing.hpp>
 
@@ -51,6 +53,27 @@ void to_general(const Context& ctx, Image& image) {
   });
 }
 
+// World bounds of everything drawn: every shaded pixel lies on one of these.
+engine::Aabb receiver_bounds(const engine::FrameContext& frame) {
+  engine::Aabb bounds;
+  for (const auto& d : frame.draws) {
+    const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
+    if (mesh && mesh->data) bounds.extend(mesh->data->bounds.transformed(d.world));
+  }
+  return bounds;
+}
+
+// Map-texel xy bounds of `points` in `light_view_projection`.
+glm::vec4 texel_bounds(const glm::mat4& light_view_projection, const glm::vec3* points, int n, float size) {
+  glm::vec4 r(std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+              -std::numeric_limits<float>::max(), -std::numeric_limits<float>::max());
+  for (int i = 0; i < n; ++i) {
+    const glm::vec2 t = (glm::vec2(light_view_projection * glm::vec4(points[i], 1.0f)) * 0.5f + 0.5f) * size;
+    r = glm::vec4(glm::min(glm::vec2(r), t), glm::max(glm::vec2(r.z, r.w), t));
+  }
+  return r;
+}
+
 }  // namespace
 
 struct CascadesPass::Impl {
@@ -70,7 +93,6 @@ struct CascadesPass::Impl {
   Sampler nearest;
   Pipeline depth_pipeline[2];  // [cull_front_faces]
   Pipeline edges_pipeline;
-  Pipeline reduce_pipeline;
   Pipeline filter_pipeline;
   Pipeline blur_args_pipeline;
   Pipeline blur_pipeline;
@@ -100,11 +122,7 @@ struct CascadesPass::Impl {
                                        {gs::CASCADE_MASK_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
                                        {gs::CASCADE_MASK_BINDING_EDGE_DST, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                                        {gs::CASCADE_MASK_BINDING_EXTENT_DST, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
-                                      0});
-    reduce_pipeline = factory.compute({"cascade_reduce.comp",
-                                       {{gs::CASCADE_REDUCE_BINDING_SRC, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                        {gs::CASCADE_REDUCE_BINDING_DST, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
-                                       sizeof(gs::CascadeMaskPush)});
+                                      sizeof(gs::CascadeMaskPush)});
     filter_pipeline = factory.compute(
         {"cascade_filter.comp",
          {{gs::CASCADE_FILTER_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
@@ -183,12 +201,54 @@ struct CascadesPass::Impl {
                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade blur list");
   }
 
+  // The mask texels cascade c's receivers can read: the light-space bounds of its view slice (as
+  // fitted, blend band included), clipped to the bounds of everything drawn, grown by the kernel,
+  // the offsets and the mask's one-texel border. Masks are built only there; the filter takes the
+  // full kernel for any footprint outside, so a loose or wrong rectangle costs time, never accuracy.
+  glm::ivec4 mask_rect(const engine::FrameContext& frame, uint32_t c, uint32_t level, float kernel) const {
+    const engine::FrameView& view = frame.view;
+    const float size = float(map_size);
+    const glm::mat4& lvp = fit.light_view_projection[c];
+    const float d[2] = {c == 0 ? fit.splits[0] : fit.blend_start[c - 1], fit.splits[c + 1]};
+    const float aspect = view.extent.height ? float(view.extent.width) / float(view.extent.height) : 1.0f;
+    const float tan_half = std::tan(view.vertical_fov * 0.5f);
+    const glm::mat4& v = view.view;
+    const glm::vec3 right(v[0][0], v[1][0], v[2][0]), up(v[0][1], v[1][1], v[2][1]);
+    const glm::vec3 forward = -glm::vec3(v[0][2], v[1][2], v[2][2]);
+    glm::vec3 corners[8];
+    for (int i = 0; i < 8; ++i) {
+      const float depth = d[i >> 2];
+      corners[i] = view.camera_position + forward * depth + right * (((i & 1) ? 1.0f : -1.0f) * depth * tan_half * aspect) +
+                   up * (((i & 2) ? 1.0f : -1.0f) * depth * tan_half);
+    }
+    glm::vec4 r = texel_bounds(lvp, corners, 8, size);
+    const engine::Aabb scene = receiver_bounds(frame);
+    if (scene.valid()) {
+      glm::vec3 box[8];
+      for (int i = 0; i < 8; ++i)
+        box[i] = glm::vec3((i & 1) ? scene.max.x : scene.min.x, (i & 2) ? scene.max.y : scene.min.y,
+                           (i & 4) ? scene.max.z : scene.min.z);
+      const glm::vec4 b = texel_bounds(lvp, box, 8, size);
+      r = glm::vec4(glm::max(glm::vec2(r), glm::vec2(b)), glm::min(glm::vec2(r.z, r.w), glm::vec2(b.z, b.w)));
+    }
+    // Kernel, normal offsets (in texels; at most one texel each way), snapping, and the border.
+    const float margin = kernel + 4.0f;
+    const glm::ivec2 lo = glm::ivec2(glm::floor(glm::vec2(r) - margin));
+    const glm::ivec2 hi = glm::ivec2(glm::ceil(glm::vec2(r.z, r.w) + margin));
+    const int last = int(std::max(map_size >> level, 1u)) - 1;
+    const glm::ivec2 a = glm::clamp(lo, glm::ivec2(0), glm::ivec2(int(map_size) - 1)) >> int(level);
+    const glm::ivec2 b = glm::clamp(hi, glm::ivec2(0), glm::ivec2(int(map_size) - 1)) >> int(level);
+    if (hi.x < 0 || hi.y < 0 || lo.x >= int(map_size) || lo.y >= int(map_size) || r.x > r.z || r.y > r.w)
+      return glm::ivec4(0, 0, -1, -1);
+    return glm::ivec4(glm::min(a, glm::ivec2(last)), glm::min(b, glm::ivec2(last)));
+  }
+
   gs::CascadeParams make_params(const engine::FrameContext& frame, const CascadeSettings& s, DebugView debug,
-                                uint32_t* max_level) const {
+                                std::array<uint32_t, kMaxCascadeCount>* levels,
+                                std::array<glm::ivec4, kMaxCascadeCount>* rects) const {
     gs::CascadeParams p{};
     const float size = float(map_size);
     const uint32_t top_level = mip_count(map_size) - 1;
-    *max_level = 0;
     for (uint32_t c = 0; c < kMaxCascadeCount; ++c) {
       const uint32_t k = std::min(c, fit.count - 1);  // unused slots repeat the last cascade
       const float texel = fit.texel_world[k];
@@ -206,9 +266,13 @@ struct CascadesPass::Impl {
       // Smallest level whose texels are at least as wide as the kernel: its footprint then spans at
       // most 2x2 texels there.
       const float width = std::max(2.0f * kernel, 1.0f);
-      const uint32_t level = std::min(uint32_t(std::ceil(std::log2(width) - 1e-4f)), top_level);
+      // Capped so the mask pass's row buffer stays small; a wider kernel then just visits more texels.
+      const uint32_t level = std::min({uint32_t(std::ceil(std::log2(width) - 1e-4f)), top_level,
+                                       uint32_t(gs::CASCADE_MASK_MAX_LEVEL)});
       p.mask_level[c] = int(level);
-      if (c < fit.count) *max_level = std::max(*max_level, level);
+      p.mask_rect[c] = c < fit.count ? mask_rect(frame, c, level, kernel) : glm::ivec4(0, 0, -1, -1);
+      (*levels)[c] = level;
+      (*rects)[c] = p.mask_rect[c];
     }
     (void)size;
     const glm::mat4& v = frame.view.view;
@@ -242,22 +306,6 @@ struct CascadesPass::Impl {
       vkCmdEndRendering(cmd);
     }
   }
-
-  void record_chain(VkCommandBuffer cmd, Image& chain, uint32_t max_level, bool depth_extent) {
-    for (uint32_t level = 1; level <= max_level; ++level) {
-      memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-      const uint32_t dst_size = std::max(map_size >> level, 1u);
-      gs::CascadeMaskPush push{std::max(map_size >> (level - 1), 1u), dst_size, fit.count, depth_extent ? 1u : 0u};
-      reduce_pipeline.bind(cmd);
-      DescriptorWriter()
-          .storage_image(gs::CASCADE_REDUCE_BINDING_SRC, chain.mip_view(level - 1))
-          .storage_image(gs::CASCADE_REDUCE_BINDING_DST, chain.mip_view(level))
-          .push(ctx, cmd, reduce_pipeline);
-      reduce_pipeline.push_constants(cmd, push);
-      vkCmdDispatch(cmd, (dst_size + 7) / 8, (dst_size + 7) / 8, fit.count);
-    }
-  }
 };
 
 CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {
@@ -281,8 +329,9 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   m.ensure_maps(std::max(settings.map_size, 16u));
   m.ensure_frame(frame.view.extent);
   m.fit = fit_cascades(frame.view, settings, caster_bounds(frame));
-  uint32_t max_level = 0;
-  const gs::CascadeParams p = m.make_params(frame, settings, debug, &max_level);
+  std::array<uint32_t, kMaxCascadeCount> levels{};
+  std::array<glm::ivec4, kMaxCascadeCount> rects{};
+  const gs::CascadeParams p = m.make_params(frame, settings, debug, &levels, &rects);
   m.params.write(&p, sizeof(p));
   m.blur_enabled = settings.blur;
 
@@ -293,15 +342,19 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
     const bool extent = settings.masking == Masking::DepthExtent;
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_masks");
     m.edges_pipeline.bind(cmd);
-    DescriptorWriter()
-        .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, m.params.handle())
-        .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-        .storage_image(gs::CASCADE_MASK_BINDING_EDGE_DST, m.edges.mip_view(0))
-        .storage_image(gs::CASCADE_MASK_BINDING_EXTENT_DST, m.extents.mip_view(0))
-        .push(m.ctx, cmd, m.edges_pipeline);
-    vkCmdDispatch(cmd, (m.map_size + 7) / 8, (m.map_size + 7) / 8, m.fit.count);
-    m.record_chain(cmd, m.edges, max_level, false);
-    if (extent) m.record_chain(cmd, m.extents, max_level, true);
+    // One dispatch per cascade over the texels its receivers can read, at the one level it uses.
+    for (uint32_t c = 0; c < m.fit.count; ++c) {
+      const glm::ivec4 rect = rects[c];
+      if (rect.z < rect.x || rect.w < rect.y) continue;
+      DescriptorWriter()
+          .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, m.params.handle())
+          .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+          .storage_image(gs::CASCADE_MASK_BINDING_EDGE_DST, m.edges.mip_view(levels[c]))
+          .storage_image(gs::CASCADE_MASK_BINDING_EXTENT_DST, m.extents.mip_view(levels[c]))
+          .push(m.ctx, cmd, m.edges_pipeline);
+      m.edges_pipeline.push_constants(cmd, gs::CascadeMaskPush{c, extent ? 1u : 0u, 0u, 0u});
+      vkCmdDispatch(cmd, uint32_t(rect.z - rect.x + 8) / 8, uint32_t(rect.w - rect.y + 8) / 8, 1);
+    }
     full_barrier(cmd);
   }
   {
