@@ -22,6 +22,14 @@ for sc in contact atrium foliage "$sponza"; do
       --mode izb,izb+csm --csm-test hertel,bary --frames 2 --warmup 1 --reference "$@"
   done; done
 done
+# Coverage tests compared on the same caster set: every mesh forced into the CSM (no automatic skip).
+for sc in contact atrium foliage "$sponza"; do
+  n=$(basename "$sc" .gltf)
+  for v in 0 1; do
+    run culling_${n}_v$v --scene "$sc" --view $v --size 512x512 --izb 512 --mode izb+csm --csm-test hertel,bary \
+      --csm-choice on --frames 2 --warmup 1 --reference "$@"
+  done
+done
 for sc in atrium "$sponza"; do
   n=$(basename "$sc" .gltf)
   for v in 0 1; do
