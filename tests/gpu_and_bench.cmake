@@ -39,3 +39,16 @@ foreach(bad missing_file broken_json index_out_of_range nan_position)
                    $<TARGET_FILE:walkthrough> ${file})
   set_tests_properties(walkthrough_rejects_${bad} PROPERTIES LABELS unit)
 endforeach()
+add_test(NAME walkthrough_loads_gltf
+         COMMAND $<TARGET_FILE:walkthrough> --headless --scene ${PROJECT_SOURCE_DIR}/content/test_gltf/triangle.gltf
+                 --size 96x64 --frames 1 --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_gltf_out)
+set_tests_properties(walkthrough_loads_gltf PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe"
+                     PASS_REGULAR_EXPRESSION "wrote .*frame_000.png")
+set(SPONZA_GLTF ${PROJECT_SOURCE_DIR}/../shared/content/sponza/sponza.gltf)
+if(EXISTS ${SPONZA_GLTF})
+  add_test(NAME walkthrough_loads_sponza
+           COMMAND $<TARGET_FILE:walkthrough> --headless --scene ${SPONZA_GLTF} --size 160x90 --frames 1 --mode izb+csm
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_sponza_out)
+  set_tests_properties(walkthrough_loads_sponza PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe"
+                       PASS_REGULAR_EXPRESSION "wrote .*frame_000.png")
+endif()

@@ -292,6 +292,13 @@ int main(int argc, char** argv) {
       for (const auto& [name, value] : gpu_ms.items())
         if (name != "total") std::printf("    %-26s %10.3f ms\n", name.c_str(), value.get<double>());
     }
+    if (tracer && !o.screenshot_dir.empty() && !reference_vis.empty()) {
+      // The lighting path fed by the reference instead of a technique: what the image should be.
+      renderer.set_external_shadow_term(reference_vis);
+      renderer.render_frame(0.0f);
+      renderer.write_png(o.screenshot_dir + "/" + scene->name + "_v" + std::to_string(o.view) + "_reference.png");
+      renderer.set_external_shadow_term({});
+    }
     if (!o.json_path.empty()) {
       const std::filesystem::path p(o.json_path);
       if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());

@@ -57,6 +57,20 @@ TEST_F(GpuTest, ReferenceAgreesWithAnalyticAnswersOnContact) {
     EXPECT_EQ(reference[i], e.visibility) << e.what << " (reference)";
     EXPECT_EQ(izb[i], e.visibility) << e.what << " (IZB)";
   }
+  // The lit image: the ground under the plate is darker than open ground, with the technique's
+  // shadow term and with the reference's fed to lighting instead.
+  auto luminance = [&](const std::vector<uint8_t>& rgba, const glm::vec3& p) {
+    const glm::ivec2 px = pixel_of(r.frame_view(), p);
+    const size_t i = (size_t(px.y) * 256 + px.x) * 4;
+    return 0.2126f * rgba[i] + 0.7152f * rgba[i + 1] + 0.0722f * rgba[i + 2];
+  };
+  const auto lit = r.read_output_rgba8();
+  EXPECT_LT(luminance(lit, under_plate) + 40.0f, luminance(lit, open_ground));
+  r.set_external_shadow_term(reference);
+  r.render_frame();
+  const auto from_reference = r.read_output_rgba8();
+  EXPECT_EQ(from_reference, lit);  // the IZB and the reference agree on every pixel here
+  r.set_external_shadow_term({});
   shadows_module.reset();
 }
 
