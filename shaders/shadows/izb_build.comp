@@ -96,6 +96,7 @@ void main() {
       atomicMax(counters[IZB_COUNTER_DISPATCH], slot / 64u + 1u);
     }
     pixel_state[index] = state;
+    occluder_distance[index] = floatBitsToUint(1.0e30);
     visibility_mask[index] = mask;
   }
   uint covered_sum = subgroupAdd(covered);

@@ -16,6 +16,7 @@ layout(set = 0, binding = IZB_BINDING_VERTICES, std430) readonly buffer Vertices
 layout(set = 0, binding = IZB_BINDING_INDICES, std430) readonly buffer Indices { uint indices[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Triangles { vec4 world_triangles[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
+layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };
 
 uint izb_resolution() { return params.extent.z; }
 uint izb_samples() { return params.extent.w; }
@@ -61,17 +62,20 @@ void store_quad_point(uint pixel, uint corner, vec3 v) {
 // nearer the light there: exactly the reference ray's hit with t > 0.
 float edge_fn(vec2 p, vec2 a, vec2 b) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
 
-bool shadows_point(vec3 s, vec3 a, vec3 b, vec3 c, float inv_area) {
+// `gap` keeps the smallest light-depth distance from an occluded sample up to the triangle.
+bool shadows_point(vec3 s, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
   float w0 = edge_fn(s.xy, b.xy, c.xy) * inv_area;
   float w1 = edge_fn(s.xy, c.xy, a.xy) * inv_area;
   float w2 = edge_fn(s.xy, a.xy, b.xy) * inv_area;
   if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) return false;
   float depth = w0 * a.z + w1 * b.z + w2 * c.z;
-  return depth < s.z;
+  if (depth >= s.z) return false;
+  gap = min(gap, s.z - depth);
+  return true;
 }
 
-uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area) {
-  if (izb_samples() == 1u) return shadows_point(quad_point(pixel, 0u), a, b, c, inv_area) ? 1u : 0u;
+uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
+  if (izb_samples() == 1u) return shadows_point(quad_point(pixel, 0u), a, b, c, inv_area, gap) ? 1u : 0u;
   vec3 c00 = quad_point(pixel, 0u);
   vec3 c10 = quad_point(pixel, 1u);
   vec3 c01 = quad_point(pixel, 2u);
@@ -85,9 +89,15 @@ uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area) {
   uint bits = 0u;
   for (uint i = 0u; i < 32u; ++i) {
     vec3 s = micro_quad_blend(c00, c10, c01, c11, kSamplePattern[i]);
-    if (shadows_point(s, a, b, c, inv_area)) bits |= 1u << i;
+    if (shadows_point(s, a, b, c, inv_area, gap)) bits |= 1u << i;
   }
   return bits;
 }
 
 uint full_mask() { return izb_samples() == 32u ? 0xffffffffu : 1u; }
+
+// Records the nearest occluder seen for `pixel` (light depth units; the hybrid blend reads it).
+void note_occluder_gap(uint pixel, float gap) {
+  uint bits = floatBitsToUint(max(gap, 0.0));
+  if (bits < occluder_distance[pixel]) atomicMin(occluder_distance[pixel], bits);
+}

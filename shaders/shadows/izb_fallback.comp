@@ -11,7 +11,8 @@ void main() {
   uint slot = gl_GlobalInvocationID.x;
   if (slot >= counters[IZB_COUNTER_OVERFLOW_PIXELS]) return;
   uint pixel = overflow_pixels[slot];
-  uint triangle_count = push.pad0;
+  uint triangle_count = push.triangle_count;
+  float gap = 1.0e30;
   uint bits = visibility_mask[pixel];
   uint full = full_mask();
   for (uint t = 0u; t < triangle_count && bits != full; ++t) {
@@ -20,7 +21,8 @@ void main() {
     vec3 c = to_grid(world_triangles[3u * t + 2u].xyz);
     float area = edge_fn(c.xy, a.xy, b.xy);
     if (abs(area) <= 1.0e-10) continue;
-    bits |= occluded_samples(pixel, a, b, c, 1.0 / area);
+    bits |= occluded_samples(pixel, a, b, c, 1.0 / area, gap);
   }
   visibility_mask[pixel] = bits;
+  if (bits != 0u) note_occluder_gap(pixel, gap);
 }

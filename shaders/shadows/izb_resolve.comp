@@ -17,8 +17,8 @@ vec3 heat(float t) {
   return clamp(vec3(1.5 - abs(4.0 * t - 3.0), 1.5 - abs(4.0 * t - 2.0), 1.5 - abs(4.0 * t - 1.0)), 0.0, 1.0);
 }
 
-// Visibility mask -> shadow term. push.mode 1 (hybrid): near the IZB range limit the hard result
-// fades into the term already there (the cascades'), over the last tenth of the range.
+// Visibility mask -> shadow term. push.mode 1 (hybrid): blends toward the term already there (the
+// cascades') by occluder distance, and over the last tenth of the IZB's range.
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
@@ -40,9 +40,18 @@ void main() {
   } else {
     visibility = 1.0;  // does not receive shadows
   }
-  if (push.mode == 1u && max_distance > 0.0) {
-    float fade = clamp((dist - 0.9 * max_distance) / (0.1 * max_distance), 0.0, 1.0);
-    visibility = mix(visibility, imageLoad(shadow_term, pixel).r, fade);
+  if (push.mode == 1u) {
+    // Hybrid: hard at contact, soft away from it. The farther the nearest occluder sits above the
+    // point (in world units along the light), the more the cascades' filtered term takes over; and
+    // near the IZB's range limit the cascades take over completely.
+    float soft = imageLoad(shadow_term, pixel).r;
+    float gap_world = uintBitsToFloat(occluder_distance[index]) * (params.depth_range.y - params.depth_range.x);
+    if ((state & IZB_PIXEL_CANDIDATE) != 0u && mask != 0u && gap_world < 1.0e20 && push.soft_distance > 0.0)
+      visibility = mix(visibility, soft, clamp(gap_world / push.soft_distance, 0.0, 1.0));
+    if (max_distance > 0.0) {
+      float fade = clamp((dist - 0.9 * max_distance) / (0.1 * max_distance), 0.0, 1.0);
+      visibility = mix(visibility, soft, fade);
+    }
   }
   imageStore(shadow_term, pixel, vec4(visibility));
 

@@ -61,8 +61,10 @@ void main() {
         uint current = visibility_mask[n.y];
         if (progressive && current == full) continue;
         ++tests;
-        uint bits = occluded_samples(n.y, a, b, c, inv_area);
+        float gap = 1.0e30;
+        uint bits = occluded_samples(n.y, a, b, c, inv_area, gap);
         if ((bits & ~current) != 0u) atomicOr(visibility_mask[n.y], bits);
+        if (bits != 0u) note_occluder_gap(n.y, gap);
       }
     }
   }

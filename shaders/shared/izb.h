@@ -79,6 +79,7 @@ SHARED_CONST uint IZB_BINDING_OVERLAY = 15u;
 SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;
 SHARED_CONST uint IZB_BINDING_OVERFLOW_LIST = 17u;
 SHARED_CONST uint IZB_BINDING_CSM_DEPTH = 18u;
+SHARED_CONST uint IZB_BINDING_OCCLUDER_DISTANCE = 19u;  // per pixel: nearest occluder's light depth above it
 
 // Push constants of the trace and CSM draws.
 struct IzbDrawPush {
@@ -91,10 +92,10 @@ struct IzbDrawPush {
 
 // Push constants of compute passes.
 struct IzbComputePush {
-  uint mode;   // pass-specific selector
-  uint debug;  // DebugView as uint
-  uint pad0;
-  uint pad1;
+  uint mode;            // pass-specific selector
+  uint debug;           // DebugView as uint
+  uint triangle_count;  // caster triangles, for the fallback
+  float soft_distance;  // hybrid: occluder distance (world units) at which the shadow is fully soft
 };
 
 SHARED_END

@@ -270,3 +270,32 @@ TEST_F(IzbTest, SponzaCsmIsConservative) {
 }
 
 }  // namespace
+
+namespace {
+
+// Hybrid: hard at contact, soft where the occluder is far above the receiver.
+TEST_F(IzbTest, HybridIsHardAtContactAndSoftAway) {
+  shadows::Settings hybrid;
+  hybrid.technique = shadows::Technique::Hybrid;
+  hybrid.izb.resolution = 512;
+  const auto h = render("contact", 0, hybrid, false, 1, 256);
+  const auto positions = renderer_->read_world_positions();
+  const auto hard = render("contact", 0, izb(1), false, 1, 256);
+  size_t contact_pixels = 0, soft_pixels = 0;
+  for (size_t i = 0; i < positions.size(); ++i) {
+    if (positions[i].w == 0.0f || hard.visibility[i] != 0.0f) continue;  // shadowed by the IZB only
+    const glm::vec3 p(positions[i]);
+    if (std::abs(p.y) > 1e-3f) continue;  // on the ground
+    const glm::vec2 d = glm::abs(glm::vec2(p.x, p.z)) - glm::vec2(1.0f);  // outside the box footprint by
+    const float gap = std::max(d.x, d.y);
+    if (gap > 0.0f && gap < 0.1f) {  // right at the box's base: the occluder touches the ground
+      ++contact_pixels;
+      EXPECT_LT(h.visibility[i], 0.1f) << "pixel " << i;
+    }
+    if (h.visibility[i] > 0.05f && h.visibility[i] < 0.95f) ++soft_pixels;
+  }
+  EXPECT_GT(contact_pixels, 5u);
+  EXPECT_GT(soft_pixels, 20u);  // the far ends of the pole's and plate's shadows soften
+}
+
+}  // namespace

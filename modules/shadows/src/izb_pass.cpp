@@ -38,7 +38,8 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gpu_shared::IZB_BINDING_TRIANGLES, storage},
           {gpu_shared::IZB_BINDING_OVERFLOW_LIST, storage},
-          {gpu_shared::IZB_BINDING_CSM_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+          {gpu_shared::IZB_BINDING_CSM_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {gpu_shared::IZB_BINDING_OCCLUDER_DISTANCE, storage}};
 }
 
 uint32_t debug_code(DebugView debug) {
@@ -58,7 +59,7 @@ struct IzbPass::Impl {
   Pipeline trace_software, trace_hardware, count_software, count_hardware, depth_fill;
   Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
-  Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles;
+  Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
   Sampler nearest;
   std::unique_ptr<CsmPass> csm;
   uint32_t resolution = 0;
@@ -176,6 +177,7 @@ struct IzbPass::Impl {
       mask = Buffer(ctx, pixels * 4, usage, false, "izb visibility mask");
       pixel_state = Buffer(ctx, pixels * 4, usage, false, "izb pixel state");
       overflow_list = Buffer(ctx, pixels * 4, usage, false, "izb overflow pixels");
+      occluder_distance = Buffer(ctx, pixels * 4, usage, false, "izb nearest occluder distance");
       const uint32_t stride = spp == 32 ? gpu_shared::kIzbQuadFloats32 : gpu_shared::kIzbQuadFloats1;
       quads = Buffer(ctx, pixels * stride * 4, usage, false, "izb pixel light-space data");
       pool_size = 0;
@@ -247,6 +249,7 @@ struct IzbPass::Impl {
         .storage_image(gpu_shared::IZB_BINDING_OVERLAY, frame.overlay.view())
         .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLES, triangles.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_OVERFLOW_LIST, overflow_list.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_OCCLUDER_DISTANCE, occluder_distance.handle())
         .sampled_image(gpu_shared::IZB_BINDING_CSM_DEPTH, csm->depth_view(), nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
         .push(ctx, cmd, p);
   }
@@ -268,7 +271,7 @@ bool IzbPass::hardware_raster_available() const { return impl_->trace_hardware.v
 bool IzbPass::csm_test_supported(CsmTest test, std::string* why) const { return impl_->csm->supported(test, why); }
 
 void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
-                     bool collect_stats) {
+                     bool collect_stats, float soft_distance) {
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
   if (settings.resolution == 0 || settings.resolution > 16384)
@@ -325,7 +328,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.resolution, m.samples);
   p.limits = glm::uvec4(uint32_t(std::min<uint64_t>(m.pool_size, UINT32_MAX)), flags, 0u, 0u);
   m.params.write(&p, sizeof(p));
-  const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, 0u};
+  const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, soft_distance};
 
   // Reset: counters, bounds (min slots to the largest ordered value), lists, farthest depths.
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);

@@ -17,8 +17,9 @@ class IzbPass {
   ~IzbPass();
   // hybrid: the term already holds the cascades; the IZB overwrites its range and fades at the limit.
   // collect_stats adds the statistics passes (fragment count before culling, list lengths).
+  // hybrid with soft_distance > 0 also blends toward the cascades by occluder distance.
   void record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
-              bool collect_stats);
+              bool collect_stats, float soft_distance = 0.0f);
   void after_frame(Stats& stats);
   bool hardware_raster_available() const;
   bool csm_test_supported(CsmTest test, std::string* why) const;

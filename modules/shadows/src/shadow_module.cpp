@@ -61,7 +61,7 @@ class ShadowModuleImpl final : public ShadowModule {
         engine::gpu::full_barrier(frame.cmd);
         IzbSettings near = settings_.izb;
         near.max_distance = settings_.hybrid_izb_distance;
-        izb().record(frame, near, settings_.debug, true, collect_stats_);
+        izb().record(frame, near, settings_.debug, true, collect_stats_, settings_.hybrid_soft_distance);
         break;
       }
     }

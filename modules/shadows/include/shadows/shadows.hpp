@@ -85,6 +85,10 @@ struct Settings {
   // Hybrid: the IZB covers points up to this distance from the camera (fading over its last tenth
   // into the cascades, which cover the rest up to cascades.max_distance).
   float hybrid_izb_distance = 20.0f;
+  // Hybrid: hard at contact, soft away from it. A shadowed point whose nearest occluder lies this far
+  // (world units, along the light) or farther above it takes the cascades' filtered term; nearer
+  // occluders blend linearly toward the exact IZB term, which contact shadows keep.
+  float hybrid_soft_distance = 2.0f;
 };
 
 // Why the automatic CSM choice took or left an entity.
