@@ -85,29 +85,40 @@ int run_headless(const Options& o, engine::Scene& scene) {
 }
 
 int run_windowed(const Options& o, engine::Scene& scene) {
-  engine::platform::Window window({.title = "shadow engine walkthrough: " + scene.name, .width = o.width, .height = o.height});
-  engine::gpu::Context ctx({.device = o.device,
-                            .instance_extensions = engine::platform::Window::required_instance_extensions(),
-                            .swapchain = true});
-  window.attach(ctx);
-  const VkExtent2D extent = window.framebuffer_extent();
-  engine::Renderer renderer(ctx, {std::max(extent.width, 1u), std::max(extent.height, 1u)});
-  renderer.set_scene(scene);
-  auto module = shadows::install(renderer, *shadows::parse_mode(o.mode, {}));
+  // The window's swapchain and ImGui state belong to the device: everything that uses the device is
+  // released before the window, and the window before the context.
+  auto window = std::make_unique<engine::platform::Window>(engine::platform::WindowOptions{
+      .title = "shadow engine walkthrough: " + scene.name, .width = o.width, .height = o.height});
+  auto ctx = std::make_unique<engine::gpu::Context>(
+      engine::gpu::ContextOptions{.device = o.device,
+                                  .instance_extensions = engine::platform::Window::required_instance_extensions(),
+                                  .swapchain = true});
+  window->attach(*ctx);
+  const VkExtent2D extent = window->framebuffer_extent();
+  auto renderer = std::make_unique<engine::Renderer>(
+      *ctx, VkExtent2D{std::max(extent.width, 1u), std::max(extent.height, 1u)});
+  renderer->set_scene(scene);
+  auto module = shadows::install(*renderer, *shadows::parse_mode(o.mode, {}));
   module->set_collect_stats(false);  // the panel's checkbox turns the statistics passes on
   walkthrough::CameraPath path(scene, o.seconds_per_view);
-  renderer.systems().add("camera path", [&](engine::Registry&, float dt) { path.update(dt); });
+  renderer->systems().add("camera path", [&](engine::Registry&, float dt) { path.update(dt); });
   int frame = 0;
-  while (!window.should_close() && (o.frames < 0 || frame < o.frames)) {
-    window.poll_events();
-    if (window.draw_frame(renderer, [&] { walkthrough::draw_panel(renderer, *module, path); }, 1.0f / 60.0f)) ++frame;
+  while (!window->should_close() && (o.frames < 0 || frame < o.frames)) {
+    window->poll_events();
+    if (window->draw_frame(*renderer, [&] { walkthrough::draw_panel(*renderer, *module, path); }, 1.0f / 60.0f))
+      ++frame;
   }
   if (!o.screenshot.empty()) {
     uint32_t w = 0, h = 0;
-    auto pixels = window.read_last_frame(w, h);
+    auto pixels = window->read_last_frame(w, h);
     engine::write_rgba8_png(o.screenshot, w, h, pixels.data());
     std::printf("wrote %s\n", o.screenshot.c_str());
   }
+  vkDeviceWaitIdle(ctx->device());
+  module.reset();
+  renderer.reset();
+  window.reset();
+  ctx.reset();
   return 0;
 }
 
