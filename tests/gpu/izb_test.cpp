@@ -299,3 +299,26 @@ TEST_F(IzbTest, HybridIsHardAtContactAndSoftAway) {
 }
 
 }  // namespace
+
+namespace {
+
+// Every overlay the panel offers draws something over the lit image, without validation messages.
+TEST_F(IzbTest, DebugOverlaysDrawOverTheImage) {
+  auto& r = make_renderer("atrium", 0, 96, 96);
+  shadows::Settings s;
+  s.technique = shadows::Technique::Hybrid;
+  s.izb.resolution = 256;
+  s.izb.csm = true;
+  module_ = shadows::install(r, s);
+  r.render_frame(0.0f);
+  const auto plain = r.read_output_rgba8();
+  for (auto view : {shadows::DebugView::VisibilityMask, shadows::DebugView::ListLength,
+                    shadows::DebugView::Cascades, shadows::DebugView::CsmCoverage,
+                    shadows::DebugView::ExpensivePath}) {
+    module_->settings().debug = view;
+    r.render_frame(0.0f);
+    EXPECT_NE(r.read_output_rgba8(), plain) << "overlay " << int(view);
+  }
+}
+
+}  // namespace
