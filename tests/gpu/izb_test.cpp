@@ -322,3 +322,27 @@ TEST_F(IzbTest, DebugOverlaysDrawOverTheImage) {
 }
 
 }  // namespace
+
+namespace {
+
+// A window resize reaches the module: its per-pixel buffers follow and the answer stays exact.
+TEST_F(IzbTest, ResizeKeepsTheAnswerExact) {
+  auto& r = make_renderer("contact", 0, 96, 96);
+  shadows::Settings s = izb(32);
+  module_ = shadows::install(r, s);
+  r.render_frame(0.0f);
+  for (VkExtent2D size : {VkExtent2D{120, 80}, VkExtent2D{64, 100}}) {
+    r.resize(size);
+    r.render_frame(0.0f);
+    reference::EmbreeTracer tracer(scene_->registry);
+    const auto reference = support::reference_visibility(r, tracer, 32);
+    const auto visibility = module_->read_visibility();
+    ASSERT_EQ(visibility.size(), size_t(size.width) * size.height);
+    EXPECT_LE(reference::compare_visibility(visibility, reference).coverage_mae, 1.0 / 64.0);
+  }
+  module_->settings().technique = shadows::Technique::Hybrid;
+  r.resize({100, 60});
+  r.render_frame(0.0f);
+}
+
+}  // namespace
