@@ -86,6 +86,27 @@ uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area, inout 
   vec2 tmin = min(min(a.xy, b.xy), c.xy);
   vec2 tmax = max(max(a.xy, b.xy), c.xy);
   if (any(lessThan(qmax, tmin)) || any(greaterThan(qmin, tmax))) return 0u;
+  // Every sample is a convex blend of the four corners, and the triangle's edge functions and the
+  // depth gap are affine in position, so the corners decide the whole quad when they agree: all
+  // outside one edge -> no sample shadowed; all inside and behind -> every sample shadowed.
+  vec3 corner[4] = vec3[4](c00, c10, c01, c11);
+  vec3 inside_all = vec3(1.0), outside_all = vec3(1.0);
+  float nearest_gap = 1.0e30;
+  bool all_behind = true;
+  for (int k = 0; k < 4; ++k) {
+    vec3 w = vec3(edge_fn(corner[k].xy, b.xy, c.xy), edge_fn(corner[k].xy, c.xy, a.xy),
+                  edge_fn(corner[k].xy, a.xy, b.xy)) * inv_area;
+    inside_all = min(inside_all, vec3(greaterThanEqual(w, vec3(0.0))));
+    outside_all = min(outside_all, vec3(lessThan(w, vec3(0.0))));
+    float corner_gap = corner[k].z - dot(w, vec3(a.z, b.z, c.z));
+    all_behind = all_behind && corner_gap > 0.0;
+    nearest_gap = min(nearest_gap, corner_gap);
+  }
+  if (any(greaterThan(outside_all, vec3(0.5)))) return 0u;
+  if (all(greaterThan(inside_all, vec3(0.5))) && all_behind) {
+    gap = min(gap, nearest_gap);
+    return 0xffffffffu;
+  }
   uint bits = 0u;
   for (uint i = 0u; i < 32u; ++i) {
     vec3 s = micro_quad_blend(c00, c10, c01, c11, kSamplePattern[i]);
