@@ -21,13 +21,12 @@ struct IzbParams {
   vec4 camera_position;      // xyz; w: max IZB distance from the camera (0: unlimited)
   vec4 depth_range;          // x: near, y: far light-view distance of the casters (for the projection)
   uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (1 or 32)
-  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*); z: mask of all samples; w: pool of μQuads
+  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*); z, w: unused
 };
 
+// (Depth culling and the rasterizer choice are pipeline state, not flags.)
 SHARED_CONST uint IZB_FLAG_CSM = 1u;
-SHARED_CONST uint IZB_FLAG_DEPTH_CULL = 2u;
 SHARED_CONST uint IZB_FLAG_PROGRESSIVE = 4u;
-SHARED_CONST uint IZB_FLAG_SOFTWARE_RASTER = 8u;
 SHARED_CONST uint IZB_FLAG_STATS = 16u;
 
 // A list node is a uvec2 {next node, pixel}. Each pixel's light-space data lives once in the

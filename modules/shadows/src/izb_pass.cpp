@@ -314,11 +314,9 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     far_d = hi + margin;
   }
 
-  uint32_t flags = gpu_shared::IZB_FLAG_STATS;
+  uint32_t flags = collect_stats ? gpu_shared::IZB_FLAG_STATS : 0u;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
-  if (settings.depth_cull) flags |= gpu_shared::IZB_FLAG_DEPTH_CULL;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
-  if (!use_hardware) flags |= gpu_shared::IZB_FLAG_SOFTWARE_RASTER;
   gpu_shared::IzbParams p{};
   p.light_view = light_view;
   p.inverse_view_projection = frame.view.inverse_view_projection;
