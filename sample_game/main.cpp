@@ -46,7 +46,15 @@ Options parse(int argc, char** argv) {
     else if (a == "--out") o.out_dir = args.value();
     else if (a == "--device") o.device = args.value();
     else if (a == "--mode") o.mode = args.value();
-    else if (a == "--seconds-per-view") o.seconds_per_view = std::stof(args.value());
+    else if (a == "--seconds-per-view") {
+      const std::string v = args.value();
+      try {
+        o.seconds_per_view = std::stof(v);
+      } catch (const std::exception&) {
+        throw std::runtime_error("--seconds-per-view '" + v + "': expected a number of seconds");
+      }
+      if (!(o.seconds_per_view > 0.0f)) throw std::runtime_error("--seconds-per-view must be positive");
+    }
     else if (a == "--help" || a == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);
@@ -87,8 +95,15 @@ int run_headless(const Options& o, engine::Scene& scene) {
 int run_windowed(const Options& o, engine::Scene& scene) {
   // The window's swapchain and ImGui state belong to the device: everything that uses the device is
   // released before the window, and the window before the context.
-  auto window = std::make_unique<engine::platform::Window>(engine::platform::WindowOptions{
-      .title = "shadow engine walkthrough: " + scene.name, .width = o.width, .height = o.height});
+  std::unique_ptr<engine::platform::Window> window;
+  try {
+    window = std::make_unique<engine::platform::Window>(engine::platform::WindowOptions{
+        .title = "shadow engine walkthrough: " + scene.name, .width = o.width, .height = o.height});
+  } catch (const std::exception& e) {
+    // A display variable without a usable display server: still do the job, headless.
+    std::printf("%s: running headless\n", e.what());
+    return run_headless(o, scene);
+  }
   auto ctx = std::make_unique<engine::gpu::Context>(
       engine::gpu::ContextOptions{.device = o.device,
                                   .instance_extensions = engine::platform::Window::required_instance_extensions(),
