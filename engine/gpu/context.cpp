@@ -296,6 +296,10 @@ void Context::create_device(const ContextOptions& options) {
   p2.pNext = &subgroup;
   vkGetPhysicalDeviceProperties2(physical_device_, &p2);
   features_.subgroup_size = subgroup.subgroupSize;
+  const VkSubgroupFeatureFlags needed_ops = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+  const VkShaderStageFlags needed_stages = VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+  features_.subgroup_arithmetic_compute_fragment = (subgroup.supportedOperations & needed_ops) == needed_ops &&
+                                                   (subgroup.supportedStages & needed_stages) == needed_stages;
   driver_description_ = std::string(driver.driverName) + " " + driver.driverInfo;
 
   uint32_t family_count = 0;

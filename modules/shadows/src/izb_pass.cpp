@@ -84,6 +84,9 @@ struct IzbPass::Impl {
     fallback = factory.compute({"izb_fallback.comp", bindings, push});
     resolve = factory.compute({"izb_resolve.comp", bindings, push});
     list_stats = factory.compute({"izb_list_stats.comp", bindings, push});
+    if (!c.features().subgroup_arithmetic_compute_fragment)
+      throw VulkanError("the IZB needs subgroup arithmetic in compute and fragment shaders, which " +
+                        c.device_name() + " lacks");
     if (!c.features().depth_clamp)
       throw VulkanError("the IZB trace needs the depthClamp feature, which " + c.device_name() + " lacks");
     // Trace pipelines: software (geometry-shader quads + exact texel test) and hardware conservative

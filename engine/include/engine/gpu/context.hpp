@@ -28,6 +28,9 @@ struct DeviceFeatures {
   bool fragment_stores_and_atomics = false;
   bool vertex_stores_and_atomics = false;
   uint32_t subgroup_size = 0;
+  // Subgroup basic + arithmetic operations in compute and fragment shaders (the shadow passes reduce
+  // their counters per subgroup).
+  bool subgroup_arithmetic_compute_fragment = false;
 };
 
 struct ContextOptions {
