@@ -309,6 +309,9 @@ struct CascadesPass::Impl {
 };
 
 CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {
+  if (!ctx.features().subgroup_arithmetic_compute_fragment)
+    throw VulkanError("the cascades need subgroup arithmetic in compute shaders, which " + ctx.device_name() +
+                      " lacks");
   Impl& m = *impl_;
   m.params = Buffer(ctx, sizeof(gs::CascadeParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "cascade params");
   m.counters = Buffer(ctx, gs::CASCADE_COUNTER_WORDS * 4,
