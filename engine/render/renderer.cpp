@@ -372,12 +372,7 @@ void Renderer::set_external_shadow_term(std::vector<float> term) {
 
 std::vector<uint8_t> Renderer::read_output_rgba8() { return read_image(ctx_, output_, 4); }
 
-std::vector<glm::vec4> Renderer::read_world_positions() {
-  auto bytes = read_image(ctx_, gbuffer_.world_position, 16);
-  std::vector<glm::vec4> out(bytes.size() / 16);
-  std::memcpy(out.data(), bytes.data(), bytes.size());
-  return out;
-}
+std::vector<glm::vec4> Renderer::read_world_positions() { return read_image_as<glm::vec4>(ctx_, gbuffer_.world_position); }
 
 std::vector<glm::vec4> Renderer::read_geometric_normals() {
   // RGBA16F on the GPU; widened here.
@@ -397,25 +392,12 @@ std::vector<glm::vec4> Renderer::read_geometric_normals() {
     wide.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                     VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
   });
-  auto bytes = read_image(ctx_, wide, 16);
-  std::vector<glm::vec4> out(bytes.size() / 16);
-  std::memcpy(out.data(), bytes.data(), bytes.size());
-  return out;
+  return read_image_as<glm::vec4>(ctx_, wide);
 }
 
-std::vector<float> Renderer::read_depth() {
-  auto bytes = read_image(ctx_, gbuffer_.depth, 4);
-  std::vector<float> out(bytes.size() / 4);
-  std::memcpy(out.data(), bytes.data(), bytes.size());
-  return out;
-}
+std::vector<float> Renderer::read_depth() { return read_image_as<float>(ctx_, gbuffer_.depth); }
 
-std::vector<float> Renderer::read_shadow_term() {
-  auto bytes = read_image(ctx_, shadow_term_, 4);
-  std::vector<float> out(bytes.size() / 4);
-  std::memcpy(out.data(), bytes.data(), bytes.size());
-  return out;
-}
+std::vector<float> Renderer::read_shadow_term() { return read_image_as<float>(ctx_, shadow_term_); }
 
 void write_rgba8_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const uint8_t* rgba) {
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());

@@ -48,7 +48,6 @@ SHARED_CONST uint IZB_COUNTER_OVERFLOW_PIXELS = 8u;// pixels resolved by the fal
 SHARED_CONST uint IZB_COUNTER_LIST_MAX = 9u;
 SHARED_CONST uint IZB_COUNTER_LIST_SUM = 10u;
 SHARED_CONST uint IZB_COUNTER_NONEMPTY = 11u;
-SHARED_CONST uint IZB_COUNTER_CSM_TEXELS = 12u;
 SHARED_CONST uint IZB_COUNTER_BOUNDS = 16u;        // 4 uints: ordered min x, min y, max x, max y
 SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
 SHARED_CONST uint IZB_COUNTER_COUNT = 24u;

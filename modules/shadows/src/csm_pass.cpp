@@ -332,10 +332,5 @@ void CsmPass::after_frame(Stats& stats) {
 }  // namespace shadows::detail
 
 namespace shadows::detail {
-std::vector<float> CsmPass::read_depth() {
-  auto bytes = engine::gpu::read_image(impl_->ctx, impl_->depth, 4);
-  std::vector<float> out(bytes.size() / 4);
-  std::memcpy(out.data(), bytes.data(), bytes.size());
-  return out;
-}
+std::vector<float> CsmPass::read_depth() { return engine::gpu::read_image_as<float>(impl_->ctx, impl_->depth); }
 }  // namespace shadows::detail

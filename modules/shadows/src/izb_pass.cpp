@@ -73,7 +73,6 @@ struct IzbPass::Impl {
   bool used_hardware = false;
   bool last_used_csm = false;
   bool collected = false;
-  uint32_t last_candidates = 0;
 
   explicit Impl(Context& c) : ctx(c), factory(c) {
     const auto bindings = izb_bindings();

@@ -122,4 +122,13 @@ bool is_depth_format(VkFormat format);
 // The image must be in GENERAL or TRANSFER_SRC layout and is left in its original layout.
 std::vector<uint8_t> read_image(const Context& ctx, Image& image, uint32_t texel_bytes);
 
+// The same, typed: one T per texel (T's size is the texel size).
+template <typename T>
+std::vector<T> read_image_as(const Context& ctx, Image& image) {
+  const auto bytes = read_image(ctx, image, sizeof(T));
+  std::vector<T> out(bytes.size() / sizeof(T));
+  std::memcpy(out.data(), bytes.data(), out.size() * sizeof(T));
+  return out;
+}
+
 }  // namespace engine::gpu
