@@ -90,27 +90,35 @@ uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area, inout 
   // depth gap are affine in position, so the corners decide the whole quad when they agree: all
   // outside one edge -> no sample shadowed; all inside and behind -> every sample shadowed.
   vec3 corner[4] = vec3[4](c00, c10, c01, c11);
+  vec3 w[4];
+  float corner_gap[4];
   vec3 inside_all = vec3(1.0), outside_all = vec3(1.0);
   float nearest_gap = 1.0e30;
   bool all_behind = true;
   for (int k = 0; k < 4; ++k) {
-    vec3 w = vec3(edge_fn(corner[k].xy, b.xy, c.xy), edge_fn(corner[k].xy, c.xy, a.xy),
-                  edge_fn(corner[k].xy, a.xy, b.xy)) * inv_area;
-    inside_all = min(inside_all, vec3(greaterThanEqual(w, vec3(0.0))));
-    outside_all = min(outside_all, vec3(lessThan(w, vec3(0.0))));
-    float corner_gap = corner[k].z - dot(w, vec3(a.z, b.z, c.z));
-    all_behind = all_behind && corner_gap > 0.0;
-    nearest_gap = min(nearest_gap, corner_gap);
+    w[k] = vec3(edge_fn(corner[k].xy, b.xy, c.xy), edge_fn(corner[k].xy, c.xy, a.xy),
+                edge_fn(corner[k].xy, a.xy, b.xy)) * inv_area;
+    inside_all = min(inside_all, vec3(greaterThanEqual(w[k], vec3(0.0))));
+    outside_all = min(outside_all, vec3(lessThan(w[k], vec3(0.0))));
+    corner_gap[k] = corner[k].z - dot(w[k], vec3(a.z, b.z, c.z));
+    all_behind = all_behind && corner_gap[k] > 0.0;
+    nearest_gap = min(nearest_gap, corner_gap[k]);
   }
   if (any(greaterThan(outside_all, vec3(0.5)))) return 0u;
   if (all(greaterThan(inside_all, vec3(0.5))) && all_behind) {
     gap = min(gap, nearest_gap);
     return 0xffffffffu;
   }
+  // Otherwise each sample's barycentrics and depth gap are the same bilinear blend of the corners'.
   uint bits = 0u;
   for (uint i = 0u; i < 32u; ++i) {
-    vec3 s = micro_quad_blend(c00, c10, c01, c11, kSamplePattern[i]);
-    if (shadows_point(s, a, b, c, inv_area, gap)) bits |= 1u << i;
+    vec2 o = kSamplePattern[i];
+    vec3 ws = mix(mix(w[0], w[1], o.x), mix(w[2], w[3], o.x), o.y);
+    float gs = mix(mix(corner_gap[0], corner_gap[1], o.x), mix(corner_gap[2], corner_gap[3], o.x), o.y);
+    if (all(greaterThanEqual(ws, vec3(0.0))) && gs > 0.0) {
+      bits |= 1u << i;
+      gap = min(gap, gs);
+    }
   }
   return bits;
 }
