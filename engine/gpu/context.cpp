@@ -358,21 +358,28 @@ void Context::immediate_submit(const std::function<void(VkCommandBuffer)>& recor
   alloc.commandBufferCount = 1;
   VkCommandBuffer cmd;
   VK_CHECK(vkAllocateCommandBuffers(device_, &alloc, &cmd));
+  VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence fence;
+  VK_CHECK(vkCreateFence(device_, &fence_info, nullptr, &fence));
+  record_submit_wait(cmd, fence, record);
+  vkDestroyFence(device_, fence, nullptr);
+  vkFreeCommandBuffers(device_, command_pool_, 1, &cmd);
+}
+
+void Context::record_submit_wait(VkCommandBuffer cmd, VkFence fence,
+                                 const std::function<void(VkCommandBuffer)>& record) const {
+  VK_CHECK(vkResetCommandBuffer(cmd, 0));
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   VK_CHECK(vkBeginCommandBuffer(cmd, &begin));
   record(cmd);
   VK_CHECK(vkEndCommandBuffer(cmd));
-  VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  VkFence fence;
-  VK_CHECK(vkCreateFence(device_, &fence_info, nullptr, &fence));
+  VK_CHECK(vkResetFences(device_, 1, &fence));
   VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   submit.commandBufferCount = 1;
   submit.pCommandBuffers = &cmd;
   VK_CHECK(vkQueueSubmit(queue_, 1, &submit, fence));
   VK_CHECK(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX));
-  vkDestroyFence(device_, fence, nullptr);
-  vkFreeCommandBuffers(device_, command_pool_, 1, &cmd);
 }
 
 void Context::set_name(VkObjectType type, uint64_t handle, const std::string& name) const {

@@ -341,18 +341,7 @@ void Renderer::after_frame() {
 
 void Renderer::render_frame(float dt) {
   update(dt);
-  VK_CHECK(vkResetCommandBuffer(frame_cmd_, 0));
-  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  VK_CHECK(vkBeginCommandBuffer(frame_cmd_, &begin));
-  record(frame_cmd_);
-  VK_CHECK(vkEndCommandBuffer(frame_cmd_));
-  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  submit.commandBufferCount = 1;
-  submit.pCommandBuffers = &frame_cmd_;
-  VK_CHECK(vkResetFences(ctx_.device(), 1, &frame_fence_));
-  VK_CHECK(vkQueueSubmit(ctx_.queue(), 1, &submit, frame_fence_));
-  VK_CHECK(vkWaitForFences(ctx_.device(), 1, &frame_fence_, VK_TRUE, UINT64_MAX));
+  ctx_.record_submit_wait(frame_cmd_, frame_fence_, [&](VkCommandBuffer cmd) { record(cmd); });
   after_frame();
 }
 

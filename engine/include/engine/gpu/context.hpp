@@ -72,6 +72,10 @@ class Context {
 
   // Records commands into a fresh command buffer, submits it and waits. For uploads, readbacks, tests.
   void immediate_submit(const std::function<void(VkCommandBuffer)>& record) const;
+  // Records into an existing command buffer (reset first), submits it with `fence` (reset first) and
+  // waits for the fence.
+  void record_submit_wait(VkCommandBuffer cmd, VkFence fence,
+                          const std::function<void(VkCommandBuffer)>& record) const;
 
   // VK_EXT_debug_utils names (no-ops when the extension is absent).
   void set_name(VkObjectType type, uint64_t handle, const std::string& name) const;
