@@ -305,10 +305,15 @@ std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points,
         out[i] = 0.0f;
         continue;
       }
+      // The μQuad's corners once per pixel; every sample is their blend (micro_quad_sample's definition).
       const glm::vec2 pixel{float(x), float(y)};
+      glm::vec3 corner[4];
+      for (int k = 0; k < 4; ++k)
+        corner[k] = gpu_shared::micro_quad_corner(pixel + glm::vec2(float(k & 1), float(k >> 1)), viewport,
+                                                  points.inv_view_proj, p, n);
       for (uint32_t s = 0; s < kSamples; ++s) {
-        const glm::vec3 q = gpu_shared::micro_quad_sample(pixel, gpu_shared::kSamplePattern[s],
-                                                          viewport, points.inv_view_proj, p, n);
+        const glm::vec3 q = gpu_shared::micro_quad_blend(corner[0], corner[1], corner[2], corner[3],
+                                                         gpu_shared::kSamplePattern[s]);
         origins[s] = gpu_shared::shadow_ray_origin(q, n);
       }
       for (uint32_t s = 0; s < kSamples; s += kPacket)
