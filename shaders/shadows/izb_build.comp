@@ -6,13 +6,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
 
-// Inserts a node into a texel's list; false when the pool is full.
-bool insert_node(uint texel, uint pixel_index, float depth) {
-  uint node = atomicAdd(counters[IZB_COUNTER_NODES], 1u);
-  if (node >= params.limits.x) {
-    atomicAdd(counters[IZB_COUNTER_OVERFLOW], 1u);
-    return false;
-  }
+// Links node `node` (reserved by the caller) into a texel's list; false when the pool is full.
+bool link_node(uint node, uint texel, uint pixel_index, float depth) {
+  if (node >= params.limits.x) return false;
   uint previous = atomicExchange(heads[texel], node);
   nodes[node] = uvec2(previous, pixel_index);
   // Depths are clamped into [0,1], where float order is bit order: the buffer copies straight into
@@ -34,11 +30,15 @@ void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   uint covered = 0u, candidate = 0u, culled = 0u;
+  uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
+  uint state = 0u;
+  uint mask = 0u;
+  // The texels this pixel's node goes into: 1 spp one, 32 spp every texel holding one of its samples.
+  uint texels[32];
+  uint count = 0u;
+  float node_depth = 0.0;
   if (inside) {
-    uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
     PixelPoint p = load_pixel(pixel);
-    uint state = 0u;
-    uint mask = 0u;
     covered = p.covered ? 1u : 0u;
     if (p.candidate) {
       candidate = 1u;
@@ -50,8 +50,10 @@ void main() {
           state |= IZB_PIXEL_CSM_CULLED;
           mask = 1u;
           culled = 1u;
-        } else if (!insert_node(texel_index(grid_texel(g)), index, g.z)) {
-          state |= IZB_PIXEL_OVERFLOW;
+        } else {
+          texels[0] = texel_index(grid_texel(g));
+          count = 1u;
+          node_depth = g.z;
         }
       } else {
         vec3 c[4];
@@ -63,10 +65,9 @@ void main() {
           store_quad_point(index, uint(i), g[i]);
           far_depth = max(far_depth, g[i].z);
         }
+        node_depth = far_depth;
         // The footprint that matters is the set of texels holding one of the 32 samples: a triangle
         // shadows a sample only if it covers the sample's texel, so no other texel needs the node.
-        uint texels[32];
-        uint count = 0u;
         for (uint s = 0u; s < 32u; ++s) {
           vec3 q = micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]);
           if (csm_proves_shadowed(q)) {  // this sample is settled: shadowed, no list needs it
@@ -82,15 +83,27 @@ void main() {
           state |= IZB_PIXEL_CSM_CULLED;
           culled = 1u;
         }
-        // Every texel is requested even after a refusal, so the counter measures the true demand
-        // the pool is grown to.
-        for (uint k = 0u; k < count; ++k) {
-          if (!insert_node(texels[k], index, far_depth)) state |= IZB_PIXEL_OVERFLOW;
-        }
       }
     }
+  }
+  // One atomic per subgroup reserves every lane's nodes. Every texel is requested even past the pool,
+  // so the counter measures the true demand the pool is grown to.
+  uint offset = subgroupExclusiveAdd(count);
+  uint total = subgroupAdd(count);
+  uint base = 0u;
+  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_NODES], total);
+  base = subgroupBroadcastFirst(base) + offset;
+  uint refused = 0u;
+  for (uint k = 0u; k < count; ++k) {
+    if (!link_node(base + k, texels[k], index, node_depth)) {
+      state |= IZB_PIXEL_OVERFLOW;
+      ++refused;
+    }
+  }
+  if (inside) {
     if ((state & IZB_PIXEL_OVERFLOW) != 0u) {
       // The fallback pass resolves this pixel exactly by testing every caster triangle.
+      atomicAdd(counters[IZB_COUNTER_OVERFLOW], refused);
       uint slot = atomicAdd(counters[IZB_COUNTER_OVERFLOW_PIXELS], 1u);
       overflow_pixels[slot] = index;
       atomicMax(counters[IZB_COUNTER_DISPATCH], slot / 64u + 1u);

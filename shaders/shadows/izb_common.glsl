@@ -17,6 +17,7 @@ layout(set = 0, binding = IZB_BINDING_INDICES, std430) readonly buffer Indices {
 layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Triangles { vec4 world_triangles[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
 layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };
+layout(set = 0, binding = IZB_BINDING_GRID_TRIANGLES, std430) buffer GridTriangles { vec4 grid_triangles[]; };
 
 uint izb_resolution() { return params.extent.z; }
 uint izb_samples() { return params.extent.w; }
@@ -129,4 +130,65 @@ uint full_mask() { return izb_samples() == 32u ? 0xffffffffu : 1u; }
 void note_occluder_gap(uint pixel, float gap) {
   uint bits = floatBitsToUint(max(gap, 0.0));
   if (bits < occluder_distance[pixel]) atomicMin(occluder_distance[pixel], bits);
+}
+
+// A caster triangle in grid space, transformed once per frame by izb_triangles.comp: every trace
+// (raster, compute, fallback) reads the same floats, so their answers agree bit for bit.
+void load_grid_triangle(uint t, out vec3 a, out vec3 b, out vec3 c) {
+  a = grid_triangles[3u * t].xyz;
+  b = grid_triangles[3u * t + 1u].xyz;
+  c = grid_triangles[3u * t + 2u].xyz;
+}
+
+// Separating-axis test of the rectangle [lo, hi] against the triangle (inclusive, with a little slack
+// so a sample exactly on a texel border is never lost).
+bool rect_touches_triangle(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientation) {
+  const float slack = 1.0e-3;
+  vec2 tmin = min(min(a.xy, b.xy), c.xy);
+  vec2 tmax = max(max(a.xy, b.xy), c.xy);
+  if (any(lessThan(tmax, lo - slack)) || any(greaterThan(tmin, hi + slack))) return false;
+  vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
+  for (int i = 0; i < 3; ++i) {
+    vec2 e0 = p[i];
+    vec2 e1 = p[(i + 1) % 3];
+    float best = -1.0e30;
+    best = max(best, orientation * edge_fn(vec2(lo.x, lo.y), e0, e1));
+    best = max(best, orientation * edge_fn(vec2(hi.x, lo.y), e0, e1));
+    best = max(best, orientation * edge_fn(vec2(lo.x, hi.y), e0, e1));
+    best = max(best, orientation * edge_fn(vec2(hi.x, hi.y), e0, e1));
+    if (best < -slack * length(e1 - e0)) return false;
+  }
+  return true;
+}
+
+// A lower bound of the triangle's light depth over the rectangle [lo, hi]: its plane's minimum over
+// the corners, never below its nearest vertex, less a rounding margin; clamped to [0,1] as the raster
+// trace's depth clamp does.
+float triangle_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float area) {
+  float dzdx = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
+  float dzdy = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
+  vec2 corner = vec2(dzdx >= 0.0 ? lo.x : hi.x, dzdy >= 0.0 ? lo.y : hi.y);
+  float plane = a.z + dzdx * (corner.x - a.x) + dzdy * (corner.y - a.y);
+  float nearest = max(plane, min(min(a.z, b.z), c.z));
+  return clamp(nearest - 1.0e-6 - 1.0e-6 * abs(nearest), 0.0, 1.0);
+}
+
+// The trace's inner loop, shared by the raster and compute traces: tests the triangle against every
+// node in the texel's list and ORs the shadowed samples into each node's pixel. Returns the tests made.
+uint trace_texel_list(uint texel, vec3 a, vec3 b, vec3 c, float inv_area) {
+  uint full = full_mask();
+  bool progressive = izb_flag(IZB_FLAG_PROGRESSIVE);
+  uint tests = 0u;
+  for (uint node = heads[texel]; node != kIzbEndOfList;) {
+    uvec2 n = nodes[node];
+    node = n.x;
+    uint current = visibility_mask[n.y];
+    if (progressive && current == full) continue;
+    ++tests;
+    float gap = 1.0e30;
+    uint bits = occluded_samples(n.y, a, b, c, inv_area, gap);
+    if ((bits & ~current) != 0u) atomicOr(visibility_mask[n.y], bits);
+    if (bits != 0u) note_occluder_gap(n.y, gap);
+  }
+  return tests;
 }

@@ -16,9 +16,8 @@ void main() {
   uint bits = visibility_mask[pixel];
   uint full = full_mask();
   for (uint t = 0u; t < triangle_count && bits != full; ++t) {
-    vec3 a = to_grid(world_triangles[3u * t].xyz);
-    vec3 b = to_grid(world_triangles[3u * t + 1u].xyz);
-    vec3 c = to_grid(world_triangles[3u * t + 2u].xyz);
+    vec3 a, b, c;
+    load_grid_triangle(t, a, b, c);
     float area = edge_fn(c.xy, a.xy, b.xy);
     if (abs(area) <= 1.0e-10) continue;
     bits |= occluded_samples(pixel, a, b, c, 1.0 / area, gap);

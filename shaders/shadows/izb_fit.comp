@@ -4,8 +4,13 @@
 #include "shadows/izb_pixel.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 
+layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) buffer BoundsPartials { vec4 bounds_partials[]; };
+
+shared vec4 subgroup_bounds[64];
+
 // Light frustum fit, step 1: light-view x/y bounds of every lit candidate's ray origin (and, at 32
-// spp, its μQuad corners), reduced per subgroup then with atomics.
+// spp, its μQuad corners), reduced over the workgroup and written once per workgroup: no atomics,
+// so no contention on a handful of addresses (izb_setup.comp reduces the partials).
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
@@ -30,10 +35,11 @@ void main() {
   }
   lo = subgroupMin(lo);
   hi = subgroupMax(hi);
-  if (subgroupElect() && hi.x >= lo.x) {
-    atomicMin(counters[IZB_COUNTER_BOUNDS + 0u], float_to_ordered(lo.x));
-    atomicMin(counters[IZB_COUNTER_BOUNDS + 1u], float_to_ordered(lo.y));
-    atomicMax(counters[IZB_COUNTER_BOUNDS + 2u], float_to_ordered(hi.x));
-    atomicMax(counters[IZB_COUNTER_BOUNDS + 3u], float_to_ordered(hi.y));
+  if (subgroupElect()) subgroup_bounds[gl_SubgroupID] = vec4(lo, hi);
+  barrier();
+  if (gl_LocalInvocationIndex == 0u) {
+    vec4 b = subgroup_bounds[0];
+    for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
+    bounds_partials[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = b;
   }
 }

@@ -1,16 +1,31 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
-layout(local_size_x = 1) in;
+layout(local_size_x = 256) in;
 
-// Light frustum fit, step 2: an orthographic projection whose x/y window covers the reduced bounds
+layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) readonly buffer BoundsPartials { vec4 bounds_partials[]; };
+
+shared vec4 subgroup_bounds[256];
+
+// Light frustum fit, step 2: reduces the fit's per-workgroup bounds, then builds an orthographic projection whose x/y window covers the reduced bounds
 // plus a one-texel border (so no point sits on the grid's edge), and whose depth range spans the
 // casters (from the CPU, which knows their bounds).
 void main() {
-  float lo_x = ordered_to_float(counters[IZB_COUNTER_BOUNDS + 0u]);
-  float lo_y = ordered_to_float(counters[IZB_COUNTER_BOUNDS + 1u]);
-  float hi_x = ordered_to_float(counters[IZB_COUNTER_BOUNDS + 2u]);
-  float hi_y = ordered_to_float(counters[IZB_COUNTER_BOUNDS + 3u]);
+  uint partials = ((params.extent.x + 7u) / 8u) * ((params.extent.y + 7u) / 8u);
+  vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
+  for (uint i = gl_LocalInvocationIndex; i < partials; i += gl_WorkGroupSize.x) {
+    vec4 p = bounds_partials[i];
+    b = vec4(min(b.xy, p.xy), max(b.zw, p.zw));
+  }
+  b = vec4(subgroupMin(b.xy), subgroupMax(b.zw));
+  if (subgroupElect()) subgroup_bounds[gl_SubgroupID] = b;
+  barrier();
+  if (gl_LocalInvocationIndex != 0u) return;
+  for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
+  float lo_x = b.x;
+  float lo_y = b.y;
+  float hi_x = b.z;
+  float hi_y = b.w;
   bool empty = !(hi_x >= lo_x && hi_y >= lo_y);
   if (empty) {
     lo_x = -1.0; lo_y = -1.0; hi_x = 1.0; hi_y = 1.0;

@@ -21,13 +21,14 @@ struct IzbParams {
   vec4 camera_position;      // xyz; w: max IZB distance from the camera (0: unlimited)
   vec4 depth_range;          // x: near, y: far light-view distance of the casters (for the projection)
   uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (1 or 32)
-  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*); z, w: unused
+  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*); z: trace chunk capacity; w: trace pair capacity
 };
 
-// (Depth culling and the rasterizer choice are pipeline state, not flags.)
+// (For the raster trace, depth culling and the rasterizer choice are pipeline state.)
 SHARED_CONST uint IZB_FLAG_CSM = 1u;
 SHARED_CONST uint IZB_FLAG_PROGRESSIVE = 4u;
 SHARED_CONST uint IZB_FLAG_STATS = 16u;
+SHARED_CONST uint IZB_FLAG_NO_DEPTH_CULL = 32u;  // compute trace: test every touched texel's list
 
 // A list node is a uvec2 {next node, pixel}. Each pixel's light-space data lives once in the
 // "quads" buffer: 1 spp: its ray origin (grid x, grid y, light depth); 32 spp: the four μQuad corners
@@ -48,9 +49,23 @@ SHARED_CONST uint IZB_COUNTER_OVERFLOW_PIXELS = 8u;// pixels resolved by the fal
 SHARED_CONST uint IZB_COUNTER_LIST_MAX = 9u;
 SHARED_CONST uint IZB_COUNTER_LIST_SUM = 10u;
 SHARED_CONST uint IZB_COUNTER_NONEMPTY = 11u;
+SHARED_CONST uint IZB_COUNTER_CHUNKS = 12u;        // compute trace: chunk records requested
+SHARED_CONST uint IZB_COUNTER_CSM_CHUNKS = 13u;    // compute CSM: chunk records requested
+SHARED_CONST uint IZB_COUNTER_PAIRS = 14u;         // compute trace: (triangle, texel) pairs requested
 SHARED_CONST uint IZB_COUNTER_BOUNDS = 16u;        // 4 uints: ordered min x, min y, max x, max y
 SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
-SHARED_CONST uint IZB_COUNTER_COUNT = 24u;
+SHARED_CONST uint IZB_COUNTER_CHUNK_DISPATCH = 24u;// 3 uints: indirect dispatch over chunk records
+SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 28u; // 3 uints: indirect dispatch over pairs
+SHARED_CONST uint IZB_COUNTER_COUNT = 32u;
+
+// Compute trace and compute CSM: a triangle's texel bounding box is cut into chunks of
+// kIzbChunkTexels texels; a workgroup of kIzbChunkLanes threads walks one chunk, so a large triangle
+// spreads over many workgroups instead of serializing one thread. Dispatches over records use rows of
+// kIzbDispatchRow workgroups (the portable limit per dimension is 65535).
+SHARED_CONST uint kIzbChunkTexels = 1024u;
+SHARED_CONST uint kIzbChunkLanes = 32u;
+SHARED_CONST uint kIzbDispatchRow = 32768u;
+SHARED_CONST uint kIzbPairGroup = 64u;             // pairs per workgroup of the compute trace
 
 // Per-pixel state bits beside the visibility mask.
 SHARED_CONST uint IZB_PIXEL_CANDIDATE = 1u;
@@ -78,13 +93,22 @@ SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;
 SHARED_CONST uint IZB_BINDING_OVERFLOW_LIST = 17u;
 SHARED_CONST uint IZB_BINDING_CSM_DEPTH = 18u;
 SHARED_CONST uint IZB_BINDING_OCCLUDER_DISTANCE = 19u;  // per pixel: nearest occluder's light depth above it
+SHARED_CONST uint IZB_BINDING_GRID_TRIANGLES = 20u;     // per caster triangle: 3 vec4 (grid x, grid y, light depth, -)
+SHARED_CONST uint IZB_BINDING_CHUNKS = 21u;             // uvec2 {triangle, first texel of the chunk in its box}
+SHARED_CONST uint IZB_BINDING_PAIRS = 22u;              // uvec2 {triangle, texel} surviving the depth cull
+SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;    // per fit workgroup: vec4 (min x, min y, max x, max y)
+SHARED_CONST uint IZB_BINDING_TRIANGLE_DRAW = 24u;      // per caster triangle: its caster draw's ordinal
+SHARED_CONST uint IZB_BINDING_DRAW_FLAGS = 25u;         // per caster draw: IZB_DRAW_* bits for this frame
+SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;         // compute CSM: ordered depth bits per texel
+
+SHARED_CONST uint IZB_DRAW_IN_CSM = 1u;
 
 // Push constants of the trace and CSM draws.
 struct IzbDrawPush {
   mat4 model;
   uint first_index;
   int vertex_offset;
-  uint flags;
+  uint first_triangle;  // the draw's first triangle in the caster triangle buffers
   uint debug;
 };
 
@@ -92,9 +116,15 @@ struct IzbDrawPush {
 struct IzbComputePush {
   uint mode;            // pass-specific selector
   uint debug;           // DebugView as uint
-  uint triangle_count;  // caster triangles, for the fallback
+  uint triangle_count;  // caster triangles
   float soft_distance;  // hybrid: occluder distance (world units) at which the shadow is fully soft
 };
+
+// push.mode of the chunk emitter and of the dispatch-argument pass.
+SHARED_CONST uint IZB_CHUNKS_FOR_TRACE = 0u;
+SHARED_CONST uint IZB_CHUNKS_FOR_CSM_HERTEL = 1u;
+SHARED_CONST uint IZB_CHUNKS_FOR_CSM_BARYCENTRIC = 2u;
+SHARED_CONST uint IZB_ARGS_PAIRS = 16u;  // else: the IZB_CHUNKS_FOR_* mode whose records to dispatch
 
 SHARED_END
 

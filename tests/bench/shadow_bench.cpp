@@ -41,16 +41,20 @@ struct Options {
   std::string dump_dir;  // raw float32 visibility per run, for comparing runs offline
   uint32_t node_pool = 0;
   std::string raster;  // auto|hardware|software
+  std::vector<std::string> traces = {"auto"};        // frustum trace backends to run
+  std::vector<std::string> csm_backends = {"auto"};  // CSM backends to run
 };
 
 const char* kUsage =
     "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--mode LIST]\n"
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
+    "                    [--trace LIST] [--csm-backend LIST]\n"
     "                    [--frames N] [--warmup N] [--reference] [--device gpu|lavapipe|INDEX]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm;\n"
-    "  csm tests: hertel, bary, bary-hw, inner-hw.\n";
+    "  csm tests: hertel, bary, bary-hw, inner-hw; trace and CSM backends: auto, raster, compute\n"
+    "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up).\n";
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
@@ -75,6 +79,8 @@ Options parse(int argc, char** argv) {
     else if (a == "--masking") o.masking = args.value();
     else if (a == "--csm-choice") o.csm_choice = args.value();
     else if (a == "--raster") o.raster = args.value();
+    else if (a == "--trace") o.traces = split(args.value());
+    else if (a == "--csm-backend") o.csm_backends = split(args.value());
     else if (a == "--node-pool") o.node_pool = args.uint_value();
     else if (a == "--frames") o.frames = int(args.uint_value());
     else if (a == "--warmup") o.warmup = int(args.uint_value());
@@ -97,8 +103,16 @@ Options parse(int argc, char** argv) {
 struct RunConfig {
   std::string mode;
   std::string csm_test;
+  std::string trace = "none";
+  std::string csm_backend = "none";
   shadows::Settings settings;
 };
+
+shadows::PassBackend backend_option(const std::string& flag, const std::string& name) {
+  auto b = shadows::parse_backend(name);
+  if (!b) throw std::runtime_error(flag + " '" + name + "': expected auto, raster or compute");
+  return *b;
+}
 
 std::vector<RunConfig> expand_runs(const Options& o) {
   std::vector<RunConfig> runs;
@@ -120,18 +134,32 @@ std::vector<RunConfig> expand_runs(const Options& o) {
     }
     auto settings = shadows::parse_mode(mode, base);
     if (!settings) throw std::runtime_error("--mode '" + mode + "' is not a shadow mode (see --help)");
-    const bool uses_csm = settings->izb.csm && (settings->technique == shadows::Technique::Izb ||
-                                                settings->technique == shadows::Technique::Hybrid);
-    if (!uses_csm) {
-      runs.push_back({mode, "none", *settings});
+    const bool uses_izb =
+        settings->technique == shadows::Technique::Izb || settings->technique == shadows::Technique::Hybrid;
+    const bool uses_csm = settings->izb.csm && uses_izb;
+    if (!uses_izb) {
+      runs.push_back({mode, "none", "none", "none", *settings});
       continue;
     }
-    for (const auto& test_name : o.csm_tests) {
-      auto test = shadows::parse_csm_test(test_name);
-      if (!test) throw std::runtime_error("--csm-test '" + test_name + "': expected hertel, bary, bary-hw or inner-hw");
-      RunConfig run{mode, test_name, *settings};
-      run.settings.izb.csm_test = *test;
-      runs.push_back(run);
+    for (const auto& trace : o.traces) {
+      RunConfig traced{mode, "none", trace, "none", *settings};
+      traced.settings.izb.trace = backend_option("--trace", trace);
+      if (!uses_csm) {
+        runs.push_back(traced);
+        continue;
+      }
+      for (const auto& test_name : o.csm_tests) {
+        auto test = shadows::parse_csm_test(test_name);
+        if (!test) throw std::runtime_error("--csm-test '" + test_name + "': expected hertel, bary, bary-hw or inner-hw");
+        for (const auto& backend : o.csm_backends) {
+          RunConfig run = traced;
+          run.csm_test = test_name;
+          run.csm_backend = backend;
+          run.settings.izb.csm_test = *test;
+          run.settings.izb.csm_backend = backend_option("--csm-backend", backend);
+          runs.push_back(run);
+        }
+      }
     }
   }
   return runs;
@@ -167,7 +195,13 @@ json stats_json(const shadows::Stats& s) {
   c["expensive_path_fraction"] = s.expensive_path_fraction;
   c["expensive_path_pixels"] = s.expensive_path_pixels;
   c["blurred_pixels"] = s.blurred_pixels;
+  c["trace_pairs"] = s.trace_pairs;
+  c["trace_chunks"] = s.trace_chunks;
   return c;
+}
+
+json choice_json(const shadows::Stats::BackendChoice& c) {
+  return {{"backend", c.backend}, {"reason", c.reason}, {"raster_ms", c.raster_ms}, {"compute_ms", c.compute_ms}};
 }
 
 }  // namespace
@@ -190,8 +224,8 @@ int main(int argc, char** argv) {
     if (o.reference) tracer = std::make_unique<reference::EmbreeTracer>(scene->registry);
 
     json results = json::array();
-    std::printf("%-12s %-9s %4s %10s %10s %12s %12s %10s\n", "mode", "csm_test", "spp", "total_ms", "frame_ms",
-                "mismatch", "false_shad", "cov_mae");
+    std::printf("%-12s %-9s %-8s %-8s %4s %10s %10s %12s %12s %10s\n", "mode", "csm_test", "trace", "csm_pass",
+                "spp", "total_ms", "frame_ms", "mismatch", "false_shad", "cov_mae");
     for (const auto& run : runs) {
       module->settings() = run.settings;
       json entry;
@@ -213,6 +247,11 @@ int main(int argc, char** argv) {
         results.push_back(entry);
         continue;
       }
+      // Automatic backends first time both (a few frames), then keep the faster.
+      for (int f = 0; f < 16 && (module->stats().trace_choice.reason == "probing" ||
+                                 module->stats().csm_choice.reason == "probing" || f == 0);
+           ++f)
+        renderer.render_frame(0.0f);
       for (int f = 0; f < o.warmup; ++f) renderer.render_frame(0.0f);
       renderer.profiler().clear_history();
       for (int f = 0; f < o.frames; ++f) renderer.render_frame(0.0f);
@@ -240,6 +279,10 @@ int main(int argc, char** argv) {
       entry["culling_rate"] = module->stats().culling_rate;
       entry["hardware_conservative"] = module->stats().hardware_conservative;
       entry["csm_status"] = module->stats().csm_status;
+      entry["trace"] = run.trace;
+      entry["csm_backend"] = run.csm_backend;
+      if (!module->stats().trace_choice.backend.empty()) entry["trace_choice"] = choice_json(module->stats().trace_choice);
+      if (!module->stats().csm_choice.backend.empty()) entry["csm_choice"] = choice_json(module->stats().csm_choice);
       if (!module->stats().cascade_splits.empty()) entry["cascade_splits"] = module->stats().cascade_splits;
       json decisions = json::array();
       for (const auto& d : module->stats().csm_decisions)
@@ -275,7 +318,8 @@ int main(int argc, char** argv) {
         const auto vis = module->read_visibility();
         const std::string file = o.dump_dir + "/vis_" + scene->name + "_v" + std::to_string(o.view) + "_" + run.mode +
                                  "_" + run.csm_test + "_spp" + std::to_string(o.spp) + "_" +
-                                 (o.raster.empty() ? "auto" : o.raster) + ".f32";
+                                 (o.raster.empty() ? "auto" : o.raster) + "_" + run.trace + "_" + run.csm_backend +
+                                 ".f32";
         std::ofstream out(file, std::ios::binary);
         out.write(reinterpret_cast<const char*>(vis.data()), std::streamsize(vis.size() * sizeof(float)));
       }
@@ -286,7 +330,12 @@ int main(int argc, char** argv) {
       }
       entry["validation_messages"] = ctx.validation_message_count();
       results.push_back(entry);
-      std::printf("%-12s %-9s %4u %10.3f %10.3f %12.6f %12llu %10.5f\n", run.mode.c_str(), run.csm_test.c_str(), o.spp,
+      const auto ran = [](const shadows::Stats::BackendChoice& c, const std::string& asked) {
+        return asked == "none" || c.backend.empty() ? asked : c.backend;
+      };
+      std::printf("%-12s %-9s %-8s %-8s %4u %10.3f %10.3f %12.6f %12llu %10.5f\n", run.mode.c_str(),
+                  run.csm_test.c_str(), ran(module->stats().trace_choice, run.trace).c_str(),
+                  ran(module->stats().csm_choice, run.csm_backend).c_str(), o.spp,
                   gpu_ms["total"].get<double>(), renderer.profiler().median_ms("frame"), mismatch,
                   (unsigned long long)false_shadowed, mae);
       for (const auto& [name, value] : gpu_ms.items())

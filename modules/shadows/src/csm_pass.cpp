@@ -113,8 +113,7 @@ struct CsmPass::Impl {
     switch (test) {
       case CsmTest::Hertel:
       case CsmTest::Barycentric:
-        if (!f.geometry_shader) return fail("needs geometry shaders, which " + ctx.device_name() + " lacks");
-        return true;
+        return true;  // as compute work everywhere; as raster work with geometry shaders
       case CsmTest::BarycentricHw:
         if (!f.fragment_shader_barycentric)
           return fail("needs VK_KHR_fragment_shader_barycentric, which " + ctx.device_name() + " lacks");
@@ -219,6 +218,10 @@ struct CsmPass::Impl {
 };
 
 CsmPass::CsmPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
+bool CsmPass::raster_available(CsmTest test) const {
+  return compute_available(test) ? impl_->ctx.features().geometry_shader : impl_->supported(test, nullptr);
+}
+const std::vector<bool>& CsmPass::chosen_draws() const { return impl_->in_csm; }
 CsmPass::~CsmPass() = default;
 void CsmPass::prepare(uint32_t resolution) { impl_->ensure_depth(resolution); }
 VkImageView CsmPass::depth_view() const { return impl_->depth.view(); }
@@ -269,16 +272,26 @@ void CsmPass::note_yield(double culling_rate) {
 }
 
 void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, const Buffer& izb_frame,
-                     uint32_t resolution) {
+                     uint32_t resolution, const std::function<void(VkCommandBuffer)>& compute_fill,
+                     const Buffer* compute_texels) {
   Impl& m = *impl_;
   std::string why;
   if (!m.supported(settings.csm_test, &why))
     throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " is unavailable: " + why);
   if (m.depth.extent().width != resolution) throw std::logic_error("CsmPass::prepare was not called");
   VkCommandBuffer cmd = frame.cmd;
-  const Pipeline& p = m.pipeline(settings.csm_test);
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
-  {
+  if (compute_fill) {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm");
+    compute_fill(cmd);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
+    copy.imageExtent = {resolution, resolution, 1};
+    vkCmdCopyBufferToImage(cmd, compute_texels->handle(), m.depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
+  } else {
+    const Pipeline& p = m.pipeline(settings.csm_test);
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm");
     begin_depth_rendering(cmd, m.depth.view(), {resolution, resolution}, true);
     p.bind(cmd);

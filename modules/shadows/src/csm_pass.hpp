@@ -1,4 +1,5 @@
 #pragma once
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -38,14 +39,23 @@ class CsmPass {
   void prepare(uint32_t resolution);
   VkImageView depth_view() const;
   bool supported(CsmTest test, std::string* why) const;
+  // Whether `test` exists as a raster pass (the hardware tests always; Hertel and barycentric through
+  // a geometry shader) and as a compute pass (Hertel and barycentric).
+  bool raster_available(CsmTest test) const;
+  static bool compute_available(CsmTest test) { return test == CsmTest::Hertel || test == CsmTest::Barycentric; }
+  // Per draw of the frame: whether it enters the CSM (valid after plan()).
+  const std::vector<bool>& chosen_draws() const;
   // Chooses the casters for this frame and decides whether the prepass runs at all (see
   // kCsmMinimumYield); call once per frame before prepare().
   bool plan(const engine::FrameContext& frame, const IzbSettings& settings, uint32_t resolution);
   // The culling rate the IZB measured on a frame the prepass ran.
   void note_yield(double culling_rate);
-  // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`.
+  // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`. With
+  // `compute_fill`, that callback records compute work leaving the depths (float bits, [0,1]) in
+  // `compute_texels`, which are copied into the map instead of rasterizing.
   void record(engine::FrameContext& frame, const IzbSettings& settings, const engine::gpu::Buffer& izb_frame,
-              uint32_t resolution);
+              uint32_t resolution, const std::function<void(VkCommandBuffer)>& compute_fill = {},
+              const engine::gpu::Buffer* compute_texels = nullptr);
   void after_frame(Stats& stats);
   std::vector<float> read_depth();
 

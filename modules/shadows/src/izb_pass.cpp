@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "backend_probe.hpp"
 #include "csm_pass.hpp"
 #include "engine/gpu/profiler.hpp"
 #include "light_space.hpp"
@@ -39,7 +40,14 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_TRIANGLES, storage},
           {gpu_shared::IZB_BINDING_OVERFLOW_LIST, storage},
           {gpu_shared::IZB_BINDING_CSM_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-          {gpu_shared::IZB_BINDING_OCCLUDER_DISTANCE, storage}};
+          {gpu_shared::IZB_BINDING_OCCLUDER_DISTANCE, storage},
+          {gpu_shared::IZB_BINDING_GRID_TRIANGLES, storage},
+          {gpu_shared::IZB_BINDING_CHUNKS, storage},
+          {gpu_shared::IZB_BINDING_PAIRS, storage},
+          {gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, storage},
+          {gpu_shared::IZB_BINDING_TRIANGLE_DRAW, storage},
+          {gpu_shared::IZB_BINDING_DRAW_FLAGS, storage},
+          {gpu_shared::IZB_BINDING_CSM_TEXELS, storage}};
 }
 
 uint32_t debug_code(DebugView debug) {
@@ -57,9 +65,18 @@ struct IzbPass::Impl {
   PipelineFactory factory;
   Pipeline fit, setup, build, fallback, resolve, list_stats;
   Pipeline trace_software, trace_hardware, count_software, count_hardware, depth_fill;
+  Pipeline grid_setup, chunk_emit, chunk_bin, trace_compute, dispatch_args;
   Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
+  Buffer grid_triangles, triangle_draw, draw_flags, chunks, pairs, bounds_partials, csm_texels;
+  uint64_t chunk_capacity = 0, chunk_demand = 0;
+  uint64_t pair_capacity = 0, pair_demand = 0;
+  uint32_t caster_draws = 0;
+  BackendProbe trace_probe{"frustum_trace"};
+  BackendProbe csm_probe{"csm"};
+  bool used_compute_trace = false;
+  bool used_compute_csm = false;
   Sampler nearest;
   std::unique_ptr<CsmPass> csm;
   uint32_t resolution = 0;
@@ -83,6 +100,11 @@ struct IzbPass::Impl {
     fallback = factory.compute({"izb_fallback.comp", bindings, push});
     resolve = factory.compute({"izb_resolve.comp", bindings, push});
     list_stats = factory.compute({"izb_list_stats.comp", bindings, push});
+    grid_setup = factory.compute({"izb_triangles.comp", bindings, push});
+    chunk_emit = factory.compute({"izb_chunks.comp", bindings, push});
+    chunk_bin = factory.compute({"izb_chunk_bin.comp", bindings, push});
+    trace_compute = factory.compute({"izb_trace.comp", bindings, push});
+    dispatch_args = factory.compute({"izb_dispatch_args.comp", bindings, push});
     if (!c.features().subgroup_arithmetic_compute_fragment)
       throw VulkanError("the IZB needs subgroup arithmetic in compute and fragment shaders, which " +
                         c.device_name() + " lacks");
@@ -139,9 +161,6 @@ struct IzbPass::Impl {
     fill.depth_format = VK_FORMAT_D32_SFLOAT;
     fill.depth_compare = VK_COMPARE_OP_ALWAYS;
     depth_fill = factory.graphics(fill);
-    if (!trace_software.valid() && !trace_hardware.valid())
-      throw VulkanError("the IZB needs conservative rasterization or geometry shaders; device " + c.device_name() +
-                        " has neither");
     params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "izb params");
     frame_data = Buffer(c, sizeof(gpu_shared::IzbFrame),
                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb frame");
@@ -163,6 +182,7 @@ struct IzbPass::Impl {
       resolution = s.resolution;
       const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
       heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
+      csm_texels = Buffer(ctx, texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "csm compute depths");
       farthest = Buffer(ctx, texels * 4, usage, false, "izb farthest node depth");
       trace_depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
                           VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
@@ -180,6 +200,8 @@ struct IzbPass::Impl {
       pixel_state = Buffer(ctx, pixels * 4, usage, false, "izb pixel state");
       overflow_list = Buffer(ctx, pixels * 4, usage, false, "izb overflow pixels");
       occluder_distance = Buffer(ctx, pixels * 4, usage, false, "izb nearest occluder distance");
+      const VkDeviceSize fit_groups = VkDeviceSize((e.width + 7) / 8) * ((e.height + 7) / 8);
+      bounds_partials = Buffer(ctx, fit_groups * 16, usage, false, "izb fit bounds per workgroup");
       const uint32_t stride = spp == 32 ? gpu_shared::kIzbQuadFloats32 : gpu_shared::kIzbQuadFloats1;
       quads = Buffer(ctx, pixels * stride * 4, usage, false, "izb pixel light-space data");
       pool_size = 0;
@@ -211,24 +233,63 @@ struct IzbPass::Impl {
       matrices.push_back(d.world);
       meshes.push_back(d.mesh);
     }
+    caster_draws = uint32_t(matrices.size());
     if (triangles.valid() && matrices == triangle_source_matrices && meshes == triangle_source_meshes) return;
-    // World-space caster triangles for the overflow fallback, rebuilt only when casters move.
+    // World-space caster triangles, in draw order (the raster trace finds a fragment's triangle as
+    // its draw's first triangle plus the primitive index), rebuilt only when casters move; each
+    // triangle also knows its caster draw, for the per-frame CSM choice.
     std::vector<glm::vec4> data;
+    std::vector<uint32_t> owner;
+    uint32_t ordinal = 0;
     for (const auto& d : frame.draws) {
       if (!d.shadow.casts_shadow) continue;
       const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
-      if (!mesh || !mesh->data) continue;
-      const auto& m = *mesh->data;
-      for (size_t i = 0; i + 2 < m.indices.size(); i += 3)
-        for (int k = 0; k < 3; ++k)
-          data.push_back(d.world * glm::vec4(m.vertices[m.indices[i + k]].position, 1.0f));
+      if (mesh && mesh->data) {
+        const auto& m = *mesh->data;
+        for (size_t i = 0; i + 2 < m.indices.size(); i += 3) {
+          for (int k = 0; k < 3; ++k) data.push_back(d.world * glm::vec4(m.vertices[m.indices[i + k]].position, 1.0f));
+          owner.push_back(ordinal);
+        }
+      }
+      ++ordinal;
     }
-    triangle_count = uint32_t(data.size() / 3);
+    triangle_count = uint32_t(owner.size());
     if (data.empty()) data.push_back(glm::vec4(0.0f));
+    if (owner.empty()) owner.push_back(0);
     triangles = upload_buffer(ctx, data.data(), data.size() * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                               "izb caster triangles");
+    triangle_draw = upload_buffer(ctx, owner.data(), owner.size() * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                  "izb caster triangle draw");
+    grid_triangles = Buffer(ctx, data.size() * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                            "izb grid-space caster triangles");
+    draw_flags = Buffer(ctx, std::max<size_t>(matrices.size(), 1) * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                        true, "izb caster draw flags");
     triangle_source_matrices = std::move(matrices);
     triangle_source_meshes = std::move(meshes);
+  }
+
+  // Chunk and pair buffers for the compute passes: first sized from the scene, then grown to the
+  // demand a frame measured (a frame that overflows still finishes exactly, only slower).
+  // Unused (raster passes only): small placeholders keep every binding valid.
+  void ensure_compute_buffers(bool used) {
+    const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+    if (!used) {
+      if (!chunks.valid()) chunks = Buffer(ctx, 16, usage, false, "izb chunk records (unused)");
+      if (!pairs.valid()) pairs = Buffer(ctx, 16, usage, false, "izb trace pairs (unused)");
+      return;
+    }
+    const uint64_t want_chunks =
+        std::max<uint64_t>({uint64_t(triangle_count) + triangle_count / 4, 16384, chunk_demand});
+    if (want_chunks > chunk_capacity) {
+      chunk_capacity = want_chunks;
+      chunks = Buffer(ctx, chunk_capacity * 8, usage, false, "izb chunk records");
+    }
+    const uint64_t want_pairs = std::max<uint64_t>(
+        {uint64_t(triangle_count) * 4, uint64_t(resolution) * resolution / 2, 65536, pair_demand});
+    if (want_pairs > pair_capacity) {
+      pair_capacity = want_pairs;
+      pairs = Buffer(ctx, pair_capacity * 8, usage, false, "izb trace pairs");
+    }
   }
 
   void push_all(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p) {
@@ -252,16 +313,48 @@ struct IzbPass::Impl {
         .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLES, triangles.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_OVERFLOW_LIST, overflow_list.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_OCCLUDER_DISTANCE, occluder_distance.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_GRID_TRIANGLES, grid_triangles.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_CHUNKS, chunks.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_PAIRS, pairs.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, bounds_partials.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLE_DRAW, triangle_draw.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_DRAW_FLAGS, draw_flags.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_CSM_TEXELS, csm_texels.handle())
         .sampled_image(gpu_shared::IZB_BINDING_CSM_DEPTH, csm->depth_view(), nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
         .push(ctx, cmd, p);
   }
 
-  void dispatch_pixels(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
-                       gpu_shared::IzbComputePush push) {
+  void dispatch(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+                gpu_shared::IzbComputePush push, uint32_t x, uint32_t y = 1) {
     p.bind(cmd);
     push_all(cmd, frame, p);
     p.push_constants(cmd, push);
-    vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
+    vkCmdDispatch(cmd, x, y, 1);
+  }
+
+  void dispatch_pixels(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+                       gpu_shared::IzbComputePush push) {
+    dispatch(cmd, frame, p, push, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8);
+  }
+
+  void dispatch_indirect(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+                         gpu_shared::IzbComputePush push, uint32_t counter) {
+    p.bind(cmd);
+    push_all(cmd, frame, p);
+    p.push_constants(cmd, push);
+    vkCmdDispatchIndirect(cmd, counters.handle(), VkDeviceSize(counter) * 4);
+  }
+
+  // Compute trace / compute CSM over caster triangles: chunk records of their texel boxes, then one
+  // workgroup per record (`mode`: IZB_CHUNKS_FOR_*).
+  void record_chunk_work(VkCommandBuffer cmd, const engine::FrameContext& frame, gpu_shared::IzbComputePush push,
+                         uint32_t mode) {
+    push.mode = mode;
+    dispatch(cmd, frame, chunk_emit, push, (triangle_count + 63) / 64);
+    full_barrier(cmd);
+    dispatch(cmd, frame, dispatch_args, push, 1);
+    full_barrier(cmd);
+    dispatch_indirect(cmd, frame, chunk_bin, push, gpu_shared::IZB_COUNTER_CHUNK_DISPATCH);
   }
 };
 
@@ -283,16 +376,55 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   const bool run_csm = m.csm->plan(frame, settings, m.resolution);
   m.csm->prepare(run_csm ? m.resolution : 1);
 
+  // Raster or compute, per pass. The timing of either depends on the sizes, the scene and the mode.
+  uint64_t key = mix_key(0, m.resolution);
+  for (uint64_t v : {uint64_t(frame.view.extent.width), uint64_t(frame.view.extent.height), uint64_t(m.samples),
+                     uint64_t(m.triangle_count), uint64_t(run_csm), uint64_t(settings.csm_test),
+                     uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid)})
+    key = mix_key(key, v);
+  const bool raster_trace_available = m.trace_hardware.valid() || m.trace_software.valid();
+  const bool use_compute_trace =
+      m.trace_probe.pick(settings.trace, raster_trace_available, true, key, frame.profiler) == PassBackend::Compute;
+  if (!use_compute_trace && !raster_trace_available)
+    throw std::runtime_error("the raster IZB trace needs conservative rasterization or geometry shaders; " +
+                             m.ctx.device_name() + " has neither (use the compute trace)");
+  bool use_compute_csm = false;
+  if (run_csm) {
+    const bool raster_ok = m.csm->raster_available(settings.csm_test);
+    const bool compute_ok = CsmPass::compute_available(settings.csm_test);
+    if (settings.csm_backend == PassBackend::Compute && !compute_ok)
+      throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " has no compute pass");
+    if (settings.csm_backend == PassBackend::Raster && !raster_ok)
+      throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " has no raster pass on " +
+                               m.ctx.device_name() + " (it needs geometry shaders)");
+    use_compute_csm = m.csm_probe.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler) ==
+                      PassBackend::Compute;
+  }
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
                             (settings.raster == ConservativeRaster::Auto && m.trace_hardware.valid());
-  if (use_hardware && !m.trace_hardware.valid())
-    throw std::runtime_error("hardware conservative rasterization requested but " + m.ctx.device_name() +
-                             " lacks VK_EXT_conservative_rasterization");
-  if (!use_hardware && !m.trace_software.valid())
-    throw std::runtime_error("software conservative rasterization needs geometry shaders, which " +
-                             m.ctx.device_name() + " lacks");
-  m.used_hardware = use_hardware;
+  if (!use_compute_trace) {
+    if (use_hardware && !m.trace_hardware.valid())
+      throw std::runtime_error("hardware conservative rasterization requested but " + m.ctx.device_name() +
+                               " lacks VK_EXT_conservative_rasterization");
+    if (!use_hardware && !m.trace_software.valid())
+      throw std::runtime_error("software conservative rasterization needs geometry shaders, which " +
+                               m.ctx.device_name() + " lacks");
+  }
+  m.used_hardware = use_hardware && !use_compute_trace;
+  m.used_compute_trace = use_compute_trace;
+  m.used_compute_csm = use_compute_csm;
   m.last_used_csm = run_csm;
+  m.ensure_compute_buffers(use_compute_trace || use_compute_csm);
+  if (use_compute_csm) {
+    // Per caster draw: whether it enters the CSM this frame.
+    const auto& chosen = m.csm->chosen_draws();
+    auto* flags = static_cast<uint32_t*>(m.draw_flags.mapped());
+    uint32_t ordinal = 0;
+    for (size_t i = 0; i < frame.draws.size(); ++i) {
+      if (!frame.draws[i].shadow.casts_shadow) continue;
+      flags[ordinal++] = i < chosen.size() && chosen[i] ? gpu_shared::IZB_DRAW_IN_CSM : 0u;
+    }
+  }
 
   // CPU side of the frustum: the light's rotation and the casters' depth range along it.
   const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
@@ -317,6 +449,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   }
 
   uint32_t flags = collect_stats ? gpu_shared::IZB_FLAG_STATS : 0u;
+  if (!settings.depth_cull) flags |= gpu_shared::IZB_FLAG_NO_DEPTH_CULL;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
   gpu_shared::IzbParams p{};
@@ -326,13 +459,14 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   p.camera_position = glm::vec4(frame.view.camera_position, settings.max_distance);
   p.depth_range = glm::vec4(near_d, far_d, 0.0f, 0.0f);
   p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.resolution, m.samples);
-  p.limits = glm::uvec4(uint32_t(std::min<uint64_t>(m.pool_size, UINT32_MAX)), flags, 0u, 0u);
+  p.limits = glm::uvec4(uint32_t(std::min<uint64_t>(m.pool_size, UINT32_MAX)), flags,
+                        uint32_t(std::min<uint64_t>(m.chunk_capacity, UINT32_MAX)),
+                        uint32_t(std::min<uint64_t>(m.pair_capacity, UINT32_MAX)));
   m.params.write(&p, sizeof(p));
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, soft_distance};
 
-  // Reset: counters, bounds (min slots to the largest ordered value), lists, farthest depths.
+  // Reset: counters, lists, farthest depths.
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
-  vkCmdFillBuffer(cmd, m.counters.handle(), gpu_shared::IZB_COUNTER_BOUNDS * 4, 8, 0xffffffffu);
   vkCmdFillBuffer(cmd, m.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
   vkCmdFillBuffer(cmd, m.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
   full_barrier(cmd);
@@ -340,14 +474,26 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
     m.dispatch_pixels(cmd, frame, m.fit, push);
     full_barrier(cmd);
-    m.setup.bind(cmd);
-    m.push_all(cmd, frame, m.setup);
-    m.setup.push_constants(cmd, push);
-    vkCmdDispatch(cmd, 1, 1, 1);
+    m.dispatch(cmd, frame, m.setup, push, 1);
+    full_barrier(cmd);
+    if (m.triangle_count > 0) m.dispatch(cmd, frame, m.grid_setup, push, (m.triangle_count + 63) / 64);
   }
   full_barrier(cmd);
   if (run_csm) {
-    m.csm->record(frame, settings, m.frame_data, m.resolution);
+    if (use_compute_csm) {
+      const uint32_t mode = settings.csm_test == CsmTest::Hertel ? gpu_shared::IZB_CHUNKS_FOR_CSM_HERTEL
+                                                                 : gpu_shared::IZB_CHUNKS_FOR_CSM_BARYCENTRIC;
+      m.csm->record(
+          frame, settings, m.frame_data, m.resolution,
+          [&](VkCommandBuffer c) {
+            vkCmdFillBuffer(c, m.csm_texels.handle(), 0, VK_WHOLE_SIZE, 0x3f800000u);  // 1.0: nothing stored
+            full_barrier(c);
+            m.record_chunk_work(c, frame, push, mode);
+          },
+          &m.csm_texels);
+    } else {
+      m.csm->record(frame, settings, m.frame_data, m.resolution);
+    }
     full_barrier(cmd);
   }
   {
@@ -368,13 +514,26 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     vkCmdSetDepthBias(cmd, -1.0f, 0.0f, -1.0f);
     vkCmdSetDepthCompareOp(cmd, compare);
     m.push_all(cmd, frame, trace);
+    uint32_t first_triangle = 0;  // the caster triangle buffers hold the casters in draw order
     draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
-      gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset, 0u, 0u};
+      gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset, first_triangle, 0u};
       trace.push_constants(cmd, dp);
+      first_triangle += range.index_count / 3;
     });
     vkCmdEndRendering(cmd);
   };
-  {
+  if (use_compute_trace) {
+    // Chunks of each triangle's texel box -> (triangle, texel) pairs that touch and survive the depth
+    // cull -> one thread per pair walks the texel's list.
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
+    m.record_chunk_work(cmd, frame, push, gpu_shared::IZB_CHUNKS_FOR_TRACE);
+    full_barrier(cmd);
+    gpu_shared::IzbComputePush args = push;
+    args.mode = gpu_shared::IZB_ARGS_PAIRS;
+    m.dispatch(cmd, frame, m.dispatch_args, args, 1);
+    full_barrier(cmd);
+    m.dispatch_indirect(cmd, frame, m.trace_compute, push, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
+  } else {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
     draw_trace(use_hardware ? m.trace_hardware : m.trace_software,
                settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
@@ -395,9 +554,12 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   full_barrier(cmd);
   if (collect_stats) {
     // Statistics only (excluded from the technique's total): fragments before depth culling.
+    // (The compute trace counts fragments before the cull as it bins.)
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_stats");
-    draw_trace(use_hardware ? m.count_hardware : m.count_software, VK_COMPARE_OP_ALWAYS, false);
-    full_barrier(cmd);
+    if (!use_compute_trace) {
+      draw_trace(use_hardware ? m.count_hardware : m.count_software, VK_COMPARE_OP_ALWAYS, false);
+      full_barrier(cmd);
+    }
     m.list_stats.bind(cmd);
     m.push_all(cmd, frame, m.list_stats);
     m.list_stats.push_constants(cmd, push);
@@ -444,6 +606,18 @@ void IzbPass::after_frame(Stats& s) {
   s.nonempty_texels = c[gpu_shared::IZB_COUNTER_NONEMPTY];
   s.list_length_average = s.nonempty_texels ? double(c[gpu_shared::IZB_COUNTER_LIST_SUM]) / double(s.nonempty_texels) : 0.0;
   s.hardware_conservative = m.used_hardware;
+  s.trace_choice = m.trace_probe.choice();
+  if (m.last_used_csm) s.csm_choice = m.csm_probe.choice();
+  if (m.used_compute_trace) {
+    s.trace_chunks = c[gpu_shared::IZB_COUNTER_CHUNKS];
+    s.trace_pairs = c[gpu_shared::IZB_COUNTER_PAIRS];
+    s.trace_pair_capacity = m.pair_capacity;
+  }
+  // Grow the compute passes' buffers to what this frame asked for.
+  const uint64_t chunks_asked = std::max(c[gpu_shared::IZB_COUNTER_CHUNKS], c[gpu_shared::IZB_COUNTER_CSM_CHUNKS]);
+  if (chunks_asked > m.chunk_capacity) m.chunk_demand = uint64_t(double(chunks_asked) * 1.25);
+  if (c[gpu_shared::IZB_COUNTER_PAIRS] > m.pair_capacity)
+    m.pair_demand = uint64_t(double(c[gpu_shared::IZB_COUNTER_PAIRS]) * 1.25);
   m.csm->note_yield(s.culling_rate);
   m.csm->after_frame(s);
   // Grow the pool for the next frame when this one overflowed (unless a fixed size was asked for).

@@ -81,4 +81,20 @@ std::optional<DebugView> parse_debug_view(const std::string& name) {
   return std::nullopt;
 }
 
+std::optional<PassBackend> parse_backend(const std::string& name) {
+  if (name == "auto") return PassBackend::Auto;
+  if (name == "raster") return PassBackend::Raster;
+  if (name == "compute") return PassBackend::Compute;
+  return std::nullopt;
+}
+
+std::string backend_name(PassBackend backend) {
+  switch (backend) {
+    case PassBackend::Auto: return "auto";
+    case PassBackend::Raster: return "raster";
+    case PassBackend::Compute: return "compute";
+  }
+  return "?";
+}
+
 }  // namespace shadows

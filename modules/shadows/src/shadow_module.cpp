@@ -68,11 +68,11 @@ class ShadowModuleImpl final : public ShadowModule {
   }
 
   void after_frame(engine::gpu::Context&) override {
-    if (!collect_stats_) return;
+    // Always: the passes grow their pools and buffers to the demand they measured.
     Stats fresh;  // only the techniques that ran this frame report
     if ((active_ == Technique::Izb || active_ == Technique::Hybrid) && izb_) izb_->after_frame(fresh);
     if ((active_ == Technique::Cascades || active_ == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh);
-    stats_ = std::move(fresh);
+    if (collect_stats_) stats_ = std::move(fresh);
   }
 
   std::vector<float> read_visibility() override {

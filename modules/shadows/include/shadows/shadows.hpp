@@ -36,8 +36,12 @@ enum class Masking { Off, Edge, DepthExtent };
 
 enum class DebugView { None, VisibilityMask, ListLength, Cascades, CsmCoverage, ExpensivePath };
 
-// Which rasterizer produces the trace pass's conservative fragments.
+// Which rasterizer produces the raster trace's conservative fragments.
 enum class ConservativeRaster { Auto, Hardware, Software };
+
+// How a pass that exists both as raster and as compute work runs. Both give identical results; Auto
+// times each on the first frames (again after a size, scene or mode change) and keeps the faster.
+enum class PassBackend { Auto, Raster, Compute };
 
 struct ShadowMapSettings {
   uint32_t size = 1024;
@@ -66,7 +70,9 @@ struct IzbSettings {
   float max_distance = 0.0f;          // 0: every visible point; else only points nearer the camera
   bool csm = false;                   // conservative shadow map z-prepass culls certainly shadowed points
   CsmTest csm_test = CsmTest::Barycentric;
-  ConservativeRaster raster = ConservativeRaster::Auto;
+  ConservativeRaster raster = ConservativeRaster::Auto;  // for the raster trace
+  PassBackend trace = PassBackend::Auto;     // frustum trace: conservative raster or compute binning
+  PassBackend csm_backend = PassBackend::Auto;  // CSM (hertel/bary only; the hardware tests are raster)
   bool depth_cull = true;             // cull trace fragments behind the farthest node of their texel
   bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed
   float node_pool_factor = 1.25f;     // pool size = factor * pixels * (1 or expected texels per μQuad)
@@ -120,6 +126,19 @@ struct Stats {
   uint64_t triangle_tests = 0;        // ray/frustum-triangle tests
   double triangle_tests_per_pixel = 0.0;
   bool hardware_conservative = false;
+  // Raster or compute, per pass: what ran, why ("forced", "only one available", "probing",
+  // "auto: ..."), and the probe's GPU times in ms (0 where not measured).
+  struct BackendChoice {
+    std::string backend;
+    std::string reason;
+    double raster_ms = 0.0;
+    double compute_ms = 0.0;
+  };
+  BackendChoice trace_choice;
+  BackendChoice csm_choice;
+  uint64_t trace_pairs = 0;           // compute trace: (triangle, texel) pairs after the depth cull
+  uint64_t trace_pair_capacity = 0;
+  uint64_t trace_chunks = 0;          // compute trace: chunk records of triangle texel boxes
   // Cascades
   double expensive_path_fraction = 0.0;
   uint64_t expensive_path_pixels = 0;
@@ -163,5 +182,7 @@ std::string csm_test_name(CsmTest test);
 std::optional<Masking> parse_masking(const std::string& name);
 std::string masking_name(Masking masking);
 std::optional<DebugView> parse_debug_view(const std::string& name);
+std::optional<PassBackend> parse_backend(const std::string& name);  // "auto", "raster", "compute"
+std::string backend_name(PassBackend backend);
 
 }  // namespace shadows

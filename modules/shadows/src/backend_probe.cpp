@@ -1,0 +1,59 @@
+#include "backend_probe.hpp"
+
+#include <algorithm>
+#include <sstream>
+
+namespace shadows::detail {
+
+uint64_t mix_key(uint64_t key, uint64_t value) {
+  key ^= value + 0x9e3779b97f4a7c15ull + (key << 6) + (key >> 2);
+  return key;
+}
+
+namespace {
+double best(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); }
+size_t slot(PassBackend b) { return b == PassBackend::Compute ? 1 : 0; }
+}  // namespace
+
+PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
+                               const engine::gpu::GpuProfiler& profiler) {
+  if (key != key_) {
+    key_ = key;
+    samples_[0].clear();
+    samples_[1].clear();
+    decided_.reset();
+    pending_.reset();
+  }
+  if (pending_) {
+    // Only whole frames count: the previous frame's region, if this pass recorded it.
+    for (const auto& [name, ms] : profiler.last_frame())
+      if (name == region_) samples_[slot(*pending_)].push_back(ms);
+    pending_.reset();
+  }
+  choice_.raster_ms = best(samples_[0]);
+  choice_.compute_ms = best(samples_[1]);
+  auto use = [&](PassBackend b, std::string reason) {
+    choice_.backend = backend_name(b);
+    choice_.reason = std::move(reason);
+    return b;
+  };
+  if (requested != PassBackend::Auto) return use(requested, "forced");
+  if (!raster_available) return use(PassBackend::Compute, "only compute available");
+  if (!compute_available) return use(PassBackend::Raster, "only raster available");
+  if (!profiler.enabled()) return use(PassBackend::Compute, "no GPU timestamps to probe with: compute");
+  if (!decided_ && samples_[0].size() >= kFramesEach && samples_[1].size() >= kFramesEach) {
+    decided_ = choice_.compute_ms <= choice_.raster_ms ? PassBackend::Compute : PassBackend::Raster;
+  }
+  if (decided_) {
+    std::ostringstream why;
+    why.precision(3);
+    why << "auto: " << backend_name(*decided_) << " faster (raster " << choice_.raster_ms << " ms, compute "
+        << choice_.compute_ms << " ms, best of " << kFramesEach << " frames each)";
+    return use(*decided_, why.str());
+  }
+  const PassBackend next = samples_[0].size() <= samples_[1].size() ? PassBackend::Raster : PassBackend::Compute;
+  pending_ = next;
+  return use(next, "probing");
+}
+
+}  // namespace shadows::detail

@@ -1,0 +1,37 @@
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/gpu/profiler.hpp"
+#include "shadows/shadows.hpp"
+
+namespace shadows::detail {
+
+// Chooses raster or compute for one pass under PassBackend::Auto by timing both: the first frames
+// alternate the two, reading the pass's GPU region of the previous frame from the profiler, then the
+// faster (by its best probe frame) is kept until the configuration key changes.
+class BackendProbe {
+ public:
+  static constexpr size_t kFramesEach = 2;
+
+  explicit BackendProbe(std::string region) : region_(std::move(region)) {}
+  // This frame's backend. `key` identifies what the timing depends on (sizes, scene, mode).
+  PassBackend pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
+                   const engine::gpu::GpuProfiler& profiler);
+  const Stats::BackendChoice& choice() const { return choice_; }
+
+ private:
+  std::string region_;
+  uint64_t key_ = ~uint64_t(0);
+  std::optional<PassBackend> pending_;  // ran last frame, its time not yet read
+  std::vector<double> samples_[2];      // raster, compute
+  std::optional<PassBackend> decided_;
+  Stats::BackendChoice choice_;
+};
+
+// Mixes values into a configuration key.
+uint64_t mix_key(uint64_t key, uint64_t value);
+
+}  // namespace shadows::detail

@@ -1,0 +1,22 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows/izb_prelude.glsl"
+#include "shadows/izb_chunk_work.glsl"
+layout(local_size_x = kIzbPairGroup) in;
+
+// Compute trace, step 3: one thread per surviving (triangle, texel) pair walks the texel's list with
+// the same exact node test as the raster trace.
+void main() {
+  uint index = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * kIzbPairGroup + gl_LocalInvocationID.x;
+  uint tests = 0u;
+  if (index < min(counters[IZB_COUNTER_PAIRS], params.limits.w)) {
+    uvec2 pair = pairs[index];
+    vec3 a, b, c;
+    load_grid_triangle(pair.x, a, b, c);
+    tests = trace_texel_list(pair.y, a, b, c, 1.0 / edge_fn(c.xy, a.xy, b.xy));
+  }
+  if (izb_flag(IZB_FLAG_STATS)) {
+    uint s = subgroupAdd(tests);
+    if (subgroupElect() && s > 0u) atomicAdd(counters[IZB_COUNTER_TRIANGLE_TESTS], s);
+  }
+}
