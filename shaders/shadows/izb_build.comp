@@ -13,7 +13,8 @@ bool link_node(uint node, uint texel, uint pixel_index, float depth) {
   nodes[node] = uvec2(previous, pixel_index);
   // Depths are clamped into [0,1], where float order is bit order: the buffer copies straight into
   // the trace pass's depth attachment.
-  atomicMax(farthest[texel], floatBitsToUint(clamp(depth, 0.0, 1.0)));
+  uint bits = floatBitsToUint(clamp(depth, 0.0, 1.0));
+  if (bits > farthest[texel]) atomicMax(farthest[texel], bits);  // most nodes are not their texel's farthest
   return true;
 }
 

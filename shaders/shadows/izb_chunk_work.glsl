@@ -1,44 +1,70 @@
-// Work on one texel of a triangle's texel box, shared by the chunk emitter (which runs a chunk
-// itself when the chunk buffer is full) and the chunk workgroups. Include after izb_prelude.glsl.
-layout(set = 0, binding = IZB_BINDING_CHUNKS, std430) buffer Chunks { uvec2 chunks[]; };
+// Work on one (triangle, texel) of the compute trace and the compute CSM, shared by the record
+// emitter (which works a record itself when the record buffer is full) and the record workgroups.
+layout(set = 0, binding = IZB_BINDING_CHUNKS, std430) buffer Chunks { uvec4 chunks[]; };
 layout(set = 0, binding = IZB_BINDING_PAIRS, std430) buffer Pairs { uvec2 pairs[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLE_DRAW, std430) readonly buffer TriangleDraw { uint triangle_draw[]; };
 layout(set = 0, binding = IZB_BINDING_DRAW_FLAGS, std430) readonly buffer DrawFlags { uint draw_flags[]; };
 layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
 #include "csm.h"
 
-// The texel box [lo, hi) a triangle's grid-space bounds touch, clamped to the grid; empty when
-// the triangle is degenerate or outside.
-struct TexelBox {
-  ivec2 lo;
-  ivec2 size;
-};
+layout(constant_id = 0) const uint kIzbRecordLanes = kIzbRecordLanesGpu;
+layout(constant_id = 1) const uint kIzbRecordsPerGroup = kIzbRecordsPerGroupGpu;
+layout(constant_id = 2) const uint kIzbRecordTexels = kIzbRecordTexelsGpu;
 
-TexelBox triangle_texel_box(vec3 a, vec3 b, vec3 c) {
+// The rows [first, last] of the grid a triangle's bounds touch (empty when first > last).
+ivec2 triangle_rows(vec3 a, vec3 b, vec3 c) {
   int res = int(izb_resolution());
-  TexelBox box;
-  vec2 lo = floor(min(min(a.xy, b.xy), c.xy));
-  vec2 hi = floor(max(max(a.xy, b.xy), c.xy)) + 1.0;
-  lo = clamp(lo, vec2(0.0), vec2(res));
-  hi = clamp(hi, vec2(0.0), vec2(res));
-  box.lo = ivec2(lo);
-  box.size = max(ivec2(hi) - box.lo, ivec2(0));
-  return box;
+  float lo = floor(min(min(a.y, b.y), c.y) - 2.0e-3);
+  float hi = floor(max(max(a.y, b.y), c.y) + 2.0e-3);
+  return ivec2(clamp(lo, 0.0, float(res)), clamp(hi, -1.0, float(res - 1)));
 }
 
-uint box_texels(TexelBox box) { return uint(box.size.x) * uint(box.size.y); }
+// The texels [first, last] of grid row `row` the triangle may touch: its exact x-extent over the row's
+// band (vertices inside it, edges crossing its two lines), widened by more than the touch test's
+// slack and rounding. Empty when first > last.
+ivec2 triangle_row_span(vec3 a, vec3 b, vec3 c, int row) {
+  const float slack = 2.0e-3;
+  float y0 = float(row) - slack, y1 = float(row) + 1.0 + slack;
+  vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
+  float x_lo = 1.0e30, x_hi = -1.0e30;
+  for (int i = 0; i < 3; ++i) {
+    if (p[i].y >= y0 && p[i].y <= y1) {
+      x_lo = min(x_lo, p[i].x);
+      x_hi = max(x_hi, p[i].x);
+    }
+    vec2 e0 = p[i], e1 = p[(i + 1) % 3];
+    if (e0.y == e1.y) continue;
+    for (int k = 0; k < 2; ++k) {
+      float y = k == 0 ? y0 : y1;
+      if ((e0.y - y) * (e1.y - y) > 0.0) continue;
+      float x = e0.x + (y - e0.y) * (e1.x - e0.x) / (e1.y - e0.y);
+      x_lo = min(x_lo, x);
+      x_hi = max(x_hi, x);
+    }
+  }
+  int res = int(izb_resolution());
+  if (x_lo > x_hi) return ivec2(0, -1);
+  float widen = slack + 1.0e-6 * max(abs(x_lo), abs(x_hi));
+  return ivec2(clamp(floor(x_lo - widen), 0.0, float(res)), clamp(floor(x_hi + widen), -1.0, float(res - 1)));
+}
 
-ivec2 box_texel(TexelBox box, uint i) { return box.lo + ivec2(int(i % uint(box.size.x)), int(i / uint(box.size.x))); }
-
-// Trace: whether the triangle's (texel) pair survives the conservative touch test and the depth cull
-// against the texel's farthest node. `touched` reports the touch test alone (statistics).
-bool trace_pair_survives(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, out bool touched) {
+// Trace: what becomes of a (triangle, texel) pair. The cheap depth cull against the texel's farthest
+// node runs first (an empty texel holds 0 and culls everything); the touch test after it, or first
+// when statistics count the fragments before the cull.
+const uint IZB_PAIR_OUTSIDE = 0u;  // the triangle does not touch the texel
+const uint IZB_PAIR_CULLED = 1u;   // touches, but lies behind every node of the texel
+const uint IZB_PAIR_KEPT = 2u;
+uint trace_pair_outcome(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   vec2 lo = vec2(texel);
-  touched = rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area));
-  if (!touched) return false;
-  if (izb_flag(IZB_FLAG_NO_DEPTH_CULL)) return true;
-  float farthest_node = uintBitsToFloat(farthest[texel_index(texel)]);
-  return triangle_nearest_depth(lo, lo + 1.0, a, b, c, area) < farthest_node;
+  bool counting = izb_flag(IZB_FLAG_STATS);
+  if (counting && !rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
+  if (!izb_flag(IZB_FLAG_NO_DEPTH_CULL)) {
+    float farthest_node = uintBitsToFloat(farthest[texel_index(texel)]);
+    if (farthest_node <= 0.0 || triangle_nearest_depth(lo, lo + 1.0, a, b, c, area) >= farthest_node)
+      return IZB_PAIR_CULLED;
+  }
+  if (!counting && !rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
+  return IZB_PAIR_KEPT;
 }
 
 // CSM: where the triangle fully covers the texel (Hertel's or the barycentric test, the same

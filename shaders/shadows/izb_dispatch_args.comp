@@ -6,7 +6,7 @@ layout(local_size_x = 1) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
-// Indirect dispatch arguments for the chunk workgroups (one per record of the push.mode's chunks) or
+// Indirect dispatch arguments for the record workgroups (kIzbRecordsPerGroup records of push.mode's each) or
 // the pair threads (IZB_ARGS_PAIRS), in rows of kIzbDispatchRow workgroups.
 void main() {
   uint groups, at;
@@ -14,7 +14,7 @@ void main() {
     groups = (min(counters[IZB_COUNTER_PAIRS], params.limits.w) + kIzbPairGroup - 1u) / kIzbPairGroup;
     at = IZB_COUNTER_PAIR_DISPATCH;
   } else {
-    groups = chunk_records(push.mode);
+    groups = (chunk_records(push.mode) + kIzbRecordsPerGroup - 1u) / kIzbRecordsPerGroup;
     at = IZB_COUNTER_CHUNK_DISPATCH;
   }
   counters[at] = min(groups, kIzbDispatchRow);

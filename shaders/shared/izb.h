@@ -49,8 +49,8 @@ SHARED_CONST uint IZB_COUNTER_OVERFLOW_PIXELS = 8u;// pixels resolved by the fal
 SHARED_CONST uint IZB_COUNTER_LIST_MAX = 9u;
 SHARED_CONST uint IZB_COUNTER_LIST_SUM = 10u;
 SHARED_CONST uint IZB_COUNTER_NONEMPTY = 11u;
-SHARED_CONST uint IZB_COUNTER_CHUNKS = 12u;        // compute trace: chunk records requested
-SHARED_CONST uint IZB_COUNTER_CSM_CHUNKS = 13u;    // compute CSM: chunk records requested
+SHARED_CONST uint IZB_COUNTER_CHUNKS = 12u;        // compute trace: row records requested
+SHARED_CONST uint IZB_COUNTER_CSM_CHUNKS = 13u;    // compute CSM: row records requested
 SHARED_CONST uint IZB_COUNTER_PAIRS = 14u;         // compute trace: (triangle, texel) pairs requested
 SHARED_CONST uint IZB_COUNTER_BOUNDS = 16u;        // 4 uints: ordered min x, min y, max x, max y
 SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
@@ -58,12 +58,21 @@ SHARED_CONST uint IZB_COUNTER_CHUNK_DISPATCH = 24u;// 3 uints: indirect dispatch
 SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 28u; // 3 uints: indirect dispatch over pairs
 SHARED_CONST uint IZB_COUNTER_COUNT = 32u;
 
-// Compute trace and compute CSM: a triangle's texel bounding box is cut into chunks of
-// kIzbChunkTexels texels; a workgroup of kIzbChunkLanes threads walks one chunk, so a large triangle
-// spreads over many workgroups instead of serializing one thread. Dispatches over records use rows of
-// kIzbDispatchRow workgroups (the portable limit per dimension is 65535).
-SHARED_CONST uint kIzbChunkTexels = 1024u;
-SHARED_CONST uint kIzbChunkLanes = 32u;
+// Compute trace and compute CSM: each caster triangle's light-space rows are cut into row pieces (a
+// record: triangle, row, first and last texel) of at most kIzbRecordTexels texels, enumerated from the
+// triangle's exact extent in each row (so thin diagonal triangles cost their texels, not their
+// bounding box). A workgroup of kIzbRecordLanes threads takes kIzbRecordsPerGroup records, a thread
+// per texel, so a large triangle spreads over many workgroups instead of serializing one thread. The
+// three are specialization constants 0..2: on a GPU one short record per workgroup (idle subgroups
+// exit at once); on a CPU device, which pays for every workgroup and runs every invocation, many long
+// records per narrow workgroup. Dispatches use rows of kIzbDispatchRow workgroups (the portable limit
+// per dimension is 65535).
+SHARED_CONST uint kIzbRecordLanesGpu = 64u;
+SHARED_CONST uint kIzbRecordsPerGroupGpu = 1u;
+SHARED_CONST uint kIzbRecordTexelsGpu = 64u;
+SHARED_CONST uint kIzbRecordLanesCpu = 8u;
+SHARED_CONST uint kIzbRecordsPerGroupCpu = 64u;
+SHARED_CONST uint kIzbRecordTexelsCpu = 4096u;
 SHARED_CONST uint kIzbDispatchRow = 32768u;
 SHARED_CONST uint kIzbPairGroup = 64u;             // pairs per workgroup of the compute trace
 
@@ -94,7 +103,7 @@ SHARED_CONST uint IZB_BINDING_OVERFLOW_LIST = 17u;
 SHARED_CONST uint IZB_BINDING_CSM_DEPTH = 18u;
 SHARED_CONST uint IZB_BINDING_OCCLUDER_DISTANCE = 19u;  // per pixel: nearest occluder's light depth above it
 SHARED_CONST uint IZB_BINDING_GRID_TRIANGLES = 20u;     // per caster triangle: 3 vec4 (grid x, grid y, light depth, -)
-SHARED_CONST uint IZB_BINDING_CHUNKS = 21u;             // uvec2 {triangle, first texel of the chunk in its box}
+SHARED_CONST uint IZB_BINDING_CHUNKS = 21u;             // uvec4 records {triangle, row, first texel, last texel}
 SHARED_CONST uint IZB_BINDING_PAIRS = 22u;              // uvec2 {triangle, texel} surviving the depth cull
 SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;    // per fit workgroup: vec4 (min x, min y, max x, max y)
 SHARED_CONST uint IZB_BINDING_TRIANGLE_DRAW = 24u;      // per caster triangle: its caster draw's ordinal

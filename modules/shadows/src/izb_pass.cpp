@@ -101,10 +101,16 @@ struct IzbPass::Impl {
     resolve = factory.compute({"izb_resolve.comp", bindings, push});
     list_stats = factory.compute({"izb_list_stats.comp", bindings, push});
     grid_setup = factory.compute({"izb_triangles.comp", bindings, push});
-    chunk_emit = factory.compute({"izb_chunks.comp", bindings, push});
-    chunk_bin = factory.compute({"izb_chunk_bin.comp", bindings, push});
+    // Record shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
+    const bool cpu = c.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    const std::vector<SpecializationConstant> record_shape = {
+        {0, cpu ? gpu_shared::kIzbRecordLanesCpu : gpu_shared::kIzbRecordLanesGpu},
+        {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
+        {2, cpu ? gpu_shared::kIzbRecordTexelsCpu : gpu_shared::kIzbRecordTexelsGpu}};
+    chunk_emit = factory.compute({"izb_chunks.comp", bindings, push, record_shape});
+    chunk_bin = factory.compute({"izb_chunk_bin.comp", bindings, push, record_shape});
     trace_compute = factory.compute({"izb_trace.comp", bindings, push});
-    dispatch_args = factory.compute({"izb_dispatch_args.comp", bindings, push});
+    dispatch_args = factory.compute({"izb_dispatch_args.comp", bindings, push, record_shape});
     if (!c.features().subgroup_arithmetic_compute_fragment)
       throw VulkanError("the IZB needs subgroup arithmetic in compute and fragment shaders, which " +
                         c.device_name() + " lacks");
@@ -279,10 +285,10 @@ struct IzbPass::Impl {
       return;
     }
     const uint64_t want_chunks =
-        std::max<uint64_t>({uint64_t(triangle_count) + triangle_count / 4, 16384, chunk_demand});
+        std::max<uint64_t>({uint64_t(triangle_count) * 4, uint64_t(resolution) * resolution / 32, 16384, chunk_demand});
     if (want_chunks > chunk_capacity) {
       chunk_capacity = want_chunks;
-      chunks = Buffer(ctx, chunk_capacity * 8, usage, false, "izb chunk records");
+      chunks = Buffer(ctx, chunk_capacity * 16, usage, false, "izb row records");
     }
     const uint64_t want_pairs = std::max<uint64_t>(
         {uint64_t(triangle_count) * 4, uint64_t(resolution) * resolution / 2, 65536, pair_demand});
@@ -347,13 +353,18 @@ struct IzbPass::Impl {
 
   // Compute trace / compute CSM over caster triangles: chunk records of their texel boxes, then one
   // workgroup per record (`mode`: IZB_CHUNKS_FOR_*).
+  // Nested profiler regions name the steps ("<region>_chunks", "<region>_bin").
   void record_chunk_work(VkCommandBuffer cmd, const engine::FrameContext& frame, gpu_shared::IzbComputePush push,
-                         uint32_t mode) {
+                         uint32_t mode, const std::string& region) {
     push.mode = mode;
-    dispatch(cmd, frame, chunk_emit, push, (triangle_count + 63) / 64);
-    full_barrier(cmd);
-    dispatch(cmd, frame, dispatch_args, push, 1);
-    full_barrier(cmd);
+    {
+      ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_chunks");
+      dispatch(cmd, frame, chunk_emit, push, (triangle_count + 63) / 64);
+      full_barrier(cmd);
+      dispatch(cmd, frame, dispatch_args, push, 1);
+      full_barrier(cmd);
+    }
+    ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_bin");
     dispatch_indirect(cmd, frame, chunk_bin, push, gpu_shared::IZB_COUNTER_CHUNK_DISPATCH);
   }
 };
@@ -488,7 +499,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
           [&](VkCommandBuffer c) {
             vkCmdFillBuffer(c, m.csm_texels.handle(), 0, VK_WHOLE_SIZE, 0x3f800000u);  // 1.0: nothing stored
             full_barrier(c);
-            m.record_chunk_work(c, frame, push, mode);
+            m.record_chunk_work(c, frame, push, mode, "csm");
           },
           &m.csm_texels);
     } else {
@@ -526,8 +537,9 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     // Chunks of each triangle's texel box -> (triangle, texel) pairs that touch and survive the depth
     // cull -> one thread per pair walks the texel's list.
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    m.record_chunk_work(cmd, frame, push, gpu_shared::IZB_CHUNKS_FOR_TRACE);
+    m.record_chunk_work(cmd, frame, push, gpu_shared::IZB_CHUNKS_FOR_TRACE, "trace");
     full_barrier(cmd);
+    ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "trace_pairs");
     gpu_shared::IzbComputePush args = push;
     args.mode = gpu_shared::IZB_ARGS_PAIRS;
     m.dispatch(cmd, frame, m.dispatch_args, args, 1);
