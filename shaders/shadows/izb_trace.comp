@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
-#include "shadows/izb_chunk_work.glsl"
+#include "shadows/izb_tiles.glsl"
 layout(local_size_x = kIzbPairGroup) in;
 
 // Compute trace, step 3: one thread per surviving (triangle, texel) pair walks the texel's list with

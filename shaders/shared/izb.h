@@ -21,7 +21,8 @@ struct IzbParams {
   vec4 camera_position;      // xyz; w: max IZB distance from the camera (0: unlimited)
   vec4 depth_range;          // x: near, y: far light-view distance of the casters (for the projection)
   uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (1 or 32)
-  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*); z: trace chunk capacity; w: trace pair capacity
+  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*); z: record capacity; w: pair capacity
+  uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z, w: unused
 };
 
 // (For the raster trace, depth culling and the rasterizer choice are pipeline state.)
@@ -49,30 +50,37 @@ SHARED_CONST uint IZB_COUNTER_OVERFLOW_PIXELS = 8u;// pixels resolved by the fal
 SHARED_CONST uint IZB_COUNTER_LIST_MAX = 9u;
 SHARED_CONST uint IZB_COUNTER_LIST_SUM = 10u;
 SHARED_CONST uint IZB_COUNTER_NONEMPTY = 11u;
-SHARED_CONST uint IZB_COUNTER_CHUNKS = 12u;        // compute trace: row records requested
-SHARED_CONST uint IZB_COUNTER_CSM_CHUNKS = 13u;    // compute CSM: row records requested
-SHARED_CONST uint IZB_COUNTER_PAIRS = 14u;         // compute trace: (triangle, texel) pairs requested
-SHARED_CONST uint IZB_COUNTER_BOUNDS = 16u;        // 4 uints: ordered min x, min y, max x, max y
+// Compute trace and compute CSM (each counter pair: [trace, CSM]).
+SHARED_CONST uint IZB_COUNTER_RECORDS = 12u;       // 2 uints: tile-row records requested
+SHARED_CONST uint IZB_COUNTER_TILE_PAIRS = 14u;    // 2 uints: (triangle, tile) pairs requested
+SHARED_CONST uint IZB_COUNTER_PAIRS = 16u;         // trace: (triangle, texel) pairs requested
 SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
-SHARED_CONST uint IZB_COUNTER_CHUNK_DISPATCH = 24u;// 3 uints: indirect dispatch over chunk records
-SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 28u; // 3 uints: indirect dispatch over pairs
-SHARED_CONST uint IZB_COUNTER_COUNT = 32u;
+SHARED_CONST uint IZB_COUNTER_RECORD_DISPATCH = 24u;    // 3 uints: over records
+SHARED_CONST uint IZB_COUNTER_TILE_PAIR_DISPATCH = 28u; // 3 uints: over tile pairs
+SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel pairs
+SHARED_CONST uint IZB_COUNTER_COUNT = 36u;
 
-// Compute trace and compute CSM: each caster triangle's light-space rows are cut into row pieces (a
-// record: triangle, row, first and last texel) of at most kIzbRecordTexels texels, enumerated from the
-// triangle's exact extent in each row (so thin diagonal triangles cost their texels, not their
-// bounding box). A workgroup of kIzbRecordLanes threads takes kIzbRecordsPerGroup records, a thread
-// per texel, so a large triangle spreads over many workgroups instead of serializing one thread. The
-// three are specialization constants 0..2: on a GPU one short record per workgroup (idle subgroups
-// exit at once); on a CPU device, which pays for every workgroup and runs every invocation, many long
-// records per narrow workgroup. Dispatches use rows of kIzbDispatchRow workgroups (the portable limit
-// per dimension is 65535).
-SHARED_CONST uint kIzbRecordLanesGpu = 64u;
+// Compute trace and compute CSM, hierarchically over light-space tiles of kIzbTile² texels (each
+// tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
+//  1. a thread per caster triangle walks its rows of tiles and cuts each row's exact span into
+//     records (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles;
+//  2. a thread per (record, tile) keeps the (triangle, tile) pairs the triangle touches (and, for the
+//     trace, does not lie behind every node of);
+//  3. a workgroup per (triangle, tile), a thread per texel: the CSM writes fully covered texels, the
+//     trace keeps the (triangle, texel) pairs that touch and survive the texel's farthest-node cull;
+//  4. trace only: a thread per (triangle, texel) walks the texel's list.
+// Each step's output is appended densely (one atomic per subgroup), so a large triangle spreads over
+// many workgroups instead of serializing a thread. Step 2's workgroup shape is a specialization
+// constant pair (ids 0, 1): on a GPU a record per workgroup (idle subgroups exit at once); on a CPU
+// device, which pays for every workgroup, many records per workgroup; likewise step 3's tile pairs per
+// workgroup (id 2). Dispatches use rows of kIzbDispatchRow workgroups (the portable limit per
+// dimension is 65535).
+SHARED_CONST uint kIzbTile = 16u;
+SHARED_CONST uint kIzbRecordTiles = 32u;
 SHARED_CONST uint kIzbRecordsPerGroupGpu = 1u;
-SHARED_CONST uint kIzbRecordTexelsGpu = 64u;
-SHARED_CONST uint kIzbRecordLanesCpu = 8u;
 SHARED_CONST uint kIzbRecordsPerGroupCpu = 64u;
-SHARED_CONST uint kIzbRecordTexelsCpu = 4096u;
+SHARED_CONST uint kIzbTilePairsPerGroupGpu = 1u;
+SHARED_CONST uint kIzbTilePairsPerGroupCpu = 16u;
 SHARED_CONST uint kIzbDispatchRow = 32768u;
 SHARED_CONST uint kIzbPairGroup = 64u;             // pairs per workgroup of the compute trace
 
@@ -103,12 +111,14 @@ SHARED_CONST uint IZB_BINDING_OVERFLOW_LIST = 17u;
 SHARED_CONST uint IZB_BINDING_CSM_DEPTH = 18u;
 SHARED_CONST uint IZB_BINDING_OCCLUDER_DISTANCE = 19u;  // per pixel: nearest occluder's light depth above it
 SHARED_CONST uint IZB_BINDING_GRID_TRIANGLES = 20u;     // per caster triangle: 3 vec4 (grid x, grid y, light depth, -)
-SHARED_CONST uint IZB_BINDING_CHUNKS = 21u;             // uvec4 records {triangle, row, first texel, last texel}
+SHARED_CONST uint IZB_BINDING_RECORDS = 21u;             // uvec4 records {triangle, tile row, first tile, last tile}
 SHARED_CONST uint IZB_BINDING_PAIRS = 22u;              // uvec2 {triangle, texel} surviving the depth cull
 SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;    // per fit workgroup: vec4 (min x, min y, max x, max y)
 SHARED_CONST uint IZB_BINDING_TRIANGLE_DRAW = 24u;      // per caster triangle: its caster draw's ordinal
 SHARED_CONST uint IZB_BINDING_DRAW_FLAGS = 25u;         // per caster draw: IZB_DRAW_* bits for this frame
 SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;         // compute CSM: ordered depth bits per texel
+SHARED_CONST uint IZB_BINDING_TILE_PAIRS = 27u;         // uvec2 {triangle, tile}
+SHARED_CONST uint IZB_BINDING_TILE_FARTHEST = 28u;      // per tile: its farthest node depth (float bits)
 
 SHARED_CONST uint IZB_DRAW_IN_CSM = 1u;
 
@@ -129,17 +139,20 @@ struct IzbComputePush {
   float soft_distance;  // hybrid: occluder distance (world units) at which the shadow is fully soft
 };
 
-// push.mode of the chunk emitter and of the dispatch-argument pass.
-SHARED_CONST uint IZB_CHUNKS_FOR_TRACE = 0u;
-SHARED_CONST uint IZB_CHUNKS_FOR_CSM_HERTEL = 1u;
-SHARED_CONST uint IZB_CHUNKS_FOR_CSM_BARYCENTRIC = 2u;
-SHARED_CONST uint IZB_ARGS_PAIRS = 16u;  // else: the IZB_CHUNKS_FOR_* mode whose records to dispatch
+// push.mode of the compute trace/CSM passes: what the work is for.
+SHARED_CONST uint IZB_WORK_TRACE = 0u;
+SHARED_CONST uint IZB_WORK_CSM_HERTEL = 1u;
+SHARED_CONST uint IZB_WORK_CSM_BARYCENTRIC = 2u;
+// push.debug of the dispatch-argument pass: which step's work to dispatch.
+SHARED_CONST uint IZB_ARGS_RECORDS = 0u;
+SHARED_CONST uint IZB_ARGS_TILE_PAIRS = 1u;
+SHARED_CONST uint IZB_ARGS_PAIRS = 2u;
 
 SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::IzbFrame) == 80);
-static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 2 * 16);
+static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
 #endif
 #endif

@@ -199,7 +199,8 @@ json stats_json(const shadows::Stats& s) {
   c["expensive_path_pixels"] = s.expensive_path_pixels;
   c["blurred_pixels"] = s.blurred_pixels;
   c["trace_pairs"] = s.trace_pairs;
-  c["trace_chunks"] = s.trace_chunks;
+  c["trace_records"] = s.trace_records;
+  c["trace_tile_pairs"] = s.trace_tile_pairs;
   return c;
 }
 

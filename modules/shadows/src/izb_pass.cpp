@@ -42,12 +42,14 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_CSM_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
           {gpu_shared::IZB_BINDING_OCCLUDER_DISTANCE, storage},
           {gpu_shared::IZB_BINDING_GRID_TRIANGLES, storage},
-          {gpu_shared::IZB_BINDING_CHUNKS, storage},
+          {gpu_shared::IZB_BINDING_RECORDS, storage},
           {gpu_shared::IZB_BINDING_PAIRS, storage},
           {gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, storage},
           {gpu_shared::IZB_BINDING_TRIANGLE_DRAW, storage},
           {gpu_shared::IZB_BINDING_DRAW_FLAGS, storage},
-          {gpu_shared::IZB_BINDING_CSM_TEXELS, storage}};
+          {gpu_shared::IZB_BINDING_CSM_TEXELS, storage},
+          {gpu_shared::IZB_BINDING_TILE_PAIRS, storage},
+          {gpu_shared::IZB_BINDING_TILE_FARTHEST, storage}};
 }
 
 uint32_t debug_code(DebugView debug) {
@@ -65,13 +67,18 @@ struct IzbPass::Impl {
   PipelineFactory factory;
   Pipeline fit, setup, build, fallback, resolve, list_stats;
   Pipeline trace_software, trace_hardware, count_software, count_hardware, depth_fill;
-  Pipeline grid_setup, chunk_emit, chunk_bin, trace_compute, dispatch_args;
+  Pipeline grid_setup, tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
   Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
-  Buffer grid_triangles, triangle_draw, draw_flags, chunks, pairs, bounds_partials, csm_texels;
-  uint64_t chunk_capacity = 0, chunk_demand = 0;
-  uint64_t pair_capacity = 0, pair_demand = 0;
+  Buffer grid_triangles, triangle_draw, draw_flags, bounds_partials, csm_texels, tile_farthest;
+  // Compute trace / CSM work lists (see izb.h), each grown to the demand a frame measured.
+  struct WorkList {
+    Buffer buffer;
+    uint64_t capacity = 0, demand = 0;
+  };
+  WorkList records, tile_pairs, pairs;
+  uint32_t tiles_per_side = 0;
   uint32_t caster_draws = 0;
   BackendProbe trace_probe{"frustum_trace"};
   BackendProbe csm_probe{"csm"};
@@ -101,16 +108,18 @@ struct IzbPass::Impl {
     resolve = factory.compute({"izb_resolve.comp", bindings, push});
     list_stats = factory.compute({"izb_list_stats.comp", bindings, push});
     grid_setup = factory.compute({"izb_triangles.comp", bindings, push});
-    // Record shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
+    // Workgroup shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
     const bool cpu = c.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-    const std::vector<SpecializationConstant> record_shape = {
-        {0, cpu ? gpu_shared::kIzbRecordLanesCpu : gpu_shared::kIzbRecordLanesGpu},
+    const std::vector<SpecializationConstant> shape = {
+        {0, cpu ? 8u : 32u},
         {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
-        {2, cpu ? gpu_shared::kIzbRecordTexelsCpu : gpu_shared::kIzbRecordTexelsGpu}};
-    chunk_emit = factory.compute({"izb_chunks.comp", bindings, push, record_shape});
-    chunk_bin = factory.compute({"izb_chunk_bin.comp", bindings, push, record_shape});
-    trace_compute = factory.compute({"izb_trace.comp", bindings, push});
-    dispatch_args = factory.compute({"izb_dispatch_args.comp", bindings, push, record_shape});
+        {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu}};
+    tile_records = factory.compute({"izb_records.comp", bindings, push, shape});
+    tile_bin = factory.compute({"izb_tile_bin.comp", bindings, push, shape});
+    texel_bin = factory.compute({"izb_texel_bin.comp", bindings, push, shape});
+    tile_far = factory.compute({"izb_tile_farthest.comp", bindings, push, shape});
+    trace_compute = factory.compute({"izb_trace.comp", bindings, push, shape});
+    dispatch_args = factory.compute({"izb_dispatch_args.comp", bindings, push, shape});
     if (!c.features().subgroup_arithmetic_compute_fragment)
       throw VulkanError("the IZB needs subgroup arithmetic in compute and fragment shaders, which " +
                         c.device_name() + " lacks");
@@ -189,6 +198,9 @@ struct IzbPass::Impl {
       const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
       heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
       csm_texels = Buffer(ctx, texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "csm compute depths");
+      tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
+      tile_farthest = Buffer(ctx, VkDeviceSize(tiles_per_side) * tiles_per_side * 4, usage, false,
+                             "izb farthest node depth per tile");
       farthest = Buffer(ctx, texels * 4, usage, false, "izb farthest node depth");
       trace_depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
                           VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
@@ -274,28 +286,21 @@ struct IzbPass::Impl {
     triangle_source_meshes = std::move(meshes);
   }
 
-  // Chunk and pair buffers for the compute passes: first sized from the scene, then grown to the
-  // demand a frame measured (a frame that overflows still finishes exactly, only slower).
-  // Unused (raster passes only): small placeholders keep every binding valid.
-  void ensure_compute_buffers(bool used) {
-    const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-    if (!used) {
-      if (!chunks.valid()) chunks = Buffer(ctx, 16, usage, false, "izb chunk records (unused)");
-      if (!pairs.valid()) pairs = Buffer(ctx, 16, usage, false, "izb trace pairs (unused)");
-      return;
-    }
-    const uint64_t want_chunks =
-        std::max<uint64_t>({uint64_t(triangle_count) * 4, uint64_t(resolution) * resolution / 32, 16384, chunk_demand});
-    if (want_chunks > chunk_capacity) {
-      chunk_capacity = want_chunks;
-      chunks = Buffer(ctx, chunk_capacity * 16, usage, false, "izb row records");
-    }
-    const uint64_t want_pairs = std::max<uint64_t>(
-        {uint64_t(triangle_count) * 4, uint64_t(resolution) * resolution / 2, 65536, pair_demand});
-    if (want_pairs > pair_capacity) {
-      pair_capacity = want_pairs;
-      pairs = Buffer(ctx, pair_capacity * 8, usage, false, "izb trace pairs");
-    }
+  // The compute passes' work lists: first sized from the scene and grid, then grown to the demand a
+  // frame measured (a frame that overflows still finishes exactly, only slower). Unused (raster
+  // passes only): small placeholders keep every binding valid.
+  void ensure_work_lists(bool used) {
+    auto ensure = [&](WorkList& list, uint64_t initial, VkDeviceSize stride, const char* name) {
+      const uint64_t want = used ? std::max(initial, list.demand) : 1;
+      if (list.buffer.valid() && want <= list.capacity) return;
+      list.capacity = want;
+      list.buffer = Buffer(ctx, want * stride, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, name);
+    };
+    const uint64_t tiles = uint64_t(tiles_per_side) * tiles_per_side;
+    ensure(records, std::max<uint64_t>(uint64_t(triangle_count) * 2, 16384), 16, "izb tile-row records");
+    ensure(tile_pairs, std::max<uint64_t>({uint64_t(triangle_count) * 4, tiles * 4, 65536}), 8, "izb tile pairs");
+    ensure(pairs, std::max<uint64_t>({uint64_t(triangle_count) * 4, uint64_t(resolution) * resolution / 2, 65536}), 8,
+           "izb texel pairs");
   }
 
   void push_all(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p) {
@@ -320,8 +325,10 @@ struct IzbPass::Impl {
         .storage_buffer(gpu_shared::IZB_BINDING_OVERFLOW_LIST, overflow_list.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_OCCLUDER_DISTANCE, occluder_distance.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_GRID_TRIANGLES, grid_triangles.handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_CHUNKS, chunks.handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_PAIRS, pairs.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_RECORDS, records.buffer.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_TILE_PAIRS, tile_pairs.buffer.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_PAIRS, pairs.buffer.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_TILE_FARTHEST, tile_farthest.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, bounds_partials.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLE_DRAW, triangle_draw.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_DRAW_FLAGS, draw_flags.handle())
@@ -351,21 +358,33 @@ struct IzbPass::Impl {
     vkCmdDispatchIndirect(cmd, counters.handle(), VkDeviceSize(counter) * 4);
   }
 
-  // Compute trace / compute CSM over caster triangles: chunk records of their texel boxes, then one
-  // workgroup per record (`mode`: IZB_CHUNKS_FOR_*).
-  // Nested profiler regions name the steps ("<region>_chunks", "<region>_bin").
-  void record_chunk_work(VkCommandBuffer cmd, const engine::FrameContext& frame, gpu_shared::IzbComputePush push,
-                         uint32_t mode, const std::string& region) {
+  void dispatch_step(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+                     gpu_shared::IzbComputePush push, uint32_t args, uint32_t counter) {
+    gpu_shared::IzbComputePush a = push;
+    a.debug = args;
+    dispatch(cmd, frame, dispatch_args, a, 1);
+    full_barrier(cmd);
+    dispatch_indirect(cmd, frame, p, push, counter);
+  }
+
+  // Compute trace / compute CSM, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*), each step in a nested
+  // profiler region "<region>_records", "<region>_tiles", "<region>_texels".
+  void record_tile_work(VkCommandBuffer cmd, const engine::FrameContext& frame, gpu_shared::IzbComputePush push,
+                        uint32_t mode, const std::string& region) {
     push.mode = mode;
     {
-      ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_chunks");
-      dispatch(cmd, frame, chunk_emit, push, (triangle_count + 63) / 64);
-      full_barrier(cmd);
-      dispatch(cmd, frame, dispatch_args, push, 1);
-      full_barrier(cmd);
+      ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
+      dispatch(cmd, frame, tile_records, push, (triangle_count + 63) / 64);
     }
-    ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_bin");
-    dispatch_indirect(cmd, frame, chunk_bin, push, gpu_shared::IZB_COUNTER_CHUNK_DISPATCH);
+    full_barrier(cmd);
+    {
+      ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_tiles");
+      dispatch_step(cmd, frame, tile_bin, push, gpu_shared::IZB_ARGS_RECORDS, gpu_shared::IZB_COUNTER_RECORD_DISPATCH);
+    }
+    full_barrier(cmd);
+    ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_texels");
+    dispatch_step(cmd, frame, texel_bin, push, gpu_shared::IZB_ARGS_TILE_PAIRS,
+                  gpu_shared::IZB_COUNTER_TILE_PAIR_DISPATCH);
   }
 };
 
@@ -425,7 +444,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   m.used_compute_trace = use_compute_trace;
   m.used_compute_csm = use_compute_csm;
   m.last_used_csm = run_csm;
-  m.ensure_compute_buffers(use_compute_trace || use_compute_csm);
+  m.ensure_work_lists(use_compute_trace || use_compute_csm);
   if (use_compute_csm) {
     // Per caster draw: whether it enters the CSM this frame.
     const auto& chosen = m.csm->chosen_draws();
@@ -471,8 +490,9 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   p.depth_range = glm::vec4(near_d, far_d, 0.0f, 0.0f);
   p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.resolution, m.samples);
   p.limits = glm::uvec4(uint32_t(std::min<uint64_t>(m.pool_size, UINT32_MAX)), flags,
-                        uint32_t(std::min<uint64_t>(m.chunk_capacity, UINT32_MAX)),
-                        uint32_t(std::min<uint64_t>(m.pair_capacity, UINT32_MAX)));
+                        uint32_t(std::min<uint64_t>(m.records.capacity, UINT32_MAX)),
+                        uint32_t(std::min<uint64_t>(m.pairs.capacity, UINT32_MAX)));
+  p.capacities = glm::uvec4(uint32_t(std::min<uint64_t>(m.tile_pairs.capacity, UINT32_MAX)), m.tiles_per_side, 0u, 0u);
   m.params.write(&p, sizeof(p));
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, soft_distance};
 
@@ -492,14 +512,14 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   full_barrier(cmd);
   if (run_csm) {
     if (use_compute_csm) {
-      const uint32_t mode = settings.csm_test == CsmTest::Hertel ? gpu_shared::IZB_CHUNKS_FOR_CSM_HERTEL
-                                                                 : gpu_shared::IZB_CHUNKS_FOR_CSM_BARYCENTRIC;
+      const uint32_t mode = settings.csm_test == CsmTest::Hertel ? gpu_shared::IZB_WORK_CSM_HERTEL
+                                                                 : gpu_shared::IZB_WORK_CSM_BARYCENTRIC;
       m.csm->record(
           frame, settings, m.frame_data, m.resolution,
           [&](VkCommandBuffer c) {
             vkCmdFillBuffer(c, m.csm_texels.handle(), 0, VK_WHOLE_SIZE, 0x3f800000u);  // 1.0: nothing stored
             full_barrier(c);
-            m.record_chunk_work(c, frame, push, mode, "csm");
+            m.record_tile_work(c, frame, push, mode, "csm");
           },
           &m.csm_texels);
     } else {
@@ -534,17 +554,15 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     vkCmdEndRendering(cmd);
   };
   if (use_compute_trace) {
-    // Chunks of each triangle's texel box -> (triangle, texel) pairs that touch and survive the depth
-    // cull -> one thread per pair walks the texel's list.
+    // Tiles' farthest nodes -> (triangle, tile) pairs not culled -> (triangle, texel) pairs that touch
+    // and survive the texel's cull -> one thread per pair walks the texel's list.
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    m.record_chunk_work(cmd, frame, push, gpu_shared::IZB_CHUNKS_FOR_TRACE, "trace");
+    m.dispatch(cmd, frame, m.tile_far, push, m.tiles_per_side, m.tiles_per_side);
+    full_barrier(cmd);
+    m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_TRACE, "trace");
     full_barrier(cmd);
     ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "trace_pairs");
-    gpu_shared::IzbComputePush args = push;
-    args.mode = gpu_shared::IZB_ARGS_PAIRS;
-    m.dispatch(cmd, frame, m.dispatch_args, args, 1);
-    full_barrier(cmd);
-    m.dispatch_indirect(cmd, frame, m.trace_compute, push, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
+    m.dispatch_step(cmd, frame, m.trace_compute, push, gpu_shared::IZB_ARGS_PAIRS, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
   } else {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
     draw_trace(use_hardware ? m.trace_hardware : m.trace_software,
@@ -621,15 +639,17 @@ void IzbPass::after_frame(Stats& s) {
   s.trace_choice = m.trace_probe.choice();
   if (m.last_used_csm) s.csm_choice = m.csm_probe.choice();
   if (m.used_compute_trace) {
-    s.trace_chunks = c[gpu_shared::IZB_COUNTER_CHUNKS];
+    s.trace_records = c[gpu_shared::IZB_COUNTER_RECORDS];
+    s.trace_tile_pairs = c[gpu_shared::IZB_COUNTER_TILE_PAIRS];
     s.trace_pairs = c[gpu_shared::IZB_COUNTER_PAIRS];
-    s.trace_pair_capacity = m.pair_capacity;
   }
-  // Grow the compute passes' buffers to what this frame asked for.
-  const uint64_t chunks_asked = std::max(c[gpu_shared::IZB_COUNTER_CHUNKS], c[gpu_shared::IZB_COUNTER_CSM_CHUNKS]);
-  if (chunks_asked > m.chunk_capacity) m.chunk_demand = uint64_t(double(chunks_asked) * 1.25);
-  if (c[gpu_shared::IZB_COUNTER_PAIRS] > m.pair_capacity)
-    m.pair_demand = uint64_t(double(c[gpu_shared::IZB_COUNTER_PAIRS]) * 1.25);
+  // Grow the compute passes' work lists to what this frame asked for (trace or CSM, whichever more).
+  auto grow = [](Impl::WorkList& list, uint64_t asked) {
+    if (asked > list.capacity) list.demand = uint64_t(double(asked) * 1.25);
+  };
+  grow(m.records, std::max(c[gpu_shared::IZB_COUNTER_RECORDS], c[gpu_shared::IZB_COUNTER_RECORDS + 1]));
+  grow(m.tile_pairs, std::max(c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]));
+  grow(m.pairs, c[gpu_shared::IZB_COUNTER_PAIRS]);
   m.csm->note_yield(s.culling_rate);
   m.csm->after_frame(s);
   // Grow the pool for the next frame when this one overflowed (unless a fixed size was asked for).

@@ -136,9 +136,10 @@ struct Stats {
   };
   BackendChoice trace_choice;
   BackendChoice csm_choice;
-  uint64_t trace_pairs = 0;           // compute trace: (triangle, texel) pairs after the depth cull
-  uint64_t trace_pair_capacity = 0;
-  uint64_t trace_chunks = 0;          // compute trace: chunk records of triangle texel boxes
+  // Compute trace work: tile-row records, (triangle, tile) pairs kept, (triangle, texel) pairs kept.
+  uint64_t trace_records = 0;
+  uint64_t trace_tile_pairs = 0;
+  uint64_t trace_pairs = 0;
   // Cascades
   double expensive_path_fraction = 0.0;
   uint64_t expensive_path_pixels = 0;

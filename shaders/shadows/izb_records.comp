@@ -1,0 +1,47 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows/izb_prelude.glsl"
+#include "shadows/izb_tiles.glsl"
+layout(local_size_x = 64) in;
+
+layout(push_constant) uniform Push { IzbComputePush push; };
+
+// Compute trace / compute CSM, step 1 (see izb.h): a thread per caster triangle walks its rows of
+// tiles and cuts each row's span into records of at most kIzbRecordTiles tiles (a subgroup reserves
+// its records with one atomic). A record that does not fit the buffer is worked here, so nothing is
+// dropped; the request count grows the buffer for the next frame.
+void main() {
+  uint t = gl_GlobalInvocationID.x;
+  uint mode = push.mode;
+  vec3 a = vec3(0.0), b = vec3(0.0), c = vec3(0.0);
+  float area = 0.0;
+  ivec2 rows = ivec2(0, -1);
+  if (t < push.triangle_count && triangle_wanted(t, mode)) {
+    load_grid_triangle(t, a, b, c);
+    area = edge_fn(c.xy, a.xy, b.xy);
+    if (abs(area) > 1.0e-10) rows = triangle_tile_rows(a, b, c);
+  }
+  uint count = 0u;
+  for (int r = rows.x; r <= rows.y; ++r) {
+    ivec2 span = triangle_tile_span(a, b, c, r);
+    if (span.x <= span.y) count += (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
+  }
+  uint offset = subgroupExclusiveAdd(count);
+  uint total = subgroupAdd(count);
+  uint base = 0u;
+  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_RECORDS + work_slot(mode)], total);
+  uint slot = subgroupBroadcastFirst(base) + offset;
+  for (int r = rows.x; r <= rows.y && count > 0u; ++r) {
+    ivec2 span = triangle_tile_span(a, b, c, r);
+    for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {
+      int last = min(x + int(kIzbRecordTiles) - 1, span.y);
+      if (slot < params.limits.z) {
+        records[slot] = uvec4(t, uint(r), uint(x), uint(last));
+      } else {
+        for (int k = x; k <= last; ++k)
+          if (tile_survives(uvec2(k, r), a, b, c, area, mode)) work_tile_here(uvec2(k, r), a, b, c, area, mode);
+      }
+      ++slot;
+    }
+  }
+}

@@ -1,0 +1,56 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows/izb_prelude.glsl"
+#include "shadows/izb_tiles.glsl"
+layout(local_size_x = kIzbTile, local_size_y = kIzbTile) in;
+
+layout(push_constant) uniform Push { IzbComputePush push; };
+
+// Compute trace / compute CSM, step 3 (see izb.h): a thread per texel of kIzbTilePairsPerGroup
+// (triangle, tile) pairs. The CSM writes fully covered texels' depth bounds; the trace keeps the
+// (triangle, texel) pairs that touch and survive the texel's farthest-node cull, appended densely so
+// the list walks of step 4 fill every lane. A pair that does not fit the buffer is traced here.
+void main() {
+  uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
+  uint mode = push.mode;
+  uint count = tile_pair_count(mode);
+  uint fragments = 0u, kept = 0u;
+  for (uint k = 0u; k < kIzbTilePairsPerGroup; ++k) {
+    uint index = group * kIzbTilePairsPerGroup + k;
+    if (index >= count) break;  // uniform over the workgroup
+    uvec2 pair = tile_pairs[index];
+    vec3 a, b, c;
+    load_grid_triangle(pair.x, a, b, c);
+    float area = edge_fn(c.xy, a.xy, b.xy);
+    uvec2 tile = uvec2(pair.y % tiles_per_side(), pair.y / tiles_per_side());
+    ivec2 texel = ivec2(tile * kIzbTile + gl_LocalInvocationID.xy);
+    bool inside = all(lessThan(uvec2(texel), uvec2(izb_resolution())));
+    if (mode != IZB_WORK_TRACE) {
+      if (inside) csm_texel(texel, a, b, c, area, mode);
+      continue;
+    }
+    uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;
+    bool keep = outcome == IZB_PAIR_KEPT;
+    uint want = keep ? 1u : 0u;
+    uint offset = subgroupExclusiveAdd(want);
+    uint total = subgroupAdd(want);
+    uint base = 0u;
+    if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_PAIRS], total);
+    base = subgroupBroadcastFirst(base);
+    if (keep) {
+      uint slot = base + offset;
+      if (slot < params.limits.w) pairs[slot] = uvec2(pair.x, texel_index(texel));
+      else trace_texel_list(texel_index(texel), a, b, c, 1.0 / area);
+    }
+    fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
+    kept += want;
+  }
+  if (izb_flag(IZB_FLAG_STATS) && mode == IZB_WORK_TRACE) {
+    uint f = subgroupAdd(fragments);
+    uint k = subgroupAdd(kept);
+    if (subgroupElect()) {
+      if (f > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS], f);
+      if (k > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS_KEPT], k);
+    }
+  }
+}

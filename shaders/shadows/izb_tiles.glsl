@@ -1,0 +1,146 @@
+// The compute trace and compute CSM over light-space tiles (see izb.h), shared by their passes.
+// Include after izb_prelude.glsl.
+#include "csm.h"
+
+layout(set = 0, binding = IZB_BINDING_RECORDS, std430) buffer Records { uvec4 records[]; };
+layout(set = 0, binding = IZB_BINDING_TILE_PAIRS, std430) buffer TilePairs { uvec2 tile_pairs[]; };
+layout(set = 0, binding = IZB_BINDING_PAIRS, std430) buffer Pairs { uvec2 pairs[]; };
+layout(set = 0, binding = IZB_BINDING_TRIANGLE_DRAW, std430) readonly buffer TriangleDraw { uint triangle_draw[]; };
+layout(set = 0, binding = IZB_BINDING_DRAW_FLAGS, std430) readonly buffer DrawFlags { uint draw_flags[]; };
+layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
+layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest { uint tile_farthest[]; };
+
+layout(constant_id = 0) const uint kIzbTileStepLanes = 32u;
+layout(constant_id = 1) const uint kIzbRecordsPerGroup = kIzbRecordsPerGroupGpu;
+layout(constant_id = 2) const uint kIzbTilePairsPerGroup = kIzbTilePairsPerGroupGpu;
+
+uint tiles_per_side() { return params.capacities.y; }
+// Counter slot of the work: [0] trace, [1] CSM.
+uint work_slot(uint mode) { return mode == IZB_WORK_TRACE ? 0u : 1u; }
+uint record_count(uint mode) { return min(counters[IZB_COUNTER_RECORDS + work_slot(mode)], params.limits.z); }
+uint tile_pair_count(uint mode) {
+  return min(counters[IZB_COUNTER_TILE_PAIRS + work_slot(mode)], params.capacities.x);
+}
+
+bool triangle_wanted(uint t, uint mode) {
+  return mode == IZB_WORK_TRACE || (draw_flags[triangle_draw[t]] & IZB_DRAW_IN_CSM) != 0u;
+}
+
+// The rows of tiles [first, last] a triangle's bounds touch (empty when first > last).
+ivec2 triangle_tile_rows(vec3 a, vec3 b, vec3 c) {
+  float tile = float(kIzbTile);
+  float lo = floor((min(min(a.y, b.y), c.y) - 2.0e-3) / tile);
+  float hi = floor((max(max(a.y, b.y), c.y) + 2.0e-3) / tile);
+  return ivec2(clamp(lo, 0.0, float(tiles_per_side())), clamp(hi, -1.0, float(tiles_per_side()) - 1.0));
+}
+
+// The tiles [first, last] of tile row `row` the triangle may touch: its exact x-extent over the row's
+// band (vertices inside it, edges crossing its two lines), widened by more than the touch test's
+// slack and rounding. Empty when first > last.
+ivec2 triangle_tile_span(vec3 a, vec3 b, vec3 c, int row) {
+  const float slack = 2.0e-3;
+  float tile = float(kIzbTile);
+  float y0 = float(row) * tile - slack, y1 = float(row + 1) * tile + slack;
+  vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
+  float x_lo = 1.0e30, x_hi = -1.0e30;
+  for (int i = 0; i < 3; ++i) {
+    if (p[i].y >= y0 && p[i].y <= y1) {
+      x_lo = min(x_lo, p[i].x);
+      x_hi = max(x_hi, p[i].x);
+    }
+    vec2 e0 = p[i], e1 = p[(i + 1) % 3];
+    if (e0.y == e1.y) continue;
+    for (int k = 0; k < 2; ++k) {
+      float y = k == 0 ? y0 : y1;
+      if ((e0.y - y) * (e1.y - y) > 0.0) continue;
+      float x = e0.x + (y - e0.y) * (e1.x - e0.x) / (e1.y - e0.y);
+      x_lo = min(x_lo, x);
+      x_hi = max(x_hi, x);
+    }
+  }
+  if (x_lo > x_hi) return ivec2(0, -1);
+  float widen = slack + 1.0e-6 * max(abs(x_lo), abs(x_hi));
+  float last = float(tiles_per_side()) - 1.0;
+  return ivec2(clamp(floor((x_lo - widen) / tile), 0.0, last + 1.0), clamp(floor((x_hi + widen) / tile), -1.0, last));
+}
+
+// The texel rectangle [lo, hi) of a tile, clipped to the grid.
+void tile_rect(uvec2 tile, out vec2 lo, out vec2 hi) {
+  lo = vec2(tile * kIzbTile);
+  hi = min(lo + float(kIzbTile), vec2(float(izb_resolution())));
+}
+
+// Step 2: whether the triangle may touch the tile and, for the trace, lie in front of its farthest
+// node somewhere (an empty tile holds 0 and culls everything).
+bool tile_survives(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
+  vec2 lo, hi;
+  tile_rect(tile, lo, hi);
+  if (mode == IZB_WORK_TRACE && !izb_flag(IZB_FLAG_NO_DEPTH_CULL)) {
+    float farthest_node = uintBitsToFloat(tile_farthest[tile.y * tiles_per_side() + tile.x]);
+    if (farthest_node <= 0.0 || triangle_nearest_depth(lo, hi, a, b, c, area) >= farthest_node) return false;
+  }
+  return rect_touches_triangle(lo, hi, a, b, c, sign(area));
+}
+
+// Trace: what becomes of a (triangle, texel) pair. The cheap depth cull against the texel's farthest
+// node runs first; the touch test after it, or first when statistics count the fragments before the
+// cull.
+const uint IZB_PAIR_OUTSIDE = 0u;  // the triangle does not touch the texel
+const uint IZB_PAIR_CULLED = 1u;   // touches, but lies behind every node of the texel
+const uint IZB_PAIR_KEPT = 2u;
+uint trace_pair_outcome(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
+  vec2 lo = vec2(texel);
+  bool counting = izb_flag(IZB_FLAG_STATS);
+  if (counting && !rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
+  if (!izb_flag(IZB_FLAG_NO_DEPTH_CULL)) {
+    float farthest_node = uintBitsToFloat(farthest[texel_index(texel)]);
+    if (farthest_node <= 0.0 || triangle_nearest_depth(lo, lo + 1.0, a, b, c, area) >= farthest_node)
+      return IZB_PAIR_CULLED;
+  }
+  if (!counting && !rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
+  return IZB_PAIR_KEPT;
+}
+
+// CSM: where the triangle fully covers the texel (Hertel's or the barycentric test, the same
+// arithmetic as csm.frag), the nearest bound so far of its farthest depth over the texel.
+void csm_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint test) {
+  vec2 lo = vec2(texel);
+  vec2 corners[4] = vec2[4](lo, lo + vec2(1, 0), lo + vec2(0, 1), lo + vec2(1, 1));
+  if (test == IZB_WORK_CSM_HERTEL) {
+    vec2 centre = lo + 0.5;
+    vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
+    for (int i = 0; i < 3; ++i) {
+      vec2 e0 = p[i];
+      vec2 e1 = p[(i + 1) % 3];
+      float distance_in = sign(area) * edge_fn(centre, e0, e1) / length(e1 - e0);
+      if (distance_in < 0.70710678 + kCsmDistanceSlack) return;
+    }
+  }
+  float far_depth = -1.0e30;
+  for (int i = 0; i < 4; ++i) {
+    float w0 = edge_fn(corners[i], b.xy, c.xy) / area;
+    float w1 = edge_fn(corners[i], c.xy, a.xy) / area;
+    float w2 = 1.0 - w0 - w1;
+    if (test == IZB_WORK_CSM_BARYCENTRIC &&
+        (w0 < kCsmBarycentricSlack || w1 < kCsmBarycentricSlack || w2 < kCsmBarycentricSlack))
+      return;
+    far_depth = max(far_depth, w0 * a.z + w1 * b.z + w2 * c.z);
+  }
+  // Depths in [0,1]: float order is bit order.
+  uint bits = floatBitsToUint(clamp(far_depth, 0.0, 1.0));
+  uint index = texel_index(texel);
+  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+}
+
+// Step 3 for one texel of a kept tile, done serially where a buffer overflowed.
+void work_texel_here(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint mode) {
+  if (any(greaterThanEqual(uvec2(texel), uvec2(izb_resolution())))) return;
+  if (mode != IZB_WORK_TRACE) csm_texel(texel, a, b, c, area, mode);
+  else if (trace_pair_outcome(texel, a, b, c, area) == IZB_PAIR_KEPT)
+    trace_texel_list(texel_index(texel), a, b, c, 1.0 / area);
+}
+
+void work_tile_here(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
+  for (uint i = 0u; i < kIzbTile * kIzbTile; ++i)
+    work_texel_here(ivec2(tile * kIzbTile + uvec2(i % kIzbTile, i / kIzbTile)), a, b, c, area, mode);
+}
