@@ -23,7 +23,8 @@ bool link_node(uint node, uint texel, uint pixel_index, float depth) {
 // certainly shadowed.
 bool csm_proves_shadowed(vec3 g) {
   if (!izb_flag(IZB_FLAG_CSM)) return false;
-  float stored = texelFetch(csm_depth, grid_texel(g), 0).r;
+  float stored = izb_flag(IZB_FLAG_CSM_BUFFER) ? uintBitsToFloat(csm_texels[texel_index(grid_texel(g))])
+                                              : texelFetch(csm_depth, grid_texel(g), 0).r;
   return g.z > stored;
 }
 
@@ -110,8 +111,10 @@ void main() {
       atomicMax(counters[IZB_COUNTER_DISPATCH], slot / 64u + 1u);
     }
     pixel_state[index] = state;
-    occluder_distance[index] = floatBitsToUint(1.0e30);
-    visibility_mask[index] = mask;
+    if (candidate != 0u) {  // only candidates' masks and occluder distances are ever read
+      occluder_distance[index] = floatBitsToUint(1.0e30);
+      visibility_mask[index] = mask;
+    }
   }
   uint covered_sum = subgroupAdd(covered);
   uint candidate_sum = subgroupAdd(candidate);

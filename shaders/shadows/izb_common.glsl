@@ -18,6 +18,7 @@ layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Triangl
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
 layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };
 layout(set = 0, binding = IZB_BINDING_GRID_TRIANGLES, std430) buffer GridTriangles { vec4 grid_triangles[]; };
+layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
 
 uint izb_resolution() { return params.extent.z; }
 uint izb_samples() { return params.extent.w; }

@@ -2,35 +2,34 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
 #include "shadows/izb_pixel.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = 16, local_size_y = 16) in;  // each thread 2x2 pixels: a 32x32 block
 
 layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) buffer BoundsPartials { vec4 bounds_partials[]; };
 
-shared vec4 subgroup_bounds[64];
+shared vec4 subgroup_bounds[256];
 
 // Light frustum fit, step 1: light-view x/y bounds of every lit candidate's ray origin (and, at 32
-// spp, its μQuad corners), reduced over the workgroup and written once per workgroup: no atomics,
+// spp, its μQuad corners), reduced over the workgroup's 32x32 pixels and written once per workgroup: no atomics,
 // so no contention on a handful of addresses (izb_setup.comp reduces the partials).
 void main() {
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-  bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
-  if (inside) {
+  for (uint k = 0u; k < 4u; ++k) {
+    ivec2 pixel = ivec2(gl_WorkGroupID.xy * 32u + gl_LocalInvocationID.xy * 2u + uvec2(k & 1u, k >> 1u));
+    if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;
     PixelPoint p = load_pixel(pixel);
-    if (p.candidate) {
-      if (izb_samples() == 32u) {
-        vec3 c[4];
-        micro_quad_corners(pixel, p, c);
-        for (int i = 0; i < 4; ++i) {
-          vec2 v = (params.light_view * vec4(c[i], 1.0)).xy;
-          lo = min(lo, v);
-          hi = max(hi, v);
-        }
-      } else {
-        vec2 v = (params.light_view * vec4(shadow_ray_origin(p.position, p.normal), 1.0)).xy;
-        lo = v;
-        hi = v;
+    if (!p.candidate) continue;
+    if (izb_samples() == 32u) {
+      vec3 c[4];
+      micro_quad_corners(pixel, p, c);
+      for (int i = 0; i < 4; ++i) {
+        vec2 v = (params.light_view * vec4(c[i], 1.0)).xy;
+        lo = min(lo, v);
+        hi = max(hi, v);
       }
+    } else {
+      vec2 v = (params.light_view * vec4(shadow_ray_origin(p.position, p.normal), 1.0)).xy;
+      lo = min(lo, v);
+      hi = max(hi, v);
     }
   }
   lo = subgroupMin(lo);

@@ -26,7 +26,7 @@ void main() {
   PixelPoint p = load_pixel(pixel);
   if (!p.covered) return;
   uint state = pixel_state[index];
-  uint mask = visibility_mask[index];
+  uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
   float visibility;
   bool facing = dot(p.normal, -params.light_direction.xyz) > 0.0;
   float max_distance = params.camera_position.w;

@@ -11,7 +11,7 @@ shared vec4 subgroup_bounds[256];
 // plus a one-texel border (so no point sits on the grid's edge), and whose depth range spans the
 // casters (from the CPU, which knows their bounds).
 void main() {
-  uint partials = ((params.extent.x + 7u) / 8u) * ((params.extent.y + 7u) / 8u);
+  uint partials = ((params.extent.x + 31u) / 32u) * ((params.extent.y + 31u) / 32u);
   vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
   for (uint i = gl_LocalInvocationIndex; i < partials; i += gl_WorkGroupSize.x) {
     vec4 p = bounds_partials[i];

@@ -7,7 +7,6 @@ layout(set = 0, binding = IZB_BINDING_TILE_PAIRS, std430) buffer TilePairs { uve
 layout(set = 0, binding = IZB_BINDING_PAIRS, std430) buffer Pairs { uvec2 pairs[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLE_DRAW, std430) readonly buffer TriangleDraw { uint triangle_draw[]; };
 layout(set = 0, binding = IZB_BINDING_DRAW_FLAGS, std430) readonly buffer DrawFlags { uint draw_flags[]; };
-layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
 layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest { uint tile_farthest[]; };
 
 layout(constant_id = 0) const uint kIzbTileStepLanes = 32u;

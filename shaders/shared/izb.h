@@ -30,6 +30,7 @@ SHARED_CONST uint IZB_FLAG_CSM = 1u;
 SHARED_CONST uint IZB_FLAG_PROGRESSIVE = 4u;
 SHARED_CONST uint IZB_FLAG_STATS = 16u;
 SHARED_CONST uint IZB_FLAG_NO_DEPTH_CULL = 32u;  // compute trace: test every touched texel's list
+SHARED_CONST uint IZB_FLAG_CSM_BUFFER = 64u;     // the CSM is the compute pass's buffer, not the depth image
 
 // A list node is a uvec2 {next node, pixel}. Each pixel's light-space data lives once in the
 // "quads" buffer: 1 spp: its ray origin (grid x, grid y, light depth); 32 spp: the four μQuad corners

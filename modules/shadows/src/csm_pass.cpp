@@ -272,7 +272,7 @@ void CsmPass::note_yield(double culling_rate) {
 }
 
 void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, const Buffer& izb_frame,
-                     uint32_t resolution, const std::function<void(VkCommandBuffer)>& compute_fill,
+                     uint32_t resolution, bool collect_stats, const std::function<void(VkCommandBuffer)>& compute_fill,
                      const Buffer* compute_texels) {
   Impl& m = *impl_;
   std::string why;
@@ -280,16 +280,9 @@ void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, c
     throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " is unavailable: " + why);
   if (m.depth.extent().width != resolution) throw std::logic_error("CsmPass::prepare was not called");
   VkCommandBuffer cmd = frame.cmd;
-  vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
   if (compute_fill) {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm");
     compute_fill(cmd);
-    memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-    VkBufferImageCopy copy{};
-    copy.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
-    copy.imageExtent = {resolution, resolution, 1};
-    vkCmdCopyBufferToImage(cmd, compute_texels->handle(), m.depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
   } else {
     const Pipeline& p = m.pipeline(settings.csm_test);
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm");
@@ -314,21 +307,30 @@ void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, c
     }
     vkCmdEndRendering(cmd);
   }
-  full_barrier(cmd);
-  {
-    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm_coverage");
-    m.coverage.bind(cmd);
-    DescriptorWriter()
-        .storage_buffer(gpu_shared::CSM_BINDING_FRAME, izb_frame.handle())
-        .storage_buffer(gpu_shared::CSM_BINDING_COUNTERS, m.counters.handle())
-        .sampled_image(gpu_shared::CSM_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-        .push(m.ctx, cmd, m.coverage);
-    vkCmdDispatch(cmd, (resolution + 7) / 8, (resolution + 7) / 8, 1);
+  if (!collect_stats) return;
+  // Statistics only: the covered-texel count (from the map, which the compute pass fills by a copy).
+  ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm_coverage");
+  if (compute_fill) {
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
+    copy.imageExtent = {resolution, resolution, 1};
+    vkCmdCopyBufferToImage(cmd, compute_texels->handle(), m.depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
   }
+  vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
+  full_barrier(cmd);
+  m.coverage.bind(cmd);
+  DescriptorWriter()
+      .storage_buffer(gpu_shared::CSM_BINDING_FRAME, izb_frame.handle())
+      .storage_buffer(gpu_shared::CSM_BINDING_COUNTERS, m.counters.handle())
+      .sampled_image(gpu_shared::CSM_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+      .push(m.ctx, cmd, m.coverage);
+  vkCmdDispatch(cmd, (resolution + 7) / 8, (resolution + 7) / 8, 1);
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-  VkBufferCopy copy{0, 0, m.counters.size()};
-  vkCmdCopyBuffer(cmd, m.counters.handle(), m.readback.handle(), 1, &copy);
+  VkBufferCopy counts{0, 0, m.counters.size()};
+  vkCmdCopyBuffer(cmd, m.counters.handle(), m.readback.handle(), 1, &counts);
   m.collected = true;
 }
 

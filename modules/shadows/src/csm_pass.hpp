@@ -52,9 +52,10 @@ class CsmPass {
   void note_yield(double culling_rate);
   // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`. With
   // `compute_fill`, that callback records compute work leaving the depths (float bits, [0,1]) in
-  // `compute_texels`, which are copied into the map instead of rasterizing.
+  // `compute_texels` instead, which the IZB build reads directly; only statistics (the covered-texel
+  // count, with `collect_stats`) copy them into the map.
   void record(engine::FrameContext& frame, const IzbSettings& settings, const engine::gpu::Buffer& izb_frame,
-              uint32_t resolution, const std::function<void(VkCommandBuffer)>& compute_fill = {},
+              uint32_t resolution, bool collect_stats, const std::function<void(VkCommandBuffer)>& compute_fill = {},
               const engine::gpu::Buffer* compute_texels = nullptr);
   void after_frame(Stats& stats);
   std::vector<float> read_depth();

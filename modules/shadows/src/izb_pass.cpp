@@ -218,7 +218,7 @@ struct IzbPass::Impl {
       pixel_state = Buffer(ctx, pixels * 4, usage, false, "izb pixel state");
       overflow_list = Buffer(ctx, pixels * 4, usage, false, "izb overflow pixels");
       occluder_distance = Buffer(ctx, pixels * 4, usage, false, "izb nearest occluder distance");
-      const VkDeviceSize fit_groups = VkDeviceSize((e.width + 7) / 8) * ((e.height + 7) / 8);
+      const VkDeviceSize fit_groups = VkDeviceSize((e.width + 31) / 32) * ((e.height + 31) / 32);
       bounds_partials = Buffer(ctx, fit_groups * 16, usage, false, "izb fit bounds per workgroup");
       const uint32_t stride = spp == 32 ? gpu_shared::kIzbQuadFloats32 : gpu_shared::kIzbQuadFloats1;
       quads = Buffer(ctx, pixels * stride * 4, usage, false, "izb pixel light-space data");
@@ -480,6 +480,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
 
   uint32_t flags = collect_stats ? gpu_shared::IZB_FLAG_STATS : 0u;
   if (!settings.depth_cull) flags |= gpu_shared::IZB_FLAG_NO_DEPTH_CULL;
+  if (use_compute_csm) flags |= gpu_shared::IZB_FLAG_CSM_BUFFER;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
   gpu_shared::IzbParams p{};
@@ -503,7 +504,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   full_barrier(cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
-    m.dispatch_pixels(cmd, frame, m.fit, push);
+    m.dispatch(cmd, frame, m.fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
     full_barrier(cmd);
     m.dispatch(cmd, frame, m.setup, push, 1);
     full_barrier(cmd);
@@ -515,7 +516,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
       const uint32_t mode = settings.csm_test == CsmTest::Hertel ? gpu_shared::IZB_WORK_CSM_HERTEL
                                                                  : gpu_shared::IZB_WORK_CSM_BARYCENTRIC;
       m.csm->record(
-          frame, settings, m.frame_data, m.resolution,
+          frame, settings, m.frame_data, m.resolution, collect_stats,
           [&](VkCommandBuffer c) {
             vkCmdFillBuffer(c, m.csm_texels.handle(), 0, VK_WHOLE_SIZE, 0x3f800000u);  // 1.0: nothing stored
             full_barrier(c);
@@ -523,7 +524,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
           },
           &m.csm_texels);
     } else {
-      m.csm->record(frame, settings, m.frame_data, m.resolution);
+      m.csm->record(frame, settings, m.frame_data, m.resolution, collect_stats);
     }
     full_barrier(cmd);
   }
@@ -606,7 +607,13 @@ ShadowModule::CsmSnapshot IzbPass::read_csm() {
   ShadowModule::CsmSnapshot snapshot;
   if (!m.last_used_csm) return snapshot;
   snapshot.resolution = m.resolution;
-  snapshot.depth = m.csm->read_depth();
+  if (m.used_compute_csm) {
+    const auto bytes = read_buffer(m.ctx, m.csm_texels);
+    snapshot.depth.resize(size_t(m.resolution) * m.resolution);
+    std::memcpy(snapshot.depth.data(), bytes.data(), snapshot.depth.size() * sizeof(float));
+  } else {
+    snapshot.depth = m.csm->read_depth();
+  }
   const auto frame_bytes = read_buffer(m.ctx, m.frame_data);
   gpu_shared::IzbFrame frame;
   std::memcpy(&frame, frame_bytes.data(), sizeof(frame));
