@@ -109,6 +109,41 @@ TEST_P(IzbSceneTest, CsmCullingIsConservativeForEveryAvailableTest) {
   EXPECT_GE(bary_rate, hertel_rate);  // four corners inside is a weaker demand than the circle test
 }
 
+// The compute trace and compute CSM against the raster ones: identical visibility, bit for bit, at 1
+// and 32 samples per pixel, without the CSM and with each test that has both passes (every caster in
+// the CSM, so it runs on every view); and in the hybrid, which also reads the trace's occluder distance.
+TEST_P(IzbSceneTest, ComputeAndRasterPassesAgreeBitForBit) {
+  using shadows::PassBackend;
+  auto visibility = [&](shadows::Settings s, PassBackend trace, PassBackend csm) {
+    s.izb.trace = trace;
+    s.izb.csm_backend = csm;
+    auto& r = make_renderer(GetParam().scene, GetParam().view, kSize, kSize);
+    scene_->registry.each<engine::ShadowCaster>([](engine::Entity, engine::ShadowCaster& c) { c.csm = engine::CsmChoice::On; });
+    module_ = shadows::install(r, s);
+    r.render_frame(0.0f);
+    EXPECT_EQ(module_->stats().trace_choice.backend, shadows::backend_name(trace));
+    if (s.izb.csm) {
+      EXPECT_EQ(module_->stats().csm_status, "ran");
+    }
+    auto v = module_->read_visibility();
+    module_.reset();
+    return v;
+  };
+  for (uint32_t spp : {1u, 32u}) {
+    const auto raster = visibility(izb(spp), PassBackend::Raster, PassBackend::Raster);
+    EXPECT_EQ(visibility(izb(spp), PassBackend::Compute, PassBackend::Raster), raster) << spp << " spp";
+    for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric}) {
+      const auto csm_raster = visibility(izb(spp, true, test), PassBackend::Raster, PassBackend::Raster);
+      EXPECT_EQ(visibility(izb(spp, true, test), PassBackend::Compute, PassBackend::Compute), csm_raster)
+          << shadows::csm_test_name(test) << " " << spp << " spp";
+    }
+  }
+  auto hybrid = izb(1, true);
+  hybrid.technique = shadows::Technique::Hybrid;
+  EXPECT_EQ(visibility(hybrid, PassBackend::Compute, PassBackend::Compute),
+            visibility(hybrid, PassBackend::Raster, PassBackend::Raster));
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, IzbSceneTest,
                          testing::Values(SceneView{"contact", 0}, SceneView{"contact", 1}, SceneView{"atrium", 0},
                                          SceneView{"atrium", 1}, SceneView{"foliage", 0}, SceneView{"foliage", 1}),
@@ -343,6 +378,29 @@ TEST_F(IzbTest, ResizeKeepsTheAnswerExact) {
   module_->settings().technique = shadows::Technique::Hybrid;
   r.resize({100, 60});
   r.render_frame(0.0f);
+}
+
+// Under PassBackend::Auto the module times both passes on its first frames and keeps the one that
+// measured faster, reporting both times.
+TEST_F(IzbTest, AutomaticBackendsKeepTheFasterMeasuredPass) {
+  auto s = izb(1, true);
+  s.izb.trace = shadows::PassBackend::Auto;
+  s.izb.csm_backend = shadows::PassBackend::Auto;
+  auto& r = make_renderer("atrium", 0, kSize, kSize);
+  scene_->registry.each<engine::ShadowCaster>([](engine::Entity, engine::ShadowCaster& c) { c.csm = engine::CsmChoice::On; });
+  module_ = shadows::install(r, s);
+  EXPECT_EQ(module_->stats().trace_choice.reason, "");
+  for (int i = 0; i < 6; ++i) r.render_frame(0.0f);
+  for (const auto* choice : {&module_->stats().trace_choice, &module_->stats().csm_choice}) {
+    EXPECT_EQ(choice->reason.rfind("auto: ", 0), 0u) << choice->reason;
+    EXPECT_GT(choice->raster_ms, 0.0);
+    EXPECT_GT(choice->compute_ms, 0.0);
+    EXPECT_EQ(choice->backend, choice->compute_ms <= choice->raster_ms ? "compute" : "raster") << choice->reason;
+  }
+  // A new size is a new configuration: probing starts again.
+  r.resize({kSize / 2, kSize / 2});
+  r.render_frame(0.0f);
+  EXPECT_EQ(module_->stats().trace_choice.reason, "probing");
 }
 
 }  // namespace
