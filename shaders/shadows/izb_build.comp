@@ -6,16 +6,11 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
 
-// Links node `node` (reserved by the caller) into a texel's list; false when the pool is full.
-bool link_node(uint node, uint texel, uint pixel_index, float depth) {
-  if (node >= params.limits.x) return false;
-  uint previous = atomicExchange(heads[texel], node);
-  nodes[node] = uvec2(previous, pixel_index);
-  // Depths are clamped into [0,1], where float order is bit order: the buffer copies straight into
-  // the trace pass's depth attachment.
+// Raises a texel's farthest node depth. Depths are clamped into [0,1], where float order is bit
+// order: the buffer copies straight into the raster trace's depth attachment.
+void raise_farthest(uint texel, float depth) {
   uint bits = floatBitsToUint(clamp(depth, 0.0, 1.0));
   if (bits > farthest[texel]) atomicMax(farthest[texel], bits);  // most nodes are not their texel's farthest
-  return true;
 }
 
 // The CSM holds, where one triangle fully covers a texel, a depth no nearer the light than that
@@ -34,8 +29,7 @@ void main() {
   uint covered = 0u, candidate = 0u, culled = 0u;
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
   uint state = 0u;
-  uint mask = 0u;
-  // The texels this pixel's node goes into: 1 spp one, 32 spp every texel holding one of its samples.
+  uint mask = 0u;  // samples the CSM settled (shadowed)
   uint texels[32];
   uint count = 0u;
   float node_depth = 0.0;
@@ -45,47 +39,29 @@ void main() {
     if (p.candidate) {
       candidate = 1u;
       state = IZB_PIXEL_CANDIDATE;
+      vec3 g[4];
       if (izb_samples() == 1u) {
-        vec3 g = to_grid(shadow_ray_origin(p.position, p.normal));
-        store_quad_point(index, 0u, g);
-        if (csm_proves_shadowed(g)) {
-          state |= IZB_PIXEL_CSM_CULLED;
-          mask = 1u;
-          culled = 1u;
-        } else {
-          texels[0] = texel_index(grid_texel(g));
-          count = 1u;
-          node_depth = g.z;
-        }
+        g[0] = to_grid(shadow_ray_origin(p.position, p.normal));
+        store_quad_point(index, 0u, g[0]);
+        node_depth = g[0].z;
+        if (csm_proves_shadowed(g[0])) mask = 1u;
       } else {
         vec3 c[4];
         micro_quad_corners(pixel, p, c);
-        vec3 g[4];
-        float far_depth = -1.0e30;
+        node_depth = -1.0e30;
         for (int i = 0; i < 4; ++i) {
           g[i] = to_grid(c[i]);
           store_quad_point(index, uint(i), g[i]);
-          far_depth = max(far_depth, g[i].z);
+          node_depth = max(node_depth, g[i].z);
         }
-        node_depth = far_depth;
-        // The footprint that matters is the set of texels holding one of the 32 samples: a triangle
-        // shadows a sample only if it covers the sample's texel, so no other texel needs the node.
-        for (uint s = 0u; s < 32u; ++s) {
-          vec3 q = micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]);
-          if (csm_proves_shadowed(q)) {  // this sample is settled: shadowed, no list needs it
-            mask |= 1u << s;
-            continue;
-          }
-          uint t = texel_index(grid_texel(q));
-          bool seen = false;
-          for (uint k = 0u; k < count; ++k) seen = seen || texels[k] == t;
-          if (!seen) texels[count++] = t;
-        }
-        if (mask == 0xffffffffu) {
-          state |= IZB_PIXEL_CSM_CULLED;
-          culled = 1u;
-        }
+        for (uint s = 0u; s < 32u; ++s)
+          if (csm_proves_shadowed(micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]))) mask |= 1u << s;
       }
+      if (mask == full_mask()) {
+        state |= IZB_PIXEL_CSM_CULLED;
+        culled = 1u;
+      }
+      count = node_texels(g, mask, texels);
     }
   }
   // One atomic per subgroup reserves every lane's nodes. Every texel is requested even past the pool,
@@ -96,15 +72,32 @@ void main() {
   if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_NODES], total);
   base = subgroupBroadcastFirst(base) + offset;
   uint refused = 0u;
-  for (uint k = 0u; k < count; ++k) {
-    if (!link_node(base + k, texels[k], index, node_depth)) {
-      state |= IZB_PIXEL_OVERFLOW;
-      ++refused;
+  if (sorted_lists()) {
+    // Counting sort, step 1: count each texel's nodes (izb_scatter.comp places them after the prefix
+    // sum). A pixel takes all its nodes or, past the pool, none.
+    if (base + count <= params.limits.x) {
+      for (uint k = 0u; k < count; ++k) {
+        atomicAdd(list_counts[texels[k]], 1u);
+        raise_farthest(texels[k], node_depth);
+      }
+    } else {
+      refused = count;
+    }
+  } else {
+    for (uint k = 0u; k < count; ++k) {
+      uint node = base + k;
+      if (node >= params.limits.x) {
+        ++refused;
+        continue;
+      }
+      nodes[node] = uvec2(atomicExchange(heads[texels[k]], node), index);
+      raise_farthest(texels[k], node_depth);
     }
   }
   if (inside) {
-    if ((state & IZB_PIXEL_OVERFLOW) != 0u) {
+    if (refused > 0u) {
       // The fallback pass resolves this pixel exactly by testing every caster triangle.
+      state |= IZB_PIXEL_OVERFLOW;
       atomicAdd(counters[IZB_COUNTER_OVERFLOW], refused);
       uint slot = atomicAdd(counters[IZB_COUNTER_OVERFLOW_PIXELS], 1u);
       overflow_pixels[slot] = index;

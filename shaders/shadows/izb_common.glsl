@@ -19,6 +19,8 @@ layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList
 layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };
 layout(set = 0, binding = IZB_BINDING_GRID_TRIANGLES, std430) buffer GridTriangles { vec4 grid_triangles[]; };
 layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
+layout(set = 0, binding = IZB_BINDING_LIST_COUNTS, std430) buffer ListCounts { uint list_counts[]; };
+layout(set = 0, binding = IZB_BINDING_LIST_CURSOR, std430) buffer ListCursor { uint list_cursor[]; };
 
 uint izb_resolution() { return params.extent.z; }
 uint izb_samples() { return params.extent.w; }
@@ -174,22 +176,61 @@ float triangle_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float are
   return clamp(nearest - 1.0e-6 - 1.0e-6 * abs(nearest), 0.0, 1.0);
 }
 
+// The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its
+// point's texel; 32 spp every texel holding one of its samples not already `settled` (bits the CSM
+// proved shadowed), since a triangle shadows a sample only if it covers the sample's texel. In a fixed
+// order; returns how many.
+uint node_texels(vec3 g[4], uint settled, out uint texels[32]) {
+  uint count = 0u;
+  if (izb_samples() == 1u) {
+    if (settled == 0u) texels[count++] = texel_index(grid_texel(g[0]));
+    return count;
+  }
+  for (uint s = 0u; s < 32u; ++s) {
+    if ((settled & (1u << s)) != 0u) continue;
+    uint t = texel_index(grid_texel(micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s])));
+    bool seen = false;
+    for (uint k = 0u; k < count; ++k) seen = seen || texels[k] == t;
+    if (!seen) texels[count++] = t;
+  }
+  return count;
+}
+
+bool sorted_lists() { return izb_flag(IZB_FLAG_SORTED_LISTS); }
+
+// Nodes in a texel's list, counting at most `cap`.
+uint list_length(uint texel, uint cap) {
+  if (sorted_lists()) return min(list_counts[texel], cap);
+  uint length = 0u;
+  for (uint node = heads[texel]; node != kIzbEndOfList && length < cap; node = nodes[node].x) ++length;
+  return length;
+}
+
+// Tests the triangle against one node's pixel and ORs its shadowed samples into the pixel's mask;
+// false when skipped (progressive removal of a fully shadowed pixel).
+bool trace_node(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area) {
+  uint current = visibility_mask[pixel];
+  if (izb_flag(IZB_FLAG_PROGRESSIVE) && current == full_mask()) return false;
+  float gap = 1.0e30;
+  uint bits = occluded_samples(pixel, a, b, c, inv_area, gap);
+  if ((bits & ~current) != 0u) atomicOr(visibility_mask[pixel], bits);
+  if (bits != 0u) note_occluder_gap(pixel, gap);
+  return true;
+}
+
 // The trace's inner loop, shared by the raster and compute traces: tests the triangle against every
-// node in the texel's list and ORs the shadowed samples into each node's pixel. Returns the tests made.
+// node in the texel's list. Returns the tests made.
 uint trace_texel_list(uint texel, vec3 a, vec3 b, vec3 c, float inv_area) {
-  uint full = full_mask();
-  bool progressive = izb_flag(IZB_FLAG_PROGRESSIVE);
   uint tests = 0u;
+  if (sorted_lists()) {
+    for (uint i = heads[texel], end = i + list_counts[texel]; i < end; ++i)
+      tests += trace_node(nodes[i].y, a, b, c, inv_area) ? 1u : 0u;
+    return tests;
+  }
   for (uint node = heads[texel]; node != kIzbEndOfList;) {
     uvec2 n = nodes[node];
     node = n.x;
-    uint current = visibility_mask[n.y];
-    if (progressive && current == full) continue;
-    ++tests;
-    float gap = 1.0e30;
-    uint bits = occluded_samples(n.y, a, b, c, inv_area, gap);
-    if ((bits & ~current) != 0u) atomicOr(visibility_mask[n.y], bits);
-    if (bits != 0u) note_occluder_gap(n.y, gap);
+    tests += trace_node(n.y, a, b, c, inv_area) ? 1u : 0u;
   }
   return tests;
 }

@@ -7,10 +7,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 void main() {
   uvec2 t = gl_GlobalInvocationID.xy;
   uint res = izb_resolution();
-  uint length = 0u;
-  if (all(lessThan(t, uvec2(res)))) {
-    for (uint node = heads[t.y * res + t.x]; node != kIzbEndOfList; node = nodes[node].x) ++length;
-  }
+  uint length = all(lessThan(t, uvec2(res))) ? list_length(t.y * res + t.x, 0xffffffffu) : 0u;
   uint longest = subgroupMax(length);
   uint sum = subgroupAdd(length);
   uint nonempty = subgroupAdd(length > 0u ? 1u : 0u);

@@ -59,8 +59,7 @@ void main() {
     imageStore(overlay, pixel, vec4(mix(vec3(1.0, 0.2, 0.1), vec3(0.1, 1.0, 0.2), visibility), 0.6));
   } else if (push.debug == kDebugListLength && (state & IZB_PIXEL_CANDIDATE) != 0u) {
     ivec2 t = grid_texel(quad_point(index, 0u));
-    uint length = 0u;
-    for (uint node = heads[texel_index(t)]; node != kIzbEndOfList && length < 64u; node = nodes[node].x) ++length;
+    uint length = list_length(texel_index(t), 64u);
     imageStore(overlay, pixel, vec4(heat(log2(float(length) + 1.0) / 6.0), 0.7));
   } else if (push.debug == kDebugCsm && (state & IZB_PIXEL_CSM_CULLED) != 0u) {
     imageStore(overlay, pixel, vec4(0.1, 0.4, 1.0, 0.6));

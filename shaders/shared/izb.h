@@ -31,8 +31,11 @@ SHARED_CONST uint IZB_FLAG_PROGRESSIVE = 4u;
 SHARED_CONST uint IZB_FLAG_STATS = 16u;
 SHARED_CONST uint IZB_FLAG_NO_DEPTH_CULL = 32u;  // compute trace: test every touched texel's list
 SHARED_CONST uint IZB_FLAG_CSM_BUFFER = 64u;     // the CSM is the compute pass's buffer, not the depth image
+SHARED_CONST uint IZB_FLAG_SORTED_LISTS = 128u;  // lists are contiguous node ranges (counting sort), not linked
 
-// A list node is a uvec2 {next node, pixel}. Each pixel's light-space data lives once in the
+// A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
+// through .x. Sorted lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous
+// nodes (.x unused). Each pixel's light-space data lives once in the
 // "quads" buffer: 1 spp: its ray origin (grid x, grid y, light depth); 32 spp: the four μQuad corners
 // (c00, c10, c01, c11) as 12 floats, from which the trace rebuilds every sample.
 SHARED_CONST uint kIzbQuadFloats1 = 4u;
@@ -120,6 +123,11 @@ SHARED_CONST uint IZB_BINDING_DRAW_FLAGS = 25u;         // per caster draw: IZB_
 SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;         // compute CSM: ordered depth bits per texel
 SHARED_CONST uint IZB_BINDING_TILE_PAIRS = 27u;         // uvec2 {triangle, tile}
 SHARED_CONST uint IZB_BINDING_TILE_FARTHEST = 28u;      // per tile: its farthest node depth (float bits)
+// Sorted lists (counting sort): per texel its node count, and a fill cursor; per scan block a sum.
+SHARED_CONST uint IZB_BINDING_LIST_COUNTS = 29u;
+SHARED_CONST uint IZB_BINDING_LIST_CURSOR = 30u;
+SHARED_CONST uint IZB_BINDING_SCAN_BLOCKS = 31u;
+SHARED_CONST uint kIzbScanBlock = 1024u;  // texels per block of the prefix sum (256 threads x 4)
 
 SHARED_CONST uint IZB_DRAW_IN_CSM = 1u;
 

@@ -43,13 +43,14 @@ struct Options {
   std::string raster;  // auto|hardware|software
   std::vector<std::string> traces = {"auto"};        // frustum trace backends to run
   std::vector<std::string> csm_backends = {"auto"};  // CSM backends to run
+  std::string lists;  // empty: the default list layout
 };
 
 const char* kUsage =
     "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--mode LIST]\n"
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
-    "                    [--trace LIST] [--csm-backend LIST]\n"
+    "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted]\n"
     "                    [--frames N] [--warmup N] [--reference] [--device gpu|lavapipe|INDEX]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm;\n"
@@ -81,6 +82,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--raster") o.raster = args.value();
     else if (a == "--trace") o.traces = split(args.value());
     else if (a == "--csm-backend") o.csm_backends = split(args.value());
+    else if (a == "--lists") o.lists = args.value();
     else if (a == "--node-pool") o.node_pool = args.uint_value();
     else if (a == "--frames") o.frames = int(args.uint_value());
     else if (a == "--warmup") o.warmup = int(args.uint_value());
@@ -121,6 +123,11 @@ std::vector<RunConfig> expand_runs(const Options& o) {
     base.izb.resolution = o.izb;
     base.izb.samples_per_pixel = o.spp;
     base.izb.node_pool_override = o.node_pool;
+    if (!o.lists.empty()) {
+      auto layout = shadows::parse_list_layout(o.lists);
+      if (!layout) throw std::runtime_error("--lists '" + o.lists + "': expected linked or sorted");
+      base.izb.lists = *layout;
+    }
     if (!o.raster.empty()) {
       if (o.raster == "auto") base.izb.raster = shadows::ConservativeRaster::Auto;
       else if (o.raster == "hardware") base.izb.raster = shadows::ConservativeRaster::Hardware;
@@ -284,6 +291,7 @@ int main(int argc, char** argv) {
       entry["hardware_conservative"] = module->stats().hardware_conservative;
       entry["csm_status"] = module->stats().csm_status;
       entry["trace"] = run.trace;
+      entry["lists"] = shadows::list_layout_name(run.settings.izb.lists);
       entry["csm_backend"] = run.csm_backend;
       if (!module->stats().trace_choice.backend.empty()) entry["trace_choice"] = choice_json(module->stats().trace_choice);
       if (!module->stats().csm_choice.backend.empty()) entry["csm_choice"] = choice_json(module->stats().csm_choice);

@@ -49,7 +49,10 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_DRAW_FLAGS, storage},
           {gpu_shared::IZB_BINDING_CSM_TEXELS, storage},
           {gpu_shared::IZB_BINDING_TILE_PAIRS, storage},
-          {gpu_shared::IZB_BINDING_TILE_FARTHEST, storage}};
+          {gpu_shared::IZB_BINDING_TILE_FARTHEST, storage},
+          {gpu_shared::IZB_BINDING_LIST_COUNTS, storage},
+          {gpu_shared::IZB_BINDING_LIST_CURSOR, storage},
+          {gpu_shared::IZB_BINDING_SCAN_BLOCKS, storage}};
 }
 
 uint32_t debug_code(DebugView debug) {
@@ -67,6 +70,8 @@ struct IzbPass::Impl {
   PipelineFactory factory;
   Pipeline fit, setup, build, fallback, resolve, list_stats;
   Pipeline trace_software, trace_hardware, count_software, count_hardware, depth_fill;
+  Pipeline scan, scatter;
+  Buffer list_counts, list_cursor, scan_blocks;
   Pipeline grid_setup, tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
   Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
@@ -108,6 +113,8 @@ struct IzbPass::Impl {
     resolve = factory.compute({"izb_resolve.comp", bindings, push});
     list_stats = factory.compute({"izb_list_stats.comp", bindings, push});
     grid_setup = factory.compute({"izb_triangles.comp", bindings, push});
+    scan = factory.compute({"izb_scan.comp", bindings, push});
+    scatter = factory.compute({"izb_scatter.comp", bindings, push});
     // Workgroup shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
     const bool cpu = c.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
     const std::vector<SpecializationConstant> shape = {
@@ -197,6 +204,10 @@ struct IzbPass::Impl {
       resolution = s.resolution;
       const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
       heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
+      list_counts = Buffer(ctx, texels * 4, usage, false, "izb sorted list counts");
+      list_cursor = Buffer(ctx, texels * 4, usage, false, "izb sorted list fill cursors");
+      const VkDeviceSize blocks = (texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock;
+      scan_blocks = Buffer(ctx, blocks * 4, usage, false, "izb prefix-sum blocks");
       csm_texels = Buffer(ctx, texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "csm compute depths");
       tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
       tile_farthest = Buffer(ctx, VkDeviceSize(tiles_per_side) * tiles_per_side * 4, usage, false,
@@ -329,6 +340,9 @@ struct IzbPass::Impl {
         .storage_buffer(gpu_shared::IZB_BINDING_TILE_PAIRS, tile_pairs.buffer.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_PAIRS, pairs.buffer.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_TILE_FARTHEST, tile_farthest.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_LIST_COUNTS, list_counts.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_LIST_CURSOR, list_cursor.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_SCAN_BLOCKS, scan_blocks.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, bounds_partials.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLE_DRAW, triangle_draw.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_DRAW_FLAGS, draw_flags.handle())
@@ -481,6 +495,8 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   uint32_t flags = collect_stats ? gpu_shared::IZB_FLAG_STATS : 0u;
   if (!settings.depth_cull) flags |= gpu_shared::IZB_FLAG_NO_DEPTH_CULL;
   if (use_compute_csm) flags |= gpu_shared::IZB_FLAG_CSM_BUFFER;
+  const bool sorted = settings.lists == ListLayout::Sorted;
+  if (sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
   gpu_shared::IzbParams p{};
@@ -499,7 +515,8 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
 
   // Reset: counters, lists, farthest depths.
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
-  vkCmdFillBuffer(cmd, m.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
+  if (sorted) vkCmdFillBuffer(cmd, m.list_counts.handle(), 0, VK_WHOLE_SIZE, 0);
+  else vkCmdFillBuffer(cmd, m.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
   vkCmdFillBuffer(cmd, m.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
   full_barrier(cmd);
   {
@@ -531,6 +548,20 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
     m.dispatch_pixels(cmd, frame, m.build, push);
+    if (sorted) {
+      // Counting sort: counts (above) -> prefix sum -> scatter into contiguous ranges.
+      const uint32_t blocks = uint32_t(m.scan_blocks.size() / 4);
+      for (uint32_t step = 0; step < 3; ++step) {
+        full_barrier(cmd);
+        gpu_shared::IzbComputePush scan_push = push;
+        scan_push.mode = step;
+        const uint32_t rows = (blocks + gpu_shared::kIzbDispatchRow - 1) / gpu_shared::kIzbDispatchRow;
+        if (step == 1) m.dispatch(cmd, frame, m.scan, scan_push, 1);
+        else m.dispatch(cmd, frame, m.scan, scan_push, std::min(blocks, gpu_shared::kIzbDispatchRow), rows);
+      }
+      full_barrier(cmd);
+      m.dispatch_pixels(cmd, frame, m.scatter, push);
+    }
   }
   full_barrier(cmd);
   auto draw_trace = [&](const Pipeline& trace, VkCompareOp compare, bool fill_depth) {

@@ -97,4 +97,12 @@ std::string backend_name(PassBackend backend) {
   return "?";
 }
 
+std::optional<ListLayout> parse_list_layout(const std::string& name) {
+  if (name == "linked") return ListLayout::Linked;
+  if (name == "sorted") return ListLayout::Sorted;
+  return std::nullopt;
+}
+
+std::string list_layout_name(ListLayout layout) { return layout == ListLayout::Sorted ? "sorted" : "linked"; }
+
 }  // namespace shadows

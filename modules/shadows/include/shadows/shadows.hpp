@@ -43,6 +43,10 @@ enum class ConservativeRaster { Auto, Hardware, Software };
 // times each on the first frames (again after a size, scene or mode change) and keeps the faster.
 enum class PassBackend { Auto, Raster, Compute };
 
+// How the IZB's per-texel lists are built: linked lists (a node prepended per insertion) or a
+// counting sort (count per texel, prefix sum, scatter into contiguous ranges).
+enum class ListLayout { Linked, Sorted };
+
 struct ShadowMapSettings {
   uint32_t size = 1024;
   float constant_bias = 1.0e-4f;  // in light depth units ([0,1] over the fitted depth range)
@@ -73,6 +77,7 @@ struct IzbSettings {
   ConservativeRaster raster = ConservativeRaster::Auto;  // for the raster trace
   PassBackend trace = PassBackend::Auto;     // frustum trace: conservative raster or compute binning
   PassBackend csm_backend = PassBackend::Auto;  // CSM (hertel/bary only; the hardware tests are raster)
+  ListLayout lists = ListLayout::Linked;
   bool depth_cull = true;             // cull trace fragments behind the farthest node of their texel
   bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed
   float node_pool_factor = 1.25f;     // pool size = factor * pixels * (1 or expected texels per μQuad)
@@ -185,5 +190,7 @@ std::string masking_name(Masking masking);
 std::optional<DebugView> parse_debug_view(const std::string& name);
 std::optional<PassBackend> parse_backend(const std::string& name);  // "auto", "raster", "compute"
 std::string backend_name(PassBackend backend);
+std::optional<ListLayout> parse_list_layout(const std::string& name);  // "linked", "sorted"
+std::string list_layout_name(ListLayout layout);
 
 }  // namespace shadows
