@@ -19,7 +19,8 @@ void main() {
   if (t < push.triangle_count && triangle_wanted(t, mode)) {
     load_grid_triangle(t, a, b, c);
     area = edge_fn(c.xy, a.xy, b.xy);
-    if (abs(area) > 1.0e-10) rows = triangle_tile_rows(a, b, c);
+    bool useful = mode == IZB_WORK_TRACE || triangle_can_cover_a_texel(a, b, c, area);
+    if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c);
   }
   uint count = 0u;
   for (int r = rows.x; r <= rows.y; ++r) {

@@ -25,6 +25,13 @@ bool triangle_wanted(uint t, uint mode) {
   return mode == IZB_WORK_TRACE || (draw_flags[triangle_draw[t]] & IZB_DRAW_IN_CSM) != 0u;
 }
 
+// CSM: a triangle that fully covers a texel contains the texel's inscribed circle (radius 1/2), so
+// one whose own inscribed circle is smaller (radius 2 area / perimeter) can write no texel.
+bool triangle_can_cover_a_texel(vec3 a, vec3 b, vec3 c, float area) {
+  float perimeter = length(b.xy - a.xy) + length(c.xy - b.xy) + length(a.xy - c.xy);
+  return abs(area) >= (0.5 - 1.0e-3) * perimeter;  // |area| here is twice the triangle's area
+}
+
 // The rows of tiles [first, last] a triangle's bounds touch (empty when first > last).
 ivec2 triangle_tile_rows(vec3 a, vec3 b, vec3 c) {
   float tile = float(kIzbTile);
