@@ -52,3 +52,20 @@ if(EXISTS ${SPONZA_GLTF})
   set_tests_properties(walkthrough_loads_sponza PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe"
                        PASS_REGULAR_EXPRESSION "wrote .*frame_000.png")
 endif()
+
+# The minimal integration example renders and writes a non-trivial PNG (png_check fails on a missing,
+# tiny or uniform image).
+add_executable(png_check tools/png_check.cpp)
+target_link_libraries(png_check PRIVATE PkgConfig::STB)
+add_test(NAME minimal_example_writes_png
+         COMMAND sh -c "rm -f \"$2\" && \"$0\" \"$1\" \"$2\" 2 160x90 && \"$3\" \"$2\" --min-size 160x90 --min-colors 32"
+                 $<TARGET_FILE:minimal> contact ${CMAKE_CURRENT_BINARY_DIR}/minimal_example.png $<TARGET_FILE:png_check>)
+set_tests_properties(minimal_example_writes_png PROPERTIES LABELS gpu
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe"
+                     FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+add_test(NAME minimal_example_loads_gltf
+         COMMAND sh -c "rm -f \"$2\" && \"$0\" \"$1\" \"$2\" 1 96x64 && \"$3\" \"$2\" --min-colors 2 --min-spread 0"
+                 $<TARGET_FILE:minimal> ${PROJECT_SOURCE_DIR}/content/test_gltf/triangle.gltf
+                 ${CMAKE_CURRENT_BINARY_DIR}/minimal_gltf.png $<TARGET_FILE:png_check>)
+set_tests_properties(minimal_example_loads_gltf PROPERTIES LABELS gpu
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
