@@ -69,3 +69,57 @@ add_test(NAME minimal_example_loads_gltf
                  ${CMAKE_CURRENT_BINARY_DIR}/minimal_gltf.png $<TARGET_FILE:png_check>)
 set_tests_properties(minimal_example_loads_gltf PROPERTIES LABELS gpu
                      ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+
+# The walkthrough game: replayed input, recording, scene files, tours.
+set(TEST_LEVELS ${PROJECT_SOURCE_DIR}/content/test_levels)
+add_test(NAME walkthrough_replay_walks_into_wall
+         COMMAND ${PROJECT_SOURCE_DIR}/tests/check_player.sh 3.9 4.1 -0.05 0.05 -4.75 -4.6
+                 $<TARGET_FILE:walkthrough> --headless --scene ${TEST_LEVELS}/wall.json
+                 --input ${TEST_LEVELS}/walk_into_wall.input --size 96x64 --mode sm
+                 --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_replay_out)
+set_tests_properties(walkthrough_replay_walks_into_wall PROPERTIES LABELS gpu
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
+# Recording while replaying writes a script that replays to the same place.
+add_test(NAME walkthrough_record_replays_identically
+         COMMAND sh -c "set -e; rec=$2/recorded.input; rm -f $rec; \
+a=$($0 --headless --scene $1/wall.json --input $1/walk_into_wall.input --size 64x48 --mode off --out $2 --record $rec | grep '^player:'); \
+b=$($0 --headless --scene $1/wall.json --input $rec --size 64x48 --mode off --out $2 | grep '^player:'); \
+echo \"$a\"; echo \"$b\"; [ -n \"$a\" ] && [ \"$a\" = \"$b\" ]"
+                 $<TARGET_FILE:walkthrough> ${TEST_LEVELS} ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_record_out)
+set_tests_properties(walkthrough_record_replays_identically PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+# Bad scene files and input scripts: one line naming the file (and the field or line), exit code 1.
+foreach(bad bad_json bad_field bad_shape bad_csm bad_animation bad_script)
+  if(bad STREQUAL bad_script)
+    set(args --scene ${TEST_LEVELS}/wall.json --input ${TEST_LEVELS}/bad_script.input)
+    set(expect "bad_script.input:3: unknown key 'Jump'")
+  else()
+    set(args --scene ${TEST_LEVELS}/${bad}.json)
+  endif()
+  if(bad STREQUAL bad_json)
+    set(expect "bad_json.json: not valid JSON")
+  elseif(bad STREQUAL bad_field)
+    set(expect "bad_field.json: objects.1..shape.box.max: expected an array of 3 numbers")
+  elseif(bad STREQUAL bad_shape)
+    set(expect "bad_shape.json: objects.0..shape.pyramid: unknown shape")
+  elseif(bad STREQUAL bad_csm)
+    set(expect "bad_csm.json: objects.1..shadow.csm: 'sometimes' is not one of on, off, auto")
+  elseif(bad STREQUAL bad_animation)
+    set(expect "bad_animation.json: objects.1..animate.walk.path: expected at least 2 points")
+  endif()
+  add_test(NAME walkthrough_rejects_${bad}
+           COMMAND sh -c "out=$(\"$@\" --headless --frames 1 2>&1); rc=$?; echo \"$out\"; \
+[ $rc -eq 1 ] && [ $(printf '%s\\n' \"$out\" | wc -l) -eq 1 ] && printf '%s' \"$out\" | grep -q \"$0\""
+                   "${expect}" $<TARGET_FILE:walkthrough> ${args})
+  set_tests_properties(walkthrough_rejects_${bad} PROPERTIES LABELS unit)
+endforeach()
+# A headless tour of every shipped level at a small size, with moving casters and a moving sun.
+file(GLOB SHIPPED_LEVELS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/content/levels/*.json)
+foreach(level ${SHIPPED_LEVELS})
+  get_filename_component(level_name ${level} NAME_WE)
+  add_test(NAME walkthrough_tour_${level_name}
+           COMMAND $<TARGET_FILE:walkthrough> --headless --tour --animate-sun --scene ${level} --size 128x72 --frames 3
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_tour_${level_name})
+  set_tests_properties(walkthrough_tour_${level_name} PROPERTIES LABELS gpu
+                       ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe"
+                       PASS_REGULAR_EXPRESSION "wrote .*frame_002.png" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+endforeach()
