@@ -22,6 +22,7 @@ Player::Player(const CollisionWorld* world, const glm::vec3& eye, const glm::vec
   const float down = world_ ? world_->ray_down(eye, 20.0f) : -1.0f;
   if (down >= 0.0f) {
     feet_ = eye - glm::vec3(0.0f, down - 0.01f, 0.0f);
+    grounded_ = true;
   } else {
     flying_ = true;
   }

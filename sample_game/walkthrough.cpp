@@ -91,7 +91,10 @@ void Game::set_scene(std::unique_ptr<engine::Scene> scene) {
   engine::Scene& s = *scene_;
   // Rest pose for the collision world; moving objects do not collide.
   engine::update_animations(s.registry, 0.0f);
-  collision_ = CollisionWorld::from_scene(s, [&](engine::Entity e) { return s.registry.has<engine::Animated>(e); });
+  collision_ = CollisionWorld::from_scene(s, [&](engine::Entity e) {
+    const auto* c = s.registry.try_get<engine::Collider>(e);
+    return s.registry.has<engine::Animated>(e) || (c && !c->solid);
+  });
   const engine::SceneView start = s.start ? *s.start : s.views.front();
   player_ = std::make_unique<Player>(&collision_, start.eye, start.target);
   tour_ = std::make_unique<CameraPath>(s, seconds_per_view_, &collision_);

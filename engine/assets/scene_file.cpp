@@ -239,7 +239,7 @@ void add_animation(const Reader& rd, Registry& r, Entity e, const json& a, const
 void add_object(Scene& scene, const Reader& rd, const json& o, size_t index) {
   const std::string f = "objects[" + std::to_string(index) + "]";
   rd.only_keys(o, {"name", "shape", "shapes", "plants", "gltf", "translation", "rotation_deg", "scale", "color",
-                   "leaf_color", "shadow", "animate"},
+                   "leaf_color", "shadow", "animate", "collide"},
                f);
   const std::string name = o.contains("name") ? rd.string(o.at("name"), f + ".name") : "object" + std::to_string(index);
   Transform t;
@@ -326,6 +326,8 @@ void add_object(Scene& scene, const Reader& rd, const json& o, size_t index) {
       created.push_back(n);
     });
   }
+  const bool solid = rd.boolean_or(o, "collide", f, !o.contains("plants"));
+  for (Entity e : created) scene.registry.emplace<Collider>(e, Collider{solid});
   if (o.contains("animate")) {
     if (created.size() != 1) rd.fail(f + ".animate", "only single-mesh objects (shape or shapes) can be animated");
     add_animation(rd, scene.registry, created[0], o.at("animate"), f + ".animate");
