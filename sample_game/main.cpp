@@ -44,6 +44,8 @@ struct Options {
   float target_fps = 0.0f;  // 0: 30 on a GPU, 10 on a CPU device
   float time_of_day = -1.0f;
   bool animate_sun = false;
+  std::string overlay;
+  bool stats = false;
 };
 
 const char* kUsage =
@@ -51,7 +53,7 @@ const char* kUsage =
     "                   [--input FILE] [--record FILE] [--screenshot FILE.png] [--out DIR]\n"
     "                   [--device gpu|lavapipe|INDEX] [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm]\n"
     "                   [--seconds-per-view S] [--settings FILE.json] [--fixed-size] [--target-fps F]\n"
-    "                   [--time-of-day H] [--animate-sun]\n";
+    "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats]\n";
 
 float float_value(engine::CommandLine& args, float lo, float hi) {
   const std::string flag = args.flag(), v = args.value();
@@ -89,6 +91,11 @@ Options parse(int argc, char** argv) {
     else if (a == "--target-fps") o.target_fps = float_value(args, 1.0f, 1000.0f);
     else if (a == "--time-of-day") o.time_of_day = float_value(args, 5.0f, 19.0f);
     else if (a == "--animate-sun") o.animate_sun = true;
+    else if (a == "--overlay") {
+      o.overlay = args.value();
+      if (!shadows::parse_debug_view(o.overlay))
+        throw std::runtime_error("--overlay '" + o.overlay + "': expected none, visibility, list-length, cascades, csm or expensive");
+    } else if (a == "--stats") o.stats = true;
     else if (a == "--help" || a == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);
@@ -204,7 +211,9 @@ int run_headless(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   engine::Renderer renderer(ctx, {o.width, o.height});
   renderer.set_scene(game.scene());
   auto settings = shadows::parse_mode(o.mode, {});
+  if (!o.overlay.empty()) settings->debug = *shadows::parse_debug_view(o.overlay);
   auto module = shadows::install(renderer, *settings);
+  module->set_collect_stats(o.stats);
   if (!o.settings.empty()) {
     const std::string err = walkthrough::load_settings(o.settings, *module, game, nullptr);
     if (!err.empty()) throw std::runtime_error(err);
@@ -273,13 +282,16 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   auto renderer = std::make_unique<engine::Renderer>(
       *ctx, VkExtent2D{std::max(extent.width, 1u), std::max(extent.height, 1u)});
   renderer->set_scene(game.scene());
-  auto module = shadows::install(*renderer, *shadows::parse_mode(o.mode, {}));
-  module->set_collect_stats(false);  // the panel's checkbox turns the statistics passes on
+  auto mode = *shadows::parse_mode(o.mode, {});
+  if (!o.overlay.empty()) mode.debug = *shadows::parse_debug_view(o.overlay);
+  auto module = shadows::install(*renderer, mode);
+  module->set_collect_stats(o.stats);  // else the panel's checkbox turns the statistics passes on
 
   const bool cpu = ctx->properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
   walkthrough::DynamicResolution dynres(o.target_fps > 0.0f ? o.target_fps : (cpu ? 10.0f : 30.0f));
   dynres.enabled = !o.fixed_size;
   walkthrough::PanelState panel;
+  panel.statistics = o.stats;
   panel.scenes = scene_list(o.scene);
   for (size_t i = 0; i < panel.scenes.size(); ++i)
     if (panel.scenes[i].source == o.scene) panel.scene_index = int(i);

@@ -138,13 +138,13 @@ void object_table(engine::Renderer& renderer, shadows::ShadowModule& module) {
     decisions[(uint64_t(d.entity.index) << 32) | d.entity.generation] = &d;
   if (!ImGui::BeginTable("objects", 5, ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_ScrollY |
                                            ImGuiTableFlags_SizingFixedFit,
-                         ImVec2(0, 220)))
+                         ImVec2(0, 260)))
     return;
   ImGui::TableSetupColumn("object");
   ImGui::TableSetupColumn("cast");
   ImGui::TableSetupColumn("recv");
   ImGui::TableSetupColumn("CSM");
-  ImGui::TableSetupColumn("decision");
+  ImGui::TableSetupColumn("in CSM, why");
   ImGui::TableHeadersRow();
   scene->registry.each<engine::ShadowCaster, engine::Mesh>([&](engine::Entity e, engine::ShadowCaster& c, engine::Mesh&) {
     ImGui::PushID(int(e.index));
@@ -163,7 +163,7 @@ void object_table(engine::Renderer& renderer, shadows::ShadowModule& module) {
     ImGui::TableNextColumn();
     auto it = decisions.find((uint64_t(e.index) << 32) | e.generation);
     if (it != decisions.end()) {
-      ImGui::Text("%s %s", it->second->in_csm ? "in" : "out", it->second->reason.c_str());
+      ImGui::Text("%s  %s", it->second->in_csm ? "yes" : "no ", it->second->reason.c_str());
       if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", it->second->reason.c_str());
     } else {
       ImGui::TextDisabled(c.casts_shadow ? "(no decision yet)" : "(not a caster)");
@@ -278,7 +278,7 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
   }
 
   const auto& st = module.stats();
-  if (ImGui::CollapsingHeader("Statistics", ImGuiTreeNodeFlags_DefaultOpen)) {
+  if (ImGui::CollapsingHeader("Statistics")) {
     if (!panel.statistics) ImGui::TextDisabled("turn on 'statistics' above for live numbers");
     if (s.technique == shadows::Technique::Izb || s.technique == shadows::Technique::Hybrid) {
       ImGui::Text("points %llu  nodes %llu", (unsigned long long)st.lit_candidates, (unsigned long long)st.nodes_inserted);
@@ -294,7 +294,6 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
       ImGui::Text("expensive path %.1f%%", st.expensive_path_fraction * 100.0);
   }
 
-  if (ImGui::CollapsingHeader("Objects (shadow flags, CSM decision)")) object_table(renderer, module);
 
   if (ImGui::CollapsingHeader("Settings file")) {
     static char path[256] = {};
@@ -312,6 +311,14 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
     }
     if (!panel.settings_message.empty()) ImGui::TextWrapped("%s", panel.settings_message.c_str());
   }
+  ImGui::End();
+
+  // The per-object shadow table in its own window on the right.
+  const ImGuiViewport* vp = ImGui::GetMainViewport();
+  ImGui::SetNextWindowPos(ImVec2(vp->Size.x - 8, 8), ImGuiCond_FirstUseEver, ImVec2(1.0f, 0.0f));
+  ImGui::SetNextWindowSize(ImVec2(std::min(560.0f, vp->Size.x * 0.45f), 0), ImGuiCond_FirstUseEver);
+  ImGui::Begin("Objects: shadow flags and the CSM decision");
+  object_table(renderer, module);
   ImGui::End();
 }
 
