@@ -40,6 +40,7 @@ struct Options {
   std::string input;
   std::string record;
   std::string settings;
+  std::string save_settings;
   bool fixed_size = false;
   float target_fps = 0.0f;  // 0: 30 on a GPU, 10 on a CPU device
   float time_of_day = -1.0f;
@@ -52,7 +53,7 @@ const char* kUsage =
     "usage: walkthrough [--scene NAME|FILE.json|FILE.gltf] [--size WxH] [--frames N] [--headless] [--tour]\n"
     "                   [--input FILE] [--record FILE] [--screenshot FILE.png] [--out DIR]\n"
     "                   [--device gpu|lavapipe|INDEX] [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm]\n"
-    "                   [--seconds-per-view S] [--settings FILE.json] [--fixed-size] [--target-fps F]\n"
+    "                   [--seconds-per-view S] [--settings FILE.json] [--save-settings FILE.json] [--fixed-size] [--target-fps F]\n"
     "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats]\n";
 
 float float_value(engine::CommandLine& args, float lo, float hi) {
@@ -87,6 +88,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--input") o.input = args.value();
     else if (a == "--record") o.record = args.value();
     else if (a == "--settings") o.settings = args.value();
+    else if (a == "--save-settings") o.save_settings = args.value();
     else if (a == "--fixed-size") o.fixed_size = true;
     else if (a == "--target-fps") o.target_fps = float_value(args, 1.0f, 1000.0f);
     else if (a == "--time-of-day") o.time_of_day = float_value(args, 5.0f, 19.0f);
@@ -230,7 +232,7 @@ int run_headless(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   const float tour_dt = o.seconds_per_view * float(game.scene().views.size()) / float(frames);  // one loop
   std::filesystem::create_directories(o.out_dir);
   std::printf("headless: %s on %s (%s), %ux%u, mode %s, %s\n", game.scene().name.c_str(), ctx.device_name().c_str(),
-              ctx.driver_description().c_str(), o.width, o.height, o.mode.c_str(),
+              ctx.driver_description().c_str(), o.width, o.height, shadows::mode_name(module->settings()).c_str(),
               tour ? "tour" : ("replaying " + o.input).c_str());
   std::vector<InputFrame> recorded;
   for (int f = 0; f < frames; ++f) {
@@ -252,6 +254,11 @@ int run_headless(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   }
   if (!tour) print_player(game);
   if (!o.record.empty()) walkthrough::save_input_script(o.record, recorded);
+  if (!o.save_settings.empty()) {
+    const std::string err = walkthrough::save_settings(o.save_settings, *module, game, nullptr);
+    if (!err.empty()) throw std::runtime_error(err);
+    std::printf("  saved settings to %s\n", o.save_settings.c_str());
+  }
   if (!o.screenshot.empty()) {
     renderer.write_png(o.screenshot);
     std::printf("  wrote %s\n", o.screenshot.c_str());
@@ -379,6 +386,10 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
     const VkExtent2D e = renderer->extent();
     std::printf("frames: %d, median frame %.1f ms, render size %ux%u (scale %.2f)\n", frame, sorted[sorted.size() / 2],
                 e.width, e.height, window->render_scale());
+  }
+  if (!o.save_settings.empty()) {
+    const std::string err = walkthrough::save_settings(o.save_settings, *module, game, &dynres);
+    if (!err.empty()) std::fprintf(stderr, "walkthrough: %s\n", err.c_str());
   }
   if (!o.record.empty()) {
     walkthrough::save_input_script(o.record, recorded);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "collision.hpp"
+#include "dynamic_resolution.hpp"
 #include "engine/assets/scene.hpp"
 #include "engine/render/renderer.hpp"
 #include "input.hpp"
@@ -42,25 +43,6 @@ class CameraPath {
 // Sun direction for a time of day (hours): the scene's sun at noon, rising in the east of its
 // azimuth at 6 and setting at 18 (kept a little above the horizon outside those hours).
 glm::vec3 sun_direction(const glm::vec3& noon_direction, float hours);
-
-// Holds a frame-time target by scaling the render size.
-class DynamicResolution {
- public:
-  explicit DynamicResolution(float target_fps) : target_ms_(1000.0f / target_fps) {}
-  // Feeds one frame's wall-clock time; returns true when scale() changed.
-  bool add_frame(float ms);
-  float scale() const { return scale_; }
-  float target_ms() const { return target_ms_; }
-  void set_target_fps(float fps) { target_ms_ = 1000.0f / std::max(fps, 1.0f); }
-  float median_ms() const { return median_ms_; }
-  bool enabled = true;
-
- private:
-  float target_ms_;
-  float scale_ = 1.0f;
-  float median_ms_ = 0.0f;
-  std::vector<float> window_;
-};
 
 struct SceneEntry {
   std::string label;

@@ -88,7 +88,7 @@ echo \"$a\"; echo \"$b\"; [ -n \"$a\" ] && [ \"$a\" = \"$b\" ]"
                  $<TARGET_FILE:walkthrough> ${TEST_LEVELS} ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_record_out)
 set_tests_properties(walkthrough_record_replays_identically PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
 # Bad scene files and input scripts: one line naming the file (and the field or line), exit code 1.
-foreach(bad bad_json bad_field bad_shape bad_csm bad_animation bad_script)
+foreach(bad bad_json bad_field bad_shape bad_shadow_flag bad_animation bad_script)
   if(bad STREQUAL bad_script)
     set(args --scene ${TEST_LEVELS}/wall.json --input ${TEST_LEVELS}/bad_script.input)
     set(expect "bad_script.input:3: unknown key 'Jump'")
@@ -101,8 +101,8 @@ foreach(bad bad_json bad_field bad_shape bad_csm bad_animation bad_script)
     set(expect "bad_field.json: objects.1..shape.box.max: expected an array of 3 numbers")
   elseif(bad STREQUAL bad_shape)
     set(expect "bad_shape.json: objects.0..shape.pyramid: unknown shape")
-  elseif(bad STREQUAL bad_csm)
-    set(expect "bad_csm.json: objects.1..shadow.csm: 'sometimes' is not one of on, off, auto")
+  elseif(bad STREQUAL bad_shadow_flag)
+    set(expect "bad_shadow_flag.json: objects.1..shadow.csm: 'sometimes' is not one of on, off, auto")
   elseif(bad STREQUAL bad_animation)
     set(expect "bad_animation.json: objects.1..animate.walk.path: expected at least 2 points")
   endif()
@@ -123,3 +123,17 @@ foreach(level ${SHIPPED_LEVELS})
                        ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe"
                        PASS_REGULAR_EXPRESSION "wrote .*frame_002.png" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
 endforeach()
+# Settings files: loaded, saved, and loaded back; a bad one is rejected in one line.
+add_test(NAME walkthrough_settings_round_trip
+         COMMAND sh -c "set -e; rm -f $2; $0 --headless --scene $1/wall.json --settings $1/settings.json --save-settings $2 \
+--size 64x48 --frames 1 --out $3 | grep -q 'mode sm,'; $0 --headless --scene $1/wall.json --settings $2 --size 64x48 --frames 1 \
+--out $3 | grep 'mode sm,'; grep -q '\"time_of_day\": 9.5' $2"
+                 $<TARGET_FILE:walkthrough> ${TEST_LEVELS} ${CMAKE_CURRENT_BINARY_DIR}/saved_settings.json
+                 ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_settings_out)
+set_tests_properties(walkthrough_settings_round_trip PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+add_test(NAME walkthrough_rejects_bad_settings
+         COMMAND sh -c "out=$(\"$0\" \"$@\" 2>&1); rc=$?; echo \"$out\"; [ $rc -eq 1 ] && [ $(printf '%s\\n' \"$out\" | wc -l) -eq 1 ] \
+&& printf '%s' \"$out\" | grep -q 'bad_settings.json: samples_per_pixel: must be 1 or 32'"
+                 $<TARGET_FILE:walkthrough> --headless --scene ${TEST_LEVELS}/wall.json --settings ${TEST_LEVELS}/bad_settings.json
+                 --size 64x48 --frames 1 --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_settings_out)
+set_tests_properties(walkthrough_rejects_bad_settings PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")

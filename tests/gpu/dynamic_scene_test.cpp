@@ -28,7 +28,7 @@ class DynamicSceneTest : public GpuTest, public testing::WithParamInterface<Case
   std::shared_ptr<shadows::ShadowModule> module_;
 };
 
-TEST_P(DynamicSceneTest, IzbCsmMatchesReferenceWhileCastersAndSunMove) {
+TEST_P(DynamicSceneTest, HardShadowsMatchReferenceWhileCastersAndSunMove) {
   auto& r = make_renderer(std::string(ENGINE_SOURCE_DIR) + "/content/" + GetParam().file, GetParam().view, kWidth,
                           kHeight);
   ASSERT_GT(scene_->registry.count<engine::Animated>(), 0u) << "the scene has no moving casters";

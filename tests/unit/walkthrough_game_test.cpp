@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "collision.hpp"
+#include "dynamic_resolution.hpp"
 #include "engine/assets/procedural_scenes.hpp"
 #include "engine/assets/scene_file.hpp"
 #include "engine/core/animation.hpp"
@@ -162,6 +163,24 @@ TEST(Animation, PosesAreDeterministicAndMove) {
   engine::update_animations(r, 0.0f);
   EXPECT_NEAR(glm::angle(r.get<engine::Transform>(e).rotation), 0.0f, 1e-3f);
   EXPECT_EQ(r.get<engine::Transform>(e).translation, glm::vec3(1, 2, 3));
+}
+
+TEST(DynamicResolution, ShrinksWhenSlowGrowsWhenFastOffWhenDisabled) {
+  DynamicResolution d(10.0f);  // 100 ms target
+  for (int i = 0; i < 8; ++i) d.add_frame(400.0f);
+  EXPECT_LT(d.scale(), 0.75f);  // four times too slow: at most 30% smaller per step
+  EXPECT_GE(d.scale(), 0.7f);
+  for (int step = 0; step < 10; ++step)
+    for (int i = 0; i < 8; ++i) d.add_frame(400.0f);
+  EXPECT_FLOAT_EQ(d.scale(), 0.25f);  // the floor
+  for (int step = 0; step < 40; ++step)
+    for (int i = 0; i < 8; ++i) d.add_frame(20.0f);
+  EXPECT_FLOAT_EQ(d.scale(), 1.0f);  // back to full size when fast
+  for (int i = 0; i < 8; ++i) d.add_frame(95.0f);
+  EXPECT_FLOAT_EQ(d.scale(), 1.0f);  // within the band: no change
+  d.enabled = false;
+  EXPECT_FALSE(d.add_frame(1000.0f));
+  EXPECT_FLOAT_EQ(d.scale(), 1.0f);
 }
 
 }  // namespace
