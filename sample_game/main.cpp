@@ -115,7 +115,11 @@ std::vector<walkthrough::SceneEntry> scene_list(const std::string& current) {
   std::sort(levels.begin(), levels.end());
   for (const auto& p : levels) list.push_back({"level: " + p.stem().string(), p.string()});
   for (const auto& n : engine::procedural_scene_names()) list.push_back({"procedural: " + n, n});
-  if (std::filesystem::exists(kSponza, ec)) list.push_back({"Sponza", kSponza});
+  // Sponza with an authored tour and player start when the model is present; also as a plain glTF.
+  if (std::filesystem::exists(kSponza, ec)) {
+    list.push_back({"Sponza (authored tour)", kContentDir + "/sponza/sponza.json"});
+    list.push_back({"Sponza (glTF only)", kSponza});
+  }
   bool found = false;
   for (const auto& e : list) found |= std::filesystem::path(e.source) == std::filesystem::path(current) || e.source == current;
   if (!found) list.insert(list.begin(), {std::filesystem::path(current).filename().string(), current});
@@ -350,7 +354,6 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
         }
       }
     }
-    if (!o.record.empty()) recorded.push_back(current);
     if (panel.requested_scene) {
       const int pick = *panel.requested_scene;
       panel.requested_scene.reset();
@@ -376,8 +379,10 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
                              walkthrough::draw_panel(*renderer, *module, game, panel);
                              walkthrough::draw_help(panel);
                            },
-                           current.dt))
+                           current.dt)) {
       ++frame;
+      if (!o.record.empty()) recorded.push_back(current);  // only frames that were simulated
+    }
   }
   if (game.playing) print_player(game);
   if (!frame_ms.empty()) {

@@ -137,3 +137,10 @@ add_test(NAME walkthrough_rejects_bad_settings
                  $<TARGET_FILE:walkthrough> --headless --scene ${TEST_LEVELS}/wall.json --settings ${TEST_LEVELS}/bad_settings.json
                  --size 64x48 --frames 1 --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_settings_out)
 set_tests_properties(walkthrough_rejects_bad_settings PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+if(EXISTS ${SPONZA_GLTF})
+  add_test(NAME walkthrough_tour_sponza
+           COMMAND $<TARGET_FILE:walkthrough> --headless --tour --scene ${PROJECT_SOURCE_DIR}/content/sponza/sponza.json
+                   --size 96x54 --frames 2 --mode sm --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_tour_sponza)
+  set_tests_properties(walkthrough_tour_sponza PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe"
+                       PASS_REGULAR_EXPRESSION "wrote .*frame_001.png")
+endif()
