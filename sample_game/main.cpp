@@ -47,6 +47,7 @@ struct Options {
   bool animate_sun = false;
   std::string overlay;
   bool stats = false;
+  std::string switch_scene;  // windowed: picked as if from the panel after the second frame
 };
 
 const char* kUsage =
@@ -54,7 +55,8 @@ const char* kUsage =
     "                   [--input FILE] [--record FILE] [--screenshot FILE.png] [--out DIR]\n"
     "                   [--device gpu|lavapipe|INDEX] [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm]\n"
     "                   [--seconds-per-view S] [--settings FILE.json] [--save-settings FILE.json] [--fixed-size] [--target-fps F]\n"
-    "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats]\n";
+    "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats]\n"
+    "                   [--switch-scene FILE]\n";
 
 float float_value(engine::CommandLine& args, float lo, float hi) {
   const std::string flag = args.flag(), v = args.value();
@@ -98,6 +100,7 @@ Options parse(int argc, char** argv) {
       if (!shadows::parse_debug_view(o.overlay))
         throw std::runtime_error("--overlay '" + o.overlay + "': expected none, visibility, list-length, cascades, csm or expensive");
     } else if (a == "--stats") o.stats = true;
+    else if (a == "--switch-scene") o.switch_scene = args.value();
     else if (a == "--help" || a == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);
@@ -324,6 +327,7 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   LiveInput live(window->native_handle());
   const int frames = o.frames >= 0 ? o.frames : (script.empty() ? -1 : int(script.size()));
   int frame = 0, shots = 0;
+  bool switched = false;
   auto last = std::chrono::steady_clock::now();
   std::vector<float> frame_ms;
   while (!window->should_close() && (frames < 0 || frame < frames)) {
@@ -353,6 +357,11 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
           panel.status_line = std::string("wrote ") + name;
         }
       }
+    }
+    if (!o.switch_scene.empty() && frame == 2 && !switched) {
+      switched = true;
+      panel.scenes.push_back({std::filesystem::path(o.switch_scene).filename().string(), o.switch_scene});
+      panel.requested_scene = int(panel.scenes.size()) - 1;
     }
     if (panel.requested_scene) {
       const int pick = *panel.requested_scene;
