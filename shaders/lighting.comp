@@ -16,6 +16,22 @@ vec3 linear_to_srgb(vec3 c) {
   return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
 }
 
+// Sky and bounce light, independent of the shadow term: a hemisphere between the sky colour
+// (frame.ambient, above) and a ground colour lit by the sun (below), plus a weak bounce from the
+// sunlit ground and walls arriving from the side away from the sun. Surfaces in shadow keep their
+// shape (up-facing ones read blue-bright, walls facing away from the sun get the warm bounce)
+// instead of one flat grey.
+vec3 ambient_light(vec3 n, vec3 l) {
+  float sun_height = clamp(l.y, 0.0, 1.0);
+  vec3 sky = frame.ambient.rgb;
+  vec3 ground = frame.ambient.rgb * vec3(0.55, 0.5, 0.42) + frame.light_radiance.rgb * (0.035 * sun_height);
+  vec3 hemisphere = mix(ground, sky, 0.5 + 0.5 * n.y);
+  vec3 away = vec3(-l.x, 0.0, -l.z);
+  float away_len = length(away);
+  float bounce = away_len > 1e-4 ? max(dot(n, away / away_len), 0.0) : 0.0;
+  return hemisphere + frame.light_radiance.rgb * vec3(1.0, 0.92, 0.8) * (0.045 * bounce * sun_height);
+}
+
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(uvec2(pixel), frame.extent.xy))) return;
@@ -33,8 +49,7 @@ void main() {
     vec3 l = -frame.light_direction.xyz;
     float shadow = albedo.a > 0.5 ? imageLoad(shadow_image, pixel).r : 1.0;
     float n_dot_l = max(dot(n, l), 0.0);
-    float sky = 0.5 + 0.5 * n.y;
-    color = albedo.rgb * (frame.light_radiance.rgb * n_dot_l * shadow + frame.ambient.rgb * sky);
+    color = albedo.rgb * (frame.light_radiance.rgb * n_dot_l * shadow + ambient_light(n, l));
     color = color / (1.0 + color);  // Reinhard: bright sunlit surfaces keep their gradation
   }
   vec4 overlay = imageLoad(overlay_image, pixel);

@@ -52,3 +52,95 @@ if(EXISTS ${SPONZA_GLTF})
   set_tests_properties(walkthrough_loads_sponza PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe"
                        PASS_REGULAR_EXPRESSION "wrote .*frame_000.png")
 endif()
+
+# The minimal integration example renders and writes a non-trivial PNG (png_check fails on a missing,
+# tiny or uniform image).
+add_executable(png_check tools/png_check.cpp)
+target_link_libraries(png_check PRIVATE PkgConfig::STB)
+add_test(NAME minimal_example_writes_png
+         COMMAND sh -c "rm -f \"$2\" && \"$0\" \"$1\" \"$2\" 2 160x90 && \"$3\" \"$2\" --min-size 160x90 --min-colors 32"
+                 $<TARGET_FILE:minimal> contact ${CMAKE_CURRENT_BINARY_DIR}/minimal_example.png $<TARGET_FILE:png_check>)
+set_tests_properties(minimal_example_writes_png PROPERTIES LABELS gpu
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe"
+                     FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+add_test(NAME minimal_example_loads_gltf
+         COMMAND sh -c "rm -f \"$2\" && \"$0\" \"$1\" \"$2\" 1 96x64 && \"$3\" \"$2\" --min-colors 2 --min-spread 0"
+                 $<TARGET_FILE:minimal> ${PROJECT_SOURCE_DIR}/content/test_gltf/triangle.gltf
+                 ${CMAKE_CURRENT_BINARY_DIR}/minimal_gltf.png $<TARGET_FILE:png_check>)
+set_tests_properties(minimal_example_loads_gltf PROPERTIES LABELS gpu
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+
+# The walkthrough game: replayed input, recording, scene files, tours.
+set(TEST_LEVELS ${PROJECT_SOURCE_DIR}/content/test_levels)
+add_test(NAME walkthrough_replay_walks_into_wall
+         COMMAND ${PROJECT_SOURCE_DIR}/tests/check_player.sh 3.9 4.1 -0.05 0.05 -4.75 -4.6
+                 $<TARGET_FILE:walkthrough> --headless --scene ${TEST_LEVELS}/wall.json
+                 --input ${TEST_LEVELS}/walk_into_wall.input --size 96x64 --mode sm
+                 --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_replay_out)
+set_tests_properties(walkthrough_replay_walks_into_wall PROPERTIES LABELS gpu
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
+# Recording while replaying writes a script that replays to the same place.
+add_test(NAME walkthrough_record_replays_identically
+         COMMAND sh -c "set -e; rec=$2/recorded.input; rm -f $rec; \
+a=$($0 --headless --scene $1/wall.json --input $1/walk_into_wall.input --size 64x48 --mode off --out $2 --record $rec | grep '^player:'); \
+b=$($0 --headless --scene $1/wall.json --input $rec --size 64x48 --mode off --out $2 | grep '^player:'); \
+echo \"$a\"; echo \"$b\"; [ -n \"$a\" ] && [ \"$a\" = \"$b\" ]"
+                 $<TARGET_FILE:walkthrough> ${TEST_LEVELS} ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_record_out)
+set_tests_properties(walkthrough_record_replays_identically PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+# Bad scene files and input scripts: one line naming the file (and the field or line), exit code 1.
+foreach(bad bad_json bad_field bad_shape bad_shadow_flag bad_animation bad_script)
+  if(bad STREQUAL bad_script)
+    set(args --scene ${TEST_LEVELS}/wall.json --input ${TEST_LEVELS}/bad_script.input)
+    set(expect "bad_script.input:3: unknown key 'Jump'")
+  else()
+    set(args --scene ${TEST_LEVELS}/${bad}.json)
+  endif()
+  if(bad STREQUAL bad_json)
+    set(expect "bad_json.json: not valid JSON")
+  elseif(bad STREQUAL bad_field)
+    set(expect "bad_field.json: objects.1..shape.box.max: expected an array of 3 numbers")
+  elseif(bad STREQUAL bad_shape)
+    set(expect "bad_shape.json: objects.0..shape.pyramid: unknown shape")
+  elseif(bad STREQUAL bad_shadow_flag)
+    set(expect "bad_shadow_flag.json: objects.1..shadow.csm: 'sometimes' is not one of on, off, auto")
+  elseif(bad STREQUAL bad_animation)
+    set(expect "bad_animation.json: objects.1..animate.walk.path: expected at least 2 points")
+  endif()
+  add_test(NAME walkthrough_rejects_${bad}
+           COMMAND sh -c "out=$(\"$@\" --headless --frames 1 2>&1); rc=$?; echo \"$out\"; \
+[ $rc -eq 1 ] && [ $(printf '%s\\n' \"$out\" | wc -l) -eq 1 ] && printf '%s' \"$out\" | grep -q \"$0\""
+                   "${expect}" $<TARGET_FILE:walkthrough> ${args})
+  set_tests_properties(walkthrough_rejects_${bad} PROPERTIES LABELS unit)
+endforeach()
+# A headless tour of every shipped level at a small size, with moving casters and a moving sun.
+file(GLOB SHIPPED_LEVELS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/content/levels/*.json)
+foreach(level ${SHIPPED_LEVELS})
+  get_filename_component(level_name ${level} NAME_WE)
+  add_test(NAME walkthrough_tour_${level_name}
+           COMMAND $<TARGET_FILE:walkthrough> --headless --tour --animate-sun --scene ${level} --size 128x72 --frames 3
+                   --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_tour_${level_name})
+  set_tests_properties(walkthrough_tour_${level_name} PROPERTIES LABELS gpu
+                       ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe"
+                       PASS_REGULAR_EXPRESSION "wrote .*frame_002.png" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+endforeach()
+# Settings files: loaded, saved, and loaded back; a bad one is rejected in one line.
+add_test(NAME walkthrough_settings_round_trip
+         COMMAND sh -c "set -e; rm -f $2; $0 --headless --scene $1/wall.json --settings $1/settings.json --save-settings $2 \
+--size 64x48 --frames 1 --out $3 | grep -q 'mode sm,'; $0 --headless --scene $1/wall.json --settings $2 --size 64x48 --frames 1 \
+--out $3 | grep 'mode sm,'; grep -q '\"time_of_day\": 9.5' $2"
+                 $<TARGET_FILE:walkthrough> ${TEST_LEVELS} ${CMAKE_CURRENT_BINARY_DIR}/saved_settings.json
+                 ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_settings_out)
+set_tests_properties(walkthrough_settings_round_trip PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+add_test(NAME walkthrough_rejects_bad_settings
+         COMMAND sh -c "out=$(\"$0\" \"$@\" 2>&1); rc=$?; echo \"$out\"; [ $rc -eq 1 ] && [ $(printf '%s\\n' \"$out\" | wc -l) -eq 1 ] \
+&& printf '%s' \"$out\" | grep -q 'bad_settings.json: samples_per_pixel: must be 1 or 32'"
+                 $<TARGET_FILE:walkthrough> --headless --scene ${TEST_LEVELS}/wall.json --settings ${TEST_LEVELS}/bad_settings.json
+                 --size 64x48 --frames 1 --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_settings_out)
+set_tests_properties(walkthrough_rejects_bad_settings PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+if(EXISTS ${SPONZA_GLTF})
+  add_test(NAME walkthrough_tour_sponza
+           COMMAND $<TARGET_FILE:walkthrough> --headless --tour --scene ${PROJECT_SOURCE_DIR}/content/sponza/sponza.json
+                   --size 96x54 --frames 2 --mode sm --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_tour_sponza)
+  set_tests_properties(walkthrough_tour_sponza PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe"
+                       PASS_REGULAR_EXPRESSION "wrote .*frame_001.png")
+endif()

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 
+#include "engine/assets/scene_file.hpp"
 #include "engine/core/transform_system.hpp"
 
 namespace engine {
@@ -54,9 +55,10 @@ std::unique_ptr<Scene> load_scene(const std::string& name_or_path) {
   std::error_code ec;
   const bool is_file = std::filesystem::is_regular_file(path, ec);
   // A glTF extension goes to the loader even when the file is missing so the error names the file.
+  if (ext == ".json") return load_scene_file(path);
   if (is_file || ext == ".gltf" || ext == ".glb") return load_gltf_scene(path);
   throw SceneError("unknown scene '" + name_or_path +
-                   "': expected one of contact, atrium, foliage or a .gltf/.glb file");
+                   "': expected one of contact, atrium, foliage, a .gltf/.glb file or a .json scene file");
 }
 
 }  // namespace engine

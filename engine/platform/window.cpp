@@ -74,6 +74,7 @@ constexpr VkImageUsageFlags kSwapchainUsage =
 struct Window::Impl {
   GLFWwindow* window = nullptr;
   bool glfw_acquired = false;
+  float render_scale = 1.0f;
   gpu::Context* ctx = nullptr;
 
   VkSurfaceKHR surface = VK_NULL_HANDLE;
@@ -486,6 +487,17 @@ void Window::set_size(uint32_t width, uint32_t height) {
   impl_->swapchain_dirty = true;
 }
 
+void Window::set_render_scale(float scale) { impl_->render_scale = std::clamp(scale, 0.1f, 1.0f); }
+
+float Window::render_scale() const { return impl_->render_scale; }
+
+VkExtent2D Window::render_extent(VkExtent2D fb) const {
+  const float k = impl_->render_scale;
+  return {std::max(1u, uint32_t(float(fb.width) * k + 0.5f)), std::max(1u, uint32_t(float(fb.height) * k + 0.5f))};
+}
+
+GLFWwindow* Window::native_handle() const { return impl_->window; }
+
 bool Window::draw_frame(Renderer& renderer, const std::function<void()>& build_ui, float dt) {
   Impl& s = *impl_;
   if (!s.ctx) throw std::logic_error("draw_frame before attach");
@@ -514,7 +526,7 @@ bool Window::draw_frame(Renderer& renderer, const std::function<void()>& build_u
   // Suboptimal still signalled the semaphore, so this frame goes ahead and the swapchain is rebuilt after.
   if (acquired == VK_SUBOPTIMAL_KHR) s.swapchain_dirty = true;
 
-  renderer.resize(s.extent);  // waits for the device itself when the size changes
+  renderer.resize(render_extent(s.extent));  // waits for the device itself when the size changes
   renderer.update(dt);
 
   ImGui::SetCurrentContext(s.imgui);

@@ -211,7 +211,7 @@ void Renderer::update(float dt) {
   u.camera_position = glm::vec4(view_.camera_position, 1.0f);
   u.light_direction = glm::vec4(view_.light_direction, 0.0f);
   u.light_radiance = glm::vec4(view_.light_radiance, 0.0f);
-  u.ambient = glm::vec4(0.22f, 0.25f, 0.30f, 0.0f);
+  u.ambient = glm::vec4(0.26f, 0.31f, 0.40f, 0.0f);  // sky colour of the hemisphere ambient (lighting.comp)
   u.extent = glm::uvec4(extent_.width, extent_.height, uint32_t(view_.frame_index), 0u);
   frame_uniforms_.write(&u, sizeof(u));
 }

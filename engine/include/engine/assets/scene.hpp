@@ -3,6 +3,7 @@
 // named views (camera pose + light direction) that tests and the benchmark select by index.
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -30,7 +31,8 @@ struct Scene {
   Registry registry;
   Entity camera = kNullEntity;
   Entity light = kNullEntity;
-  std::vector<SceneView> views;  // at least one
+  std::vector<SceneView> views;  // at least one (the tour)
+  std::optional<SceneView> start;  // where a player starts, when the scene says (else views[0])
 
   // Bounds of all meshes in world space (after update_world_transforms).
   Aabb world_bounds();
@@ -48,7 +50,7 @@ std::unique_ptr<Scene> build_procedural_scene(const std::string& name);
 // height) and a default sun.
 std::unique_ptr<Scene> load_gltf_scene(const std::filesystem::path& path);
 
-// A procedural scene name, or a path to a glTF file.
+// A procedural scene name, a path to a glTF file, or a .json scene file (engine/assets/scene_file.hpp).
 std::unique_ptr<Scene> load_scene(const std::string& name_or_path);
 
 }  // namespace engine

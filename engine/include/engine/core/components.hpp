@@ -104,4 +104,9 @@ struct ShadowCaster {
   CsmChoice csm = CsmChoice::Auto;
 };
 
+// Whether a game's player collides with this mesh (scene files: "collide"; plants default to false).
+struct Collider {
+  bool solid = true;
+};
+
 }  // namespace engine

@@ -8,6 +8,8 @@
 #include "engine/gpu/context.hpp"
 #include "engine/render/renderer.hpp"
 
+struct GLFWwindow;
+
 namespace engine::platform {
 
 struct WindowOptions {
@@ -34,6 +36,14 @@ class Window {
   // Framebuffer size in pixels (0 x 0 while minimised).
   VkExtent2D framebuffer_extent() const;
   void set_size(uint32_t width, uint32_t height);
+  // The renderer draws at the framebuffer size times this factor (0.1..1, each axis); presentation
+  // scales its output up to the window. Dynamic resolution changes it between frames.
+  void set_render_scale(float scale);
+  float render_scale() const;
+  // The render size draw_frame will give the renderer for a framebuffer size.
+  VkExtent2D render_extent(VkExtent2D framebuffer) const;
+  // The GLFW window, for games that read input directly (keys, mouse, gamepads).
+  GLFWwindow* native_handle() const;
 
   // One frame: update + record the renderer, blit its output to the swapchain, draw ImGui built by
   // `build_ui`, present. Handles resize and minimise (skips drawing while minimised). Returns false

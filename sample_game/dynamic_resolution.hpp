@@ -1,0 +1,28 @@
+#pragma once
+#include <algorithm>
+#include <vector>
+
+namespace walkthrough {
+
+// Holds a frame-time target by scaling the render size: every 8 frames the median frame time is
+// compared with the target; too slow shrinks each side by the square root of the ratio (at most 30%),
+// clearly fast (under 75% of the target) grows it by 8%; the scale stays in [0.25, 1] in steps of 1/40.
+class DynamicResolution {
+ public:
+  explicit DynamicResolution(float target_fps) : target_ms_(1000.0f / target_fps) {}
+  // Feeds one frame's wall-clock time; returns true when scale() changed.
+  bool add_frame(float ms);
+  float scale() const { return scale_; }
+  float target_ms() const { return target_ms_; }
+  void set_target_fps(float fps) { target_ms_ = 1000.0f / std::max(fps, 1.0f); }
+  float median_ms() const { return median_ms_; }
+  bool enabled = true;
+
+ private:
+  float target_ms_;
+  float scale_ = 1.0f;
+  float median_ms_ = 0.0f;
+  std::vector<float> window_;
+};
+
+}  // namespace walkthrough
