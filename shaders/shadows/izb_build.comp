@@ -31,6 +31,7 @@ void main() {
   uint state = 0u;
   uint mask = 0u;  // samples the CSM settled (shadowed)
   uint texels[32];
+  uint texel0 = 0u;
   uint count = 0u;
   float node_depth = 0.0;
   if (inside) {
@@ -61,7 +62,13 @@ void main() {
         state |= IZB_PIXEL_CSM_CULLED;
         culled = 1u;
       }
-      count = node_texels(g, mask, texels);
+      // 1 spp keeps its one texel in a register (texels[] is local memory, used at 32 spp).
+      if (izb_samples() == 1u) {
+        count = mask == 0u ? 1u : 0u;
+        texel0 = texel_index(grid_texel(g[0]));
+      } else {
+        count = node_texels(g, mask, texels);
+      }
     }
   }
   // One atomic per subgroup reserves every lane's nodes. Every texel is requested even past the pool,
@@ -77,8 +84,9 @@ void main() {
     // sum). A pixel takes all its nodes or, past the pool, none.
     if (base + count <= params.limits.x) {
       for (uint k = 0u; k < count; ++k) {
-        atomicAdd(list_counts[texels[k]], 1u);
-        raise_farthest(texels[k], node_depth);
+        uint texel = izb_samples() == 1u ? texel0 : texels[k];
+        atomicAdd(list_counts[texel], 1u);
+        raise_farthest(texel, node_depth);
       }
     } else {
       refused = count;
@@ -90,8 +98,9 @@ void main() {
         ++refused;
         continue;
       }
-      nodes[node] = uvec2(atomicExchange(heads[texels[k]], node), index);
-      raise_farthest(texels[k], node_depth);
+      uint texel = izb_samples() == 1u ? texel0 : texels[k];
+      nodes[node] = uvec2(atomicExchange(heads[texel], node), index);
+      raise_farthest(texel, node_depth);
     }
   }
   if (inside) {
