@@ -6,8 +6,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { CascadeMaskPush push; };
 layout(set = 0, binding = CASCADE_MASK_BINDING_PARAMS) uniform Params { CascadeParams params; };
 layout(set = 0, binding = CASCADE_MASK_BINDING_DEPTH) uniform sampler2DArray depth_map;
-layout(set = 0, binding = CASCADE_MASK_BINDING_EDGE_DST, r32ui) writeonly uniform uimage2DArray edge_dst;
-layout(set = 0, binding = CASCADE_MASK_BINDING_EXTENT_DST, r32ui) writeonly uniform uimage2DArray extent_dst;
+// Per mask texel, rows of the level's width from params.mask_offset[cascade]: x edge flag, y packed
+// depth extent.
+layout(set = 0, binding = CASCADE_MASK_BINDING_MASKS) writeonly buffer Masks { uvec2 masks[]; };
 
 // One cascade's masks at the only level the filter reads (mask_level), straight from the depth map.
 // A map texel is an edge when any 3x3 neighbour's depth differs by more than a slope of two texels
@@ -86,6 +87,6 @@ void main() {
     }
   }
   bool edge = step > params.edge_threshold[c];
-  imageStore(edge_dst, ivec3(id, c), uvec4(edge ? 1u : 0u));
-  if (push.depth_extent != 0u) imageStore(extent_dst, ivec3(id, c), uvec4(cascade_pack_extent(lo, hi)));
+  uint extent = push.depth_extent != 0u ? cascade_pack_extent(lo, hi) : CASCADE_EXTENT_EMPTY;
+  masks[params.mask_offset[c] + uint(id.y * level_size + id.x)] = uvec2(edge ? 1u : 0u, extent);
 }
