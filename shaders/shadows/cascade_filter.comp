@@ -24,8 +24,9 @@ layout(set = 0, binding = CASCADE_FILTER_BINDING_PARAMS) uniform Params { Cascad
 layout(set = 0, binding = CASCADE_FILTER_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly uniform image2D geometric_normal;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_DEPTH) uniform sampler2DArray depth_map;
-// Per mask texel: x edge flag, y packed depth extent (see cascade_edges.comp).
-layout(set = 0, binding = CASCADE_FILTER_BINDING_MASKS) readonly buffer Masks { uvec2 masks[]; };
+// Per mask texel, four entries for the texels lo..hi with hi - lo = (k & 1, k >> 1): x whether any
+// is an edge, y the union of their packed depth extents (see cascade_edges.comp).
+layout(set = 0, binding = CASCADE_FILTER_BINDING_NEIGHBOURHOODS) readonly buffer Neighbourhoods { uvec2 neighbourhoods[]; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_ROTATION) uniform sampler2D rotation;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_OVERLAY, rgba8) writeonly uniform image2D overlay;
@@ -61,15 +62,15 @@ bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
   // Masks exist only inside this frame's rectangle: elsewhere nothing is known, so take the kernel.
   ivec4 rect = params.mask_rect[c];
   bool unknown = any(lessThan(lo, rect.xy)) || any(greaterThan(hi, rect.zw)) || any(greaterThan(hi - lo, ivec2(1)));
-  // The (at most) 2x2 texels lo..hi, as four fixed lookups (repeats where lo == hi): no loop.
-  uint row_lo = params.mask_offset[c] + uint(lo.y * level_size), row_hi = params.mask_offset[c] + uint(hi.y * level_size);
-  uvec4 at = uvec4(row_lo + uint(lo.x), row_lo + uint(hi.x), row_hi + uint(lo.x), row_hi + uint(hi.x));
-  bool edge = (masks[at.x].x | masks[at.y].x | masks[at.z].x | masks[at.w].x) != 0u;
+  // The (at most) 2x2 texels lo..hi: one entry of lo's neighbourhood. (Clamped into the rectangle so
+  // that the read stays inside the buffer where the result is not used.)
+  ivec2 at = max(min(lo, rect.zw), rect.xy);
+  uint texel = params.mask_offset[c] + uint(max((at.y - rect.y) * (rect.z - rect.x + 1) + (at.x - rect.x), 0));
+  uint k = uint(hi.x > lo.x) + 2u * uint(hi.y > lo.y);
+  uvec2 m = neighbourhoods[texel * 4u + k];
+  bool edge = m.x != 0u;
   if (kMasking == CASCADE_MASKING_EDGE) return unknown || edge;
-  uvec4 v = uvec4(masks[at.x].y, masks[at.y].y, masks[at.z].y, masks[at.w].y);
-  uvec4 vlo = v >> 16u, vhi = v & 0xffffu;
-  uint d_lo = min(min(vlo.x, vlo.y), min(vlo.z, vlo.w));
-  uint d_hi = max(max(vhi.x, vhi.y), max(vhi.z, vhi.w));
+  uint d_lo = m.y >> 16u, d_hi = m.y & 0xffffu;
   // Every tap compares a receiver depth in [z_lo, z_hi] with a map depth in [d_lo, d_hi]: entirely
   // in front (all lit) or entirely behind (all shadowed) means one tap gives the same answer.
   float bias = params.depth_bias[c];

@@ -78,7 +78,7 @@ struct CascadeParams {
   vec4 edge_threshold;          // light depth step between neighbours that counts as an edge
   ivec4 mask_level;             // mask mip level matching the kernel width
   ivec4 mask_rect[4];           // mask texels built this frame (inclusive, at mask_level); empty: none
-  uvec4 mask_offset;            // each cascade's first texel in the mask buffer (rows of its level's width)
+  uvec4 mask_offset;            // each cascade's first texel in the mask buffers (rows of mask_rect's width)
   vec4 camera_position;         // xyz
   vec4 camera_forward;          // xyz, unit
   vec4 light_direction;         // xyz: travel direction, unit
@@ -101,12 +101,13 @@ struct CascadeBlurPush {
 SHARED_CONST uint CASCADE_MASK_BINDING_PARAMS = 0u;
 SHARED_CONST uint CASCADE_MASK_BINDING_DEPTH = 1u;
 SHARED_CONST uint CASCADE_MASK_BINDING_MASKS = 2u;
+SHARED_CONST uint CASCADE_MASK_BINDING_NEIGHBOURHOODS = 3u;
 
 SHARED_CONST uint CASCADE_FILTER_BINDING_PARAMS = 0u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_WORLD_POSITION = 1u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL = 2u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_DEPTH = 3u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_MASKS = 4u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_NEIGHBOURHOODS = 4u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_ROTATION = 5u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_SHADOW_TERM = 6u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_OVERLAY = 7u;

@@ -90,9 +90,12 @@ struct CascadesPass::Impl {
   Context& ctx;
   uint32_t map_size = 0;
   Image depth;        // D32 array, one layer per cascade
-  // Per cascade, at its mask level: (edge flag, packed [min, max] light depth of the neighbourhood).
-  // A buffer, not images: on CPU implementations a buffer load costs far less than a texel fetch.
+  // Per mask texel of each cascade's rectangle, at its mask level: (edge flag, packed [min, max] light
+  // depth of the neighbourhood); then the same combined over each texel's 2x2 neighbourhoods, which
+  // the filter reads with a single load.
   Buffer masks;
+  Buffer neighbourhoods;
+  VkDeviceSize mask_capacity = 0;  // texels
   Image rotation;     // kRotationTileSize^2 RG16F (cos, sin)
   Buffer blurred;     // the blur's result per blur-list entry, written back after it
   Buffer work_list;   // one uint per pixel: kernel entries from the front, band entries from the back
@@ -102,7 +105,7 @@ struct CascadesPass::Impl {
   Buffer blur_list;
   Sampler nearest;
   Pipeline depth_pipeline[2];  // [cull_front_faces]
-  Pipeline edges_pipeline;
+  Pipeline edges_pipeline[2];  // [neighbourhoods]
   // [stage][masking][debug], created on first use.
   Pipeline filter_pipelines[3][3][3];
   Pipeline args_pipeline;
@@ -128,11 +131,15 @@ struct CascadesPass::Impl {
       d.depth_bias = true;
       depth_pipeline[cull] = factory.graphics(d);
     }
-    edges_pipeline = factory.compute({"cascade_edges.comp",
-                                      {{gs::CASCADE_MASK_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-                                       {gs::CASCADE_MASK_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                                       {gs::CASCADE_MASK_BINDING_MASKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
-                                      sizeof(gs::CascadeMaskPush)});
+    for (uint32_t neighbourhoods = 0; neighbourhoods < 2; ++neighbourhoods)
+      edges_pipeline[neighbourhoods] =
+          factory.compute({"cascade_edges.comp",
+                           {{gs::CASCADE_MASK_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+                            {gs::CASCADE_MASK_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                            {gs::CASCADE_MASK_BINDING_MASKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                            {gs::CASCADE_MASK_BINDING_NEIGHBOURHOODS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+                           sizeof(gs::CascadeMaskPush),
+                           {{0, neighbourhoods}}});
     args_pipeline = factory.compute(
         {"cascade_dispatch_args.comp", {{gs::CASCADE_ARGS_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}, 0});
     for (uint32_t apply = 0; apply < 2; ++apply)
@@ -157,7 +164,7 @@ struct CascadesPass::Impl {
           {gs::CASCADE_FILTER_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gs::CASCADE_FILTER_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-          {gs::CASCADE_FILTER_BINDING_MASKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+          {gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
           {gs::CASCADE_FILTER_BINDING_ROTATION, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
           {gs::CASCADE_FILTER_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gs::CASCADE_FILTER_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
@@ -201,9 +208,6 @@ struct CascadesPass::Impl {
     // Always kMaxCascades layers: the views stay 2D arrays whatever the cascade count.
     depth = Image(ctx, {size, size}, kMapFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                   "cascade depth", 1, kMaxCascadeCount);
-    // Room for every cascade at level 0, the most a mask can take.
-    masks = Buffer(ctx, VkDeviceSize(size) * size * kMaxCascadeCount * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
-                   "cascade masks");
     to_general(ctx, depth);
   }
 
@@ -288,9 +292,10 @@ struct CascadesPass::Impl {
       const uint32_t level = std::min({uint32_t(std::ceil(std::log2(width) - 1e-4f)), top_level,
                                        uint32_t(gs::CASCADE_MASK_MAX_LEVEL)});
       p.mask_level[c] = int(level);
-      p.mask_offset[c] = mask_texels;
-      if (c < fit.count) mask_texels += std::max(map_size >> level, 1u) * std::max(map_size >> level, 1u);
       p.mask_rect[c] = c < fit.count ? mask_rect(frame, c, level, kernel) : glm::ivec4(0, 0, -1, -1);
+      p.mask_offset[c] = mask_texels;
+      const glm::ivec4 r = p.mask_rect[c];
+      if (r.z >= r.x && r.w >= r.y) mask_texels += uint32_t(r.z - r.x + 1) * uint32_t(r.w - r.y + 1);
       (*levels)[c] = level;
       (*rects)[c] = p.mask_rect[c];
     }
@@ -370,6 +375,17 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   std::array<glm::ivec4, kMaxCascadeCount> rects{};
   const gs::CascadeParams p = m.make_params(frame, settings, debug, &levels, &rects);
   m.params.write(&p, sizeof(p));
+  // Frames are recorded only once the previous one has finished, so the buffers may be replaced here.
+  const VkDeviceSize texels = std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + [&] {
+    const glm::ivec4 r = rects[kMaxCascadeCount - 1];
+    return r.z >= r.x && r.w >= r.y ? VkDeviceSize(r.z - r.x + 1) * VkDeviceSize(r.w - r.y + 1) : VkDeviceSize(0);
+  }(), 1);
+  if (texels > m.mask_capacity) {
+    m.mask_capacity = texels + texels / 4;
+    m.masks = Buffer(m.ctx, m.mask_capacity * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade masks");
+    m.neighbourhoods = Buffer(m.ctx, m.mask_capacity * 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                              "cascade mask neighbourhoods");
+  }
   m.blur_enabled = settings.blur;
 
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, gs::CASCADE_COUNTER_WORDS * 4, 0);
@@ -378,18 +394,26 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   if (settings.masking != Masking::Off) {
     const bool extent = settings.masking == Masking::DepthExtent;
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_masks");
-    m.edges_pipeline.bind(cmd);
-    // One dispatch per cascade over the texels its receivers can read, at the one level it uses.
-    for (uint32_t c = 0; c < m.fit.count; ++c) {
-      const glm::ivec4 rect = rects[c];
-      if (rect.z < rect.x || rect.w < rect.y) continue;
-      DescriptorWriter()
-          .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, m.params.handle())
-          .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-          .storage_buffer(gs::CASCADE_MASK_BINDING_MASKS, m.masks.handle())
-          .push(m.ctx, cmd, m.edges_pipeline);
-      m.edges_pipeline.push_constants(cmd, gs::CascadeMaskPush{c, extent ? 1u : 0u, 0u, 0u});
-      vkCmdDispatch(cmd, uint32_t(rect.z - rect.x + 8) / 8, uint32_t(rect.w - rect.y + 8) / 8, 1);
+    // One dispatch per cascade over the texels its receivers can read, at the one level it uses; then
+    // the same over their neighbourhoods.
+    for (uint32_t neighbourhoods = 0; neighbourhoods < 2; ++neighbourhoods) {
+      if (neighbourhoods)
+        memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+      const Pipeline& pipeline = m.edges_pipeline[neighbourhoods];
+      pipeline.bind(cmd);
+      for (uint32_t c = 0; c < m.fit.count; ++c) {
+        const glm::ivec4 rect = rects[c];
+        if (rect.z < rect.x || rect.w < rect.y) continue;
+        DescriptorWriter()
+            .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, m.params.handle())
+            .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+            .storage_buffer(gs::CASCADE_MASK_BINDING_MASKS, m.masks.handle())
+            .storage_buffer(gs::CASCADE_MASK_BINDING_NEIGHBOURHOODS, m.neighbourhoods.handle())
+            .push(m.ctx, cmd, pipeline);
+        pipeline.push_constants(cmd, gs::CascadeMaskPush{c, extent ? 1u : 0u, 0u, 0u});
+        vkCmdDispatch(cmd, uint32_t(rect.z - rect.x + 8) / 8, uint32_t(rect.w - rect.y + 8) / 8, 1);
+      }
     }
     full_barrier(cmd);
   }
@@ -404,7 +428,7 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
           .storage_image(gs::CASCADE_FILTER_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
           .storage_image(gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
           .sampled_image(gs::CASCADE_FILTER_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-          .storage_buffer(gs::CASCADE_FILTER_BINDING_MASKS, m.masks.handle())
+          .storage_buffer(gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, m.neighbourhoods.handle())
           .sampled_image(gs::CASCADE_FILTER_BINDING_ROTATION, m.rotation.view(), m.nearest.handle(),
                          VK_IMAGE_LAYOUT_GENERAL)
           .storage_image(gs::CASCADE_FILTER_BINDING_SHADOW_TERM, out.view())
