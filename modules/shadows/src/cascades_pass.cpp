@@ -1,10 +1,11 @@
 // Cascaded filtered shadow maps. Per frame: fit the cascades (cascade_fit.cpp) -> cascade_depth (one
 // D32 layer per cascade) -> cascade_masks (edge flag and depth extent per texel of each cascade's
-// mask level, in one buffer) -> cascade_filter (rotated 12-tap Poisson PCF or one tap, per pixel: a
-// classify stage over the frame takes the one tap where the mask allows and lists the pixels that
-// need the kernel or lie in a blend band; two stages over those lists, with indirect dispatches,
-// finish them) -> cascade_blur (5x5 on pixels whose taps disagreed, over a compacted list, into a
-// side buffer that a second dispatch writes back).
+// mask level over its receivers' rectangle, then combined over each texel's 2x2 neighbourhoods) ->
+// cascade_filter (rotated 12-tap Poisson PCF or one tap, per pixel: a classify stage over the frame
+// takes the one tap where the mask allows and lists the pixels that need the kernel or lie in a
+// blend band; two stages over those lists, with indirect dispatches, finish them) -> cascade_blur
+// (5x5 on pixels whose taps disagreed, over a compacted list, into a side buffer that a second
+// dispatch writes back).
 //
 // Why lists rather than branches: Mesa's llvmpipe (lavapipe) runs both sides of every branch for all
 // lanes of its SIMD rows, so a per-pixel `if (needs kernel)` made every pixel pay for the 12 taps
@@ -15,7 +16,8 @@
 // When skipping the kernel is exact. Every tap compares the receiver's tangent plane, evaluated at
 // the tap texel's centre, with that texel's stored depth. A pixel skips the 12 taps only when no edge
 // texel (a 3x3 depth step steeper than two texels of depth per texel) lies in any mask texel its
-// kernel footprint overlaps, at the level whose texels are as wide as the kernel; near-grazing
+// kernel footprint overlaps, at the level whose texels are as wide as the kernel (a footprint over
+// more than 2x2 of them, possible only where that level is capped, takes the kernel); near-grazing
 // receivers never skip. Depth-extent masking skips additionally only when the receiver's depth range
 // over the kernel lies wholly in front of, or wholly behind, every stored depth in the footprint, so
 // it always reproduces the edge-masked result exactly. Masked and unmasked agree except where a
