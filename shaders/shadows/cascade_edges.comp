@@ -3,11 +3,20 @@
 #include "cascades.h"
 layout(local_size_x = 8, local_size_y = 8) in;
 
+// Two pipelines: kNeighbourhoods 0 builds each mask texel from the depth map; 1 then combines each
+// texel with its right, lower and lower-right neighbours, so the filter reads one entry whatever the
+// (at most 2x2) mask texels its kernel covers.
+layout(constant_id = 0) const uint kNeighbourhoods = 0u;
+
 layout(push_constant) uniform Push { CascadeMaskPush push; };
 layout(set = 0, binding = CASCADE_MASK_BINDING_PARAMS) uniform Params { CascadeParams params; };
 layout(set = 0, binding = CASCADE_MASK_BINDING_DEPTH) uniform sampler2DArray depth_map;
-layout(set = 0, binding = CASCADE_MASK_BINDING_EDGE_DST, r32ui) writeonly uniform uimage2DArray edge_dst;
-layout(set = 0, binding = CASCADE_MASK_BINDING_EXTENT_DST, r32ui) writeonly uniform uimage2DArray extent_dst;
+// Per mask texel of the cascade's rectangle, in rows of its width from params.mask_offset[cascade]:
+// x edge flag, y packed depth extent.
+layout(set = 0, binding = CASCADE_MASK_BINDING_MASKS) buffer Masks { uvec2 masks[]; };
+// Four entries per mask texel, for the texels lo..hi with hi - lo = (k & 1, k >> 1): x whether any is
+// an edge, y the union of their depth extents.
+layout(set = 0, binding = CASCADE_MASK_BINDING_NEIGHBOURHOODS) writeonly buffer Neighbourhoods { uvec2 neighbourhoods[]; };
 
 // One cascade's masks at the only level the filter reads (mask_level), straight from the depth map.
 // A map texel is an edge when any 3x3 neighbour's depth differs by more than a slope of two texels
@@ -19,11 +28,39 @@ layout(set = 0, binding = CASCADE_MASK_BINDING_EXTENT_DST, r32ui) writeonly unif
 // adjacent texels, so the result equals the per-texel 3x3 definition exactly.
 const int kMaxRow = (2 << CASCADE_MASK_MAX_LEVEL) + 2;
 
+uint mask_index(int c, ivec2 id) {
+  ivec4 rect = params.mask_rect[c];
+  return params.mask_offset[c] + uint((id.y - rect.y) * (rect.z - rect.x + 1) + (id.x - rect.x));
+}
+
+uvec2 combine(uvec2 a, uvec2 b) {
+  return uvec2(a.x | b.x, (min(a.y >> 16u, b.y >> 16u) << 16u) | max(a.y & 0xffffu, b.y & 0xffffu));
+}
+
+void build_neighbourhood(int c, ivec2 id) {
+  // Neighbours past the rectangle are never read together with this texel (the filter takes the
+  // kernel for footprints leaving the rectangle): clamping only keeps the reads inside.
+  ivec2 far = min(id + 1, params.mask_rect[c].zw);
+  uvec2 self = masks[mask_index(c, id)];
+  uvec2 right = combine(self, masks[mask_index(c, ivec2(far.x, id.y))]);
+  uvec2 down = combine(self, masks[mask_index(c, ivec2(id.x, far.y))]);
+  uvec2 all4 = combine(combine(right, down), masks[mask_index(c, far)]);
+  uint at = mask_index(c, id) * 4u;
+  neighbourhoods[at] = self;
+  neighbourhoods[at + 1u] = right;
+  neighbourhoods[at + 2u] = down;
+  neighbourhoods[at + 3u] = all4;
+}
+
 void main() {
   int c = int(push.cascade);
   ivec4 rect = params.mask_rect[c];
   ivec2 id = rect.xy + ivec2(gl_GlobalInvocationID.xy);
   if (id.x > rect.z || id.y > rect.w) return;
+  if (kNeighbourhoods != 0u) {
+    build_neighbourhood(c, id);
+    return;
+  }
   int size = int(params.extent.z);
   int level = params.mask_level[c];
   int level_size = max(size >> level, 1);
@@ -86,6 +123,6 @@ void main() {
     }
   }
   bool edge = step > params.edge_threshold[c];
-  imageStore(edge_dst, ivec3(id, c), uvec4(edge ? 1u : 0u));
-  if (push.depth_extent != 0u) imageStore(extent_dst, ivec3(id, c), uvec4(cascade_pack_extent(lo, hi)));
+  uint extent = push.depth_extent != 0u ? cascade_pack_extent(lo, hi) : CASCADE_EXTENT_EMPTY;
+  masks[mask_index(c, id)] = uvec2(edge ? 1u : 0u, extent);
 }

@@ -6,32 +6,52 @@
 #include "shadow_common.h"
 layout(local_size_x = 8, local_size_y = 8) in;
 
+// One shader, three pipelines (kStage):
+// - CASCADE_STAGE_CLASSIFY, over the frame: per pixel the cascade, the mask test and the one-tap
+//   result; writes every pixel that needs nothing more, and lists the others.
+// - CASCADE_STAGE_KERNEL, over the kernel list: the 12-tap kernel in one cascade.
+// - CASCADE_STAGE_BAND, over the band list: pixels in a blend band, two cascades, each with its own
+//   mask test, one tap or the kernel.
+// Every stage writes exactly what one pass evaluating each pixel in full would. The split is for CPU
+// implementations (llvmpipe runs both sides of every branch for all lanes of a SIMD row, so work
+// behind an `if` is paid by every pixel); on a GPU the lists are compact and the classify stage is
+// cheaper than a full pass with divergent kernels.
+layout(constant_id = 0) const uint kStage = CASCADE_STAGE_CLASSIFY;
+layout(constant_id = 1) const uint kMasking = CASCADE_MASKING_EDGE;  // CascadeParams::mode.x
+layout(constant_id = 2) const uint kDebug = CASCADE_DEBUG_NONE;      // CascadeParams::mode.z
+
 layout(set = 0, binding = CASCADE_FILTER_BINDING_PARAMS) uniform Params { CascadeParams params; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly uniform image2D geometric_normal;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_DEPTH) uniform sampler2DArray depth_map;
-layout(set = 0, binding = CASCADE_FILTER_BINDING_EDGE) uniform usampler2DArray edge_mask;
-layout(set = 0, binding = CASCADE_FILTER_BINDING_EXTENT) uniform usampler2DArray depth_extent;
+// Per mask texel, four entries for the texels lo..hi with hi - lo = (k & 1, k >> 1): x whether any
+// is an edge, y the union of their packed depth extents (see cascade_edges.comp).
+layout(set = 0, binding = CASCADE_FILTER_BINDING_NEIGHBOURHOODS) readonly buffer Neighbourhoods { uvec2 neighbourhoods[]; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_ROTATION) uniform sampler2D rotation;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
-layout(set = 0, binding = CASCADE_FILTER_BINDING_UNBLURRED, r32f) writeonly uniform image2D unblurred;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_OVERLAY, rgba8) writeonly uniform image2D overlay;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_BLUR_LIST) writeonly buffer BlurList { uint blur_list[]; };
+// Kernel entries from the front, band entries from the back: a pixel is in at most one.
+layout(set = 0, binding = CASCADE_FILTER_BINDING_WORK_LIST) buffer WorkList { uint work_list[]; };
 
-struct Result {
-  float visibility;
-  bool expensive;
-  bool mixed;  // some taps lit, some shadowed
+// A receiver's position in cascade c's map.
+struct Probe {
+  vec2 t;          // map texel coordinates
+  float z;         // light depth
+  vec2 gradient;   // the receiver's tangent plane, light depth per texel
+  float r;         // kernel radius in texels
+  float bias;
+  bool expensive;  // the mask test wants the 12-tap kernel
 };
 
 // Whether the kernel footprint [t - r, t + r] could see a depth step (edge mask) and, with the depth
 // extent, whether the receiver's depth over the kernel could fall inside the footprint's map depths.
-// Every texel of `level` that any tap's texel lies in is visited, so a skipped pixel provably has no
-// edge texel under any of its taps.
+// Every texel of `level` that any tap's texel lies in is visited (the level is chosen so these are at
+// most 2x2; a wider footprint, possible only where the level is capped, takes the kernel), so a
+// skipped pixel provably has no edge texel under any of its taps.
 bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
-  uint masking = params.mode.x;
-  if (masking == CASCADE_MASKING_OFF) return true;
+  if (kMasking == CASCADE_MASKING_OFF) return true;
   int level = params.mask_level[c];
   int size = int(params.extent.z);
   int level_size = max(size >> level, 1);
@@ -41,133 +61,217 @@ bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
   hi = min(hi, ivec2(level_size - 1));
   // Masks exist only inside this frame's rectangle: elsewhere nothing is known, so take the kernel.
   ivec4 rect = params.mask_rect[c];
-  if (any(lessThan(lo, rect.xy)) || any(greaterThan(hi, rect.zw))) return true;
-  bool edge = false;
-  uint d_lo = 0xffffu, d_hi = 0u;
-  for (int y = lo.y; y <= hi.y; ++y) {
-    for (int x = lo.x; x <= hi.x; ++x) {
-      edge = edge || texelFetch(edge_mask, ivec3(x, y, c), level).r != 0u;
-      if (masking == CASCADE_MASKING_DEPTH_EXTENT) {
-        uint v = texelFetch(depth_extent, ivec3(x, y, c), level).r;
-        d_lo = min(d_lo, v >> 16u);
-        d_hi = max(d_hi, v & 0xffffu);
-      }
-    }
-  }
-  if (!edge || masking == CASCADE_MASKING_EDGE) return edge;
+  bool unknown = any(lessThan(lo, rect.xy)) || any(greaterThan(hi, rect.zw)) || any(greaterThan(hi - lo, ivec2(1)));
+  // The (at most) 2x2 texels lo..hi: one entry of lo's neighbourhood. (Clamped into the rectangle so
+  // that the read stays inside the buffer where the result is not used.)
+  ivec2 at = max(min(lo, rect.zw), rect.xy);
+  uint texel = params.mask_offset[c] + uint(max((at.y - rect.y) * (rect.z - rect.x + 1) + (at.x - rect.x), 0));
+  uint k = uint(hi.x > lo.x) + 2u * uint(hi.y > lo.y);
+  uvec2 m = neighbourhoods[texel * 4u + k];
+  bool edge = m.x != 0u;
+  if (kMasking == CASCADE_MASKING_EDGE) return unknown || edge;
+  uint d_lo = m.y >> 16u, d_hi = m.y & 0xffffu;
   // Every tap compares a receiver depth in [z_lo, z_hi] with a map depth in [d_lo, d_hi]: entirely
   // in front (all lit) or entirely behind (all shadowed) means one tap gives the same answer.
   float bias = params.depth_bias[c];
   bool all_lit = z_hi <= float(d_lo) / 65535.0 + bias;
   bool all_shadowed = z_lo > float(d_hi) / 65535.0 + bias;
-  return !(all_lit || all_shadowed);
+  return unknown || (edge && !(all_lit || all_shadowed));
 }
 
-Result evaluate(int c, vec3 p, vec3 n, ivec2 pixel) {
-  Result result = Result(1.0, false, false);
+Probe probe(int c, vec3 p, vec3 n) {
+  Probe pr;
   vec3 q = shadow_ray_origin(p, n) + n * params.normal_offset[c];
   vec4 light = params.light_view_projection[c] * vec4(q, 1.0);
   float size = float(params.extent.z);
-  vec2 t = (light.xy * 0.5 + 0.5) * size;  // map texel coordinates
-  float z = light.z;
+  pr.t = (light.xy * 0.5 + 0.5) * size;
+  pr.z = light.z;
   // The receiver's tangent plane in map space: each tap compares the plane's depth at its texel's
   // centre, so a planar receiver agrees with its own stored depth at every tap.
   vec3 nc = mat3(params.light_normal_matrix[c]) * n;
   float max_slope = 8.0 * params.edge_threshold[c];
   vec2 slope = abs(nc.z) > 1.0e-8 ? -nc.xy / nc.z * (2.0 / size) : vec2(1.0e8);
-  vec2 gradient = clamp(slope, vec2(-max_slope), vec2(max_slope));
+  pr.gradient = clamp(slope, vec2(-max_slope), vec2(max_slope));
   // Near-grazing receivers get a clamped plane that no longer tracks the map, so their taps can
   // disagree on a smooth map: they always take the kernel, which keeps masking exact.
   bool grazing = any(greaterThan(abs(slope), vec2(max_slope)));
-  float r = params.kernel_texels[c];
-  float bias = params.depth_bias[c];
-  float spread = (abs(gradient.x) + abs(gradient.y)) * (r + 1.0);
-  result.expensive = grazing || needs_kernel(c, t, r, z - spread, z + spread);
-  int last = int(size) - 1;
-  if (!result.expensive) {
-    ivec2 texel = ivec2(floor(t));
-    float zt = z + dot(gradient, vec2(texel) + 0.5 - t);
-    float d = texelFetch(depth_map, ivec3(clamp(texel, ivec2(0), ivec2(last)), c), 0).r;
-    result.visibility = zt <= d + bias ? 1.0 : 0.0;
-    return result;
-  }
-  // Only the kernel needs the pixel's rotation.
+  pr.r = params.kernel_texels[c];
+  pr.bias = params.depth_bias[c];
+  float spread = (abs(pr.gradient.x) + abs(pr.gradient.y)) * (pr.r + 1.0);
+  pr.expensive = needs_kernel(c, pr.t, pr.r, pr.z - spread, pr.z + spread) || grazing;
+  return pr;
+}
+
+// 1 where the tap at map texel coordinates t + o is lit.
+uint tap(int c, Probe pr, vec2 o) {
+  int last = int(params.extent.z) - 1;
+  ivec2 texel = ivec2(floor(pr.t + o));
+  float zt = pr.z + dot(pr.gradient, vec2(texel) + 0.5 - pr.t);
+  float d = texelFetch(depth_map, ivec3(clamp(texel, ivec2(0), ivec2(last)), c), 0).r;
+  return zt <= d + pr.bias ? 1u : 0u;
+}
+
+// Lit taps of the rotated 12-tap Poisson disk.
+uint kernel(int c, Probe pr, ivec2 pixel) {
   vec2 rot = texelFetch(rotation, pixel % int(kRotationTileSize), 0).xy;
   uint lit = 0u;
   for (uint i = 0u; i < kPoissonTaps; ++i) {
     vec2 o = kPoissonDisk[i];
-    o = vec2(o.x * rot.x - o.y * rot.y, o.x * rot.y + o.y * rot.x) * r;
-    ivec2 texel = ivec2(floor(t + o));
-    float zt = z + dot(gradient, vec2(texel) + 0.5 - t);
-    float d = texelFetch(depth_map, ivec3(clamp(texel, ivec2(0), ivec2(last)), c), 0).r;
-    lit += zt <= d + bias ? 1u : 0u;
+    o = vec2(o.x * rot.x - o.y * rot.y, o.x * rot.y + o.y * rot.x) * pr.r;
+    lit += tap(c, pr, o);
   }
-  result.visibility = float(lit) / float(kPoissonTaps);
-  result.mixed = lit != 0u && lit != kPoissonTaps;
-  return result;
+  return lit;
 }
 
-// Counters and the blur list are updated once per subgroup, not per pixel, and without shared
-// memory, so the workgroup needs no barrier (which costs a lot on CPU implementations).
-void main() {
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+// The pixel's cascade and blend weight toward the next one (or toward lit after the last).
+struct Choice {
+  int cascade;
+  bool in_range;  // nearer than the last split
+  bool band;
+  bool two;       // the band blends into another cascade
+  float w;
+};
+
+Choice choose(float depth) {
+  Choice ch;
+  int count = int(params.extent.w);
+  ch.in_range = depth < params.split_far[count - 1];
+  // The first cascade whose far split lies beyond the depth (the last one otherwise).
+  bvec3 past = greaterThanEqual(vec3(depth), params.split_far.xyz);
+  ch.cascade = min(int(past.x) + int(past.x && past.y) + int(past.x && past.y && past.z), count - 1);
+  float start = params.blend_start[ch.cascade];
+  ch.band = depth > start;
+  ch.two = ch.band && ch.cascade + 1 < count;
+  ch.w = clamp((depth - start) / max(params.split_far[ch.cascade] - start, 1.0e-6), 0.0, 1.0);
+  return ch;
+}
+
+void write_overlay(ivec2 pixel, int cascade, bool expensive) {
+  if (kDebug == CASCADE_DEBUG_CASCADES && cascade >= 0) {
+    const vec3 tint[4] = vec3[4](vec3(1.0, 0.2, 0.2), vec3(0.2, 1.0, 0.2), vec3(0.25, 0.45, 1.0), vec3(1.0, 0.9, 0.2));
+    imageStore(overlay, pixel, vec4(tint[cascade], 0.35));
+  } else if (kDebug == CASCADE_DEBUG_EXPENSIVE && expensive) {
+    imageStore(overlay, pixel, vec4(1.0, 0.0, 1.0, 0.6));
+  }
+}
+
+uint pack_pixel(ivec2 pixel) { return uint(pixel.x) | (uint(pixel.y) << 16u); }
+
+// Counters and lists are updated once per subgroup, not per pixel, and without shared memory, so the
+// workgroup needs no barrier (which costs a lot on CPU implementations).
+uint append(uint counter, bool flag, out uint slot) {
+  uint total = subgroupAdd(flag ? 1u : 0u);
+  slot = subgroupExclusiveAdd(flag ? 1u : 0u);
+  uint base = 0u;
+  if (subgroupElect() && total != 0u) base = atomicAdd(counters[counter], total);
+  return subgroupBroadcastFirst(base);
+}
+
+void count(uint counter, bool flag) {
+  uint total = subgroupAdd(flag ? 1u : 0u);
+  if (subgroupElect() && total != 0u) atomicAdd(counters[counter], total);
+}
+
+// One pixel of the classify stage; returns its counts, packed as in classify().
+uint classify_pixel(ivec2 pixel) {
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   vec4 p = inside ? imageLoad(world_position, pixel) : vec4(0.0);
-  bool facing = false, expensive = false, mixed = false;
-  if (inside && p.w == 0.0) imageStore(unblurred, pixel, vec4(-1.0));
-  if (inside && p.w != 0.0) {
-    vec3 n = imageLoad(geometric_normal, pixel).xyz;
-    float visibility = 0.0;
-    int cascade = -1;
-    // Surfaces facing away from the light are shadowed by themselves: no lookups.
-    facing = dot(n, -params.light_direction.xyz) > 0.0;
-    if (facing) {
-      float depth = dot(p.xyz - params.camera_position.xyz, params.camera_forward.xyz);
-      uint count = params.extent.w;
-      visibility = 1.0;
-      if (depth < params.split_far[count - 1u]) {
-        cascade = 0;
-        while (cascade < int(count) - 1 && depth >= params.split_far[cascade]) ++cascade;
-        float start = params.blend_start[cascade];
-        bool band = depth > start;
-        // Inside the band the next cascade takes over gradually; the last one fades to lit. One loop
-        // over one or two cascades keeps a single copy of the kernel in the shader.
-        int last = band && cascade + 1 < int(count) ? cascade + 1 : cascade;
-        float first = 1.0, next = 1.0;
-        for (int c = cascade; c <= last; ++c) {
-          Result r = evaluate(c, p.xyz, n, pixel);
-          if (c == cascade) first = r.visibility;
-          else next = r.visibility;
-          expensive = expensive || r.expensive;
-          mixed = mixed || r.mixed;
-        }
-        visibility = first;
-        if (band) {
-          float w = (depth - start) / max(params.split_far[cascade] - start, 1.0e-6);
-          visibility = mix(first, next, clamp(w, 0.0, 1.0));
-        }
-      }
-    }
-    imageStore(shadow_term, pixel, vec4(visibility));
-    imageStore(unblurred, pixel, vec4(visibility));
-    if (params.mode.z == CASCADE_DEBUG_CASCADES && cascade >= 0) {
-      const vec3 tint[4] = vec3[4](vec3(1.0, 0.2, 0.2), vec3(0.2, 1.0, 0.2), vec3(0.25, 0.45, 1.0), vec3(1.0, 0.9, 0.2));
-      imageStore(overlay, pixel, vec4(tint[cascade], 0.35));
-    } else if (params.mode.z == CASCADE_DEBUG_EXPENSIVE && expensive) {
-      imageStore(overlay, pixel, vec4(1.0, 0.0, 1.0, 0.6));
-    }
+  vec3 n = inside ? imageLoad(geometric_normal, pixel).xyz : vec3(0.0);
+  bool covered = inside && p.w != 0.0;
+  // Surfaces facing away from the light are shadowed by themselves: no lookups.
+  bool facing = covered && dot(n, -params.light_direction.xyz) > 0.0;
+  Choice ch = choose(dot(p.xyz - params.camera_position.xyz, params.camera_forward.xyz));
+  bool evaluated = facing && ch.in_range;
+  Probe pr = probe(ch.cascade, p.xyz, n);
+  float visibility = float(tap(ch.cascade, pr, vec2(0.0)));
+  // The last cascade fades to lit over its band.
+  if (ch.band) visibility = mix(visibility, 1.0, ch.w);
+  visibility = evaluated ? visibility : (facing ? 1.0 : 0.0);
+  bool band = evaluated && ch.two;
+  bool deferred = evaluated && (band || pr.expensive);
+  if (covered && !deferred) imageStore(shadow_term, pixel, vec4(visibility));
+  if (kDebug != CASCADE_DEBUG_NONE && covered && !deferred) write_overlay(pixel, evaluated ? ch.cascade : -1, false);
+  bool kernel_only = deferred && !band;
+  return (facing ? 1u : 0u) | (kernel_only ? 1u << 10u : 0u) | (band ? 1u << 20u : 0u);
+}
+
+// Each invocation takes a 2x2 quad, so the subgroup scan and the atomics (costly on CPU
+// implementations) are shared by four times as many pixels.
+void classify() {
+  ivec2 quad = ivec2(gl_GlobalInvocationID.xy) * 2;
+  // Counts in 10-bit fields (facing, kernel list, band list): at most 4 x 128 per subgroup.
+  uint flags = 0u, kernel_bits = 0u, band_bits = 0u;
+  for (int k = 0; k < 4; ++k) {
+    uint f = classify_pixel(quad + ivec2(k & 1, k >> 1));
+    flags += f;
+    kernel_bits |= ((f >> 10u) & 1u) << k;
+    band_bits |= (f >> 20u) << k;
   }
-  bool blur = mixed && params.mode.y != 0u;
-  uint n_expensive = subgroupAdd(expensive ? 1u : 0u);
-  uint n_facing = subgroupAdd(facing ? 1u : 0u);
-  uint n_blur = subgroupAdd(blur ? 1u : 0u);
-  uint slot = subgroupExclusiveAdd(blur ? 1u : 0u);
-  uint base = 0u;
+  uint total = subgroupAdd(flags);
+  uint prefix = subgroupExclusiveAdd(flags);
+  uvec2 base = uvec2(0u);
   if (subgroupElect()) {
-    if (n_expensive != 0u) atomicAdd(counters[CASCADE_COUNTER_EXPENSIVE], n_expensive);
-    if (n_facing != 0u) atomicAdd(counters[CASCADE_COUNTER_FACING], n_facing);
-    if (n_blur != 0u) base = atomicAdd(counters[CASCADE_COUNTER_BLUR], n_blur);
+    if ((total & 0x3ffu) != 0u) atomicAdd(counters[CASCADE_COUNTER_FACING], total & 0x3ffu);
+    if (((total >> 10u) & 0x3ffu) != 0u) base.x = atomicAdd(counters[CASCADE_COUNTER_KERNEL], (total >> 10u) & 0x3ffu);
+    if ((total >> 20u) != 0u) base.y = atomicAdd(counters[CASCADE_COUNTER_BAND], total >> 20u);
   }
   base = subgroupBroadcastFirst(base);
-  if (blur) blur_list[base + slot] = uint(pixel.x) | (uint(pixel.y) << 16u);
+  uint kernel_slot = base.x + ((prefix >> 10u) & 0x3ffu);
+  uint band_slot = params.extent.x * params.extent.y - 1u - (base.y + (prefix >> 20u));
+  for (int k = 0; k < 4; ++k) {
+    uint packed_pixel = pack_pixel(quad + ivec2(k & 1, k >> 1));
+    if ((kernel_bits & (1u << k)) != 0u) work_list[kernel_slot++] = packed_pixel;
+    if ((band_bits & (1u << k)) != 0u) work_list[band_slot--] = packed_pixel;
+  }
+}
+
+// A listed pixel: the kernel in its cascade, or both cascades of its band.
+void finish() {
+  uint index = gl_WorkGroupID.x * CASCADE_LIST_GROUP + gl_LocalInvocationIndex;
+  bool band_stage = kStage == CASCADE_STAGE_BAND;
+  bool valid = index < counters[band_stage ? CASCADE_COUNTER_BAND : CASCADE_COUNTER_KERNEL];
+  uint packed_pixel = valid ? work_list[band_stage ? params.extent.x * params.extent.y - 1u - index : index] : 0u;
+  ivec2 pixel = ivec2(packed_pixel & 0xffffu, packed_pixel >> 16u);
+  vec3 p = imageLoad(world_position, pixel).xyz;
+  vec3 n = imageLoad(geometric_normal, pixel).xyz;
+  Choice ch = choose(dot(p - params.camera_position.xyz, params.camera_forward.xyz));
+  float visibility;
+  bool expensive, mixed;
+  if (!band_stage) {
+    // Listed because the mask test wants the kernel.
+    Probe pr = probe(ch.cascade, p, n);
+    uint lit = kernel(ch.cascade, pr, pixel);
+    visibility = float(lit) / float(kPoissonTaps);
+    if (ch.band) visibility = mix(visibility, 1.0, ch.w);
+    expensive = true;
+    mixed = lit != 0u && lit != kPoissonTaps;
+  } else {
+    float v[2];
+    expensive = false;
+    mixed = false;
+    for (int k = 0; k < 2; ++k) {
+      int c = ch.cascade + k;
+      Probe pr = probe(c, p, n);
+      uint lit = kernel(c, pr, pixel);
+      uint one = tap(c, pr, vec2(0.0));
+      v[k] = pr.expensive ? float(lit) / float(kPoissonTaps) : float(one);
+      expensive = expensive || pr.expensive;
+      mixed = mixed || (pr.expensive && lit != 0u && lit != kPoissonTaps);
+    }
+    visibility = mix(v[0], v[1], ch.w);
+    count(CASCADE_COUNTER_EXPENSIVE, valid && expensive);
+  }
+  if (valid) {
+    imageStore(shadow_term, pixel, vec4(visibility));
+    if (kDebug != CASCADE_DEBUG_NONE) write_overlay(pixel, ch.cascade, expensive);
+  }
+  bool blur = valid && mixed && params.mode.y != 0u;
+  uint slot;
+  uint base = append(CASCADE_COUNTER_BLUR, blur, slot);
+  if (blur) blur_list[base + slot] = pack_pixel(pixel);
+}
+
+void main() {
+  if (kStage == CASCADE_STAGE_CLASSIFY) classify();
+  else finish();
 }

@@ -34,12 +34,23 @@ SHARED_CONST uint CASCADE_DEBUG_NONE = 0u;
 SHARED_CONST uint CASCADE_DEBUG_CASCADES = 1u;
 SHARED_CONST uint CASCADE_DEBUG_EXPENSIVE = 2u;
 
-// Counters in the host-readable stats buffer (uint indices), followed by the blur's dispatch args.
-SHARED_CONST uint CASCADE_COUNTER_EXPENSIVE = 0u;  // pixels that took the 12-tap path
+// Counters in the host-readable stats buffer (uint indices), followed by indirect dispatch arguments.
+SHARED_CONST uint CASCADE_COUNTER_EXPENSIVE = 0u;  // band-list pixels that took the 12-tap path
 SHARED_CONST uint CASCADE_COUNTER_BLUR = 1u;       // flagged pixels appended to the blur list
 SHARED_CONST uint CASCADE_COUNTER_FACING = 2u;     // covered pixels facing the light
-SHARED_CONST uint CASCADE_COUNTER_DISPATCH = 4u;   // 3 uints: vkCmdDispatchIndirect arguments
-SHARED_CONST uint CASCADE_COUNTER_WORDS = 8u;
+SHARED_CONST uint CASCADE_COUNTER_KERNEL = 3u;     // pixels listed for the kernel in one cascade
+SHARED_CONST uint CASCADE_COUNTER_BAND = 4u;       // pixels listed for two cascades (blend band)
+// 3 uints each: vkCmdDispatchIndirect arguments.
+SHARED_CONST uint CASCADE_COUNTER_DISPATCH_BLUR = 5u;
+SHARED_CONST uint CASCADE_COUNTER_DISPATCH_KERNEL = 8u;
+SHARED_CONST uint CASCADE_COUNTER_DISPATCH_BAND = 11u;
+SHARED_CONST uint CASCADE_COUNTER_WORDS = 16u;
+
+// Filter pipelines (specialization constant 0 of cascade_filter.comp).
+SHARED_CONST uint CASCADE_STAGE_CLASSIFY = 0u;  // every pixel: mask test, one tap; lists the rest
+SHARED_CONST uint CASCADE_STAGE_KERNEL = 1u;    // listed pixels: the kernel in one cascade
+SHARED_CONST uint CASCADE_STAGE_BAND = 2u;      // listed pixels: two cascades of a blend band
+SHARED_CONST uint CASCADE_LIST_GROUP = 64u;     // list entries per workgroup (8x8)
 
 SHARED_CONST uint CASCADE_BLUR_GROUP = 64u;
 
@@ -67,6 +78,7 @@ struct CascadeParams {
   vec4 edge_threshold;          // light depth step between neighbours that counts as an edge
   ivec4 mask_level;             // mask mip level matching the kernel width
   ivec4 mask_rect[4];           // mask texels built this frame (inclusive, at mask_level); empty: none
+  uvec4 mask_offset;            // each cascade's first texel in the mask buffers (rows of mask_rect's width)
   vec4 camera_position;         // xyz
   vec4 camera_forward;          // xyz, unit
   vec4 light_direction;         // xyz: travel direction, unit
@@ -88,30 +100,29 @@ struct CascadeBlurPush {
 
 SHARED_CONST uint CASCADE_MASK_BINDING_PARAMS = 0u;
 SHARED_CONST uint CASCADE_MASK_BINDING_DEPTH = 1u;
-SHARED_CONST uint CASCADE_MASK_BINDING_EDGE_DST = 2u;
-SHARED_CONST uint CASCADE_MASK_BINDING_EXTENT_DST = 3u;
+SHARED_CONST uint CASCADE_MASK_BINDING_MASKS = 2u;
+SHARED_CONST uint CASCADE_MASK_BINDING_NEIGHBOURHOODS = 3u;
 
 SHARED_CONST uint CASCADE_FILTER_BINDING_PARAMS = 0u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_WORLD_POSITION = 1u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL = 2u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_DEPTH = 3u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_EDGE = 4u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_EXTENT = 5u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_ROTATION = 6u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_SHADOW_TERM = 7u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_UNBLURRED = 8u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_OVERLAY = 9u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_COUNTERS = 10u;
-SHARED_CONST uint CASCADE_FILTER_BINDING_BLUR_LIST = 11u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_NEIGHBOURHOODS = 4u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_ROTATION = 5u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_SHADOW_TERM = 6u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_OVERLAY = 7u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_COUNTERS = 8u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_BLUR_LIST = 9u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_WORK_LIST = 10u;
 
-SHARED_CONST uint CASCADE_BLUR_ARGS_BINDING_COUNTERS = 0u;
+SHARED_CONST uint CASCADE_ARGS_BINDING_COUNTERS = 0u;
 
 SHARED_CONST uint CASCADE_BLUR_BINDING_WORLD_POSITION = 0u;
 SHARED_CONST uint CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL = 1u;
-SHARED_CONST uint CASCADE_BLUR_BINDING_UNBLURRED = 2u;
-SHARED_CONST uint CASCADE_BLUR_BINDING_SHADOW_TERM = 3u;
-SHARED_CONST uint CASCADE_BLUR_BINDING_COUNTERS = 4u;
-SHARED_CONST uint CASCADE_BLUR_BINDING_BLUR_LIST = 5u;
+SHARED_CONST uint CASCADE_BLUR_BINDING_SHADOW_TERM = 2u;
+SHARED_CONST uint CASCADE_BLUR_BINDING_COUNTERS = 3u;
+SHARED_CONST uint CASCADE_BLUR_BINDING_BLUR_LIST = 4u;
+SHARED_CONST uint CASCADE_BLUR_BINDING_BLURRED = 5u;
 
 // Packs a light-depth range into one uint, rounding outwards so the packed range contains it.
 SHARED_INLINE uint cascade_pack_extent(float lo, float hi) {
@@ -124,7 +135,7 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::CascadeDepthPush) == 128);
-static_assert(sizeof(gpu_shared::CascadeParams) == 8 * 64 + 17 * 16);
+static_assert(sizeof(gpu_shared::CascadeParams) == 8 * 64 + 18 * 16);
 static_assert(sizeof(gpu_shared::CascadeMaskPush) == 16);
 static_assert(sizeof(gpu_shared::CascadeBlurPush) == 32);
 #endif

@@ -1,12 +1,23 @@
 // Cascaded filtered shadow maps. Per frame: fit the cascades (cascade_fit.cpp) -> cascade_depth (one
-// D32 layer per cascade) -> cascade_masks (edge mask and depth-extent mip chains) -> cascade_filter
-// (rotated 12-tap Poisson PCF or one tap, per pixel) -> cascade_blur (5x5 on pixels whose taps
-// disagreed, over a compacted list with an indirect dispatch).
+// D32 layer per cascade) -> cascade_masks (edge flag and depth extent per texel of each cascade's
+// mask level over its receivers' rectangle, then combined over each texel's 2x2 neighbourhoods) ->
+// cascade_filter (rotated 12-tap Poisson PCF or one tap, per pixel: a classify stage over the frame
+// takes the one tap where the mask allows and lists the pixels that need the kernel or lie in a
+// blend band; two stages over those lists, with indirect dispatches, finish them) -> cascade_blur
+// (5x5 on pixels whose taps disagreed, over a compacted list, into a side buffer that a second
+// dispatch writes back).
+//
+// Why lists rather than branches: Mesa's llvmpipe (lavapipe) runs both sides of every branch for all
+// lanes of its SIMD rows, so a per-pixel `if (needs kernel)` made every pixel pay for the 12 taps
+// whatever the mask said. A pipeline per stage (specialization constants for stage, masking and debug
+// view) leaves each stage only the code it runs. On a GPU the same split replaces divergent kernels
+// in the full-screen pass with compact list dispatches.
 //
 // When skipping the kernel is exact. Every tap compares the receiver's tangent plane, evaluated at
 // the tap texel's centre, with that texel's stored depth. A pixel skips the 12 taps only when no edge
 // texel (a 3x3 depth step steeper than two texels of depth per texel) lies in any mask texel its
-// kernel footprint overlaps, at the level whose texels are as wide as the kernel; near-grazing
+// kernel footprint overlaps, at the level whose texels are as wide as the kernel (a footprint over
+// more than 2x2 of them, possible only where that level is capped, takes the kernel); near-grazing
 // receivers never skip. Depth-extent masking skips additionally only when the receiver's depth range
 // over the kernel lies wholly in front of, or wholly behind, every stored depth in the footprint, so
 // it always reproduces the edge-masked result exactly. Masked and unmasked agree except where a
@@ -36,7 +47,6 @@ namespace gs = gpu_shared;
 namespace {
 
 constexpr VkFormat kMapFormat = VK_FORMAT_D32_SFLOAT;
-constexpr VkFormat kMaskFormat = VK_FORMAT_R32_UINT;
 // A neighbour step steeper than this many texels of depth per texel counts as an edge.
 constexpr float kEdgeSlopeTexels = 2.0f;
 
@@ -82,20 +92,26 @@ struct CascadesPass::Impl {
   Context& ctx;
   uint32_t map_size = 0;
   Image depth;        // D32 array, one layer per cascade
-  Image edges;        // r32ui array + mips: 1 where a depth step is near
-  Image extents;      // r32ui array + mips: packed [min, max] light depth of the neighbourhood
+  // Per mask texel of each cascade's rectangle, at its mask level: (edge flag, packed [min, max] light
+  // depth of the neighbourhood); then the same combined over each texel's 2x2 neighbourhoods, which
+  // the filter reads with a single load.
+  Buffer masks;
+  Buffer neighbourhoods;
+  VkDeviceSize mask_capacity = 0;  // texels
   Image rotation;     // kRotationTileSize^2 RG16F (cos, sin)
-  Image unblurred;    // R32F frame-sized copy of the filter's output, read by the blur
+  Buffer blurred;     // the blur's result per blur-list entry, written back after it
+  Buffer work_list;   // one uint per pixel: kernel entries from the front, band entries from the back
   VkExtent2D frame_extent{};
   Buffer params;
   Buffer counters;    // host-readable: counters + indirect dispatch args
   Buffer blur_list;
   Sampler nearest;
   Pipeline depth_pipeline[2];  // [cull_front_faces]
-  Pipeline edges_pipeline;
-  Pipeline filter_pipeline;
-  Pipeline blur_args_pipeline;
-  Pipeline blur_pipeline;
+  Pipeline edges_pipeline[2];  // [neighbourhoods]
+  // [stage][masking][debug], created on first use.
+  Pipeline filter_pipelines[3][3][3];
+  Pipeline args_pipeline;
+  Pipeline blur_pipeline[2];  // [apply]
   CascadeFit fit;
   bool recorded = false;
   bool blur_enabled = false;
@@ -117,37 +133,49 @@ struct CascadesPass::Impl {
       d.depth_bias = true;
       depth_pipeline[cull] = factory.graphics(d);
     }
-    edges_pipeline = factory.compute({"cascade_edges.comp",
-                                      {{gs::CASCADE_MASK_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-                                       {gs::CASCADE_MASK_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                                       {gs::CASCADE_MASK_BINDING_EDGE_DST, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                       {gs::CASCADE_MASK_BINDING_EXTENT_DST, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
-                                      sizeof(gs::CascadeMaskPush)});
-    filter_pipeline = factory.compute(
+    for (uint32_t neighbourhoods = 0; neighbourhoods < 2; ++neighbourhoods)
+      edges_pipeline[neighbourhoods] =
+          factory.compute({"cascade_edges.comp",
+                           {{gs::CASCADE_MASK_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+                            {gs::CASCADE_MASK_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                            {gs::CASCADE_MASK_BINDING_MASKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                            {gs::CASCADE_MASK_BINDING_NEIGHBOURHOODS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+                           sizeof(gs::CascadeMaskPush),
+                           {{0, neighbourhoods}}});
+    args_pipeline = factory.compute(
+        {"cascade_dispatch_args.comp", {{gs::CASCADE_ARGS_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}, 0});
+    for (uint32_t apply = 0; apply < 2; ++apply)
+      blur_pipeline[apply] = factory.compute({"cascade_blur.comp",
+                                              {{gs::CASCADE_BLUR_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                               {gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                               {gs::CASCADE_BLUR_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                               {gs::CASCADE_BLUR_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                                               {gs::CASCADE_BLUR_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                                               {gs::CASCADE_BLUR_BINDING_BLURRED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+                                              sizeof(gs::CascadeBlurPush),
+                                              {{0, apply}}});
+  }
+
+  const Pipeline& filter_pipeline(uint32_t stage, uint32_t masking, uint32_t debug) {
+    Pipeline& pipeline = filter_pipelines[stage][masking][debug];
+    if (pipeline.valid()) return pipeline;
+    PipelineFactory factory(ctx);
+    pipeline = factory.compute(
         {"cascade_filter.comp",
          {{gs::CASCADE_FILTER_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
           {gs::CASCADE_FILTER_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gs::CASCADE_FILTER_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-          {gs::CASCADE_FILTER_BINDING_EDGE, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-          {gs::CASCADE_FILTER_BINDING_EXTENT, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
           {gs::CASCADE_FILTER_BINDING_ROTATION, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
           {gs::CASCADE_FILTER_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-          {gs::CASCADE_FILTER_BINDING_UNBLURRED, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gs::CASCADE_FILTER_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gs::CASCADE_FILTER_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
-         0});
-    blur_args_pipeline = factory.compute(
-        {"cascade_blur_args.comp", {{gs::CASCADE_BLUR_ARGS_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}, 0});
-    blur_pipeline = factory.compute({"cascade_blur.comp",
-                                     {{gs::CASCADE_BLUR_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                      {gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                      {gs::CASCADE_BLUR_BINDING_UNBLURRED, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                      {gs::CASCADE_BLUR_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                      {gs::CASCADE_BLUR_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                                      {gs::CASCADE_BLUR_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
-                                     sizeof(gs::CascadeBlurPush)});
+          {gs::CASCADE_FILTER_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+          {gs::CASCADE_FILTER_BINDING_WORK_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+         0,
+         {{0, stage}, {1, masking}, {2, debug}}});
+    return pipeline;
   }
 
   // Per-pixel rotations (cos, sin) from a fixed seed, so frames and runs are reproducible.
@@ -182,23 +210,18 @@ struct CascadesPass::Impl {
     // Always kMaxCascades layers: the views stay 2D arrays whatever the cascade count.
     depth = Image(ctx, {size, size}, kMapFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                   "cascade depth", 1, kMaxCascadeCount);
-    const uint32_t mips = mip_count(size);
-    edges = Image(ctx, {size, size}, kMaskFormat, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-                  "cascade edge mask", mips, kMaxCascadeCount);
-    extents = Image(ctx, {size, size}, kMaskFormat, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
-                    "cascade depth extent", mips, kMaxCascadeCount);
     to_general(ctx, depth);
-    to_general(ctx, edges);
-    to_general(ctx, extents);
   }
 
   void ensure_frame(VkExtent2D extent) {
-    if (unblurred.valid() && frame_extent.width == extent.width && frame_extent.height == extent.height) return;
+    if (blurred.valid() && frame_extent.width == extent.width && frame_extent.height == extent.height) return;
     frame_extent = extent;
-    unblurred = Image(ctx, extent, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT, "cascade unblurred");
-    to_general(ctx, unblurred);
+    blurred = Buffer(ctx, std::max<VkDeviceSize>(4, VkDeviceSize(extent.width) * extent.height * 4),
+                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade blurred");
     blur_list = Buffer(ctx, std::max<VkDeviceSize>(4, VkDeviceSize(extent.width) * extent.height * 4),
                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade blur list");
+    work_list = Buffer(ctx, std::max<VkDeviceSize>(4, VkDeviceSize(extent.width) * extent.height * 4),
+                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade work list");
   }
 
   // The mask texels cascade c's receivers can read: the light-space bounds of its view slice (as
@@ -249,6 +272,7 @@ struct CascadesPass::Impl {
     gs::CascadeParams p{};
     const float size = float(map_size);
     const uint32_t top_level = mip_count(map_size) - 1;
+    uint32_t mask_texels = 0;
     for (uint32_t c = 0; c < kMaxCascadeCount; ++c) {
       const uint32_t k = std::min(c, fit.count - 1);  // unused slots repeat the last cascade
       const float texel = fit.texel_world[k];
@@ -271,6 +295,9 @@ struct CascadesPass::Impl {
                                        uint32_t(gs::CASCADE_MASK_MAX_LEVEL)});
       p.mask_level[c] = int(level);
       p.mask_rect[c] = c < fit.count ? mask_rect(frame, c, level, kernel) : glm::ivec4(0, 0, -1, -1);
+      p.mask_offset[c] = mask_texels;
+      const glm::ivec4 r = p.mask_rect[c];
+      if (r.z >= r.x && r.w >= r.y) mask_texels += uint32_t(r.z - r.x + 1) * uint32_t(r.w - r.y + 1);
       (*levels)[c] = level;
       (*rects)[c] = p.mask_rect[c];
     }
@@ -288,6 +315,20 @@ struct CascadesPass::Impl {
     if (debug == DebugView::ExpensivePath) view = gs::CASCADE_DEBUG_EXPENSIVE;
     p.mode = glm::uvec4(masking, s.blur ? 1u : 0u, view, 0u);
     return p;
+  }
+
+  // Indirect dispatch sizes from the counters the previous dispatch wrote.
+  void record_dispatch_args(VkCommandBuffer cmd) const {
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    args_pipeline.bind(cmd);
+    DescriptorWriter()
+        .storage_buffer(gs::CASCADE_ARGS_BINDING_COUNTERS, counters.handle())
+        .push(ctx, cmd, args_pipeline);
+    vkCmdDispatch(cmd, 1, 1, 1);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   }
 
   void record_depth(engine::FrameContext& frame, const CascadeSettings& s) {
@@ -336,6 +377,17 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   std::array<glm::ivec4, kMaxCascadeCount> rects{};
   const gs::CascadeParams p = m.make_params(frame, settings, debug, &levels, &rects);
   m.params.write(&p, sizeof(p));
+  // Frames are recorded only once the previous one has finished, so the buffers may be replaced here.
+  const VkDeviceSize texels = std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + [&] {
+    const glm::ivec4 r = rects[kMaxCascadeCount - 1];
+    return r.z >= r.x && r.w >= r.y ? VkDeviceSize(r.z - r.x + 1) * VkDeviceSize(r.w - r.y + 1) : VkDeviceSize(0);
+  }(), 1);
+  if (texels > m.mask_capacity) {
+    m.mask_capacity = texels + texels / 4;
+    m.masks = Buffer(m.ctx, m.mask_capacity * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade masks");
+    m.neighbourhoods = Buffer(m.ctx, m.mask_capacity * 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                              "cascade mask neighbourhoods");
+  }
   m.blur_enabled = settings.blur;
 
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, gs::CASCADE_COUNTER_WORDS * 4, 0);
@@ -344,65 +396,84 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   if (settings.masking != Masking::Off) {
     const bool extent = settings.masking == Masking::DepthExtent;
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_masks");
-    m.edges_pipeline.bind(cmd);
-    // One dispatch per cascade over the texels its receivers can read, at the one level it uses.
-    for (uint32_t c = 0; c < m.fit.count; ++c) {
-      const glm::ivec4 rect = rects[c];
-      if (rect.z < rect.x || rect.w < rect.y) continue;
-      DescriptorWriter()
-          .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, m.params.handle())
-          .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-          .storage_image(gs::CASCADE_MASK_BINDING_EDGE_DST, m.edges.mip_view(levels[c]))
-          .storage_image(gs::CASCADE_MASK_BINDING_EXTENT_DST, m.extents.mip_view(levels[c]))
-          .push(m.ctx, cmd, m.edges_pipeline);
-      m.edges_pipeline.push_constants(cmd, gs::CascadeMaskPush{c, extent ? 1u : 0u, 0u, 0u});
-      vkCmdDispatch(cmd, uint32_t(rect.z - rect.x + 8) / 8, uint32_t(rect.w - rect.y + 8) / 8, 1);
+    // One dispatch per cascade over the texels its receivers can read, at the one level it uses; then
+    // the same over their neighbourhoods.
+    for (uint32_t neighbourhoods = 0; neighbourhoods < 2; ++neighbourhoods) {
+      if (neighbourhoods)
+        memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+      const Pipeline& pipeline = m.edges_pipeline[neighbourhoods];
+      pipeline.bind(cmd);
+      for (uint32_t c = 0; c < m.fit.count; ++c) {
+        const glm::ivec4 rect = rects[c];
+        if (rect.z < rect.x || rect.w < rect.y) continue;
+        DescriptorWriter()
+            .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, m.params.handle())
+            .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+            .storage_buffer(gs::CASCADE_MASK_BINDING_MASKS, m.masks.handle())
+            .storage_buffer(gs::CASCADE_MASK_BINDING_NEIGHBOURHOODS, m.neighbourhoods.handle())
+            .push(m.ctx, cmd, pipeline);
+        pipeline.push_constants(cmd, gs::CascadeMaskPush{c, extent ? 1u : 0u, 0u, 0u});
+        vkCmdDispatch(cmd, uint32_t(rect.z - rect.x + 8) / 8, uint32_t(rect.w - rect.y + 8) / 8, 1);
+      }
     }
     full_barrier(cmd);
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_filter");
-    m.filter_pipeline.bind(cmd);
-    DescriptorWriter()
-        .uniform_buffer(gs::CASCADE_FILTER_BINDING_PARAMS, m.params.handle())
-        .storage_image(gs::CASCADE_FILTER_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
-        .storage_image(gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
-        .sampled_image(gs::CASCADE_FILTER_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-        .sampled_image(gs::CASCADE_FILTER_BINDING_EDGE, m.edges.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-        .sampled_image(gs::CASCADE_FILTER_BINDING_EXTENT, m.extents.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-        .sampled_image(gs::CASCADE_FILTER_BINDING_ROTATION, m.rotation.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-        .storage_image(gs::CASCADE_FILTER_BINDING_SHADOW_TERM, out.view())
-        .storage_image(gs::CASCADE_FILTER_BINDING_UNBLURRED, m.unblurred.view())
-        .storage_image(gs::CASCADE_FILTER_BINDING_OVERLAY, frame.overlay.view())
-        .storage_buffer(gs::CASCADE_FILTER_BINDING_COUNTERS, m.counters.handle())
-        .storage_buffer(gs::CASCADE_FILTER_BINDING_BLUR_LIST, m.blur_list.handle())
-        .push(m.ctx, cmd, m.filter_pipeline);
-    vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
+    const uint32_t masking = p.mode.x, debug_view = p.mode.z;
+    auto bind_filter = [&](uint32_t stage) {
+      const Pipeline& pipeline = m.filter_pipeline(stage, masking, debug_view);
+      pipeline.bind(cmd);
+      DescriptorWriter()
+          .uniform_buffer(gs::CASCADE_FILTER_BINDING_PARAMS, m.params.handle())
+          .storage_image(gs::CASCADE_FILTER_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
+          .storage_image(gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+          .sampled_image(gs::CASCADE_FILTER_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+          .storage_buffer(gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, m.neighbourhoods.handle())
+          .sampled_image(gs::CASCADE_FILTER_BINDING_ROTATION, m.rotation.view(), m.nearest.handle(),
+                         VK_IMAGE_LAYOUT_GENERAL)
+          .storage_image(gs::CASCADE_FILTER_BINDING_SHADOW_TERM, out.view())
+          .storage_image(gs::CASCADE_FILTER_BINDING_OVERLAY, frame.overlay.view())
+          .storage_buffer(gs::CASCADE_FILTER_BINDING_COUNTERS, m.counters.handle())
+          .storage_buffer(gs::CASCADE_FILTER_BINDING_BLUR_LIST, m.blur_list.handle())
+          .storage_buffer(gs::CASCADE_FILTER_BINDING_WORK_LIST, m.work_list.handle())
+          .push(m.ctx, cmd, pipeline);
+    };
+    bind_filter(gs::CASCADE_STAGE_CLASSIFY);
+    // 8x8 invocations of 2x2 pixels each.
+    vkCmdDispatch(cmd, (frame.view.extent.width + 15) / 16, (frame.view.extent.height + 15) / 16, 1);
+    m.record_dispatch_args(cmd);
+    // The two lists hold different pixels: their stages need no barrier between them.
+    bind_filter(gs::CASCADE_STAGE_KERNEL);
+    vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH_KERNEL * 4);
+    bind_filter(gs::CASCADE_STAGE_BAND);
+    vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH_BAND * 4);
   }
   full_barrier(cmd);
   if (settings.blur) {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_blur");
-    m.blur_args_pipeline.bind(cmd);
-    DescriptorWriter()
-        .storage_buffer(gs::CASCADE_BLUR_ARGS_BINDING_COUNTERS, m.counters.handle())
-        .push(m.ctx, cmd, m.blur_args_pipeline);
-    vkCmdDispatch(cmd, 1, 1, 1);
-    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                   VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-    m.blur_pipeline.bind(cmd);
-    DescriptorWriter()
-        .storage_image(gs::CASCADE_BLUR_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
-        .storage_image(gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
-        .storage_image(gs::CASCADE_BLUR_BINDING_UNBLURRED, m.unblurred.view())
-        .storage_image(gs::CASCADE_BLUR_BINDING_SHADOW_TERM, out.view())
-        .storage_buffer(gs::CASCADE_BLUR_BINDING_COUNTERS, m.counters.handle())
-        .storage_buffer(gs::CASCADE_BLUR_BINDING_BLUR_LIST, m.blur_list.handle())
-        .push(m.ctx, cmd, m.blur_pipeline);
+    m.record_dispatch_args(cmd);
     gs::CascadeBlurPush push{glm::vec4(frame.view.camera_position, 1.0f),
                              glm::uvec4(frame.view.extent.width, frame.view.extent.height, 0u, 0u)};
-    m.blur_pipeline.push_constants(cmd, push);
-    vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH * 4);
+    for (int apply = 0; apply < 2; ++apply) {
+      if (apply)
+        memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+      const Pipeline& pipeline = m.blur_pipeline[apply];
+      pipeline.bind(cmd);
+      DescriptorWriter()
+          .storage_image(gs::CASCADE_BLUR_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
+          .storage_image(gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+          .storage_image(gs::CASCADE_BLUR_BINDING_SHADOW_TERM, out.view())
+          .storage_buffer(gs::CASCADE_BLUR_BINDING_COUNTERS, m.counters.handle())
+          .storage_buffer(gs::CASCADE_BLUR_BINDING_BLUR_LIST, m.blur_list.handle())
+          .storage_buffer(gs::CASCADE_BLUR_BINDING_BLURRED, m.blurred.handle())
+          .push(m.ctx, cmd, pipeline);
+      pipeline.push_constants(cmd, push);
+      vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH_BLUR * 4);
+    }
   }
   full_barrier(cmd);
   // The counters are read on the host after the frame's fence.
@@ -415,7 +486,7 @@ void CascadesPass::after_frame(Stats& stats) {
   Impl& m = *impl_;
   if (!m.recorded) return;
   const uint32_t* c = m.counters.as<uint32_t>();
-  stats.expensive_path_pixels = c[gs::CASCADE_COUNTER_EXPENSIVE];
+  stats.expensive_path_pixels = c[gs::CASCADE_COUNTER_KERNEL] + c[gs::CASCADE_COUNTER_EXPENSIVE];
   stats.blurred_pixels = m.blur_enabled ? c[gs::CASCADE_COUNTER_BLUR] : 0;
   const uint64_t facing = c[gs::CASCADE_COUNTER_FACING];
   stats.expensive_path_fraction = facing ? double(stats.expensive_path_pixels) / double(facing) : 0.0;
