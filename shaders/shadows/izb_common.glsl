@@ -22,9 +22,14 @@ layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uin
 layout(set = 0, binding = IZB_BINDING_LIST_COUNTS, std430) buffer ListCounts { uint list_counts[]; };
 layout(set = 0, binding = IZB_BINDING_LIST_CURSOR, std430) buffer ListCursor { uint list_cursor[]; };
 
+// The sample count and the IZB_FLAG_* bits are specialization constants: a pipeline per combination,
+// so a device that executes both sides of a branch (a CPU driver) runs only the code a frame needs.
+layout(constant_id = 10) const uint kIzbSamples = 1u;
+layout(constant_id = 11) const uint kIzbFlags = 0u;
+
 uint izb_resolution() { return params.extent.z; }
-uint izb_samples() { return params.extent.w; }
-bool izb_flag(uint flag) { return (params.limits.y & flag) != 0u; }
+uint izb_samples() { return kIzbSamples; }
+bool izb_flag(uint flag) { return (kIzbFlags & flag) != 0u; }
 
 // World position -> (grid x, grid y, light depth): grid in texels of the IZB, depth in [0,1].
 vec3 to_grid(vec3 world) {

@@ -17,7 +17,11 @@ vec3 heat(float t) {
   return clamp(vec3(1.5 - abs(4.0 * t - 3.0), 1.5 - abs(4.0 * t - 2.0), 1.5 - abs(4.0 * t - 1.0)), 0.0, 1.0);
 }
 
-// Visibility mask -> shadow term. push.mode 1 (hybrid): blends toward the term already there (the
+// Specialized per debug view and hybrid (a CPU driver would otherwise run every branch).
+layout(constant_id = 12) const uint kDebug = 0u;
+layout(constant_id = 13) const uint kHybrid = 0u;
+
+// Visibility mask -> shadow term. kHybrid: blends toward the term already there (the
 // cascades') by occluder distance, and over the last tenth of the IZB's range.
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
@@ -40,7 +44,7 @@ void main() {
   } else {
     visibility = 1.0;  // does not receive shadows
   }
-  if (push.mode == 1u) {
+  if (kHybrid != 0u) {
     // Hybrid: hard at contact, soft away from it. The farther the nearest occluder sits above the
     // point (in world units along the light), the more the cascades' filtered term takes over; and
     // near the IZB's range limit the cascades take over completely.
@@ -55,13 +59,13 @@ void main() {
   }
   imageStore(shadow_term, pixel, vec4(visibility));
 
-  if (push.debug == kDebugVisibility && (state & IZB_PIXEL_CANDIDATE) != 0u) {
+  if (kDebug == kDebugVisibility && (state & IZB_PIXEL_CANDIDATE) != 0u) {
     imageStore(overlay, pixel, vec4(mix(vec3(1.0, 0.2, 0.1), vec3(0.1, 1.0, 0.2), visibility), 0.6));
-  } else if (push.debug == kDebugListLength && (state & IZB_PIXEL_CANDIDATE) != 0u) {
+  } else if (kDebug == kDebugListLength && (state & IZB_PIXEL_CANDIDATE) != 0u) {
     ivec2 t = grid_texel(quad_point(index, 0u));
     uint length = list_length(texel_index(t), 64u);
     imageStore(overlay, pixel, vec4(heat(log2(float(length) + 1.0) / 6.0), 0.7));
-  } else if (push.debug == kDebugCsm && (state & IZB_PIXEL_CSM_CULLED) != 0u) {
+  } else if (kDebug == kDebugCsm && (state & IZB_PIXEL_CSM_CULLED) != 0u) {
     imageStore(overlay, pixel, vec4(0.1, 0.4, 1.0, 0.6));
   }
 }

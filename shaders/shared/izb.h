@@ -20,8 +20,8 @@ struct IzbParams {
   vec4 light_direction;      // xyz: travel direction
   vec4 camera_position;      // xyz; w: max IZB distance from the camera (0: unlimited)
   vec4 depth_range;          // x: near, y: far light-view distance of the casters (for the projection)
-  uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (1 or 32)
-  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*); z: record capacity; w: pair capacity
+  uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (also a specialization constant)
+  uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*, also a specialization constant); z: record capacity; w: pair capacity
   uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z, w: unused
 };
 

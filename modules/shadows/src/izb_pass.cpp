@@ -68,11 +68,25 @@ uint32_t debug_code(DebugView debug) {
 struct IzbPass::Impl {
   Context& ctx;
   PipelineFactory factory;
-  Pipeline fit, setup, build, fallback, resolve, list_stats;
-  Pipeline trace_software, trace_hardware, count_software, count_hardware, depth_fill;
-  Pipeline scan, scatter;
+  // Every IZB pipeline, specialized for a sample count and a set of IZB_FLAG_* (see izb_common.glsl).
+  struct Pipelines {
+    Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
+    Pipeline tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
+    Pipeline trace_software, trace_hardware, count_software, count_hardware, depth_fill;
+  };
+  std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
+  const Pipelines* p = nullptr;  // this frame's
+  std::map<uint64_t, Pipeline> resolve_pipelines;  // also per debug view and hybrid
+
+  const Pipeline& resolve_pipeline(uint32_t samples_per_pixel, uint32_t flags, uint32_t debug, bool hybrid) {
+    auto& pipeline = resolve_pipelines[(uint64_t(samples_per_pixel) << 40) | (uint64_t(debug) << 33) |
+                                       (uint64_t(hybrid) << 32) | flags];
+    if (!pipeline.valid())
+      pipeline = factory.compute({"izb_resolve.comp", izb_bindings(), sizeof(gpu_shared::IzbComputePush),
+                                  {{10, samples_per_pixel}, {11, flags}, {12, debug}, {13, hybrid ? 1u : 0u}}});
+    return pipeline;
+  }
   Buffer list_counts, list_cursor, scan_blocks;
-  Pipeline grid_setup, tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
   Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
@@ -104,34 +118,62 @@ struct IzbPass::Impl {
   bool collected = false;
 
   explicit Impl(Context& c) : ctx(c), factory(c) {
-    const auto bindings = izb_bindings();
-    const uint32_t push = sizeof(gpu_shared::IzbComputePush);
-    fit = factory.compute({"izb_fit.comp", bindings, push});
-    setup = factory.compute({"izb_setup.comp", bindings, push});
-    build = factory.compute({"izb_build.comp", bindings, push});
-    fallback = factory.compute({"izb_fallback.comp", bindings, push});
-    resolve = factory.compute({"izb_resolve.comp", bindings, push});
-    list_stats = factory.compute({"izb_list_stats.comp", bindings, push});
-    grid_setup = factory.compute({"izb_triangles.comp", bindings, push});
-    scan = factory.compute({"izb_scan.comp", bindings, push});
-    scatter = factory.compute({"izb_scatter.comp", bindings, push});
-    // Workgroup shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
-    const bool cpu = c.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-    const std::vector<SpecializationConstant> shape = {
-        {0, cpu ? 8u : 32u},
-        {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
-        {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu}};
-    tile_records = factory.compute({"izb_records.comp", bindings, push, shape});
-    tile_bin = factory.compute({"izb_tile_bin.comp", bindings, push, shape});
-    texel_bin = factory.compute({"izb_texel_bin.comp", bindings, push, shape});
-    tile_far = factory.compute({"izb_tile_farthest.comp", bindings, push, shape});
-    trace_compute = factory.compute({"izb_trace.comp", bindings, push, shape});
-    dispatch_args = factory.compute({"izb_dispatch_args.comp", bindings, push, shape});
     if (!c.features().subgroup_arithmetic_compute_fragment)
       throw VulkanError("the IZB needs subgroup arithmetic in compute and fragment shaders, which " +
                         c.device_name() + " lacks");
     if (!c.features().depth_clamp)
       throw VulkanError("the IZB trace needs the depthClamp feature, which " + c.device_name() + " lacks");
+    params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "izb params");
+    frame_data = Buffer(c, sizeof(gpu_shared::IzbFrame),
+                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb frame");
+    const VkDeviceSize counter_bytes = gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t);
+    counters = Buffer(c, counter_bytes,
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
+                      false, "izb counters");
+    counters_readback = Buffer(c, counter_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "izb counters readback");
+    std::memset(counters_readback.mapped(), 0, counter_bytes);
+    nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "izb nearest");
+    csm = std::make_unique<CsmPass>(c);
+  }
+
+  bool raster_trace_available() const {
+    return ctx.features().geometry_shader || ctx.features().conservative_rasterization;
+  }
+
+  // The pipelines for `samples` and `flags`, made on first use and kept.
+  const Pipelines& pipelines(uint32_t samples_per_pixel, uint32_t flags) {
+    auto& slot = pipeline_sets[(uint64_t(samples_per_pixel) << 32) | flags];
+    if (slot) return *slot;
+    slot = std::make_unique<Pipelines>();
+    Pipelines& ps = *slot;
+    const auto bindings = izb_bindings();
+    const uint32_t push = sizeof(gpu_shared::IzbComputePush);
+    const std::vector<SpecializationConstant> variant = {{10, samples_per_pixel}, {11, flags}};
+    auto compute = [&](const char* shader, std::vector<SpecializationConstant> constants = {}) {
+      constants.insert(constants.end(), variant.begin(), variant.end());
+      return factory.compute({shader, bindings, push, constants});
+    };
+    ps.fit = compute("izb_fit.comp");
+    ps.setup = compute("izb_setup.comp");
+    ps.build = compute("izb_build.comp");
+    ps.fallback = compute("izb_fallback.comp");
+    ps.list_stats = compute("izb_list_stats.comp");
+    ps.grid_setup = compute("izb_triangles.comp");
+    ps.scan = compute("izb_scan.comp");
+    ps.scatter = compute("izb_scatter.comp");
+    // Workgroup shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
+    const bool cpu = ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    const std::vector<SpecializationConstant> shape = {
+        {0, cpu ? 8u : 32u},
+        {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
+        {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu}};
+    ps.tile_records = compute("izb_records.comp", shape);
+    ps.tile_bin = compute("izb_tile_bin.comp", shape);
+    ps.texel_bin = compute("izb_texel_bin.comp", shape);
+    ps.tile_far = compute("izb_tile_farthest.comp", shape);
+    ps.trace_compute = compute("izb_trace.comp", shape);
+    ps.dispatch_args = compute("izb_dispatch_args.comp", shape);
     // Trace pipelines: software (geometry-shader quads + exact texel test) and hardware conservative
     // rasterization, each also as a count-only variant for the before-culling fragment statistic.
     // Depth: the attachment holds each texel's farthest node; the rasterized depth, biased by minus
@@ -151,24 +193,22 @@ struct IzbPass::Impl {
     trace.depth_clamp = true;
     trace.fragment_shader = "izb_trace.frag";
     trace.vertex_shader = "izb_trace.vert";
-    if (c.features().geometry_shader) {
-      trace.name = "izb trace (software conservative)";
+    auto raster = [&](const std::string& name, uint32_t software, uint32_t count_only) {
+      trace.name = name;
+      trace.specialization = {{0, software}, {1, count_only}};
+      trace.specialization.insert(trace.specialization.end(), variant.begin(), variant.end());
+      return factory.graphics(trace);
+    };
+    if (ctx.features().geometry_shader) {
       trace.geometry_shader = "izb_trace.geom";
-      trace.specialization = {{0, 1u}, {1, 0u}};
-      trace_software = factory.graphics(trace);
-      trace.name = "izb fragment count (software conservative)";
-      trace.specialization = {{0, 1u}, {1, 1u}};
-      count_software = factory.graphics(trace);
+      ps.trace_software = raster("izb trace (software conservative)", 1, 0);
+      ps.count_software = raster("izb fragment count (software conservative)", 1, 1);
     }
-    if (c.features().conservative_rasterization) {
+    if (ctx.features().conservative_rasterization) {
       trace.geometry_shader.clear();
       trace.conservative = ConservativeMode::Overestimate;
-      trace.name = "izb trace (hardware conservative)";
-      trace.specialization = {{0, 0u}, {1, 0u}};
-      trace_hardware = factory.graphics(trace);
-      trace.name = "izb fragment count (hardware conservative)";
-      trace.specialization = {{0, 0u}, {1, 1u}};
-      count_hardware = factory.graphics(trace);
+      ps.trace_hardware = raster("izb trace (hardware conservative)", 0, 0);
+      ps.count_hardware = raster("izb fragment count (hardware conservative)", 0, 1);
     }
     GraphicsPipelineDesc fill;
     fill.name = "izb farthest depth fill";
@@ -182,19 +222,9 @@ struct IzbPass::Impl {
     fill.cull_mode = VK_CULL_MODE_NONE;
     fill.depth_format = VK_FORMAT_D32_SFLOAT;
     fill.depth_compare = VK_COMPARE_OP_ALWAYS;
-    depth_fill = factory.graphics(fill);
-    params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "izb params");
-    frame_data = Buffer(c, sizeof(gpu_shared::IzbFrame),
-                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb frame");
-    const VkDeviceSize counter_bytes = gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t);
-    counters = Buffer(c, counter_bytes,
-                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
-                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
-                      false, "izb counters");
-    counters_readback = Buffer(c, counter_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "izb counters readback");
-    std::memset(counters_readback.mapped(), 0, counter_bytes);
-    nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "izb nearest");
-    csm = std::make_unique<CsmPass>(c);
+    fill.specialization = variant;
+    ps.depth_fill = factory.graphics(fill);
+    return ps;
   }
 
   void ensure_buffers(const engine::FrameContext& frame, const IzbSettings& s) {
@@ -376,7 +406,7 @@ struct IzbPass::Impl {
                      gpu_shared::IzbComputePush push, uint32_t args, uint32_t counter) {
     gpu_shared::IzbComputePush a = push;
     a.debug = args;
-    dispatch(cmd, frame, dispatch_args, a, 1);
+    dispatch(cmd, frame, this->p->dispatch_args, a, 1);
     full_barrier(cmd);
     dispatch_indirect(cmd, frame, p, push, counter);
   }
@@ -388,16 +418,16 @@ struct IzbPass::Impl {
     push.mode = mode;
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
-      dispatch(cmd, frame, tile_records, push, (triangle_count + 63) / 64);
+      dispatch(cmd, frame, p->tile_records, push, (triangle_count + 63) / 64);
     }
     full_barrier(cmd);
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_tiles");
-      dispatch_step(cmd, frame, tile_bin, push, gpu_shared::IZB_ARGS_RECORDS, gpu_shared::IZB_COUNTER_RECORD_DISPATCH);
+      dispatch_step(cmd, frame, p->tile_bin, push, gpu_shared::IZB_ARGS_RECORDS, gpu_shared::IZB_COUNTER_RECORD_DISPATCH);
     }
     full_barrier(cmd);
     ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_texels");
-    dispatch_step(cmd, frame, texel_bin, push, gpu_shared::IZB_ARGS_TILE_PAIRS,
+    dispatch_step(cmd, frame, p->texel_bin, push, gpu_shared::IZB_ARGS_TILE_PAIRS,
                   gpu_shared::IZB_COUNTER_TILE_PAIR_DISPATCH);
   }
 };
@@ -405,7 +435,7 @@ struct IzbPass::Impl {
 IzbPass::IzbPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
 IzbPass::~IzbPass() = default;
 
-bool IzbPass::hardware_raster_available() const { return impl_->trace_hardware.valid(); }
+bool IzbPass::hardware_raster_available() const { return impl_->ctx.features().conservative_rasterization; }
 
 bool IzbPass::csm_test_supported(CsmTest test, std::string* why) const { return impl_->csm->supported(test, why); }
 
@@ -426,7 +456,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
                      uint64_t(m.triangle_count), uint64_t(run_csm), uint64_t(settings.csm_test),
                      uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid)})
     key = mix_key(key, v);
-  const bool raster_trace_available = m.trace_hardware.valid() || m.trace_software.valid();
+  const bool raster_trace_available = m.raster_trace_available();
   const bool use_compute_trace =
       m.trace_probe.pick(settings.trace, raster_trace_available, true, key, frame.profiler) == PassBackend::Compute;
   if (!use_compute_trace && !raster_trace_available)
@@ -445,12 +475,12 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
                       PassBackend::Compute;
   }
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
-                            (settings.raster == ConservativeRaster::Auto && m.trace_hardware.valid());
+                            (settings.raster == ConservativeRaster::Auto && m.ctx.features().conservative_rasterization);
   if (!use_compute_trace) {
-    if (use_hardware && !m.trace_hardware.valid())
+    if (use_hardware && !m.ctx.features().conservative_rasterization)
       throw std::runtime_error("hardware conservative rasterization requested but " + m.ctx.device_name() +
                                " lacks VK_EXT_conservative_rasterization");
-    if (!use_hardware && !m.trace_software.valid())
+    if (!use_hardware && !m.ctx.features().geometry_shader)
       throw std::runtime_error("software conservative rasterization needs geometry shaders, which " +
                                m.ctx.device_name() + " lacks");
   }
@@ -497,6 +527,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   if (use_compute_csm) flags |= gpu_shared::IZB_FLAG_CSM_BUFFER;
   const bool sorted = settings.lists == ListLayout::Sorted;
   if (sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
+  m.p = &m.pipelines(m.samples, flags);
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
   gpu_shared::IzbParams p{};
@@ -521,11 +552,11 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   full_barrier(cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
-    m.dispatch(cmd, frame, m.fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
+    m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
     full_barrier(cmd);
-    m.dispatch(cmd, frame, m.setup, push, 1);
+    m.dispatch(cmd, frame, m.p->setup, push, 1);
     full_barrier(cmd);
-    if (m.triangle_count > 0) m.dispatch(cmd, frame, m.grid_setup, push, (m.triangle_count + 63) / 64);
+    if (m.triangle_count > 0) m.dispatch(cmd, frame, m.p->grid_setup, push, (m.triangle_count + 63) / 64);
   }
   full_barrier(cmd);
   if (run_csm) {
@@ -547,7 +578,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
-    m.dispatch_pixels(cmd, frame, m.build, push);
+    m.dispatch_pixels(cmd, frame, m.p->build, push);
     if (sorted) {
       // Counting sort: counts (above) -> prefix sum -> scatter into contiguous ranges.
       const uint32_t blocks = uint32_t(m.scan_blocks.size() / 4);
@@ -556,11 +587,11 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
         gpu_shared::IzbComputePush scan_push = push;
         scan_push.mode = step;
         const uint32_t rows = (blocks + gpu_shared::kIzbDispatchRow - 1) / gpu_shared::kIzbDispatchRow;
-        if (step == 1) m.dispatch(cmd, frame, m.scan, scan_push, 1);
-        else m.dispatch(cmd, frame, m.scan, scan_push, std::min(blocks, gpu_shared::kIzbDispatchRow), rows);
+        if (step == 1) m.dispatch(cmd, frame, m.p->scan, scan_push, 1);
+        else m.dispatch(cmd, frame, m.p->scan, scan_push, std::min(blocks, gpu_shared::kIzbDispatchRow), rows);
       }
       full_barrier(cmd);
-      m.dispatch_pixels(cmd, frame, m.scatter, push);
+      m.dispatch_pixels(cmd, frame, m.p->scatter, push);
     }
   }
   full_barrier(cmd);
@@ -569,8 +600,8 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     if (fill_depth) {
       // Writes each texel's farthest node depth; the trace draws after it in the same pass see it
       // (depth tests follow primitive order).
-      m.depth_fill.bind(cmd);
-      m.push_all(cmd, frame, m.depth_fill);
+      m.p->depth_fill.bind(cmd);
+      m.push_all(cmd, frame, m.p->depth_fill);
       vkCmdDraw(cmd, 3, 1, 0, 0);
     }
     trace.bind(cmd);
@@ -589,29 +620,29 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     // Tiles' farthest nodes -> (triangle, tile) pairs not culled -> (triangle, texel) pairs that touch
     // and survive the texel's cull -> one thread per pair walks the texel's list.
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    m.dispatch(cmd, frame, m.tile_far, push, m.tiles_per_side, m.tiles_per_side);
+    m.dispatch(cmd, frame, m.p->tile_far, push, m.tiles_per_side, m.tiles_per_side);
     full_barrier(cmd);
     m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_TRACE, "trace");
     full_barrier(cmd);
     ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "trace_pairs");
-    m.dispatch_step(cmd, frame, m.trace_compute, push, gpu_shared::IZB_ARGS_PAIRS, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
+    m.dispatch_step(cmd, frame, m.p->trace_compute, push, gpu_shared::IZB_ARGS_PAIRS, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
   } else {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    draw_trace(use_hardware ? m.trace_hardware : m.trace_software,
+    draw_trace(use_hardware ? m.p->trace_hardware : m.p->trace_software,
                settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
   }
   full_barrier(cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_fallback");
-    m.fallback.bind(cmd);
-    m.push_all(cmd, frame, m.fallback);
-    m.fallback.push_constants(cmd, push);
+    m.p->fallback.bind(cmd);
+    m.push_all(cmd, frame, m.p->fallback);
+    m.p->fallback.push_constants(cmd, push);
     vkCmdDispatchIndirect(cmd, m.counters.handle(), gpu_shared::IZB_COUNTER_DISPATCH * 4);
   }
   full_barrier(cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_resolve");
-    m.dispatch_pixels(cmd, frame, m.resolve, push);
+    m.dispatch_pixels(cmd, frame, m.resolve_pipeline(m.samples, flags, debug_code(debug), hybrid), push);
   }
   full_barrier(cmd);
   if (collect_stats) {
@@ -619,12 +650,12 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     // (The compute trace counts fragments before the cull as it bins.)
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_stats");
     if (!use_compute_trace) {
-      draw_trace(use_hardware ? m.count_hardware : m.count_software, VK_COMPARE_OP_ALWAYS, false);
+      draw_trace(use_hardware ? m.p->count_hardware : m.p->count_software, VK_COMPARE_OP_ALWAYS, false);
       full_barrier(cmd);
     }
-    m.list_stats.bind(cmd);
-    m.push_all(cmd, frame, m.list_stats);
-    m.list_stats.push_constants(cmd, push);
+    m.p->list_stats.bind(cmd);
+    m.push_all(cmd, frame, m.p->list_stats);
+    m.p->list_stats.push_constants(cmd, push);
     vkCmdDispatch(cmd, (m.resolution + 7) / 8, (m.resolution + 7) / 8, 1);
   }
   memory_barrier(cmd, kAll, kAllAccess, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
