@@ -531,9 +531,9 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   if (use_compute_csm) flags |= gpu_shared::IZB_FLAG_CSM_BUFFER;
   const bool sorted = settings.lists == ListLayout::Sorted;
   if (sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
-  m.p = &m.pipelines(m.samples, flags);
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
+  m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
   p.light_view = light_view;
   p.inverse_view_projection = frame.view.inverse_view_projection;
