@@ -316,6 +316,18 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
     if (!err.empty()) throw std::runtime_error(err);
   }
 
+  // The IZB grid and the cascade maps follow the render scale, so a smaller frame also costs less
+  // shadow work (about a grid texel per pixel, as at full size); the sizes set at start are the full ones.
+  const uint32_t full_izb = module->settings().izb.resolution;
+  const uint32_t full_cascade = module->settings().cascades.map_size;
+  auto follow_render_scale = [&](float scale) {
+    auto scaled = [&](uint32_t full, uint32_t least) {
+      return std::max(least, uint32_t(float(full) * scale / 64.0f + 0.5f) * 64u);
+    };
+    module->settings().izb.resolution = scaled(full_izb, 128);
+    module->settings().cascades.map_size = scaled(full_cascade, 256);
+  };
+
   std::vector<InputFrame> script;
   if (!o.input.empty()) {
     script = walkthrough::load_input_script(o.input);
@@ -337,7 +349,10 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
     last = now;
     if (frame > 0) {
       frame_ms.push_back(wall * 1000.0f);
-      if (dynres.add_frame(wall * 1000.0f)) window->set_render_scale(dynres.scale());
+      if (dynres.add_frame(wall * 1000.0f)) {
+        window->set_render_scale(dynres.scale());
+        follow_render_scale(dynres.scale());
+      }
     }
     if (!script.empty()) {
       current = script[std::min(size_t(frame), script.size() - 1)];
