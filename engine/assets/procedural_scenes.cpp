@@ -1,4 +1,5 @@
 #include "engine/assets/procedural_scenes.hpp"
+#include "portable_random.hpp"
 
 #include <algorithm>
 #include <array>
@@ -224,24 +225,7 @@ void finish(Scene& scene) {
   update_world_transforms(scene.registry);
 }
 
-// Portable uniform floats: std::uniform_real_distribution differs between standard libraries, and
-// the scenes must be identical everywhere for reference images to match.
-class Random {
- public:
-  explicit Random(uint32_t seed) : engine_(seed) {}
-  float uniform(float lo, float hi) { return lo + (hi - lo) * float(engine_() >> 8) * (1.0f / 16777216.0f); }
-  int integer(int lo, int hi) { return lo + int(engine_() % uint32_t(hi - lo + 1)); }
-  glm::vec3 unit_vector() {
-    for (;;) {
-      const glm::vec3 p{uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)};
-      const float l2 = glm::dot(p, p);
-      if (l2 > 1e-4f && l2 <= 1.0f) return p / std::sqrt(l2);
-    }
-  }
-
- private:
-  std::mt19937 engine_;
-};
+using Random = detail::PortableRandom;
 
 std::unique_ptr<Scene> build_contact() {
   using namespace contact;

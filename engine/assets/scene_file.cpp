@@ -1,4 +1,5 @@
 #include "engine/assets/scene_file.hpp"
+#include "portable_random.hpp"
 
 #include <cmath>
 #include <fstream>
@@ -80,22 +81,7 @@ class Reader {
   std::filesystem::path file_;
 };
 
-// Portable random numbers (the same scene everywhere).
-class Random {
- public:
-  explicit Random(uint32_t seed) : engine_(seed) {}
-  float uniform(float lo, float hi) { return lo + (hi - lo) * float(engine_() >> 8) * (1.0f / 16777216.0f); }
-  glm::vec3 unit_vector() {
-    for (;;) {
-      const glm::vec3 p{uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)};
-      const float l2 = glm::dot(p, p);
-      if (l2 > 1e-4f && l2 <= 1.0f) return p / std::sqrt(l2);
-    }
-  }
-
- private:
-  std::mt19937 engine_;
-};
+using Random = detail::PortableRandom;
 
 glm::vec3 any_perpendicular(const glm::vec3& n) {
   const glm::vec3 helper = std::abs(n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);

@@ -148,14 +148,11 @@ void load_grid_triangle(uint t, out vec3 a, out vec3 b, out vec3 c) {
   c = grid_triangles[3u * t + 2u].xyz;
 }
 
-// Separating-axis test of the rectangle [lo, hi] against the triangle (inclusive, with a little slack
-// so a sample exactly on a texel border is never lost).
-bool rect_touches_triangle(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientation) {
-  const float slack = 1.0e-3;
-  vec2 tmin = min(min(a.xy, b.xy), c.xy);
-  vec2 tmax = max(max(a.xy, b.xy), c.xy);
-  if (any(lessThan(tmax, lo - slack)) || any(greaterThan(tmin, hi + slack))) return false;
+// How far inside the triangle the rectangle [lo, hi] reaches: over the three edges, the least of the
+// distances (positive inward) of the rectangle's corner deepest inside that edge.
+float rect_depth_inside(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientation) {
   vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
+  float least = 1.0e30;
   for (int i = 0; i < 3; ++i) {
     vec2 e0 = p[i];
     vec2 e1 = p[(i + 1) % 3];
@@ -164,9 +161,19 @@ bool rect_touches_triangle(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orien
     best = max(best, orientation * edge_fn(vec2(hi.x, lo.y), e0, e1));
     best = max(best, orientation * edge_fn(vec2(lo.x, hi.y), e0, e1));
     best = max(best, orientation * edge_fn(vec2(hi.x, hi.y), e0, e1));
-    if (best < -slack * length(e1 - e0)) return false;
+    least = min(least, best / length(e1 - e0));
   }
-  return true;
+  return least;
+}
+
+// Separating-axis test of the rectangle [lo, hi] against the triangle (inclusive, with a little slack
+// so a sample exactly on a texel border is never lost).
+bool rect_touches_triangle(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientation) {
+  const float slack = 1.0e-3;
+  vec2 tmin = min(min(a.xy, b.xy), c.xy);
+  vec2 tmax = max(max(a.xy, b.xy), c.xy);
+  if (any(lessThan(tmax, lo - slack)) || any(greaterThan(tmin, hi + slack))) return false;
+  return rect_depth_inside(lo, hi, a, b, c, orientation) >= -slack;
 }
 
 // A lower bound of the triangle's light depth over the rectangle [lo, hi]: its plane's minimum over

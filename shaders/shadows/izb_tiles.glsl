@@ -80,20 +80,7 @@ void tile_rect(uvec2 tile, out vec2 lo, out vec2 hi) {
 // covered texel's centre lies in [lo + 1/2, hi - 1/2] and at least half a texel inside every edge,
 // so a rectangle none of whose points is that far inside some edge holds no such texel.
 bool rect_may_hold_covered_texel(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientation) {
-  lo += 0.5;
-  hi -= 0.5;
-  vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
-  for (int i = 0; i < 3; ++i) {
-    vec2 e0 = p[i];
-    vec2 e1 = p[(i + 1) % 3];
-    float best = -1.0e30;
-    best = max(best, orientation * edge_fn(vec2(lo.x, lo.y), e0, e1));
-    best = max(best, orientation * edge_fn(vec2(hi.x, lo.y), e0, e1));
-    best = max(best, orientation * edge_fn(vec2(lo.x, hi.y), e0, e1));
-    best = max(best, orientation * edge_fn(vec2(hi.x, hi.y), e0, e1));
-    if (best < (0.5 - 1.0e-3) * length(e1 - e0)) return false;
-  }
-  return true;
+  return rect_depth_inside(lo + 0.5, hi - 0.5, a, b, c, orientation) >= 0.5 - 1.0e-3;
 }
 
 // Step 2: whether the triangle may touch the tile and, for the trace, lie in front of its farthest
