@@ -21,6 +21,9 @@ class BackendProbe {
   PassBackend pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
                    const engine::gpu::GpuProfiler& profiler);
   const Stats::BackendChoice& choice() const { return choice_; }
+  // The frame just recorded is not representative (e.g. its work lists overflowed and grow for the
+  // next frame): its time is not taken, and the probe runs that backend again.
+  void discard_pending() { pending_.reset(); }
 
  private:
   std::string region_;

@@ -720,6 +720,14 @@ void IzbPass::after_frame(Stats& s) {
   auto grow = [](Impl::WorkList& list, uint64_t asked) {
     if (asked > list.capacity) list.demand = uint64_t(double(asked) * 1.25);
   };
+  const bool overflowed =
+      std::max(c[gpu_shared::IZB_COUNTER_RECORDS], c[gpu_shared::IZB_COUNTER_RECORDS + 1]) > m.records.capacity ||
+      std::max(c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]) > m.tile_pairs.capacity ||
+      c[gpu_shared::IZB_COUNTER_PAIRS] > m.pairs.capacity || requested > m.pool_size;
+  if (overflowed) {  // a frame slowed by an overflow does not speak for its backend
+    m.trace_probe.discard_pending();
+    m.csm_probe.discard_pending();
+  }
   grow(m.records, std::max(c[gpu_shared::IZB_COUNTER_RECORDS], c[gpu_shared::IZB_COUNTER_RECORDS + 1]));
   grow(m.tile_pairs, std::max(c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]));
   grow(m.pairs, c[gpu_shared::IZB_COUNTER_PAIRS]);
