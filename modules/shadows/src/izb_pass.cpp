@@ -453,11 +453,12 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
 
   // Raster or compute, per pass. The timing of either depends on the sizes, the scene and the mode.
   // The render size counts in half-octaves of pixels, so dynamic resolution's small steps do not
-  // restart the probe every few frames.
+  // restart the probe every few frames; the CSM setting counts, not whether the adaptive CSM ran
+  // this frame (that alternates).
   const double pixels = double(frame.view.extent.width) * frame.view.extent.height;
   uint64_t key = mix_key(0, m.resolution);
   for (uint64_t v : {uint64_t(std::lround(2.0 * std::log2(std::max(pixels, 1.0)))), uint64_t(m.samples),
-                     uint64_t(m.triangle_count), uint64_t(run_csm), uint64_t(settings.csm_test),
+                     uint64_t(m.triangle_count), uint64_t(settings.csm), uint64_t(settings.csm_test),
                      uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid)})
     key = mix_key(key, v);
   const bool raster_trace_available = m.raster_trace_available();
