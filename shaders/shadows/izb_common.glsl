@@ -45,15 +45,6 @@ ivec2 grid_texel(vec3 g) {
 
 uint texel_index(ivec2 t) { return uint(t.y) * izb_resolution() + uint(t.x); }
 
-// Floats compare like their bit patterns once mapped to this order (for atomic min/max).
-uint float_to_ordered(float f) {
-  uint u = floatBitsToUint(f);
-  return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
-}
-float ordered_to_float(uint u) {
-  return uintBitsToFloat((u & 0x80000000u) != 0u ? (u & 0x7fffffffu) : ~u);
-}
-
 uint quad_stride() { return izb_samples() == 32u ? kIzbQuadFloats32 : kIzbQuadFloats1; }
 vec3 quad_point(uint pixel, uint corner) {
   uint base = pixel * quad_stride() + corner * 3u;
