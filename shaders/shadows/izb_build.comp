@@ -122,8 +122,12 @@ void main() {
   uint candidate_sum = subgroupAdd(candidate);
   uint culled_sum = subgroupAdd(culled);
   if (subgroupElect()) {
-    if (covered_sum > 0u) atomicAdd(counters[IZB_COUNTER_SHADING_POINTS], covered_sum);
-    if (candidate_sum > 0u) atomicAdd(counters[IZB_COUNTER_CANDIDATES], candidate_sum);
-    if (culled_sum > 0u) atomicAdd(counters[IZB_COUNTER_CSM_CULLED], culled_sum);
+    uint shard = (gl_WorkGroupID.x * 7u + gl_WorkGroupID.y * 13u + gl_SubgroupID) % kIzbCounterShards;
+    if (covered_sum > 0u)
+      atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_SHADING_POINTS * kIzbCounterShards + shard], covered_sum);
+    if (candidate_sum > 0u)
+      atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_CANDIDATES * kIzbCounterShards + shard], candidate_sum);
+    if (culled_sum > 0u)
+      atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_CSM_CULLED * kIzbCounterShards + shard], culled_sum);
   }
 }

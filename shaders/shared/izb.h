@@ -44,12 +44,12 @@ SHARED_CONST uint kIzbQuadFloats32 = 12u;
 // Counters read back for statistics (and the node allocator).
 SHARED_CONST uint IZB_COUNTER_NODES = 0u;          // nodes requested (may exceed the pool)
 SHARED_CONST uint IZB_COUNTER_OVERFLOW = 1u;       // insertions refused: pool full
-SHARED_CONST uint IZB_COUNTER_CANDIDATES = 2u;     // lit candidates (facing, receiving, in range)
-SHARED_CONST uint IZB_COUNTER_SHADING_POINTS = 3u; // covered pixels
+SHARED_CONST uint IZB_COUNTER_CANDIDATES = 2u;     // lit candidates (facing, receiving, in range): sharded
+SHARED_CONST uint IZB_COUNTER_SHADING_POINTS = 3u; // covered pixels: sharded
 SHARED_CONST uint IZB_COUNTER_FRAGMENTS = 4u;      // trace fragments before depth culling
 SHARED_CONST uint IZB_COUNTER_FRAGMENTS_KEPT = 5u; // after depth culling
 SHARED_CONST uint IZB_COUNTER_TRIANGLE_TESTS = 6u; // node-triangle tests
-SHARED_CONST uint IZB_COUNTER_CSM_CULLED = 7u;     // candidates proved shadowed by the CSM
+SHARED_CONST uint IZB_COUNTER_CSM_CULLED = 7u;     // candidates proved shadowed by the CSM: sharded
 SHARED_CONST uint IZB_COUNTER_OVERFLOW_PIXELS = 8u;// pixels resolved by the fallback
 SHARED_CONST uint IZB_COUNTER_LIST_MAX = 9u;
 SHARED_CONST uint IZB_COUNTER_LIST_SUM = 10u;
@@ -62,7 +62,12 @@ SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch
 SHARED_CONST uint IZB_COUNTER_RECORD_DISPATCH = 24u;    // 3 uints: over records
 SHARED_CONST uint IZB_COUNTER_TILE_PAIR_DISPATCH = 28u; // 3 uints: over tile pairs
 SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel pairs
-SHARED_CONST uint IZB_COUNTER_COUNT = 36u;
+// The build's per-pixel counts, added once per subgroup by every subgroup of the frame, go to one of
+// kIzbCounterShards slots each (a single address would serialize hundreds of thousands of atomics);
+// the CPU sums the shards. Counter k (a sharded IZB_COUNTER_*) lives at IZB_COUNTER_SHARDS + k * shards.
+SHARED_CONST uint kIzbCounterShards = 64u;
+SHARED_CONST uint IZB_COUNTER_SHARDS = 36u;
+SHARED_CONST uint IZB_COUNTER_COUNT = 36u + 8u * 64u;
 
 // Compute trace and compute CSM, hierarchically over light-space tiles of kIzbTile² texels (each
 // tile knows its farthest node, so the trace culls a triangle from a whole tile at once):

@@ -693,14 +693,20 @@ void IzbPass::after_frame(Stats& s) {
   if (!m.collected) return;
   m.collected = false;
   const auto* c = m.counters_readback.as<uint32_t>();
-  s.shading_points = c[gpu_shared::IZB_COUNTER_SHADING_POINTS];
-  s.lit_candidates = c[gpu_shared::IZB_COUNTER_CANDIDATES];
+  auto sharded = [&](uint32_t counter) {
+    uint64_t sum = 0;
+    for (uint32_t k = 0; k < gpu_shared::kIzbCounterShards; ++k)
+      sum += c[gpu_shared::IZB_COUNTER_SHARDS + counter * gpu_shared::kIzbCounterShards + k];
+    return sum;
+  };
+  s.shading_points = sharded(gpu_shared::IZB_COUNTER_SHADING_POINTS);
+  s.lit_candidates = sharded(gpu_shared::IZB_COUNTER_CANDIDATES);
   const uint64_t requested = c[gpu_shared::IZB_COUNTER_NODES];
   s.node_pool_size = m.pool_size;
   s.nodes_inserted = std::min<uint64_t>(requested, m.pool_size);
   s.node_overflow = c[gpu_shared::IZB_COUNTER_OVERFLOW];
   s.overflow_pixels = c[gpu_shared::IZB_COUNTER_OVERFLOW_PIXELS];
-  s.csm_culled = c[gpu_shared::IZB_COUNTER_CSM_CULLED];
+  s.csm_culled = sharded(gpu_shared::IZB_COUNTER_CSM_CULLED);
   s.culling_rate = s.lit_candidates ? double(s.csm_culled) / double(s.lit_candidates) : 0.0;
   s.trace_fragments_before_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS];
   s.trace_fragments_after_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS_KEPT];
