@@ -227,6 +227,13 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
       std::string why;
       if (module.supported(shadows::CsmTest(test), &why)) s.izb.csm_test = shadows::CsmTest(test);
     }
+    // Raster or compute passes: auto times both on the first frames and keeps the faster.
+    const char* backends[] = {"auto", "raster", "compute"};
+    int trace = int(s.izb.trace);
+    if (ImGui::Combo("trace pass", &trace, backends, IM_ARRAYSIZE(backends))) s.izb.trace = shadows::PassBackend(trace);
+    int csm_backend = int(s.izb.csm_backend);
+    if (ImGui::Combo("CSM pass", &csm_backend, backends, IM_ARRAYSIZE(backends)))
+      s.izb.csm_backend = shadows::PassBackend(csm_backend);
     const char* maskings[] = {"off", "edge", "depth extent"};
     int masking = int(s.cascades.masking);
     if (ImGui::Combo("masking", &masking, maskings, IM_ARRAYSIZE(maskings))) s.cascades.masking = shadows::Masking(masking);
@@ -263,7 +270,9 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
                   (unsigned long long)st.node_pool_size, pool * 100.0, (unsigned long long)st.node_overflow);
       ImGui::Text("CSM culled %.1f%% (%s)", st.culling_rate * 100.0, st.csm_status.c_str());
       ImGui::Text("list avg %.2f max %llu", st.list_length_average, (unsigned long long)st.list_length_max);
-      ImGui::Text("trace: %s (%s)", st.trace_choice.backend.c_str(), st.trace_choice.reason.c_str());
+      ImGui::TextWrapped("trace: %s (%s)", st.trace_choice.backend.c_str(), st.trace_choice.reason.c_str());
+      if (!st.csm_choice.backend.empty())
+        ImGui::TextWrapped("CSM: %s (%s)", st.csm_choice.backend.c_str(), st.csm_choice.reason.c_str());
     }
     if (s.technique == shadows::Technique::Cascades || s.technique == shadows::Technique::Hybrid)
       ImGui::Text("expensive path %.1f%%", st.expensive_path_fraction * 100.0);
@@ -306,6 +315,8 @@ std::string save_settings(const std::string& path, shadows::ShadowModule& module
   j["samples_per_pixel"] = s.izb.samples_per_pixel;
   j["csm"] = s.izb.csm;
   j["csm_test"] = shadows::csm_test_name(s.izb.csm_test);
+  j["trace"] = shadows::backend_name(s.izb.trace);
+  j["csm_backend"] = shadows::backend_name(s.izb.csm_backend);
   j["masking"] = shadows::masking_name(s.cascades.masking);
   j["blur"] = s.cascades.blur;
   j["debug"] = int(s.debug);
@@ -356,6 +367,10 @@ std::string load_settings(const std::string& path, shadows::ShadowModule& module
         auto t = shadows::parse_csm_test(v.get<std::string>());
         if (!t || !module.supported(*t)) return bad("unknown or unsupported coverage test");
         s.izb.csm_test = *t;
+      } else if (k == "trace" || k == "csm_backend") {
+        auto b = shadows::parse_backend(v.get<std::string>());
+        if (!b) return bad("expected auto, raster or compute");
+        (k == "trace" ? s.izb.trace : s.izb.csm_backend) = *b;
       } else if (k == "masking") {
         auto m = shadows::parse_masking(v.get<std::string>());
         if (!m) return bad("unknown masking");
