@@ -382,11 +382,16 @@ struct IzbPass::Impl {
         .push(ctx, cmd, p);
   }
 
-  void dispatch(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
-                gpu_shared::IzbComputePush push, uint32_t x, uint32_t y = 1) {
+  void bind_compute(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+                    const gpu_shared::IzbComputePush& push) {
     p.bind(cmd);
     push_all(cmd, frame, p);
     p.push_constants(cmd, push);
+  }
+
+  void dispatch(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+                gpu_shared::IzbComputePush push, uint32_t x, uint32_t y = 1) {
+    bind_compute(cmd, frame, p, push);
     vkCmdDispatch(cmd, x, y, 1);
   }
 
@@ -397,9 +402,7 @@ struct IzbPass::Impl {
 
   void dispatch_indirect(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
                          gpu_shared::IzbComputePush push, uint32_t counter) {
-    p.bind(cmd);
-    push_all(cmd, frame, p);
-    p.push_constants(cmd, push);
+    bind_compute(cmd, frame, p, push);
     vkCmdDispatchIndirect(cmd, counters.handle(), VkDeviceSize(counter) * 4);
   }
 
@@ -639,10 +642,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   full_barrier(cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_fallback");
-    m.p->fallback.bind(cmd);
-    m.push_all(cmd, frame, m.p->fallback);
-    m.p->fallback.push_constants(cmd, push);
-    vkCmdDispatchIndirect(cmd, m.counters.handle(), gpu_shared::IZB_COUNTER_DISPATCH * 4);
+    m.dispatch_indirect(cmd, frame, m.p->fallback, push, gpu_shared::IZB_COUNTER_DISPATCH);
   }
   full_barrier(cmd);
   {
@@ -658,10 +658,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
       draw_trace(use_hardware ? m.p->count_hardware : m.p->count_software, VK_COMPARE_OP_ALWAYS, false);
       full_barrier(cmd);
     }
-    m.p->list_stats.bind(cmd);
-    m.push_all(cmd, frame, m.p->list_stats);
-    m.p->list_stats.push_constants(cmd, push);
-    vkCmdDispatch(cmd, (m.resolution + 7) / 8, (m.resolution + 7) / 8, 1);
+    m.dispatch(cmd, frame, m.p->list_stats, push, (m.resolution + 7) / 8, (m.resolution + 7) / 8);
   }
   memory_barrier(cmd, kAll, kAllAccess, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
   VkBufferCopy copy{0, 0, m.counters.size()};
