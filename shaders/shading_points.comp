@@ -6,7 +6,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = SHADING_POINTS_BINDING_FRAME) uniform Frame { FrameUniforms frame; };
 layout(set = 0, binding = SHADING_POINTS_BINDING_DEPTH) uniform sampler2D depth_image;
 layout(set = 0, binding = SHADING_POINTS_BINDING_WORLD_POSITION, rgba32f) writeonly uniform image2D world_position;
+layout(set = 0, binding = SHADING_POINTS_BINDING_TERMINATOR_OFFSET, rgba16f) readonly uniform image2D terminator_offset;
 
+// World positions from depth, moved by the G-buffer's smooth-terminator offset (gbuffer.frag): the
+// shading points every shadow technique and the reference start their rays from.
 void main() {
   uvec2 pixel = gl_GlobalInvocationID.xy;
   if (any(greaterThanEqual(pixel, frame.extent.xy))) return;
@@ -17,5 +20,7 @@ void main() {
   }
   vec2 ndc = (vec2(pixel) + 0.5) / vec2(frame.extent.xy) * 2.0 - 1.0;
   vec4 world = frame.inverse_view_projection * vec4(ndc, depth, 1.0);
-  imageStore(world_position, ivec2(pixel), vec4(world.xyz / world.w, 1.0));
+  vec3 offset = (frame.extent.w & FRAME_FLAG_SMOOTH_TERMINATOR) != 0u ? imageLoad(terminator_offset, ivec2(pixel)).xyz
+                                                                      : vec3(0.0);
+  imageStore(world_position, ivec2(pixel), vec4(world.xyz / world.w + offset, 1.0));
 }

@@ -11,6 +11,7 @@
 #include <iterator>
 #include <map>
 
+#include <stb_image.h>
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
@@ -66,7 +67,8 @@ class Loader {
   std::vector<uint32_t> read_indices(int accessor, const std::string& what) const;
   std::shared_ptr<const MeshData> build_primitive(int mesh_index, int primitive_index);
   Transform node_transform(const tinygltf::Node& node, int node_index) const;
-  Material material_for(int material_index, const std::string& what) const;
+  Material material_for(int material_index, const std::string& what);
+  std::shared_ptr<const Texture> texture_for(int texture_index, int material_index);
   void add_nodes(Scene& scene);
   void add_views(Scene& scene);
 
@@ -77,13 +79,32 @@ class Loader {
   std::vector<std::pair<Entity, int>> camera_nodes_;  // node entity, camera index
   size_t skipped_primitives_ = 0;
   size_t skipped_cameras_ = 0;
+  std::map<int, std::shared_ptr<const Texture>> texture_cache_;  // by glTF texture index (null: unusable)
 };
 
-// Textures are not used by the engine; skipping their decode keeps loading fast and lets files whose
-// images are missing or in unusual formats still load.
-bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
-                  void*) {
+// Decodes an image (PNG, JPEG, ... through stb_image) to RGBA8. An image that does not decode is left
+// empty and the load goes on: the materials using it fall back to their factors (texture_for warns).
+bool decode_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                  const unsigned char* bytes, int size, void*) {
+  int width = 0, height = 0, components = 0;
+  stbi_uc* pixels = stbi_load_from_memory(bytes, size, &width, &height, &components, 4);
+  if (!pixels) return true;
+  image->width = width;
+  image->height = height;
+  image->component = 4;
+  image->bits = 8;
+  image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+  image->image.assign(pixels, pixels + size_t(width) * size_t(height) * 4);
+  stbi_image_free(pixels);
   return true;
+}
+
+TextureWrap wrap_mode(int gltf_wrap) {
+  switch (gltf_wrap) {
+    case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE: return TextureWrap::ClampToEdge;
+    case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT: return TextureWrap::MirroredRepeat;
+    default: return TextureWrap::Repeat;
+  }
 }
 
 void Loader::parse() {
@@ -97,7 +118,7 @@ void Loader::parse() {
   if (bytes.size() > UINT32_MAX) fail("file is larger than 4 GiB");
 
   tinygltf::TinyGLTF gltf;
-  gltf.SetImageLoader(ignore_image, nullptr);
+  gltf.SetImageLoader(decode_image, nullptr);
   std::string err, warn;
   const std::string base_dir = path_.parent_path().string();
   const bool is_binary = bytes.compare(0, 4, "glTF") == 0;
@@ -375,7 +396,45 @@ Transform Loader::node_transform(const tinygltf::Node& node, int node_index) con
   return t;
 }
 
-Material Loader::material_for(int material_index, const std::string& what) const {
+std::shared_ptr<const Texture> Loader::texture_for(int texture_index, int material_index) {
+  if (auto it = texture_cache_.find(texture_index); it != texture_cache_.end()) return it->second;
+  std::shared_ptr<const Texture>& slot = texture_cache_[texture_index];
+  const std::string material = "material " + std::to_string(material_index);
+  auto warn = [&](const std::string& problem) {
+    std::cerr << file_ << ": warning: " << problem << "; " << material << " uses its base colour factor\n";
+  };
+  if (texture_index < 0 || size_t(texture_index) >= model_.textures.size()) {
+    warn("texture " + std::to_string(texture_index) + " out of range");
+    return slot;
+  }
+  const tinygltf::Texture& t = model_.textures[size_t(texture_index)];
+  if (t.source < 0 || size_t(t.source) >= model_.images.size()) {
+    warn("texture " + std::to_string(texture_index) + " has no image");
+    return slot;
+  }
+  const tinygltf::Image& image = model_.images[size_t(t.source)];
+  const std::string image_name = !image.uri.empty() && image.uri.rfind("data:", 0) != 0
+                                     ? (path_.parent_path() / image.uri).string()
+                                     : "image " + std::to_string(t.source);
+  if (image.image.empty() || image.width <= 0 || image.height <= 0 ||
+      image.image.size() != size_t(image.width) * size_t(image.height) * 4) {
+    warn("image " + image_name + " is missing or cannot be decoded");
+    return slot;
+  }
+  auto texture = std::make_shared<Texture>();
+  texture->name = image_name;
+  texture->width = uint32_t(image.width);
+  texture->height = uint32_t(image.height);
+  texture->rgba = image.image;
+  if (t.sampler >= 0 && size_t(t.sampler) < model_.samplers.size()) {
+    texture->wrap_s = wrap_mode(model_.samplers[size_t(t.sampler)].wrapS);
+    texture->wrap_t = wrap_mode(model_.samplers[size_t(t.sampler)].wrapT);
+  }
+  slot = std::move(texture);
+  return slot;
+}
+
+Material Loader::material_for(int material_index, const std::string& what) {
   Material out;
   if (material_index < 0) return out;
   if (size_t(material_index) >= model_.materials.size()) {
@@ -403,6 +462,15 @@ Material Loader::material_for(int material_index, const std::string& what) const
     fail("material " + std::to_string(material_index) + " has an invalid alphaCutoff");
   }
   out.alpha_cutoff = float(m.alphaCutoff);
+  if (const int texture = m.pbrMetallicRoughness.baseColorTexture.index; texture >= 0) {
+    if (m.pbrMetallicRoughness.baseColorTexture.texCoord != 0) {
+      std::cerr << file_ << ": warning: material " << material_index
+                << " samples TEXCOORD_" << m.pbrMetallicRoughness.baseColorTexture.texCoord
+                << ", which the engine does not load; it uses its base colour factor\n";
+    } else {
+      out.base_color_texture = texture_for(texture, material_index);
+    }
+  }
   return out;
 }
 

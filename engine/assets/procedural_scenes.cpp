@@ -11,6 +11,7 @@
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/assets/procedural_textures.hpp"
 #include "engine/assets/scene.hpp"
 #include "engine/core/transform_system.hpp"
 
@@ -389,19 +390,72 @@ std::unique_ptr<Scene> build_foliage() {
   return scene;
 }
 
+// Trees whose leaves are cut-out cards: each card a double-sided quad showing a generated spray of
+// leaves (alpha-tested, MASK at 0.5), so shadows on the ground and trunks are leaf-shaped with light
+// between the leaves.
+std::unique_ptr<Scene> build_canopy() {
+  using namespace canopy;
+  auto scene = std::make_unique<Scene>();
+  scene->name = "canopy";
+  Random rng(kSeed);
+  add_mesh(*scene, "ground", make_ground(kGroundHalfSize, kGroundHalfSize, 0.0f, 8), {0.5f, 0.46f, 0.36f, 1.0f});
+  const auto spray = make_leaf_spray_texture(kLeafTextureSize, 7);
+  for (int p = 0; p < kTreeCount; ++p) {
+    const float angle = kTwoPi * float(p) / float(kTreeCount) + rng.uniform(-0.3f, 0.3f);
+    const float radius = p == 0 ? 0.0f : rng.uniform(3.0f, 6.0f);
+    const glm::vec3 origin{radius * std::cos(angle), 0.0f, radius * std::sin(angle)};
+    const float height = rng.uniform(2.6f, 3.6f);
+    MeshData wood = make_cylinder({0, 0, 0}, {0, height, 0}, rng.uniform(0.08f, 0.12f), 10, true);
+    MeshData cards;
+    const int branch_count = rng.integer(5, 7);
+    for (int b = 0; b < branch_count; ++b) {
+      const float a = kTwoPi * (float(b) + rng.uniform(0.0f, 0.5f)) / float(branch_count);
+      const glm::vec3 start{0.0f, height * rng.uniform(0.55f, 0.95f), 0.0f};
+      const glm::vec3 dir = glm::normalize(glm::vec3(std::cos(a), rng.uniform(0.2f, 0.7f), std::sin(a)));
+      const glm::vec3 end = start + dir * rng.uniform(0.9f, 1.5f);
+      append_mesh(wood, make_cylinder(start, end, 0.035f, 6, false));
+      const int card_count = rng.integer(4, 6);
+      for (int c = 0; c < card_count; ++c) {
+        // A card hangs from a point on the outer branch, its leaves fanning outward and roughly up.
+        const glm::vec3 attach = glm::mix(start, end, rng.uniform(0.4f, 1.0f));
+        const glm::vec3 out = glm::normalize(dir + glm::vec3(0.0f, rng.uniform(0.2f, 0.8f), 0.0f) + rng.unit_vector() * 0.5f);
+        const glm::vec3 side = glm::normalize(glm::cross(out, perpendicular(out)) + rng.unit_vector() * 0.3f);
+        const glm::vec3 across = glm::normalize(glm::cross(out, side));
+        const float half = rng.uniform(0.35f, 0.55f);
+        // make_quad's t = 1 edge (the texture's bottom row, where the stems meet) sits at the branch.
+        append_mesh(cards, make_double_sided_quad(attach + out * half, across * half, -out * half));
+      }
+    }
+    char suffix[8];
+    std::snprintf(suffix, sizeof(suffix), "%02d", p);
+    add_mesh(*scene, std::string("wood_") + suffix, std::move(wood), {0.42f, 0.3f, 0.2f, 1.0f}, origin);
+    const Entity leaves = add_mesh(*scene, std::string("leaf_cards_") + suffix, std::move(cards), glm::vec4(1.0f), origin);
+    Material& material = scene->registry.get<Material>(leaves);
+    material.alpha_mode = AlphaMode::Mask;
+    material.alpha_cutoff = 0.5f;
+    material.base_color_texture = spray;
+  }
+  add_camera_and_light(*scene, 0.03f, 120.0f);
+  scene->views.push_back({"overview", {0.0f, 6.0f, 13.0f}, {0.0f, 1.2f, 0.0f}, kLightDirection, glm::radians(60.0f)});
+  scene->views.push_back({"ground", {1.5f, 4.5f, 4.5f}, {-0.5f, 0.0f, -1.0f}, {0.45f, -1.0f, 0.2f}, glm::radians(65.0f)});
+  finish(*scene);
+  return scene;
+}
+
 }  // namespace
 
 }  // namespace engine::procedural
 
 namespace engine {
 
-std::vector<std::string> procedural_scene_names() { return {"contact", "atrium", "foliage"}; }
+std::vector<std::string> procedural_scene_names() { return {"contact", "atrium", "foliage", "canopy"}; }
 
 std::unique_ptr<Scene> build_procedural_scene(const std::string& name) {
   if (name == "contact") return procedural::build_contact();
   if (name == "atrium") return procedural::build_atrium();
   if (name == "foliage") return procedural::build_foliage();
-  throw SceneError("unknown procedural scene '" + name + "': expected one of contact, atrium, foliage");
+  if (name == "canopy") return procedural::build_canopy();
+  throw SceneError("unknown procedural scene '" + name + "': expected one of contact, atrium, foliage, canopy");
 }
 
 }  // namespace engine

@@ -58,7 +58,7 @@ std::unique_ptr<Scene> load_scene(const std::string& name_or_path) {
   if (ext == ".json") return load_scene_file(path);
   if (is_file || ext == ".gltf" || ext == ".glb") return load_gltf_scene(path);
   throw SceneError("unknown scene '" + name_or_path +
-                   "': expected one of contact, atrium, foliage, a .gltf/.glb file or a .json scene file");
+                   "': expected one of contact, atrium, foliage, canopy, a .gltf/.glb file or a .json scene file");
 }
 
 }  // namespace engine

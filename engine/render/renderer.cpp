@@ -51,6 +51,9 @@ SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
     meshes_.push_back(range);
   });
   total_indices_ = indices.size();
+  texture_table_ = MaterialTextureTable(registry);
+  textures_ = upload_buffer(ctx, texture_table_.words().data(), texture_table_.words().size() * sizeof(uint32_t),
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "material textures");
   const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   vertices_ = upload_buffer(ctx, vertices.data(), vertices.size() * sizeof(Vertex),
                             usage | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "scene vertices");
@@ -71,9 +74,10 @@ Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(ex
   g.fragment_shader = "gbuffer.frag";
   g.bindings = {{gpu_shared::GBUFFER_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
                 {gpu_shared::GBUFFER_BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                {gpu_shared::GBUFFER_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+                {gpu_shared::GBUFFER_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                {gpu_shared::GBUFFER_BINDING_TEXTURES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
   g.push_constant_size = sizeof(gpu_shared::DrawPush);
-  g.color_formats = {kAlbedoFormat, kNormalFormat, kNormalFormat};
+  g.color_formats = {kAlbedoFormat, kNormalFormat, kNormalFormat, kNormalFormat};
   g.depth_format = kDepthFormat;
   g.cull_mode = VK_CULL_MODE_NONE;  // glTF single-sided surfaces still occlude and must be seen from both sides
   gbuffer_pipeline_ = factory.graphics(g);
@@ -82,7 +86,8 @@ Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(ex
       {"shading_points.comp",
        {{gpu_shared::SHADING_POINTS_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
         {gpu_shared::SHADING_POINTS_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-        {gpu_shared::SHADING_POINTS_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+        {gpu_shared::SHADING_POINTS_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+        {gpu_shared::SHADING_POINTS_BINDING_TERMINATOR_OFFSET, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
        0});
   lighting_pipeline_ = factory.compute({"lighting.comp",
                                         {{gpu_shared::LIGHTING_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
@@ -125,12 +130,14 @@ void Renderer::create_targets() {
   gbuffer_.albedo = Image(ctx_, e, kAlbedoFormat, color, "gbuffer albedo");
   gbuffer_.normal = Image(ctx_, e, kNormalFormat, color, "gbuffer normal");
   gbuffer_.geometric_normal = Image(ctx_, e, kNormalFormat, color, "gbuffer geometric normal");
+  gbuffer_.terminator_offset = Image(ctx_, e, kNormalFormat, color, "gbuffer terminator offset");
   gbuffer_.world_position = Image(ctx_, e, kWorldPositionFormat, storage, "world position");
   shadow_term_ = Image(ctx_, e, kShadowFormat, storage, "shadow term");
   overlay_ = Image(ctx_, e, kOutputFormat, storage, "debug overlay");
   output_ = Image(ctx_, e, kOutputFormat, storage | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, "lit output");
   ctx_.immediate_submit([&](VkCommandBuffer cmd) {
     for (Image* img : {&gbuffer_.depth, &gbuffer_.albedo, &gbuffer_.normal, &gbuffer_.geometric_normal,
+                       &gbuffer_.terminator_offset,
                        &gbuffer_.world_position, &shadow_term_, &overlay_, &output_})
       img->transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAllStages, kAllAccess);
   });
@@ -172,6 +179,8 @@ void Renderer::build_draw_list() {
       d.base_color = m->base_color;
       d.alpha_mode = m->alpha_mode;
       d.alpha_cutoff = m->alpha_cutoff;
+      d.alpha_threshold = alpha_threshold(*m);
+      d.base_color_texture = geometry_->texture_table().index_of(*m);
     }
     if (const auto* s = scene_->registry.try_get<ShadowCaster>(e)) d.shadow = *s;
     draws_.push_back(d);
@@ -212,7 +221,8 @@ void Renderer::update(float dt) {
   u.light_direction = glm::vec4(view_.light_direction, 0.0f);
   u.light_radiance = glm::vec4(view_.light_radiance, 0.0f);
   u.ambient = glm::vec4(0.26f, 0.31f, 0.40f, 0.0f);  // sky colour of the hemisphere ambient (lighting.comp)
-  u.extent = glm::uvec4(extent_.width, extent_.height, uint32_t(view_.frame_index), 0u);
+  u.extent = glm::uvec4(extent_.width, extent_.height, uint32_t(view_.frame_index),
+                        smooth_terminator_ ? gpu_shared::FRAME_FLAG_SMOOTH_TERMINATOR : 0u);
   frame_uniforms_.write(&u, sizeof(u));
 }
 
@@ -223,9 +233,9 @@ void Renderer::record(VkCommandBuffer cmd) {
     // G-buffer.
     {
       ScopedGpuRegion region(ctx_, profiler_, cmd, "gbuffer");
-      VkRenderingAttachmentInfo colors[3];
-      Image* targets[3] = {&gbuffer_.albedo, &gbuffer_.normal, &gbuffer_.geometric_normal};
-      for (int i = 0; i < 3; ++i) {
+      VkRenderingAttachmentInfo colors[4];
+      Image* targets[4] = {&gbuffer_.albedo, &gbuffer_.normal, &gbuffer_.geometric_normal, &gbuffer_.terminator_offset};
+      for (int i = 0; i < 4; ++i) {
         colors[i] = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
         colors[i].imageView = targets[i]->view();
         colors[i].imageLayout = VK_IMAGE_LAYOUT_GENERAL;
@@ -242,7 +252,7 @@ void Renderer::record(VkCommandBuffer cmd) {
       VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
       info.renderArea = {{0, 0}, extent_};
       info.layerCount = 1;
-      info.colorAttachmentCount = 3;
+      info.colorAttachmentCount = 4;
       info.pColorAttachments = colors;
       info.pDepthAttachment = &depth;
       vkCmdBeginRendering(cmd, &info);
@@ -255,6 +265,7 @@ void Renderer::record(VkCommandBuffer cmd) {
           .uniform_buffer(gpu_shared::GBUFFER_BINDING_FRAME, frame_uniforms_.handle())
           .storage_buffer(gpu_shared::GBUFFER_BINDING_VERTICES, geometry_->vertices().handle())
           .storage_buffer(gpu_shared::GBUFFER_BINDING_INDICES, geometry_->indices().handle())
+          .storage_buffer(gpu_shared::GBUFFER_BINDING_TEXTURES, geometry_->textures().handle())
           .push(ctx_, cmd, gbuffer_pipeline_);
       VkDeviceSize offset = 0;
       VkBuffer vb = geometry_->vertices().handle();
@@ -268,9 +279,9 @@ void Renderer::record(VkCommandBuffer cmd) {
         push.base_color = d.base_color;
         push.first_index = range.first_index;
         push.vertex_offset = range.vertex_offset;
-        push.flags = (d.alpha_mode == AlphaMode::Mask ? gpu_shared::DRAW_FLAG_ALPHA_MASK : 0u) |
-                     (d.shadow.receives_shadow ? gpu_shared::DRAW_FLAG_RECEIVES_SHADOW : 0u);
-        push.alpha_cutoff = d.alpha_cutoff;
+        push.flags = d.shadow.receives_shadow ? gpu_shared::DRAW_FLAG_RECEIVES_SHADOW : 0u;
+        push.alpha_threshold = d.alpha_threshold;
+        push.base_color_texture = d.base_color_texture;
         gbuffer_pipeline_.push_constants(cmd, push);
         vkCmdDrawIndexed(cmd, range.index_count, 1, range.first_index, range.vertex_offset, 0);
       }
@@ -288,6 +299,7 @@ void Renderer::record(VkCommandBuffer cmd) {
           .sampled_image(gpu_shared::SHADING_POINTS_BINDING_DEPTH, gbuffer_.depth.view(), nearest_sampler_.handle(),
                          VK_IMAGE_LAYOUT_GENERAL)
           .storage_image(gpu_shared::SHADING_POINTS_BINDING_WORLD_POSITION, gbuffer_.world_position.view())
+          .storage_image(gpu_shared::SHADING_POINTS_BINDING_TERMINATOR_OFFSET, gbuffer_.terminator_offset.view())
           .push(ctx_, cmd, shading_points_pipeline_);
       vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
     }

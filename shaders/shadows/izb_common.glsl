@@ -14,13 +14,16 @@ layout(set = 0, binding = IZB_BINDING_PIXEL_STATE, std430) buffer PixelState { u
 layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer Quads { float quads[]; };
 layout(set = 0, binding = IZB_BINDING_VERTICES, std430) readonly buffer Vertices { float vertex_floats[]; };
 layout(set = 0, binding = IZB_BINDING_INDICES, std430) readonly buffer Indices { uint indices[]; };
-layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Triangles { vec4 world_triangles[]; };
+layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Casters { IzbCasterTriangle casters[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
 layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };
 layout(set = 0, binding = IZB_BINDING_GRID_TRIANGLES, std430) buffer GridTriangles { vec4 grid_triangles[]; };
 layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
 layout(set = 0, binding = IZB_BINDING_LIST_COUNTS, std430) buffer ListCounts { uint list_counts[]; };
 layout(set = 0, binding = IZB_BINDING_LIST_CURSOR, std430) buffer ListCursor { uint list_cursor[]; };
+
+#define MATERIAL_TEXTURES_BINDING IZB_BINDING_MATERIAL_TEXTURES
+#include "material_textures.glsl"
 
 // The sample count and the IZB_FLAG_* bits are specialization constants: a pipeline per combination,
 // so a device that executes both sides of a branch (a CPU driver) runs only the code a frame needs.
@@ -57,25 +60,56 @@ void store_quad_point(uint pixel, uint corner, vec3 v) {
   quads[base + 2u] = v.z;
 }
 
+// What a node test needs to alpha-test a caster triangle: its material's threshold (0: not
+// alpha-tested, and nothing else is read) and texture, and its vertices' texture coordinates.
+struct CasterAlpha {
+  uint threshold;
+  uint texture;
+  vec2 uv0, uv1, uv2;
+};
+
+uint caster_draw(uint t) { return floatBitsToUint(casters[t].p0.w); }
+
+CasterAlpha load_caster_alpha(uint t) {
+  CasterAlpha ca;
+  ca.threshold = floatBitsToUint(casters[t].p1.w);
+  ca.texture = floatBitsToUint(casters[t].p2.w);
+  if (ca.threshold != 0u) {
+    ca.uv0 = casters[t].uv01.xy;
+    ca.uv1 = casters[t].uv01.zw;
+    ca.uv2 = casters[t].uv2.xy;
+  }
+  return ca;
+}
+
+// Whether the caster is solid where the light ray meets it: `w` are the barycentrics of the sample's
+// projection along the light in the grid-space triangle, which (the projection being parallel) are
+// those of the ray's hit on the world triangle, hence its texture coordinate there.
+bool caster_solid_at(CasterAlpha ca, vec3 w) {
+  if (ca.threshold == 0u) return true;
+  return material_alpha_kept(ca.texture, ca.threshold, w.x * ca.uv0 + w.y * ca.uv1 + w.z * ca.uv2);
+}
+
 // Shadowed-sample bits that a grid-space triangle (a, b, c) casts on `pixel`. A sample is shadowed
 // when its projection along the light lies inside the triangle (edges inclusive) and the triangle is
 // nearer the light there: exactly the reference ray's hit with t > 0.
 float edge_fn(vec2 p, vec2 a, vec2 b) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
 
 // `gap` keeps the smallest light-depth distance from an occluded sample up to the triangle.
-bool shadows_point(vec3 s, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
+bool shadows_point(vec3 s, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
   float w0 = edge_fn(s.xy, b.xy, c.xy) * inv_area;
   float w1 = edge_fn(s.xy, c.xy, a.xy) * inv_area;
   float w2 = edge_fn(s.xy, a.xy, b.xy) * inv_area;
   if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) return false;
   float depth = w0 * a.z + w1 * b.z + w2 * c.z;
   if (depth >= s.z) return false;
+  if (!caster_solid_at(ca, vec3(w0, w1, w2))) return false;
   gap = min(gap, s.z - depth);
   return true;
 }
 
-uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
-  if (izb_samples() == 1u) return shadows_point(quad_point(pixel, 0u), a, b, c, inv_area, gap) ? 1u : 0u;
+uint occluded_samples(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
+  if (izb_samples() == 1u) return shadows_point(quad_point(pixel, 0u), ca, a, b, c, inv_area, gap) ? 1u : 0u;
   vec3 c00 = quad_point(pixel, 0u);
   vec3 c10 = quad_point(pixel, 1u);
   vec3 c01 = quad_point(pixel, 2u);
@@ -88,7 +122,8 @@ uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area, inout 
   if (any(lessThan(qmax, tmin)) || any(greaterThan(qmin, tmax))) return 0u;
   // Every sample is a convex blend of the four corners, and the triangle's edge functions and the
   // depth gap are affine in position, so the corners decide the whole quad when they agree: all
-  // outside one edge -> no sample shadowed; all inside and behind -> every sample shadowed.
+  // outside one edge -> no sample shadowed; all inside and behind -> every sample shadowed (unless
+  // the caster is alpha-tested: then each sample's texel decides).
   vec3 corner[4] = vec3[4](c00, c10, c01, c11);
   vec3 w[4];
   float corner_gap[4];
@@ -105,7 +140,7 @@ uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area, inout 
     nearest_gap = min(nearest_gap, corner_gap[k]);
   }
   if (any(greaterThan(outside_all, vec3(0.5)))) return 0u;
-  if (all(greaterThan(inside_all, vec3(0.5))) && all_behind) {
+  if (all(greaterThan(inside_all, vec3(0.5))) && all_behind && ca.threshold == 0u) {
     gap = min(gap, nearest_gap);
     return 0xffffffffu;
   }
@@ -115,7 +150,7 @@ uint occluded_samples(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area, inout 
     vec2 o = kSamplePattern[i];
     vec3 ws = mix(mix(w[0], w[1], o.x), mix(w[2], w[3], o.x), o.y);
     float gs = mix(mix(corner_gap[0], corner_gap[1], o.x), mix(corner_gap[2], corner_gap[3], o.x), o.y);
-    if (all(greaterThanEqual(ws, vec3(0.0))) && gs > 0.0) {
+    if (all(greaterThanEqual(ws, vec3(0.0))) && gs > 0.0 && caster_solid_at(ca, ws)) {
       bits |= 1u << i;
       gap = min(gap, gs);
     }
@@ -211,11 +246,11 @@ uint list_length(uint texel, uint cap) {
 
 // Tests the triangle against one node's pixel and ORs its shadowed samples into the pixel's mask;
 // false when skipped (progressive removal of a fully shadowed pixel).
-bool trace_node(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area) {
+bool trace_node(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area) {
   uint current = visibility_mask[pixel];
   if (izb_flag(IZB_FLAG_PROGRESSIVE) && current == full_mask()) return false;
   float gap = 1.0e30;
-  uint bits = occluded_samples(pixel, a, b, c, inv_area, gap);
+  uint bits = occluded_samples(pixel, ca, a, b, c, inv_area, gap);
   if ((bits & ~current) != 0u) atomicOr(visibility_mask[pixel], bits);
   if (bits != 0u) note_occluder_gap(pixel, gap);
   return true;
@@ -223,17 +258,18 @@ bool trace_node(uint pixel, vec3 a, vec3 b, vec3 c, float inv_area) {
 
 // The trace's inner loop, shared by the raster and compute traces: tests the triangle against every
 // node in the texel's list. Returns the tests made.
-uint trace_texel_list(uint texel, vec3 a, vec3 b, vec3 c, float inv_area) {
+uint trace_texel_list(uint texel, uint triangle, vec3 a, vec3 b, vec3 c, float inv_area) {
   uint tests = 0u;
+  CasterAlpha ca = load_caster_alpha(triangle);
   if (sorted_lists()) {
     for (uint i = heads[texel], end = i + list_counts[texel]; i < end; ++i)
-      tests += trace_node(nodes[i].y, a, b, c, inv_area) ? 1u : 0u;
+      tests += trace_node(nodes[i].y, ca, a, b, c, inv_area) ? 1u : 0u;
     return tests;
   }
   for (uint node = heads[texel]; node != kIzbEndOfList;) {
     uvec2 n = nodes[node];
     node = n.x;
-    tests += trace_node(n.y, a, b, c, inv_area) ? 1u : 0u;
+    tests += trace_node(n.y, ca, a, b, c, inv_area) ? 1u : 0u;
   }
   return tests;
 }

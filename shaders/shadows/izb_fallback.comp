@@ -20,7 +20,7 @@ void main() {
     load_grid_triangle(t, a, b, c);
     float area = edge_fn(c.xy, a.xy, b.xy);
     if (abs(area) <= 1.0e-10) continue;
-    bits |= occluded_samples(pixel, a, b, c, 1.0 / area, gap);
+    bits |= occluded_samples(pixel, load_caster_alpha(t), a, b, c, 1.0 / area, gap);
   }
   visibility_mask[pixel] = bits;
   if (bits != 0u) note_occluder_gap(pixel, gap);

@@ -40,7 +40,7 @@ void main() {
         records[slot] = uvec4(t, uint(r), uint(x), uint(last));
       } else {
         for (int k = x; k <= last; ++k)
-          if (tile_survives(uvec2(k, r), a, b, c, area, mode)) work_tile_here(uvec2(k, r), a, b, c, area, mode);
+          if (tile_survives(uvec2(k, r), a, b, c, area, mode)) work_tile_here(uvec2(k, r), t, a, b, c, area, mode);
       }
       ++slot;
     }

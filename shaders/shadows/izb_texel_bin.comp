@@ -40,7 +40,7 @@ void main() {
     if (keep) {
       uint slot = base + offset;
       if (slot < params.limits.w) pairs[slot] = uvec2(pair.x, texel_index(texel));
-      else trace_texel_list(texel_index(texel), a, b, c, 1.0 / area);
+      else trace_texel_list(texel_index(texel), pair.x, a, b, c, 1.0 / area);
     }
     fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
     kept += want;

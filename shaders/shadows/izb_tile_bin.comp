@@ -33,7 +33,7 @@ void main() {
       if (keep) {
         uint slot = base + offset;
         if (slot < params.capacities.x) tile_pairs[slot] = uvec2(rec.x, tile.y * tiles_per_side() + tile.x);
-        else work_tile_here(tile, a, b, c, area, mode);
+        else work_tile_here(tile, rec.x, a, b, c, area, mode);
       }
     }
   }

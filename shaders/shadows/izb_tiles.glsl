@@ -5,7 +5,6 @@
 layout(set = 0, binding = IZB_BINDING_RECORDS, std430) buffer Records { uvec4 records[]; };
 layout(set = 0, binding = IZB_BINDING_TILE_PAIRS, std430) buffer TilePairs { uvec2 tile_pairs[]; };
 layout(set = 0, binding = IZB_BINDING_PAIRS, std430) buffer Pairs { uvec2 pairs[]; };
-layout(set = 0, binding = IZB_BINDING_TRIANGLE_DRAW, std430) readonly buffer TriangleDraw { uint triangle_draw[]; };
 layout(set = 0, binding = IZB_BINDING_DRAW_FLAGS, std430) readonly buffer DrawFlags { uint draw_flags[]; };
 layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest { uint tile_farthest[]; };
 
@@ -22,7 +21,7 @@ uint tile_pair_count(uint mode) {
 }
 
 bool triangle_wanted(uint t, uint mode) {
-  return mode == IZB_WORK_TRACE || (draw_flags[triangle_draw[t]] & IZB_DRAW_IN_CSM) != 0u;
+  return mode == IZB_WORK_TRACE || (draw_flags[caster_draw(t)] & IZB_DRAW_IN_CSM) != 0u;
 }
 
 // CSM: a triangle that fully covers a texel contains the texel's inscribed circle (radius 1/2), so
@@ -147,14 +146,14 @@ void csm_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint test) {
 }
 
 // Step 3 for one texel of a kept tile, done serially where a buffer overflowed.
-void work_texel_here(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint mode) {
+void work_texel_here(ivec2 texel, uint t, vec3 a, vec3 b, vec3 c, float area, uint mode) {
   if (any(greaterThanEqual(uvec2(texel), uvec2(izb_resolution())))) return;
   if (mode != IZB_WORK_TRACE) csm_texel(texel, a, b, c, area, mode);
   else if (trace_pair_outcome(texel, a, b, c, area) == IZB_PAIR_KEPT)
-    trace_texel_list(texel_index(texel), a, b, c, 1.0 / area);
+    trace_texel_list(texel_index(texel), t, a, b, c, 1.0 / area);
 }
 
-void work_tile_here(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
+void work_tile_here(uvec2 tile, uint t, vec3 a, vec3 b, vec3 c, float area, uint mode) {
   for (uint i = 0u; i < kIzbTile * kIzbTile; ++i)
-    work_texel_here(ivec2(tile * kIzbTile + uvec2(i % kIzbTile, i / kIzbTile)), a, b, c, area, mode);
+    work_texel_here(ivec2(tile * kIzbTile + uvec2(i % kIzbTile, i / kIzbTile)), t, a, b, c, area, mode);
 }

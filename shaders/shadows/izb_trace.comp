@@ -13,7 +13,7 @@ void main() {
     uvec2 pair = pairs[index];
     vec3 a, b, c;
     load_grid_triangle(pair.x, a, b, c);
-    tests = trace_texel_list(pair.y, a, b, c, 1.0 / edge_fn(c.xy, a.xy, b.xy));
+    tests = trace_texel_list(pair.y, pair.x, a, b, c, 1.0 / edge_fn(c.xy, a.xy, b.xy));
   }
   if (izb_flag(IZB_FLAG_STATS)) {
     uint s = subgroupAdd(tests);

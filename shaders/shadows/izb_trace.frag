@@ -13,14 +13,15 @@ layout(push_constant) uniform Push { IzbDrawPush draw; };
 
 void main() {
   ivec2 texel = ivec2(gl_FragCoord.xy);
+  uint triangle = draw.first_triangle + uint(gl_PrimitiveID);
   vec3 a, b, c;
-  load_grid_triangle(draw.first_triangle + uint(gl_PrimitiveID), a, b, c);
+  load_grid_triangle(triangle, a, b, c);
   float area = edge_fn(c.xy, a.xy, b.xy);
   uint fragment = 0u, tests = 0u;
   if (abs(area) > 1.0e-10 &&
       (kSoftware == 0u || rect_touches_triangle(vec2(texel), vec2(texel) + 1.0, a, b, c, sign(area)))) {
     fragment = 1u;
-    if (kCountOnly == 0u) tests = trace_texel_list(texel_index(texel), a, b, c, 1.0 / area);
+    if (kCountOnly == 0u) tests = trace_texel_list(texel_index(texel), triangle, a, b, c, 1.0 / area);
   }
   if (izb_flag(IZB_FLAG_STATS)) {
     uint f = subgroupAdd(fragment);

@@ -10,5 +10,7 @@ layout(push_constant) uniform Push { IzbComputePush push; };
 void main() {
   uint t = gl_GlobalInvocationID.x;
   if (t >= push.triangle_count) return;
-  for (uint k = 0u; k < 3u; ++k) grid_triangles[3u * t + k] = vec4(to_grid(world_triangles[3u * t + k].xyz), 0.0);
+  grid_triangles[3u * t] = vec4(to_grid(casters[t].p0.xyz), 0.0);
+  grid_triangles[3u * t + 1u] = vec4(to_grid(casters[t].p1.xyz), 0.0);
+  grid_triangles[3u * t + 2u] = vec4(to_grid(casters[t].p2.xyz), 0.0);
 }

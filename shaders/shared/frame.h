@@ -14,7 +14,7 @@ struct FrameUniforms {
   vec4 light_direction;          // xyz: direction the light travels, unit
   vec4 light_radiance;           // rgb: colour * intensity
   vec4 ambient;                  // rgb: sky fill light
-  uvec4 extent;                  // x, y: render size in pixels; z: frame index
+  uvec4 extent;                  // x, y: render size in pixels; z: frame index; w: FRAME_FLAG_*
 };
 
 // Push constants of one mesh draw in the G-buffer pass.
@@ -24,21 +24,27 @@ struct DrawPush {
   uint first_index;   // of the mesh in the scene index buffer, to fetch the triangle for its face normal
   int vertex_offset;
   uint flags;         // DRAW_FLAG_*
-  float alpha_cutoff;
+  uint alpha_threshold;  // engine::alpha_threshold: 0 opaque, else the least alpha byte kept
+  uint base_color_texture;  // index into the material textures, or kNoTexture
+  uint pad0, pad1, pad2;
 };
 
-SHARED_CONST uint DRAW_FLAG_ALPHA_MASK = 1u;
 SHARED_CONST uint DRAW_FLAG_RECEIVES_SHADOW = 2u;
+
+// frame.extent.w bits.
+SHARED_CONST uint FRAME_FLAG_SMOOTH_TERMINATOR = 1u;  // shading points take the terminator offset
 
 // G-buffer pass bindings.
 SHARED_CONST uint GBUFFER_BINDING_FRAME = 0u;
 SHARED_CONST uint GBUFFER_BINDING_VERTICES = 1u;
 SHARED_CONST uint GBUFFER_BINDING_INDICES = 2u;
+SHARED_CONST uint GBUFFER_BINDING_TEXTURES = 3u;
 
 // Shading-point pass: depth -> world position.
 SHARED_CONST uint SHADING_POINTS_BINDING_FRAME = 0u;
 SHARED_CONST uint SHADING_POINTS_BINDING_DEPTH = 1u;
 SHARED_CONST uint SHADING_POINTS_BINDING_WORLD_POSITION = 2u;
+SHARED_CONST uint SHADING_POINTS_BINDING_TERMINATOR_OFFSET = 3u;
 
 // Lighting pass.
 SHARED_CONST uint LIGHTING_BINDING_FRAME = 0u;
@@ -55,6 +61,6 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::FrameUniforms) == 4 * 64 + 5 * 16);
-static_assert(sizeof(gpu_shared::DrawPush) == 96);
+static_assert(sizeof(gpu_shared::DrawPush) == 112);
 #endif
 #endif

@@ -115,7 +115,7 @@ SHARED_CONST uint IZB_BINDING_VERTICES = 12u;
 SHARED_CONST uint IZB_BINDING_INDICES = 13u;
 SHARED_CONST uint IZB_BINDING_SHADOW_TERM = 14u;
 SHARED_CONST uint IZB_BINDING_OVERLAY = 15u;
-SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;
+SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;          // per caster triangle: IzbCasterTriangle
 SHARED_CONST uint IZB_BINDING_OVERFLOW_LIST = 17u;
 SHARED_CONST uint IZB_BINDING_CSM_DEPTH = 18u;
 SHARED_CONST uint IZB_BINDING_OCCLUDER_DISTANCE = 19u;  // per pixel: nearest occluder's light depth above it
@@ -123,7 +123,7 @@ SHARED_CONST uint IZB_BINDING_GRID_TRIANGLES = 20u;     // per caster triangle: 
 SHARED_CONST uint IZB_BINDING_RECORDS = 21u;             // uvec4 records {triangle, tile row, first tile, last tile}
 SHARED_CONST uint IZB_BINDING_PAIRS = 22u;              // uvec2 {triangle, texel} surviving the depth cull
 SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;    // per fit workgroup: vec4 (min x, min y, max x, max y)
-SHARED_CONST uint IZB_BINDING_TRIANGLE_DRAW = 24u;      // per caster triangle: its caster draw's ordinal
+SHARED_CONST uint IZB_BINDING_MATERIAL_TEXTURES = 24u;  // the scene's material textures (shared/material.h)
 SHARED_CONST uint IZB_BINDING_DRAW_FLAGS = 25u;         // per caster draw: IZB_DRAW_* bits for this frame
 SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;         // compute CSM: ordered depth bits per texel
 SHARED_CONST uint IZB_BINDING_TILE_PAIRS = 27u;         // uvec2 {triangle, tile}
@@ -135,6 +135,15 @@ SHARED_CONST uint IZB_BINDING_SCAN_BLOCKS = 31u;
 SHARED_CONST uint kIzbScanBlock = 1024u;  // texels per block of the prefix sum (256 threads x 4)
 
 SHARED_CONST uint IZB_DRAW_IN_CSM = 1u;
+
+// A caster triangle as uploaded (world space, rebuilt when casters move), in draw order.
+struct IzbCasterTriangle {
+  vec4 p0;    // xyz: vertex 0; w: its caster draw's ordinal (uint bits)
+  vec4 p1;    // w: the material's alpha threshold (uint bits; 0: not alpha-tested)
+  vec4 p2;    // w: the material's base-colour texture (uint bits; kNoTexture: none)
+  vec4 uv01;  // texture coordinates of vertices 0 (xy) and 1 (zw)
+  vec4 uv2;   // xy: of vertex 2
+};
 
 // Push constants of the trace and CSM draws.
 struct IzbDrawPush {
@@ -168,5 +177,6 @@ SHARED_END
 static_assert(sizeof(gpu_shared::IzbFrame) == 80);
 static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
+static_assert(sizeof(gpu_shared::IzbCasterTriangle) == 80);
 #endif
 #endif

@@ -22,10 +22,20 @@ SHARED_CONST uint SM_RESOLVE_BINDING_GEOMETRIC_NORMAL = 2u;
 SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_MAP = 3u;
 SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_TERM = 4u;
 
+// ---- Alpha-tested casters in the shadow-map depth passes (sm, cascades) ----
+struct AlphaDepthPush {
+  mat4 model_view_projection;  // object -> light clip space
+  uint base_color_texture;     // material texture index, or kNoTexture
+  uint alpha_threshold;        // engine::alpha_threshold
+  uint pad0, pad1;
+};
+SHARED_CONST uint ALPHA_DEPTH_BINDING_TEXTURES = 0u;
+
 SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::ShadowMapPush) == 128);
+static_assert(sizeof(gpu_shared::AlphaDepthPush) == 80);
 static_assert(sizeof(gpu_shared::ShadowMapResolveParams) == 64 + 48);
 #endif
 #endif

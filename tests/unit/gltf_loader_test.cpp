@@ -264,7 +264,7 @@ TEST(SceneLoading, DispatchesByNameOrPath) {
     load_scene("nonsense");
     FAIL();
   } catch (const SceneError& e) {
-    EXPECT_STREQ(e.what(), "unknown scene 'nonsense': expected one of contact, atrium, foliage, a .gltf/.glb file or a .json scene file");
+    EXPECT_STREQ(e.what(), "unknown scene 'nonsense': expected one of contact, atrium, foliage, canopy, a .gltf/.glb file or a .json scene file");
   }
   // A missing glTF path reaches the loader, so the error names the file rather than the scene list.
   try {

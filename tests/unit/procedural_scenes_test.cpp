@@ -82,7 +82,7 @@ glm::vec3 project(const Camera& c, const glm::vec3& p) {
 }
 
 TEST(ProceduralScenes, NamesAreTheThreeScenes) {
-  EXPECT_EQ(procedural_scene_names(), (std::vector<std::string>{"contact", "atrium", "foliage"}));
+  EXPECT_EQ(procedural_scene_names(), (std::vector<std::string>{"contact", "atrium", "foliage", "canopy"}));
   EXPECT_THROW(build_procedural_scene("nope"), SceneError);
 }
 

@@ -107,6 +107,7 @@ struct CascadesPass::Impl {
   Buffer blur_list;
   Sampler nearest;
   Pipeline depth_pipeline[2];  // [cull_front_faces]
+  Pipeline alpha_depth;  // alpha-tested casters, either culling setting
   Pipeline edges_pipeline[2];  // [neighbourhoods]
   // [stage][masking][debug], created on first use.
   Pipeline filter_pipelines[3][3][3];
@@ -132,6 +133,7 @@ struct CascadesPass::Impl {
       d.cull_mode = cull ? VK_CULL_MODE_FRONT_BIT : VK_CULL_MODE_NONE;
       d.depth_bias = true;
       depth_pipeline[cull] = factory.graphics(d);
+      if (!cull) alpha_depth = alpha_depth_pipeline(ctx, d);
     }
     for (uint32_t neighbourhoods = 0; neighbourhoods < 2; ++neighbourhoods)
       edges_pipeline[neighbourhoods] =
@@ -343,7 +345,8 @@ struct CascadesPass::Impl {
       draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
         gs::CascadeDepthPush push{d.world, fit.light_view_projection[c]};
         pipeline.push_constants(cmd, push);
-      });
+      }, CasterSet::Opaque);
+      draw_alpha_casters(ctx, cmd, frame, alpha_depth, fit.light_view_projection[c]);
       vkCmdEndRendering(cmd);
     }
   }

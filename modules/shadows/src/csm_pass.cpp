@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <iostream>
+#include <set>
 #include <sstream>
 
 #include "engine/gpu/profiler.hpp"
@@ -178,6 +180,8 @@ struct CsmPass::Impl {
     return std::max(hi.x - lo.x, hi.y - lo.y) / float(resolution);
   }
 
+  std::set<uint32_t> warned_alpha_forced;  // entities already warned about
+
   void choose(const engine::FrameContext& frame, uint32_t resolution) {
     decisions.clear();
     in_csm.assign(frame.draws.size(), false);
@@ -189,7 +193,15 @@ struct CsmPass::Impl {
       decision.entity = d.entity;
       if (const auto* n = frame.registry.try_get<engine::Name>(d.entity)) decision.name = n->value;
       const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
-      if (d.shadow.csm == engine::CsmChoice::On) {
+      if (d.alpha_tested()) {
+        // The CSM writes a texel only where one triangle provably covers all of it; an alpha-tested
+        // triangle has holes wherever its texture says so, so it can prove nothing.
+        decision.automatic = d.shadow.csm == engine::CsmChoice::Auto;
+        decision.reason = "out: alpha-tested material (cut-outs cannot prove full texel coverage)";
+        if (d.shadow.csm == engine::CsmChoice::On && warned_alpha_forced.insert(d.entity.index).second)
+          std::cerr << "warning: entity '" << decision.name
+                    << "' is forced into the CSM but its material is alpha-tested; it stays out\n";
+      } else if (d.shadow.csm == engine::CsmChoice::On) {
         decision.in_csm = true;
         decision.reason = "on: chosen for the entity";
       } else if (d.shadow.csm == engine::CsmChoice::Off) {

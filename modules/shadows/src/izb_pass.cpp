@@ -1,6 +1,7 @@
 #include "izb_pass.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 
@@ -46,7 +47,7 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_RECORDS, storage},
           {gpu_shared::IZB_BINDING_PAIRS, storage},
           {gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, storage},
-          {gpu_shared::IZB_BINDING_TRIANGLE_DRAW, storage},
+          {gpu_shared::IZB_BINDING_MATERIAL_TEXTURES, storage},
           {gpu_shared::IZB_BINDING_DRAW_FLAGS, storage},
           {gpu_shared::IZB_BINDING_CSM_TEXELS, storage},
           {gpu_shared::IZB_BINDING_TILE_PAIRS, storage},
@@ -91,7 +92,7 @@ struct IzbPass::Impl {
   Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
-  Buffer grid_triangles, triangle_draw, draw_flags, bounds_partials, csm_texels, tile_farthest;
+  Buffer grid_triangles, draw_flags, bounds_partials, csm_texels, tile_farthest;
   // Compute trace / CSM work lists (see izb.h), each grown to the demand a frame measured.
   struct WorkList {
     Buffer buffer;
@@ -292,14 +293,16 @@ struct IzbPass::Impl {
       if (!d.shadow.casts_shadow) continue;
       matrices.push_back(d.world);
       meshes.push_back(d.mesh);
+      meshes.push_back(d.alpha_threshold);
+      meshes.push_back(d.base_color_texture);
     }
     caster_draws = uint32_t(matrices.size());
     if (triangles.valid() && matrices == triangle_source_matrices && meshes == triangle_source_meshes) return;
     // World-space caster triangles, in draw order (the raster trace finds a fragment's triangle as
-    // its draw's first triangle plus the primitive index), rebuilt only when casters move; each
-    // triangle also knows its caster draw, for the per-frame CSM choice.
-    std::vector<glm::vec4> data;
-    std::vector<uint32_t> owner;
+    // its draw's first triangle plus the primitive index), rebuilt only when casters move or change
+    // material; each triangle also knows its caster draw, for the per-frame CSM choice, and what
+    // its alpha test needs.
+    std::vector<gpu_shared::IzbCasterTriangle> data;
     uint32_t ordinal = 0;
     for (const auto& d : frame.draws) {
       if (!d.shadow.casts_shadow) continue;
@@ -307,20 +310,25 @@ struct IzbPass::Impl {
       if (mesh && mesh->data) {
         const auto& m = *mesh->data;
         for (size_t i = 0; i + 2 < m.indices.size(); i += 3) {
-          for (int k = 0; k < 3; ++k) data.push_back(d.world * glm::vec4(m.vertices[m.indices[i + k]].position, 1.0f));
-          owner.push_back(ordinal);
+          const engine::Vertex* v[3] = {&m.vertices[m.indices[i]], &m.vertices[m.indices[i + 1]],
+                                        &m.vertices[m.indices[i + 2]]};
+          gpu_shared::IzbCasterTriangle t{};
+          t.p0 = glm::vec4(glm::vec3(d.world * glm::vec4(v[0]->position, 1.0f)), std::bit_cast<float>(ordinal));
+          t.p1 = glm::vec4(glm::vec3(d.world * glm::vec4(v[1]->position, 1.0f)), std::bit_cast<float>(d.alpha_threshold));
+          t.p2 = glm::vec4(glm::vec3(d.world * glm::vec4(v[2]->position, 1.0f)),
+                           std::bit_cast<float>(d.base_color_texture));
+          t.uv01 = glm::vec4(v[0]->uv, v[1]->uv);
+          t.uv2 = glm::vec4(v[2]->uv, 0.0f, 0.0f);
+          data.push_back(t);
         }
       }
       ++ordinal;
     }
-    triangle_count = uint32_t(owner.size());
-    if (data.empty()) data.push_back(glm::vec4(0.0f));
-    if (owner.empty()) owner.push_back(0);
-    triangles = upload_buffer(ctx, data.data(), data.size() * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+    triangle_count = uint32_t(data.size());
+    if (data.empty()) data.push_back({});
+    triangles = upload_buffer(ctx, data.data(), data.size() * sizeof(data[0]), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                               "izb caster triangles");
-    triangle_draw = upload_buffer(ctx, owner.data(), owner.size() * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                                  "izb caster triangle draw");
-    grid_triangles = Buffer(ctx, data.size() * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+    grid_triangles = Buffer(ctx, data.size() * 3 * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
                             "izb grid-space caster triangles");
     draw_flags = Buffer(ctx, std::max<size_t>(matrices.size(), 1) * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                         true, "izb caster draw flags");
@@ -375,7 +383,7 @@ struct IzbPass::Impl {
         .storage_buffer(gpu_shared::IZB_BINDING_LIST_CURSOR, list_cursor.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_SCAN_BLOCKS, scan_blocks.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, bounds_partials.handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLE_DRAW, triangle_draw.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_MATERIAL_TEXTURES, frame.geometry.textures().handle())
         .storage_buffer(gpu_shared::IZB_BINDING_DRAW_FLAGS, draw_flags.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_CSM_TEXELS, csm_texels.handle())
         .sampled_image(gpu_shared::IZB_BINDING_CSM_DEPTH, csm->depth_view(), nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)

@@ -2,6 +2,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "shared/shadows.h"
+
 namespace shadows::detail {
 
 glm::mat4 light_view_matrix(const glm::vec3& light_direction) {
@@ -56,6 +58,36 @@ void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D ex
   info.pDepthAttachment = &attachment;
   vkCmdBeginRendering(cmd, &info);
   set_viewport(cmd, extent);
+}
+
+engine::gpu::Pipeline alpha_depth_pipeline(const engine::gpu::Context& ctx, engine::gpu::GraphicsPipelineDesc opaque) {
+  opaque.name += " (alpha-tested)";
+  opaque.vertex_shader = "shadow_depth_alpha.vert";
+  opaque.fragment_shader = "shadow_depth_alpha.frag";
+  opaque.vertex_input = engine::gpu::VertexInput::StandardVertex;
+  opaque.bindings = {{gpu_shared::ALPHA_DEPTH_BINDING_TEXTURES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+  opaque.push_constant_size = sizeof(gpu_shared::AlphaDepthPush);
+  opaque.cull_mode = VK_CULL_MODE_NONE;
+  return engine::gpu::PipelineFactory(ctx).graphics(opaque);
+}
+
+void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const engine::FrameContext& frame,
+                        const engine::gpu::Pipeline& pipeline, const glm::mat4& light_view_projection) {
+  bool bound = false;
+  draw_casters(
+      cmd, frame,
+      [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
+        if (!bound) {
+          pipeline.bind(cmd);
+          engine::gpu::DescriptorWriter()
+              .storage_buffer(gpu_shared::ALPHA_DEPTH_BINDING_TEXTURES, frame.geometry.textures().handle())
+              .push(ctx, cmd, pipeline);
+          bound = true;
+        }
+        gpu_shared::AlphaDepthPush push{light_view_projection * d.world, d.base_color_texture, d.alpha_threshold, 0u, 0u};
+        pipeline.push_constants(cmd, push);
+      },
+      CasterSet::AlphaTested);
 }
 
 }  // namespace shadows::detail

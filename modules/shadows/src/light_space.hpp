@@ -18,15 +18,25 @@ glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box,
 // World bounds of every shadow-casting draw.
 engine::Aabb caster_bounds(const engine::FrameContext& frame);
 
-// Issues one indexed draw per shadow-casting item; `push` is called before each with its model matrix.
+// Which shadow-casting draws draw_casters issues.
+enum class CasterSet { All, Opaque, AlphaTested };
+
+inline bool in_caster_set(const engine::DrawItem& d, CasterSet set) {
+  if (!d.shadow.casts_shadow) return false;
+  if (set == CasterSet::Opaque) return !d.alpha_tested();
+  if (set == CasterSet::AlphaTested) return d.alpha_tested();
+  return true;
+}
+
+// Issues one indexed draw per shadow-casting item of `set`; `push` is called before each.
 template <typename PushFn>
-void draw_casters(VkCommandBuffer cmd, const engine::FrameContext& frame, PushFn&& push) {
+void draw_casters(VkCommandBuffer cmd, const engine::FrameContext& frame, PushFn&& push, CasterSet set = CasterSet::All) {
   VkDeviceSize offset = 0;
   VkBuffer vb = frame.geometry.vertices().handle();
   vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
   vkCmdBindIndexBuffer(cmd, frame.geometry.indices().handle(), 0, VK_INDEX_TYPE_UINT32);
   for (const auto& d : frame.draws) {
-    if (!d.shadow.casts_shadow) continue;
+    if (!in_caster_set(d, set)) continue;
     const auto& range = frame.geometry.mesh(d.mesh);
     if (range.index_count == 0) continue;
     push(d, range);
@@ -35,6 +45,16 @@ void draw_casters(VkCommandBuffer cmd, const engine::FrameContext& frame, PushFn
 }
 
 void set_viewport(VkCommandBuffer cmd, VkExtent2D extent);
+
+// The depth pipeline for alpha-tested casters of a shadow-map pass: `opaque` with the alpha-testing
+// shaders (shadow_depth_alpha.*: position and texture coordinate in, the material's alpha test,
+// material_textures.glsl) and no face culling (cut-out cards are single quads seen from either side).
+engine::gpu::Pipeline alpha_depth_pipeline(const engine::gpu::Context& ctx, engine::gpu::GraphicsPipelineDesc opaque);
+
+// Draws the alpha-tested casters with `pipeline` (from alpha_depth_pipeline) into the bound depth
+// target through `light_view_projection`; the caller has set the depth bias.
+void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const engine::FrameContext& frame,
+                        const engine::gpu::Pipeline& pipeline, const glm::mat4& light_view_projection);
 
 // Begins depth-only dynamic rendering into `depth` (GENERAL layout) over `extent` and sets the
 // viewport; with `clear` the target starts at depth 1 (far), else its contents are kept.

@@ -33,6 +33,7 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
                                         {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
                                        0});
   depth_pipeline_ = factory.graphics(d);
+  alpha_depth_pipeline_ = alpha_depth_pipeline(ctx, d);
 }
 
 void ShadowMapPass::ensure_map(uint32_t size) {
@@ -61,7 +62,8 @@ void ShadowMapPass::record(engine::FrameContext& frame, const ShadowMapSettings&
     draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
       gpu_shared::ShadowMapPush push{d.world, light_vp};
       depth_pipeline_.push_constants(cmd, push);
-    });
+    }, CasterSet::Opaque);
+    draw_alpha_casters(ctx_, cmd, frame, alpha_depth_pipeline_, light_vp);
     vkCmdEndRendering(cmd);
   }
   full_barrier(cmd);

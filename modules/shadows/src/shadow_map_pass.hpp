@@ -17,6 +17,7 @@ class ShadowMapPass {
   engine::gpu::Buffer params_;
   engine::gpu::Sampler sampler_;
   engine::gpu::Pipeline depth_pipeline_;
+  engine::gpu::Pipeline alpha_depth_pipeline_;  // alpha-tested casters
   engine::gpu::Pipeline resolve_pipeline_;
 };
 

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "engine/core/components.hpp"
+#include "engine/core/material_textures.hpp"
 
 namespace reference {
 namespace {
@@ -81,8 +82,37 @@ void for_each_row(uint32_t height, Fn&& row_fn) {
 
 }  // namespace
 
+// What the occlusion filter needs to alpha-test one triangle (the IZB's CasterAlpha).
+struct TriangleAlpha {
+  uint32_t threshold = 0;  // engine::alpha_threshold; 0: not alpha-tested
+  uint32_t texture = 0;
+  glm::vec2 uv[3]{};
+};
+
+struct AlphaScene {
+  engine::MaterialTextureTable textures;
+  std::vector<TriangleAlpha> triangles;  // by Embree primitive id
+};
+
+// Rejects hits where an alpha-tested triangle is transparent: the texture coordinate at the hit
+// (Embree's barycentrics u, v weight vertices 1 and 2) read by the shared nearest-texel rule, as the
+// GPU techniques do.
+void alpha_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* scene = static_cast<const AlphaScene*>(args->geometryUserPtr);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const TriangleAlpha& t = scene->triangles[RTCHitN_primID(args->hit, args->N, i)];
+    if (t.threshold == 0) continue;
+    const float u = RTCHitN_u(args->hit, args->N, i);
+    const float v = RTCHitN_v(args->hit, args->N, i);
+    const glm::vec2 uv = (1.0f - u - v) * t.uv[0] + u * t.uv[1] + v * t.uv[2];
+    if (!scene->textures.alpha_kept(t.texture, t.threshold, uv)) args->valid[i] = 0;
+  }
+}
+
 struct EmbreeTracer::Impl {
   DeviceHandle device;
+  std::unique_ptr<AlphaScene> alpha;
   SceneHandle scene;
   uint32_t triangles = 0;
   bool packets = false;
@@ -170,6 +200,9 @@ EmbreeTracer::EmbreeTracer(engine::Registry& registry) : impl_(std::make_unique<
   // All casters go into one world-space triangle soup: the reference needs no instancing.
   std::vector<glm::vec3> vertices;
   std::vector<uint32_t> indices;
+  im.alpha = std::make_unique<AlphaScene>();
+  im.alpha->textures = engine::MaterialTextureTable(registry);
+  bool any_alpha_tested = false;
   registry.each<engine::Mesh, engine::Transform>(
       [&](engine::Entity e, engine::Mesh& mesh, engine::Transform& transform) {
         if (const auto* caster = registry.try_get<engine::ShadowCaster>(e);
@@ -183,6 +216,12 @@ EmbreeTracer::EmbreeTracer(engine::Registry& registry) : impl_(std::make_unique<
           vertices.push_back(glm::vec3(transform.world * glm::vec4(v.position, 1.0f)));
         }
         const size_t whole = data.indices.size() / 3 * 3;
+        TriangleAlpha alpha;
+        if (const auto* material = registry.try_get<engine::Material>(e)) {
+          alpha.threshold = engine::alpha_threshold(*material);
+          alpha.texture = im.alpha->textures.index_of(*material);
+        }
+        any_alpha_tested = any_alpha_tested || alpha.threshold != 0;
         for (size_t i = 0; i < whole; ++i) {
           const uint32_t idx = data.indices[i];
           if (idx >= data.vertices.size()) {
@@ -191,6 +230,8 @@ EmbreeTracer::EmbreeTracer(engine::Registry& registry) : impl_(std::make_unique<
                                      " vertices)");
           }
           indices.push_back(static_cast<uint32_t>(base + idx));
+          alpha.uv[i % 3] = data.vertices[idx].uv;
+          if (i % 3 == 2) im.alpha->triangles.push_back(alpha);
         }
       });
   if (vertices.size() > UINT32_MAX)
@@ -222,6 +263,10 @@ EmbreeTracer::EmbreeTracer(engine::Registry& registry) : impl_(std::make_unique<
       vb[3 * i + 2] = vertices[i].z;
     }
     std::copy(indices.begin(), indices.end(), ib);
+    if (any_alpha_tested) {
+      rtcSetGeometryUserData(geom, im.alpha.get());
+      rtcSetGeometryOccludedFilterFunction(geom, alpha_filter);
+    }
     rtcCommitGeometry(geom);
     rtcAttachGeometry(im.scene.get(), geom);
     rtcReleaseGeometry(geom);  // the scene keeps its own reference

@@ -46,6 +46,15 @@ inline constexpr unsigned kSeed = 0x5eed1e5u;
 inline constexpr glm::vec3 kLightDirection{-0.4f, -1.0f, -0.3f};
 }  // namespace foliage
 
+// `canopy`: trees whose leaves are alpha-tested cards (a generated leaf-spray mask), over a ground.
+namespace canopy {
+inline constexpr float kGroundHalfSize = 15.0f;
+inline constexpr int kTreeCount = 6;
+inline constexpr unsigned kSeed = 0xca9091u;
+inline constexpr uint32_t kLeafTextureSize = 128;
+inline constexpr glm::vec3 kLightDirection{-0.3f, -1.0f, -0.25f};
+}  // namespace canopy
+
 // Mesh builders. All produce outward normals and counter-clockwise front faces seen from outside
 // (right-handed, +Y up), so back-face culling and shadow biasing behave the same for every shape.
 

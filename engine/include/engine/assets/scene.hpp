@@ -41,7 +41,7 @@ struct Scene {
   size_t triangle_count();
 };
 
-// The procedural scenes built in code: "contact", "atrium", "foliage".
+// The procedural scenes built in code: "contact", "atrium", "foliage", "canopy".
 std::vector<std::string> procedural_scene_names();
 std::unique_ptr<Scene> build_procedural_scene(const std::string& name);
 

@@ -73,11 +73,35 @@ struct Mesh {
 
 enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
 
+// How texture coordinates outside [0,1] fold back (glTF sampler wrapS / wrapT).
+enum class TextureWrap : uint32_t { Repeat = 0, ClampToEdge = 1, MirroredRepeat = 2 };
+
+// A decoded RGBA8 image (sRGB colour, linear alpha), rows top to bottom. Every technique and the
+// reference read it with one rule, the nearest texel of this level (shared/material.h), so alpha
+// tests agree exactly.
+struct Texture {
+  std::string name;  // file or generator, for messages
+  uint32_t width = 0;
+  uint32_t height = 0;
+  std::vector<uint8_t> rgba;
+  TextureWrap wrap_s = TextureWrap::Repeat;
+  TextureWrap wrap_t = TextureWrap::Repeat;
+};
+
 struct Material {
   glm::vec4 base_color{0.8f, 0.8f, 0.8f, 1.0f};
   AlphaMode alpha_mode = AlphaMode::Opaque;
   float alpha_cutoff = 0.5f;
+  std::shared_ptr<const Texture> base_color_texture;  // multiplies base_color; null: the factor alone
 };
+
+// Whether the material cuts holes by alpha: MASK, and BLEND, which a deferred renderer cannot blend
+// and so tests against 0.5 (its cut-outs stay; its translucency is lost).
+bool alpha_tested(const Material& m);
+// The least texel alpha byte (0..255) that keeps a texel of an alpha-tested material:
+// base_color.a * byte / 255 >= cutoff. 256: nothing is kept; 0: everything. Computed once here so
+// every shader and the reference compare integers and agree exactly.
+uint32_t alpha_threshold(const Material& m);
 
 struct Camera {
   float vertical_fov = glm::radians(60.0f);

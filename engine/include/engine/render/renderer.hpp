@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "engine/assets/scene.hpp"
+#include "engine/core/material_textures.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/gpu/pipeline.hpp"
 #include "engine/gpu/profiler.hpp"
@@ -30,6 +31,9 @@ class SceneGeometry {
   SceneGeometry(gpu::Context& ctx, Registry& registry);
   const gpu::Buffer& vertices() const { return vertices_; }
   const gpu::Buffer& indices() const { return indices_; }
+  // Every material texture (shared/material.h); bind as a storage buffer.
+  const gpu::Buffer& textures() const { return textures_; }
+  const MaterialTextureTable& texture_table() const { return texture_table_; }
   const GpuMeshRange& mesh(uint32_t slot) const { return meshes_.at(slot); }
   size_t mesh_count() const { return meshes_.size(); }
   uint64_t triangle_count() const { return total_indices_ / 3; }
@@ -37,6 +41,8 @@ class SceneGeometry {
  private:
   gpu::Buffer vertices_;
   gpu::Buffer indices_;
+  gpu::Buffer textures_;
+  MaterialTextureTable texture_table_;
   std::vector<GpuMeshRange> meshes_;
   uint64_t total_indices_ = 0;
 };
@@ -49,6 +55,9 @@ struct DrawItem {
   glm::vec4 base_color{1.0f};
   AlphaMode alpha_mode = AlphaMode::Opaque;
   float alpha_cutoff = 0.5f;
+  uint32_t alpha_threshold = 0;               // engine::alpha_threshold (0: not alpha-tested)
+  uint32_t base_color_texture = 0xffffffffu;  // SceneGeometry::texture_table() index, or none
+  bool alpha_tested() const { return alpha_threshold != 0; }
   ShadowCaster shadow;  // defaults when the entity has none
 };
 
@@ -72,6 +81,7 @@ struct GBuffer {
   gpu::Image albedo;          // RGBA8: base colour, a = receives-shadow flag
   gpu::Image normal;          // RGBA16F: shading normal, facing the camera
   gpu::Image geometric_normal;// RGBA16F: triangle normal in world space, facing the camera
+  gpu::Image terminator_offset;  // RGBA16F: xyz smooth-terminator offset of the shading point (gbuffer.frag)
   gpu::Image world_position;  // RGBA32F: reconstructed from depth; w = 1 covered, 0 background
   VkExtent2D extent{};
 };
@@ -129,6 +139,11 @@ class Renderer {
   // used to show the reference tracer's answer. Clear with an empty vector.
   void set_external_shadow_term(std::vector<float> term);
 
+  // The smooth-terminator offset of the shading points (gbuffer.frag; on by default). Off only to
+  // measure the faceted terminator it removes.
+  void set_smooth_terminator(bool on) { smooth_terminator_ = on; }
+  bool smooth_terminator() const { return smooth_terminator_; }
+
   gpu::Image& output() { return output_; }
   GBuffer& gbuffer() { return gbuffer_; }
   gpu::Image& shadow_term() { return shadow_term_; }
@@ -166,6 +181,7 @@ class Renderer {
   gpu::Buffer frame_uniforms_;
   gpu::Buffer external_shadow_;
   bool use_external_shadow_ = false;
+  bool smooth_terminator_ = true;
   gpu::Sampler nearest_sampler_;
   gpu::Pipeline gbuffer_pipeline_;
   gpu::Pipeline shading_points_pipeline_;

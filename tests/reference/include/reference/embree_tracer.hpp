@@ -14,7 +14,10 @@
 //    kSamplePattern[i], vec2(width, height), inv_view_proj, p, n); one ray from
 //    shadow_ray_origin(s_i, n); the value is the unoccluded fraction k / 32.
 // A ray (tnear = 0, tfar = inf) is occluded by any hit on either face of any triangle (no backface
-// culling).
+// culling), except where an alpha-tested triangle (engine::alpha_tested: MASK, BLEND) is transparent:
+// an occlusion filter reads its texture at the hit's texture coordinate with the rule every GPU
+// technique uses (the nearest texel of the stored level, shared/material.h) and drops the hit when
+// the alpha byte is below engine::alpha_threshold.
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
