@@ -78,6 +78,9 @@ void main() {
   float receives = (draw.flags & DRAW_FLAG_RECEIVES_SHADOW) != 0u ? 1.0 : 0.0;
   out_albedo = vec4(color.rgb, receives);
   out_normal = vec4(shading, 1.0);
-  out_geometric_normal = vec4(geometric, 1.0);
+  // The light-facing decision every shadow technique reads (shadow_common.h, faces_light).
+  bool smooth_terminator = (frame.extent.w & FRAME_FLAG_SMOOTH_TERMINATOR) != 0u;
+  bool facing_light = dot(smooth_terminator ? shading : geometric, -frame.light_direction.xyz) > 0.0;
+  out_geometric_normal = vec4(geometric, facing_light ? 1.0 : 0.0);
   out_terminator_offset = vec4(offset, 0.0);
 }

@@ -176,10 +176,11 @@ void count(uint counter, bool flag) {
 uint classify_pixel(ivec2 pixel) {
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   vec4 p = inside ? imageLoad(world_position, pixel) : vec4(0.0);
-  vec3 n = inside ? imageLoad(geometric_normal, pixel).xyz : vec3(0.0);
+  vec4 normal = inside ? imageLoad(geometric_normal, pixel) : vec4(0.0);
+  vec3 n = normal.xyz;
   bool covered = inside && p.w != 0.0;
   // Surfaces facing away from the light are shadowed by themselves: no lookups.
-  bool facing = covered && dot(n, -params.light_direction.xyz) > 0.0;
+  bool facing = covered && faces_light(normal);
   Choice ch = choose(dot(p.xyz - params.camera_position.xyz, params.camera_forward.xyz));
   bool evaluated = facing && ch.in_range;
   Probe pr = probe(ch.cascade, p.xyz, n);

@@ -8,6 +8,7 @@ struct PixelPoint {
   bool candidate;  // covered, receiving, facing the light, inside the IZB range
   vec3 position;
   vec3 normal;
+  bool facing;     // faces_light (shadow_common.h)
 };
 
 PixelPoint load_pixel(ivec2 pixel) {
@@ -15,14 +16,15 @@ PixelPoint load_pixel(ivec2 pixel) {
   vec4 pos = imageLoad(world_position_image, pixel);
   p.covered = pos.w > 0.5;
   p.position = pos.xyz;
-  p.normal = imageLoad(geometric_normal_image, pixel).xyz;
+  vec4 normal = imageLoad(geometric_normal_image, pixel);
+  p.normal = normal.xyz;
+  p.facing = faces_light(normal);
   p.candidate = false;
   if (!p.covered) return p;
   bool receives = imageLoad(albedo_image, pixel).a > 0.5;
-  bool facing = dot(p.normal, -params.light_direction.xyz) > 0.0;
   float max_distance = params.camera_position.w;
   bool in_range = max_distance <= 0.0 || distance(p.position, params.camera_position.xyz) <= max_distance;
-  p.candidate = receives && facing && in_range;
+  p.candidate = receives && p.facing && in_range;
   return p;
 }
 

@@ -32,7 +32,7 @@ void main() {
   uint state = pixel_state[index];
   uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
   float visibility;
-  bool facing = dot(p.normal, -params.light_direction.xyz) > 0.0;
+  bool facing = p.facing;
   float max_distance = params.camera_position.w;
   float dist = distance(p.position, params.camera_position.xyz);
   if ((state & IZB_PIXEL_CANDIDATE) != 0u) {

@@ -16,9 +16,10 @@ void main() {
   if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
   vec4 p = imageLoad(world_position, pixel);
   if (p.w == 0.0) return;
-  vec3 n = imageLoad(geometric_normal, pixel).xyz;
+  vec4 normal = imageLoad(geometric_normal, pixel);
+  vec3 n = normal.xyz;
   float visibility = 0.0;
-  if (dot(n, -params.light_direction.xyz) > 0.0) {
+  if (faces_light(normal)) {
     vec4 light = params.light_view_projection * vec4(shadow_ray_origin(p.xyz, n), 1.0);
     vec2 uv = light.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) {

@@ -14,6 +14,14 @@ SHARED_INLINE vec3 shadow_ray_origin(SHARED_IN(vec3) position, SHARED_IN(vec3) g
   return position + geometric_normal * kShadowNormalOffset;
 }
 
+// Whether a shading point faces the light; a point turned away is shadowed without a ray. The
+// G-buffer decides once per pixel (gbuffer.frag) and stores the answer in the geometric normal's w
+// (1 facing, 0 not): with the smooth terminator on, from the shading normal, since the point has
+// been lifted onto the smooth surface that normal describes and a ray toward a light it faces leaves
+// that surface outward, clear of the flat facets under it; otherwise from the geometric normal.
+// Every technique and the reference read the stored answer.
+SHARED_INLINE bool faces_light(SHARED_IN(vec4) geometric_normal_texel) { return geometric_normal_texel.w > 0.5f; }
+
 // 32 sample offsets inside a pixel, in [0,1)^2, for the 32-samples-per-pixel mode: a jittered 8x4 grid
 // (one sample per cell, fixed jitter) so coverage is well stratified.
 SHARED_CONST uint kSamplesPerPixel = 32u;

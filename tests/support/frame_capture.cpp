@@ -8,6 +8,7 @@ reference::ShadingPoints capture_shading_points(engine::Renderer& renderer) {
   points.height = renderer.extent().height;
   points.position = renderer.read_world_positions();
   points.normal = renderer.read_geometric_normals();
+  points.facing_from_w = true;
   points.inv_view_proj = renderer.frame_view().inverse_view_projection;
   return points;
 }

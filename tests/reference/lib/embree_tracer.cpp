@@ -317,7 +317,7 @@ std::vector<float> EmbreeTracer::visibility_1spp(const ShadingPoints& points,
       if (!points.covered(i)) continue;
       const glm::vec3 p(points.position[i]);
       const glm::vec3 n(points.normal[i]);
-      if (glm::dot(n, to_light) <= 0.0f) {
+      if (!points.faces(i, to_light)) {
         out[i] = 0.0f;
         continue;
       }
@@ -346,7 +346,7 @@ std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points,
       if (!points.covered(i)) continue;
       const glm::vec3 p(points.position[i]);
       const glm::vec3 n(points.normal[i]);
-      if (glm::dot(n, to_light) <= 0.0f) {
+      if (!points.faces(i, to_light)) {
         out[i] = 0.0f;
         continue;
       }

@@ -4,8 +4,8 @@
 //
 // Rules of every visibility_* result (one float per pixel, index y * width + x):
 //  * background pixel (position.w == 0)                       -> -1 (excluded from comparisons)
-//  * covered pixel whose normal faces away from the light,
-//    dot(n, -normalize(light_direction)) <= 0                 -> 0  (the GPU passes skip such
+//  * covered pixel that does not face the light (ShadingPoints::faces: the G-buffer's decision,
+//    gpu_shared::faces_light, for captured frames)            -> 0  (the GPU passes skip such
 //    points)
 //  * otherwise, visibility_1spp: one ray from gpu_shared::shadow_ray_origin(p, n) towards the
 //  light;

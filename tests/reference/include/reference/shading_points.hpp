@@ -11,8 +11,12 @@ struct ShadingPoints {
   uint32_t height = 0;
   // World-space position; w = 1 where geometry covers the pixel, 0 for background.
   std::vector<glm::vec4> position;
-  // Geometric normal (xyz, unit), oriented towards the camera; w is unused.
+  // Geometric normal (xyz, unit), oriented towards the camera; w as the G-buffer writes it (1 where
+  // the point faces the light, gpu_shared::faces_light), read only when `facing_from_w` is set.
   std::vector<glm::vec4> normal;
+  // Whether normal.w carries the G-buffer's light-facing decision (captured frames); otherwise
+  // (synthetic points) a point faces the light when dot(normal.xyz, to_light) > 0.
+  bool facing_from_w = false;
   // NDC (Vulkan: x, y in [-1,1], y down, reversed depth: 1 near, 0 far) to world. The 32-sample
   // mode needs it to place the μQuad samples exactly where the GPU places them.
   glm::mat4 inv_view_proj{1.0f};
@@ -21,6 +25,9 @@ struct ShadingPoints {
   size_t index(uint32_t x, uint32_t y) const { return size_t(y) * width + x; }
   size_t pixel_count() const { return size_t(width) * height; }
   bool covered(size_t i) const { return position[i].w > 0.5f; }
+  bool faces(size_t i, const glm::vec3& to_light) const {
+    return facing_from_w ? normal[i].w > 0.5f : glm::dot(glm::vec3(normal[i]), to_light) > 0.0f;
+  }
 
   // Sizes both arrays for width x height with every pixel background.
   void resize(uint32_t w, uint32_t h) {
