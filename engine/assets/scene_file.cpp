@@ -1,4 +1,5 @@
 #include "engine/assets/scene_file.hpp"
+#include "engine/assets/procedural_textures.hpp"
 #include "portable_random.hpp"
 
 #include <cmath>
@@ -168,6 +169,22 @@ MeshData make_shape(const Reader& rd, const json& shape, const std::string& fiel
   rd.fail(f, "unknown shape (box, cylinder, sphere, ground, quad)");
 }
 
+// An alpha-tested cut-out over a shape's texture coordinates (quads span [0,1]^2): "grate" with
+// `cells` [u, v] openings across the shape and `bar` the bars' width as a share of a cell. Scales the
+// mesh's texture coordinates to repeat one generated cell.
+std::shared_ptr<const Texture> make_cutout(const Reader& rd, const json& c, const std::string& field, MeshData& mesh) {
+  if (!c.is_object() || c.size() != 1 || !c.contains("grate")) rd.fail(field, "expected {\"grate\": {...}}");
+  const json& g = c.at("grate");
+  const std::string f = field + ".grate";
+  rd.only_keys(g, {"cells", "bar"}, f);
+  const glm::vec2 cells = rd.vec2(rd.required(g, "cells", f), f + ".cells");
+  if (!(cells.x >= 1.0f && cells.y >= 1.0f && cells.x <= 1000.0f && cells.y <= 1000.0f))
+    rd.fail(f + ".cells", "expected [u, v] between 1 and 1000");
+  const float bar = rd.number_or(g, "bar", f, 0.15f, 0.01f, 0.9f);
+  for (Vertex& v : mesh.vertices) v.uv *= cells;
+  return procedural::make_grate_texture(64, 1, bar);
+}
+
 struct Loaded {
   Scene* scene;
   const Reader* rd;
@@ -225,7 +242,7 @@ void add_animation(const Reader& rd, Registry& r, Entity e, const json& a, const
 void add_object(Scene& scene, const Reader& rd, const json& o, size_t index) {
   const std::string f = "objects[" + std::to_string(index) + "]";
   rd.only_keys(o, {"name", "shape", "shapes", "plants", "gltf", "translation", "rotation_deg", "scale", "color",
-                   "leaf_color", "shadow", "animate", "collide"},
+                   "leaf_color", "shadow", "animate", "collide", "cutout"},
                f);
   const std::string name = o.contains("name") ? rd.string(o.at("name"), f + ".name") : "object" + std::to_string(index);
   Transform t;
@@ -247,6 +264,7 @@ void add_object(Scene& scene, const Reader& rd, const json& o, size_t index) {
   }
   const int sources = int(o.contains("shape")) + int(o.contains("shapes")) + int(o.contains("plants")) + int(o.contains("gltf"));
   if (sources != 1) rd.fail(f, "needs exactly one of shape, shapes, plants, gltf");
+  if (o.contains("cutout") && !o.contains("shape") && !o.contains("shapes")) rd.fail(f + ".cutout", "applies to shape or shapes only");
 
   std::vector<Entity> created;
   if (o.contains("shape") || o.contains("shapes")) {
@@ -259,7 +277,15 @@ void add_object(Scene& scene, const Reader& rd, const json& o, size_t index) {
       for (size_t i = 0; i < list.size(); ++i)
         append_mesh(mesh, make_shape(rd, list[i], f + ".shapes[" + std::to_string(i) + "]"));
     }
+    std::shared_ptr<const Texture> cutout;
+    if (o.contains("cutout")) cutout = make_cutout(rd, o.at("cutout"), f + ".cutout", mesh);
     created.push_back(add_entity(scene, name, std::move(mesh), color, t, shadow));
+    if (cutout) {
+      Material& m = scene.registry.get<Material>(created.back());
+      m.alpha_mode = AlphaMode::Mask;
+      m.alpha_cutoff = 0.5f;
+      m.base_color_texture = std::move(cutout);
+    }
   } else if (o.contains("plants")) {
     const json& p = o.at("plants");
     const std::string g = f + ".plants";
