@@ -10,6 +10,7 @@
 #include <iostream>
 #include <iterator>
 #include <map>
+#include <sstream>
 
 #include <stb_image.h>
 #include <glm/gtc/constants.hpp>
@@ -135,7 +136,11 @@ void Loader::parse() {
     fail(std::string("parse error: ") + e.what());
   }
   if (!ok) fail(err.empty() ? std::string("not a valid glTF file") : err);
-  if (!warn.empty()) std::cerr << file_ << ": warning: " << one_line(warn) << "\n";
+  // Image problems are reported once, per material that needs the image, by texture_for.
+  std::string kept, line;
+  for (std::istringstream lines(warn); std::getline(lines, line);)
+    if (line.find("image[") == std::string::npos && line.rfind("File not found", 0) != 0) kept += line + "\n";
+  if (!one_line(kept).empty()) std::cerr << file_ << ": warning: " << one_line(kept) << "\n";
 }
 
 Loader::AccessorSpan Loader::resolve_accessor(int index, const std::string& what) const {
