@@ -249,6 +249,9 @@ std::unique_ptr<Scene> build_contact() {
   scene->views.push_back(
       {"side", {11.0f, 4.5f, -7.0f}, {-0.5f, 0.5f, -0.5f}, {-0.8f, -0.55f, 0.35f}, glm::radians(55.0f)});
   scene->views.push_back({"top", {0.0f, 16.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, kLightDirection, glm::radians(60.0f)});
+  // The sphere close up, lit from the side: its terminator crosses the view (the smooth-terminator test).
+  scene->views.push_back(
+      {"sphere", kSphereCenter + glm::vec3(0.4f, 0.6f, 4.2f), kSphereCenter, kSphereSideLight, glm::radians(34.0f)});
   finish(*scene);
   return scene;
 }

@@ -34,6 +34,7 @@ struct Options {
   int frames = 10;
   int warmup = 3;
   bool reference = false;
+  bool faceted_terminator = false;  // the smooth-terminator offset off, to show what it removes
   std::string device;
   std::string json_path;
   std::string diff_dir;
@@ -51,7 +52,7 @@ const char* kUsage =
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted]\n"
-    "                    [--frames N] [--warmup N] [--reference] [--device gpu|lavapipe|INDEX]\n"
+    "                    [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm;\n"
     "  csm tests: hertel, bary, bary-hw, inner-hw; trace and CSM backends: auto, raster, compute\n"
@@ -87,6 +88,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--frames") o.frames = int(args.uint_value());
     else if (a == "--warmup") o.warmup = int(args.uint_value());
     else if (a == "--reference") o.reference = true;
+    else if (a == "--faceted-terminator") o.faceted_terminator = true;
     else if (a == "--device") o.device = args.value();
     else if (a == "--json") o.json_path = args.value();
     else if (a == "--diff") o.diff_dir = args.value();
@@ -228,6 +230,7 @@ int main(int argc, char** argv) {
     engine::gpu::Context ctx({.device = o.device});
     engine::Renderer renderer(ctx, {o.width, o.height});
     renderer.set_scene(*scene);
+    renderer.set_smooth_terminator(!o.faceted_terminator);
     auto module = shadows::install(renderer, runs.front().settings);
 
     std::unique_ptr<reference::EmbreeTracer> tracer;

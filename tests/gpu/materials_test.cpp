@@ -200,10 +200,9 @@ TEST_F(MaterialsTest, GbufferAlphaTestsAndTexturesLeafCards) {
 // the same shading points, so both improve alike.
 TEST_F(MaterialsTest, SmoothTerminatorFollowsTheSpheresShading) {
   using namespace engine::procedural::contact;
-  const glm::vec3 sun = glm::normalize(glm::vec3(-1.0f, -0.35f, 0.15f));
-  auto& r = make_renderer("contact", 0, 160, 160);
-  scene_->views.push_back({"sphere", kSphereCenter + glm::vec3(0.4f, 0.6f, 4.2f), kSphereCenter, sun, glm::radians(34.0f)});
-  scene_->apply_view(scene_->views.size() - 1);
+  const glm::vec3 sun = glm::normalize(kSphereSideLight);
+  auto& r = make_renderer("contact", 3, 160, 160);
+  ASSERT_EQ(scene_->views[3].name, "sphere");
   // Other casters (the ground, the box) must not be what shadows a counted pixel.
   engine::Entity sphere;
   scene_->registry.each<engine::Name>([&](engine::Entity e, engine::Name& n) {

@@ -19,6 +19,7 @@ inline constexpr float kSphereRadius = 1.0f;
 inline constexpr glm::vec3 kPlateCenter{-2.5f, 1.5f, -3.0f};  // floating plate 2 x 0.1 x 2
 inline constexpr glm::vec3 kPlateHalfExtent{1.0f, 0.05f, 1.0f};
 inline constexpr glm::vec3 kLightDirection{-0.35f, -1.0f, -0.25f};  // views 0 and 2 (normalised on use)
+inline constexpr glm::vec3 kSphereSideLight{-1.0f, -0.35f, 0.15f};  // view 3, "sphere"
 }  // namespace contact
 
 // `atrium`: a walled courtyard with galleries along x = +-kColonnadeX and a roof at kWallHeight with
