@@ -351,10 +351,16 @@ struct CascadesPass::Impl {
       pipeline.bind(cmd);
       // Constant bias is applied in the filter (scaled per cascade); the rasterizer adds the slope part.
       vkCmdSetDepthBias(cmd, 0.0f, 0.0f, s.slope_bias);
-      draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
-        gs::CascadeDepthPush push{d.world, fit.light_view_projection[c]};
-        pipeline.push_constants(cmd, push);
-      });
+      // A caster wholly outside the drawn rectangle (in light space) cannot touch it.
+      const float size = float(map_size);
+      const glm::vec4 ndc = glm::vec4(glm::vec2(lo), glm::vec2(hi + 1)) / size * 2.0f - 1.0f;
+      draw_casters(
+          cmd, frame,
+          [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
+            gs::CascadeDepthPush push{d.world, fit.light_view_projection[c]};
+            pipeline.push_constants(cmd, push);
+          },
+          [&](const engine::DrawItem& d) { return d.bounds.outside_clip(fit.light_view_projection[c], ndc); });
       vkCmdEndRendering(cmd);
     }
   }
