@@ -20,6 +20,10 @@ glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box,
 
 // World bounds of every shadow-casting draw.
 engine::Aabb caster_bounds(const engine::FrameContext& frame);
+// Bounds of everything drawn (every receiver lies inside).
+engine::Aabb scene_bounds(const engine::FrameContext& frame);
+// The eight corners of the camera frustum between view depths d0 and d1 (near quad first).
+void view_slice_corners(const engine::FrameView& view, float d0, float d1, glm::vec3 corners[8]);
 
 // Issues one indexed draw per shadow-casting item; `push` is called before each with its model matrix.
 // Draws every caster; with `cull`, only those it keeps (the raster trace needs all of them, in
