@@ -1,5 +1,9 @@
 #pragma once
 // Light-space helpers shared by the module's passes.
+#include <cstddef>
+#include <functional>
+#include <type_traits>
+
 #include <glm/glm.hpp>
 
 #include "engine/core/components.hpp"
@@ -17,6 +21,10 @@ glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box,
 
 // World bounds of every shadow-casting draw.
 engine::Aabb caster_bounds(const engine::FrameContext& frame);
+// Bounds of everything drawn (every receiver lies inside).
+engine::Aabb scene_bounds(const engine::FrameContext& frame);
+// The eight corners of the camera frustum between view depths d0 and d1 (near quad first).
+void view_slice_corners(const engine::FrameView& view, float d0, float d1, glm::vec3 corners[8]);
 
 // Which shadow-casting draws draw_casters issues.
 enum class CasterSet { All, Opaque, AlphaTested };
@@ -28,15 +36,20 @@ inline bool in_caster_set(const engine::DrawItem& d, CasterSet set) {
   return true;
 }
 
-// Issues one indexed draw per shadow-casting item of `set`; `push` is called before each.
-template <typename PushFn>
-void draw_casters(VkCommandBuffer cmd, const engine::FrameContext& frame, PushFn&& push, CasterSet set = CasterSet::All) {
+// Issues one indexed draw per shadow-casting item of `set`; `push` is called before each with its
+// model matrix. With `cull`, only those it keeps (the raster trace needs all of them, in order, to
+// find a fragment's triangle).
+template <typename PushFn, typename CullFn = std::nullptr_t>
+void draw_casters(VkCommandBuffer cmd, const engine::FrameContext& frame, PushFn&& push, CasterSet set = CasterSet::All,
+                  CullFn&& cull = nullptr) {
   VkDeviceSize offset = 0;
   VkBuffer vb = frame.geometry.vertices().handle();
   vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
   vkCmdBindIndexBuffer(cmd, frame.geometry.indices().handle(), 0, VK_INDEX_TYPE_UINT32);
   for (const auto& d : frame.draws) {
     if (!in_caster_set(d, set)) continue;
+    if constexpr (!std::is_same_v<std::decay_t<CullFn>, std::nullptr_t>)
+      if (cull(d)) continue;
     const auto& range = frame.geometry.mesh(d.mesh);
     if (range.index_count == 0) continue;
     push(d, range);
@@ -53,11 +66,15 @@ engine::gpu::Pipeline alpha_depth_pipeline(const engine::gpu::Context& ctx, engi
 
 // Draws the alpha-tested casters with `pipeline` (from alpha_depth_pipeline) into the bound depth
 // target through `light_view_projection`; the caller has set the depth bias.
+// `cull` (optional) skips the draws it returns true for.
 void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const engine::FrameContext& frame,
-                        const engine::gpu::Pipeline& pipeline, const glm::mat4& light_view_projection);
+                        const engine::gpu::Pipeline& pipeline, const glm::mat4& light_view_projection,
+                        const std::function<bool(const engine::DrawItem&)>& cull = {});
 
 // Begins depth-only dynamic rendering into `depth` (GENERAL layout) over `extent` and sets the
 // viewport; with `clear` the target starts at depth 1 (far), else its contents are kept.
-void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear);
+// `area` (optional) limits the clear and the rasterization to texels that are read afterwards.
+void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear,
+                           const VkRect2D* area = nullptr);
 
 }  // namespace shadows::detail

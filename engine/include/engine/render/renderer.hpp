@@ -59,6 +59,7 @@ struct DrawItem {
   uint32_t base_color_texture = 0xffffffffu;  // SceneGeometry::texture_table() index, or none
   bool alpha_tested() const { return alpha_threshold != 0; }
   ShadowCaster shadow;  // defaults when the entity has none
+  Aabb bounds;          // world space
 };
 
 struct FrameView {
