@@ -40,3 +40,10 @@ done
 for c in auto off on; do
   run foliage_choice_$c --scene foliage --size 1920x1080 --izb 1024 --mode izb+csm --csm-choice $c --frames 3 --warmup 1 "$@"
 done
+# Alpha-tested casters (the canopy's leaf cards) in every technique against the alpha-aware reference.
+for size in 256 512; do for v in 0 1; do
+  run canopy_v${v}_${size}_spp1 --scene canopy --view $v --size ${size}x$size --izb 512 \
+    --mode sm,cascades,izb,izb+csm --frames 5 --warmup 2 --reference "$@"
+  run canopy_v${v}_${size}_spp32 --scene canopy --view $v --size ${size}x$size --izb 512 --spp 32 \
+    --mode izb --frames 3 --warmup 1 --reference "$@"
+done; done
