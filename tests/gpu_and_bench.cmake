@@ -144,3 +144,24 @@ if(EXISTS ${SPONZA_GLTF})
   set_tests_properties(walkthrough_tour_sponza PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe"
                        PASS_REGULAR_EXPRESSION "wrote .*frame_001.png")
 endif()
+
+# The ray-traced technique on a device without ray tracing (lavapipe): the benchmark and the
+# walkthrough refuse `--mode rt` with one line naming the missing extension.
+set(ONE_LINE_ERROR_NAMING_EXTENSION
+    "out=$(\"$@\" 2>&1); rc=$?; echo \"$out\"; [ $rc -ne 0 ] && [ $(printf '%s\\n' \"$out\" | wc -l) -eq 1 ] && printf '%s' \"$out\" | grep -q 'lacks VK_KHR_'")
+add_test(NAME shadow_bench_rt_without_ray_tracing_one_line
+         COMMAND sh -c "${ONE_LINE_ERROR_NAMING_EXTENSION}" sh $<TARGET_FILE:shadow_bench> --mode rt --size 64x64 --frames 1)
+add_test(NAME walkthrough_rt_without_ray_tracing_one_line
+         COMMAND sh -c "${ONE_LINE_ERROR_NAMING_EXTENSION}" sh $<TARGET_FILE:walkthrough> --headless --scene contact
+                 --size 64x64 --frames 1 --mode rt --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_rt_out)
+set_tests_properties(shadow_bench_rt_without_ray_tracing_one_line walkthrough_rt_without_ray_tracing_one_line
+                     PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+
+# The paper suite at small sizes: every technique on every view of two scenes, both tables written.
+add_test(NAME shadow_bench_suite_paper_quick
+         COMMAND sh -c "rm -rf \"$1\" && \"$0\" --suite paper --quick --scene contact,atrium --frames 2 --warmup 1 --out \"$1\" \
+&& grep -q 'Table 2 layout: 320x180' \"$1/suite.md\" && grep -q 'Table 3 layout' \"$1/suite.md\" \
+&& grep -q '\"mode\": \"rt\"' \"$1/suite.json\" && ! grep -q '\"validation_messages\": [1-9]' \"$1/suite.json\""
+                 $<TARGET_FILE:shadow_bench> ${CMAKE_CURRENT_BINARY_DIR}/suite_quick)
+set_tests_properties(shadow_bench_suite_paper_quick PROPERTIES LABELS gpu
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
