@@ -159,7 +159,7 @@ set_tests_properties(shadow_bench_rt_without_ray_tracing_one_line walkthrough_rt
 
 # The paper suite at small sizes: every technique on every view of two scenes, both tables written.
 add_test(NAME shadow_bench_suite_paper_quick
-         COMMAND sh -c "rm -rf \"$1\" && \"$0\" --suite paper --quick --scene contact,atrium --frames 2 --warmup 1 --out \"$1\" \
+         COMMAND sh -c "rm -rf \"$1\" && \"$0\" --suite paper --quick --scene contact,atrium --views 1 --frames 2 --warmup 0 --out \"$1\" \
 && grep -q 'Table 2 layout: 320x180' \"$1/suite.md\" && grep -q 'Table 3 layout' \"$1/suite.md\" \
 && grep -q '\"mode\": \"rt\"' \"$1/suite.json\" && ! grep -q '\"validation_messages\": [1-9]' \"$1/suite.json\""
                  $<TARGET_FILE:shadow_bench> ${CMAKE_CURRENT_BINARY_DIR}/suite_quick)

@@ -41,7 +41,7 @@ def load(paths):
     runs = []
     for p in paths:
         with open(p) as f:
-            runs.extend(r for r in json.load(f) if r.get("status", "ran") == "ran")
+            runs.extend(r for r in json.load(f) if r.get("status", "ran") == "ran" and not r.get("csm_everything"))
     return [r for r in runs if (r["mode"], r["csm_test"]) in TECHNIQUES]
 
 
