@@ -165,3 +165,17 @@ add_test(NAME shadow_bench_suite_paper_quick
                  $<TARGET_FILE:shadow_bench> ${CMAKE_CURRENT_BINARY_DIR}/suite_quick)
 set_tests_properties(shadow_bench_suite_paper_quick PROPERTIES LABELS gpu
                      ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+
+# Scale on lavapipe: Sponza x16 (over a million triangles) with every technique at a small size; each
+# must run without validation messages (buffers are sized from the demand, or refused with the figures).
+if(EXISTS ${SPONZA_GLTF})
+  add_test(NAME shadow_bench_million_triangles
+           COMMAND sh -c "\"$0\" --scene \"$1\" --view 1 --instances 16 --size 160x90 --izb 256 \
+--mode sm,cascades,izb,izb+csm,hybrid+csm --trace compute --csm-backend compute --frames 1 --warmup 0 --json \"$2\" \
+&& python3 -c \"import json, sys; runs = json.load(open(sys.argv[1])); \
+sys.exit(0 if len(runs) == 5 and all(r['status'] == 'ran' and r['triangles'] >= 1000000 and r['validation_messages'] == 0 \
+and r['memory_total_bytes'] > 0 for r in runs) else 'a technique did not run at scale')\" \"$2\""
+                   $<TARGET_FILE:shadow_bench> ${SPONZA_GLTF} ${CMAKE_CURRENT_BINARY_DIR}/million_triangles.json)
+  set_tests_properties(shadow_bench_million_triangles PROPERTIES LABELS long TIMEOUT 600
+                       ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+endif()

@@ -5,6 +5,12 @@ namespace engine::gpu {
 Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool host_visible,
                const std::string& name)
     : ctx_(&ctx), size_(size) {
+  // Storage buffers are bound whole, so one larger than the device's storage range could not be read
+  // past it: refuse it with the figures rather than let the shader see a truncated buffer.
+  const uint64_t storage_range = ctx.features().max_storage_buffer_range;
+  if ((usage & VK_BUFFER_USAGE_STORAGE_BUFFER_BIT) && storage_range && size > storage_range)
+    throw VulkanError("buffer '" + name + "' needs " + std::to_string(size) + " bytes, over " + ctx.device_name() +
+                      "'s maxStorageBufferRange of " + std::to_string(storage_range) + " bytes");
   VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   info.size = size > 0 ? size : 4;
   info.usage = usage;

@@ -497,19 +497,29 @@ int run_single(const Options& o) {
 
 // The configurations of one (view, size, spp): Table 2's izb and izb+csm (bary), Table 3's other
 // coverage tests, and the other techniques.
-std::vector<RunConfig> suite_runs(uint32_t izb, uint32_t spp) {
+// The trace and CSM backends are the first of --trace / --csm-backend (default auto).
+std::vector<RunConfig> suite_runs(const Options& o, uint32_t izb, uint32_t spp) {
   std::vector<RunConfig> runs;
   shadows::Settings base;
   base.izb.resolution = izb;
   base.izb.samples_per_pixel = spp;
-  for (const char* mode : {"izb", "izb+csm", "sm", "cascades", "hybrid+csm", "rt"})
-    runs.push_back({mode, shadows::parse_mode(mode, base)->izb.csm ? "bary" : "none", "auto",
-                    shadows::parse_mode(mode, base)->izb.csm ? "auto" : "none", *shadows::parse_mode(mode, base)});
+  const std::string trace = o.traces.front(), csm_backend = o.csm_backends.front();
+  base.izb.trace = backend_option("--trace", trace);
+  base.izb.csm_backend = backend_option("--csm-backend", csm_backend);
+  for (const char* mode : {"izb", "izb+csm", "sm", "cascades", "hybrid+csm", "rt"}) {
+    const shadows::Settings s = *shadows::parse_mode(mode, base);
+    const bool izb_mode = s.technique == shadows::Technique::Izb || s.technique == shadows::Technique::Hybrid;
+    runs.push_back({mode, s.izb.csm ? "bary" : "none", izb_mode ? trace : "none", s.izb.csm ? csm_backend : "none", s});
+  }
   if (spp == 1) {
     for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric, shadows::CsmTest::BarycentricHw,
                       shadows::CsmTest::InnerHw}) {
-      RunConfig r{"izb+csm", shadows::csm_test_name(test), "auto", "auto", *shadows::parse_mode("izb+csm", base)};
+      const bool hardware_test = test == shadows::CsmTest::BarycentricHw || test == shadows::CsmTest::InnerHw;
+      RunConfig r{"izb+csm", shadows::csm_test_name(test), trace, hardware_test ? "raster" : csm_backend,
+                  *shadows::parse_mode("izb+csm", base)};
       r.settings.izb.csm_test = test;
+      // The hardware coverage tests exist only as raster passes.
+      if (hardware_test) r.settings.izb.csm_backend = shadows::PassBackend::Raster;
       r.csm_everything = true;
       runs.push_back(r);
     }
@@ -697,7 +707,7 @@ int run_suite(const Options& o) {
           for (uint32_t spp : o.spps) {
             std::printf("-- %s v%zu, %u triangles, %s, IZB %u, %u spp\n", scene->name.c_str(), view,
                         unsigned(scene->triangle_count()), size.label.c_str(), size.izb, spp);
-            for (const auto& run : suite_runs(size.izb, spp)) results.push_back(bench.measure(run, true));
+            for (const auto& run : suite_runs(o, size.izb, spp)) results.push_back(bench.measure(run, true));
           }
         }
       }
