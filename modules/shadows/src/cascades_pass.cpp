@@ -331,12 +331,23 @@ struct CascadesPass::Impl {
                    VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   }
 
-  void record_depth(engine::FrameContext& frame, const CascadeSettings& s) {
+  // Each cascade is drawn only over the texels its receivers can read (the mask rectangle, which
+  // already holds the kernel, the offsets and a border, in map texels): the rest of a layer is never
+  // sampled, and on a raster-poor GPU the fill is most of this pass.
+  void record_depth(engine::FrameContext& frame, const CascadeSettings& s,
+                    const std::array<uint32_t, kMaxCascadeCount>& levels,
+                    const std::array<glm::ivec4, kMaxCascadeCount>& rects) {
     VkCommandBuffer cmd = frame.cmd;
     ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_depth");
     const Pipeline& pipeline = depth_pipeline[s.cull_front_faces ? 1 : 0];
     for (uint32_t c = 0; c < fit.count; ++c) {
-      begin_depth_rendering(cmd, depth.layer_view(c), depth.extent(), true);
+      const glm::ivec4 r = rects[c];
+      if (r.z < r.x || r.w < r.y) continue;  // no receiver reads this cascade
+      const int level = int(levels[c]), last = int(map_size) - 1;
+      const glm::ivec2 lo = glm::ivec2(r.x, r.y) << level;
+      const glm::ivec2 hi = glm::min(((glm::ivec2(r.z, r.w) + 1) << level) - 1, glm::ivec2(last));
+      const VkRect2D area{{lo.x, lo.y}, {uint32_t(hi.x - lo.x + 1), uint32_t(hi.y - lo.y + 1)}};
+      begin_depth_rendering(cmd, depth.layer_view(c), depth.extent(), true, &area);
       pipeline.bind(cmd);
       // Constant bias is applied in the filter (scaled per cascade); the rasterizer adds the slope part.
       vkCmdSetDepthBias(cmd, 0.0f, 0.0f, s.slope_bias);
@@ -391,7 +402,7 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   m.blur_enabled = settings.blur;
 
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, gs::CASCADE_COUNTER_WORDS * 4, 0);
-  m.record_depth(frame, settings);
+  m.record_depth(frame, settings, levels, rects);
   full_barrier(cmd);
   if (settings.masking != Masking::Off) {
     const bool extent = settings.masking == Masking::DepthExtent;

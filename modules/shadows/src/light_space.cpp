@@ -43,7 +43,8 @@ void set_viewport(VkCommandBuffer cmd, VkExtent2D extent) {
   vkCmdSetScissor(cmd, 0, 1, &scissor);
 }
 
-void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear) {
+void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear,
+                           const VkRect2D* area) {
   VkRenderingAttachmentInfo attachment{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
   attachment.imageView = depth;
   attachment.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
@@ -51,11 +52,12 @@ void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D ex
   attachment.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
   attachment.clearValue.depthStencil = {1.0f, 0};
   VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-  info.renderArea = {{0, 0}, extent};
+  info.renderArea = area ? *area : VkRect2D{{0, 0}, extent};
   info.layerCount = 1;
   info.pDepthAttachment = &attachment;
   vkCmdBeginRendering(cmd, &info);
   set_viewport(cmd, extent);
+  if (area) vkCmdSetScissor(cmd, 0, 1, area);
 }
 
 }  // namespace shadows::detail

@@ -38,6 +38,8 @@ void set_viewport(VkCommandBuffer cmd, VkExtent2D extent);
 
 // Begins depth-only dynamic rendering into `depth` (GENERAL layout) over `extent` and sets the
 // viewport; with `clear` the target starts at depth 1 (far), else its contents are kept.
-void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear);
+// `area` (optional) limits the clear and the rasterization to texels that are read afterwards.
+void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear,
+                           const VkRect2D* area = nullptr);
 
 }  // namespace shadows::detail
