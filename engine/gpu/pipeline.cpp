@@ -282,12 +282,6 @@ Pipeline PipelineFactory::ray_tracing(const RayTracingPipelineDesc& desc) const 
   return p;
 }
 
-namespace {
-VkDeviceSize align_up(VkDeviceSize value, VkDeviceSize alignment) {
-  return alignment ? (value + alignment - 1) / alignment * alignment : value;
-}
-}  // namespace
-
 ShaderBindingTable::ShaderBindingTable(const Context& ctx, const Pipeline& pipeline, uint32_t miss_count,
                                        uint32_t hit_count, const std::string& name) {
   const auto& f = ctx.features();

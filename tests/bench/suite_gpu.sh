@@ -45,8 +45,11 @@ reference_views() {
 }
 step reference reference_views
 step rt_tests env ENGINE_VALIDATION=1 build/bin/gpu_tests --gtest_filter='*RayTraced*'
-if python3 -c 'import matplotlib' 2>/dev/null; then
-  step plots python3 tests/bench/plot_suite.py "$out/plots" "$out/paper/suite.json" "$out/scaling/suite.json"
+# Debian's matplotlib belongs to /usr/bin/python3 (a python3 earlier on PATH may not see it).
+python=
+for p in python3 /usr/bin/python3; do "$p" -c 'import matplotlib' 2>/dev/null && { python=$p; break; }; done
+if [[ -n $python ]]; then
+  step plots "$python" tests/bench/plot_suite.py "$out/plots" "$out/paper/suite.json" "$out/scaling/suite.json"
 else
   echo "suite_gpu: python3-matplotlib missing; plot later with tests/bench/plot_suite.py"
 fi

@@ -13,10 +13,6 @@ using namespace engine::gpu;
 
 namespace {
 
-VkDeviceSize align_up(VkDeviceSize value, VkDeviceSize alignment) {
-  return alignment ? (value + alignment - 1) / alignment * alignment : value;
-}
-
 // An acceleration structure and the buffer that stores it.
 struct Structure {
   const Context* ctx = nullptr;

@@ -113,6 +113,11 @@ class Sampler {
   VkSampler sampler_ = VK_NULL_HANDLE;
 };
 
+// `value` rounded up to a multiple of `alignment` (0: unchanged).
+inline VkDeviceSize align_up(VkDeviceSize value, VkDeviceSize alignment) {
+  return alignment ? (value + alignment - 1) / alignment * alignment : value;
+}
+
 // Memory barrier helpers (synchronization2).
 void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,
                     VkPipelineStageFlags2 dst_stage, VkAccessFlags2 dst_access);
