@@ -26,6 +26,7 @@ struct Options {
   size_t view = 0;
   uint32_t width = 512, height = 512;
   uint32_t izb = 1024;
+  uint32_t cascade_size = 0;  // 0: the module's default
   std::vector<std::string> modes = {"sm"};
   uint32_t spp = 1;
   std::vector<std::string> csm_tests = {"bary"};
@@ -53,7 +54,7 @@ struct Options {
 };
 
 const char* kUsage =
-    "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--mode LIST]\n"
+    "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--cascade-size N] [--mode LIST]\n"
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted]\n"
@@ -105,6 +106,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--view") o.view = args.uint_value();
     else if (a == "--size") args.size_value(o.width, o.height);
     else if (a == "--izb") o.izb = args.uint_value();
+    else if (a == "--cascade-size") o.cascade_size = args.uint_value();
     else if (a == "--mode") o.modes = split(args.value());
     else if (a == "--spp") {
       o.spps = split_uints("--spp", args.value());
@@ -176,6 +178,7 @@ std::vector<RunConfig> expand_runs(const Options& o) {
   for (const auto& mode : o.modes) {
     shadows::Settings base;
     base.izb.resolution = o.izb;
+    if (o.cascade_size) base.cascades.map_size = o.cascade_size;
     base.izb.samples_per_pixel = o.spp;
     base.izb.node_pool_override = o.node_pool;
     if (!o.lists.empty()) {
