@@ -17,6 +17,20 @@ SHARED_CONST uint RT_BINDING_GEOMETRIC_NORMAL = 2u;
 SHARED_CONST uint RT_BINDING_ALBEDO = 3u;
 SHARED_CONST uint RT_BINDING_SHADOW_TERM = 4u;
 SHARED_CONST uint RT_BINDING_COUNTERS = 5u;
+// The any-hit alpha test (rt_shadow.rahit): the scene's vertex and index buffers, one
+// RayTracedInstance per top-level instance (its instanceCustomIndex), and the material textures.
+SHARED_CONST uint RT_BINDING_VERTICES = 6u;
+SHARED_CONST uint RT_BINDING_INDICES = 7u;
+SHARED_CONST uint RT_BINDING_INSTANCES = 8u;
+SHARED_CONST uint RT_BINDING_MATERIAL_TEXTURES = 9u;
+
+// What the any-hit shader needs of an instance: where its mesh's triangles are and its alpha test.
+struct RayTracedInstance {
+  uint first_index;       // of the mesh in the scene index buffer
+  int vertex_offset;
+  uint base_color_texture;  // or kNoTexture
+  uint alpha_threshold;   // engine::alpha_threshold; 0: opaque (the instance is then forced opaque)
+};
 
 SHARED_CONST uint RT_COUNTER_SHADING_POINTS = 0u;  // covered pixels
 SHARED_CONST uint RT_COUNTER_CANDIDATES = 1u;      // covered, receiving, facing the light
@@ -28,5 +42,6 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::RayTracedPush) == 96);
+static_assert(sizeof(gpu_shared::RayTracedInstance) == 16);
 #endif
 #endif

@@ -100,7 +100,8 @@ TEST_P(RayTracedSceneTest, ThirtyTwoSamplesMatchReferenceCoverage) {
 
 INSTANTIATE_TEST_SUITE_P(Scenes, RayTracedSceneTest,
                          testing::Values(SceneView{"contact", 0}, SceneView{"contact", 1}, SceneView{"atrium", 0},
-                                         SceneView{"atrium", 1}, SceneView{"foliage", 0}, SceneView{"foliage", 1}),
+                                         SceneView{"atrium", 1}, SceneView{"foliage", 0}, SceneView{"foliage", 1},
+                                         SceneView{"canopy", 0}, SceneView{"canopy", 1}),
                          [](const testing::TestParamInfo<SceneView>& info) {
                            return info.param.scene + "_view" + std::to_string(info.param.view);
                          });

@@ -1,7 +1,6 @@
 #include "ray_traced_pass.hpp"
 
 #include <cstring>
-#include <iostream>
 #include <stdexcept>
 
 #include "engine/gpu/pipeline.hpp"
@@ -91,6 +90,7 @@ struct RayTracedPass::Impl {
   uint32_t top_capacity = 0;
   Scratch top_scratch;
   Buffer instances;  // host-visible VkAccelerationStructureInstanceKHR array
+  Buffer instance_materials;  // host-visible RayTracedInstance per instance (the any-hit alpha test)
   Buffer counters, counters_readback;
   bool collected = false;
   uint32_t instance_count = 0;
@@ -102,14 +102,18 @@ struct RayTracedPass::Impl {
     d.name = "rt shadow";
     d.raygen_shader = "rt_shadow.rgen";
     d.miss_shaders = {"rt_shadow.rmiss"};
-    d.hit_groups = {{}};  // occlusion only: a hit needs no shader
+    d.hit_groups = {{"", "rt_shadow.rahit"}};  // occlusion only; the any-hit shader alpha-tests
     d.push_constant_size = sizeof(gpu_shared::RayTracedPush);
     d.bindings = {{gpu_shared::RT_BINDING_SCENE, VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR},
                   {gpu_shared::RT_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {gpu_shared::RT_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {gpu_shared::RT_BINDING_ALBEDO, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {gpu_shared::RT_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {gpu_shared::RT_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+                  {gpu_shared::RT_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {gpu_shared::RT_BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {gpu_shared::RT_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {gpu_shared::RT_BINDING_INSTANCES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {gpu_shared::RT_BINDING_MATERIAL_TEXTURES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     pipeline = factory.ray_tracing(d);
     sbt = ShaderBindingTable(ctx, pipeline, 1, 1, "rt shader binding table");
     const VkDeviceSize counter_bytes = gpu_shared::RT_COUNTER_COUNT * sizeof(uint32_t);
@@ -191,18 +195,23 @@ struct RayTracedPass::Impl {
   // Rebuilds the top level over every casting draw with its transform of this frame.
   void build_top_level(VkCommandBuffer cmd, const engine::FrameContext& frame) {
     std::vector<VkAccelerationStructureInstanceKHR> list;
+    std::vector<gpu_shared::RayTracedInstance> materials;
     list.reserve(frame.draws.size());
     for (const auto& d : frame.draws) {
       if (!d.shadow.casts_shadow || d.mesh >= bottom.size() || !bottom[d.mesh].handle) continue;
       VkAccelerationStructureInstanceKHR inst{};
       inst.transform = to_transform(d.world);
-      inst.instanceCustomIndex = 0;
+      inst.instanceCustomIndex = uint32_t(list.size());
       inst.mask = 0xff;
       inst.instanceShaderBindingTableRecordOffset = 0;
       // Both faces occlude, as in the reference.
-      inst.flags = VK_GEOMETRY_INSTANCE_TRIANGLE_FACING_CULL_DISABLE_BIT_KHR | VK_GEOMETRY_INSTANCE_FORCE_OPAQUE_BIT_KHR;
+      // Both faces occlude, as in the reference; only alpha-tested instances run the any-hit shader.
+      inst.flags = VK_GEOMETRY_INSTANCE_TRIANGLE_FACING_CULL_DISABLE_BIT_KHR |
+                   (d.alpha_tested() ? VK_GEOMETRY_INSTANCE_FORCE_NO_OPAQUE_BIT_KHR : VK_GEOMETRY_INSTANCE_FORCE_OPAQUE_BIT_KHR);
       inst.accelerationStructureReference = bottom[d.mesh].address;
       list.push_back(inst);
+      const engine::GpuMeshRange& range = frame.geometry.mesh(d.mesh);
+      materials.push_back({range.first_index, range.vertex_offset, d.base_color_texture, d.alpha_threshold});
     }
     instance_count = uint32_t(list.size());
 
@@ -230,9 +239,14 @@ struct RayTracedPass::Impl {
                          VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
                              VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
                          true, "rt instances");
+      instance_materials = Buffer(ctx, VkDeviceSize(top_capacity) * sizeof(gpu_shared::RayTracedInstance),
+                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "rt instance materials");
     }
     // The host writes before the submission that reads them (one frame in flight).
-    if (!list.empty()) instances.write(list.data(), list.size() * sizeof(list[0]));
+    if (!list.empty()) {
+      instances.write(list.data(), list.size() * sizeof(list[0]));
+      instance_materials.write(materials.data(), materials.size() * sizeof(materials[0]));
+    }
     g.geometry.instances.data.deviceAddress = instances.device_address();
     info.dstAccelerationStructure = top.handle;
     info.scratchData.deviceAddress = top_scratch.address;
@@ -269,13 +283,6 @@ void RayTracedPass::record(engine::FrameContext& frame, uint32_t samples_per_pix
   VkCommandBuffer cmd = frame.cmd;
   if (m.built_for != &frame.geometry || m.built_vertices != frame.geometry.vertices().handle()) {
     m.build_bottom_levels(frame.geometry);
-    // Not yet alpha-tested here (an any-hit shader calling material_alpha_kept is the missing
-    // piece): say so once per scene rather than disagree silently with the other techniques.
-    for (const auto& d : frame.draws)
-      if (d.shadow.casts_shadow && d.alpha_tested()) {
-        std::cerr << "warning: rt traces alpha-tested casters as opaque (their cut-outs cast solid shadows)\n";
-        break;
-      }
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "rt_build");
@@ -302,6 +309,10 @@ void RayTracedPass::record(engine::FrameContext& frame, uint32_t samples_per_pix
         .storage_image(gpu_shared::RT_BINDING_ALBEDO, frame.gbuffer.albedo.view())
         .storage_image(gpu_shared::RT_BINDING_SHADOW_TERM, frame.shadow_term.view())
         .storage_buffer(gpu_shared::RT_BINDING_COUNTERS, m.counters.handle())
+        .storage_buffer(gpu_shared::RT_BINDING_VERTICES, frame.geometry.vertices().handle())
+        .storage_buffer(gpu_shared::RT_BINDING_INDICES, frame.geometry.indices().handle())
+        .storage_buffer(gpu_shared::RT_BINDING_INSTANCES, m.instance_materials.handle())
+        .storage_buffer(gpu_shared::RT_BINDING_MATERIAL_TEXTURES, frame.geometry.textures().handle())
         .push(m.ctx, cmd, m.pipeline);
     m.pipeline.push_constants(cmd, push);
     m.sbt.trace(m.ctx, cmd, frame.view.extent.width, frame.view.extent.height);
