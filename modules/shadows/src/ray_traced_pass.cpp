@@ -204,7 +204,6 @@ struct RayTracedPass::Impl {
       inst.instanceCustomIndex = uint32_t(list.size());
       inst.mask = 0xff;
       inst.instanceShaderBindingTableRecordOffset = 0;
-      // Both faces occlude, as in the reference.
       // Both faces occlude, as in the reference; only alpha-tested instances run the any-hit shader.
       inst.flags = VK_GEOMETRY_INSTANCE_TRIANGLE_FACING_CULL_DISABLE_BIT_KHR |
                    (d.alpha_tested() ? VK_GEOMETRY_INSTANCE_FORCE_NO_OPAQUE_BIT_KHR : VK_GEOMETRY_INSTANCE_FORCE_OPAQUE_BIT_KHR);
@@ -281,9 +280,8 @@ void RayTracedPass::scene_changed() {
 void RayTracedPass::record(engine::FrameContext& frame, uint32_t samples_per_pixel, bool collect_stats) {
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
-  if (m.built_for != &frame.geometry || m.built_vertices != frame.geometry.vertices().handle()) {
+  if (m.built_for != &frame.geometry || m.built_vertices != frame.geometry.vertices().handle())
     m.build_bottom_levels(frame.geometry);
-  }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "rt_build");
     m.build_top_level(cmd, frame);
