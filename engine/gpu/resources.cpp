@@ -9,6 +9,12 @@ Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, 
   info.size = size > 0 ? size : 4;
   info.usage = usage;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  // Storage buffers are bound whole, so one beyond the device's range would be a validation error
+  // (and undefined reads) later: refuse it here, naming it.
+  const VkDeviceSize storage_range = ctx.properties().limits.maxStorageBufferRange;
+  if ((usage & VK_BUFFER_USAGE_STORAGE_BUFFER_BIT) && info.size > storage_range)
+    throw VulkanError("buffer '" + name + "' needs " + std::to_string(info.size) + " bytes, more than the " +
+                      std::to_string(storage_range) + "-byte storage buffer range of " + ctx.device_name());
   VK_CHECK(vkCreateBuffer(ctx.device(), &info, nullptr, &buffer_));
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(ctx.device(), buffer_, &req);
@@ -17,7 +23,12 @@ Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, 
   alloc.memoryTypeIndex = ctx.find_memory_type(
       req.memoryTypeBits, host_visible ? (VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
                                        : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  VK_CHECK(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_));
+  try {
+    memory_ = ctx.allocate_memory(alloc, "buffer '" + name + "'");
+  } catch (...) {
+    vkDestroyBuffer(ctx.device(), buffer_, nullptr);
+    throw;
+  }
   VK_CHECK(vkBindBufferMemory(ctx.device(), buffer_, memory_, 0));
   if (host_visible) VK_CHECK(vkMapMemory(ctx.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
   ctx.set_name(buffer_, VK_OBJECT_TYPE_BUFFER, name);
@@ -38,7 +49,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
 void Buffer::reset() {
   if (!ctx_) return;
   if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
-  if (memory_) vkFreeMemory(ctx_->device(), memory_, nullptr);
+  ctx_->free_memory(memory_);
   buffer_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
   mapped_ = nullptr;
@@ -82,6 +93,10 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
              uint32_t mip_levels, uint32_t layers)
     : ctx_(&ctx), format_(format), extent_(extent), mip_levels_(mip_levels), layers_(layers) {
   aspect_ = is_depth_format(format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+  const uint32_t max_side = ctx.properties().limits.maxImageDimension2D;
+  if (extent.width > max_side || extent.height > max_side)
+    throw VulkanError("image '" + name + "' of " + std::to_string(extent.width) + "x" + std::to_string(extent.height) +
+                      " exceeds the " + std::to_string(max_side) + "-texel image side of " + ctx.device_name());
   VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
   info.imageType = VK_IMAGE_TYPE_2D;
   info.format = format;
@@ -98,7 +113,12 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
   VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   alloc.allocationSize = req.size;
   alloc.memoryTypeIndex = ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  VK_CHECK(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_));
+  try {
+    memory_ = ctx.allocate_memory(alloc, "image '" + name + "'");
+  } catch (...) {
+    vkDestroyImage(ctx.device(), image_, nullptr);
+    throw;
+  }
   VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
 
   auto make_view = [&](uint32_t base_mip, uint32_t mips, uint32_t base_layer, uint32_t layer_count) {
@@ -163,7 +183,7 @@ void Image::reset() {
   layer_views_.clear();
   if (view_) vkDestroyImageView(d, view_, nullptr);
   if (image_) vkDestroyImage(d, image_, nullptr);
-  if (memory_) vkFreeMemory(d, memory_, nullptr);
+  ctx_->free_memory(memory_);
   view_ = VK_NULL_HANDLE;
   image_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;

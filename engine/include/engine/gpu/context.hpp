@@ -42,7 +42,17 @@ struct ContextOptions {
   std::vector<const char*> instance_extensions;  // e.g. from the window system
   bool swapchain = false;                        // enable VK_KHR_swapchain on the device
   std::string application_name = "shadow_engine";
+  // Optional features to treat as absent, as on a device without them (tests of the other paths):
+  // "conservative_rasterization", "geometry_shader", "fragment_shader_barycentric",
+  // "subgroup_arithmetic". ENGINE_MASK_FEATURES (comma-separated) adds to the list.
+  std::vector<std::string> masked_features;
+  // The validation layer's synchronization checks (hazards between commands); needs validation.
+  // Also forced on by ENGINE_SYNC_VALIDATION=1.
+  bool sync_validation = false;
 };
+
+// The names ContextOptions::masked_features accepts.
+const std::vector<std::string>& maskable_feature_names();
 
 class Context {
  public:
@@ -69,6 +79,16 @@ class Context {
   std::vector<std::string> validation_messages() const;
 
   uint32_t find_memory_type(uint32_t type_bits, VkMemoryPropertyFlags properties) const;
+  bool sync_validation_enabled() const { return sync_validation_enabled_; }
+  const std::vector<std::string>& masked_features() const { return masked_features_; }
+
+  // Every device memory allocation goes through these, so leaks show as a growing live count. The
+  // allocation is checked against the device's largest allocation first (a clear error naming
+  // `what`, not a driver failure).
+  VkDeviceMemory allocate_memory(const VkMemoryAllocateInfo& info, const std::string& what) const;
+  void free_memory(VkDeviceMemory memory) const;
+  uint32_t live_allocation_count() const { return live_allocations_.load(); }
+  VkDeviceSize max_memory_allocation_size() const { return max_allocation_size_; }
 
   // Records commands into a fresh command buffer, submits it and waits. For uploads, readbacks, tests.
   void immediate_submit(const std::function<void(VkCommandBuffer)>& record) const;
@@ -106,6 +126,10 @@ class Context {
   DeviceFeatures features_;
   std::string driver_description_;
   bool validation_enabled_ = false;
+  bool sync_validation_enabled_ = false;
+  std::vector<std::string> masked_features_;
+  VkDeviceSize max_allocation_size_ = 0;
+  mutable std::atomic<uint32_t> live_allocations_{0};
   bool debug_utils_ = false;
   std::atomic<uint32_t> validation_messages_{0};
   mutable std::vector<std::string> message_log_;
