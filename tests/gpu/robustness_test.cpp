@@ -63,9 +63,10 @@ class RobustnessTest : public GpuTest {
 
   Outcome render(const shadows::Settings& settings, bool with_reference, int frames = 1) {
     Outcome out;
-    auto& r = prepare(settings);
+    engine::Renderer* r = nullptr;
     try {
-      for (int i = 0; i < frames; ++i) r.render_frame(0.0f);
+      r = &prepare(settings);
+      for (int i = 0; i < frames; ++i) r->render_frame(0.0f);
     } catch (const std::exception& e) {
       out.error = e.what();
       return out;
@@ -73,7 +74,7 @@ class RobustnessTest : public GpuTest {
     out.visibility = module_->read_visibility();
     if (with_reference) {
       reference::EmbreeTracer tracer(scene_->registry);
-      out.reference = support::reference_visibility(r, tracer, settings.izb.samples_per_pixel);
+      out.reference = support::reference_visibility(*r, tracer, settings.izb.samples_per_pixel);
     }
     return out;
   }
@@ -121,8 +122,10 @@ TEST_P(MaskedFeatureTest, EveryTechniqueTakesAnotherPathOrRefuses) {
       EXPECT_LE(cmp.mismatch_rate, 0.0002) << cmp.mismatched << " of " << cmp.pixels << " pixels differ";
     }
   }
-  // Only the subgroup reductions have no other path; the plain shadow map needs none of the four.
-  EXPECT_EQ(refused, GetParam().feature == "subgroup_arithmetic" ? 4u : 0u);
+  // The subgroup reductions have no other path (the plain shadow map needs none of the four); the
+  // G-buffer needs geometry shaders for gl_PrimitiveID, so without them every mode refuses.
+  const std::string& feature = GetParam().feature;
+  EXPECT_EQ(refused, feature == "subgroup_arithmetic" ? 4u : feature == "geometry_shader" ? kModes.size() : 0u);
 }
 
 // The paths that need the feature, asked for explicitly, refuse in one line naming it.
@@ -190,7 +193,7 @@ TEST_F(RobustnessTest, SameFrameGivesBitIdenticalVisibility) {
       frames.push_back(fresh.visibility);
       size_t shadowed = 0;
       for (float v : frames[0]) shadowed += v >= 0.0f && v < 1.0f;
-      EXPECT_GT(shadowed, 100u) << "spp " << spp << ": too few shadowed pixels to tell";
+      EXPECT_GT(shadowed, 50u) << "spp " << spp << ": too few shadowed pixels to tell";
       for (size_t i = 1; i < frames.size(); ++i) {
         ASSERT_EQ(frames[i].size(), frames[0].size());
         EXPECT_EQ(std::memcmp(frames[i].data(), frames[0].data(), frames[0].size() * sizeof(float)), 0)
