@@ -259,4 +259,20 @@ TEST_F(RobustnessTest, LiveAllocationCountReturnsAfterTheRendererGoes) {
   EXPECT_EQ(ctx_->live_allocation_count(), before);
 }
 
+// The synchronization checks are live where they are asked for (the `syncval` label): two fills of one
+// buffer without a barrier between them are a write-after-write hazard the layer must report.
+TEST_F(RobustnessTest, SyncValidationReportsAMissingBarrier) {
+  if (!ctx_->sync_validation_enabled()) GTEST_SKIP() << "synchronization validation is off (ENGINE_SYNC_VALIDATION)";
+  engine::gpu::Buffer target(*ctx_, 256, VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "hazard target");
+  ctx_->immediate_submit([&](VkCommandBuffer cmd) {
+    vkCmdFillBuffer(cmd, target.handle(), 0, 256, 1u);
+    vkCmdFillBuffer(cmd, target.handle(), 0, 256, 2u);
+  });
+  EXPECT_GT(ctx_->validation_message_count(), 0u) << "the hazard went unreported";
+  bool named = false;
+  for (const auto& m : ctx_->validation_messages()) named = named || m.find("WRITE_AFTER_WRITE") != std::string::npos;
+  EXPECT_TRUE(named);
+  ctx_->reset_validation_message_count();
+}
+
 }  // namespace

@@ -2,9 +2,10 @@
 // changing every 100 frames through every mode. Resident memory and the number of live Vulkan
 // memory allocations must stay flat once every mode has run once (warm-up): it fails when either grows.
 //
-//   shadow_soak [--frames 10000] [--size 64x48] [--rss-slack-mib 16]
+//   shadow_soak [--frames 10000] [--size 64x48] [--rss-slack-mib 16] [--modes off,sm,...] [--verbose]
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -33,9 +34,22 @@ int main(int argc, char** argv) {
   int frames = 10000;
   uint32_t width = 64, height = 48;
   double rss_slack_mib = 16.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string key = argv[i], value = argv[i + 1];
-    if (key == "--frames") {
+  bool verbose = false;
+  bool still = false;  // casters stay put (to tell their re-upload from other growth)
+  std::vector<std::string> modes = {"off", "sm", "cascades", "izb", "izb+csm", "hybrid"};
+  for (int i = 1; i < argc; i += 2) {
+    const std::string key = argv[i], value = i + 1 < argc ? argv[i + 1] : "";
+    if (key == "--verbose" || key == "--still") {
+      (key == "--verbose" ? verbose : still) = true;
+      --i;
+    } else if (key == "--modes") {
+      modes.clear();
+      for (size_t start = 0; start <= value.size();) {
+        const size_t comma = std::min(value.find(',', start), value.size());
+        modes.push_back(value.substr(start, comma - start));
+        start = comma + 1;
+      }
+    } else if (key == "--frames") {
       frames = std::atoi(value.c_str());
     } else if (key == "--size" && std::sscanf(value.c_str(), "%ux%u", &width, &height) == 2) {
     } else if (key == "--rss-slack-mib") {
@@ -51,10 +65,16 @@ int main(int argc, char** argv) {
     scene->apply_view(0);
     engine::Renderer renderer(ctx, VkExtent2D{width, height});
     renderer.set_scene(*scene);
-    auto module = shadows::install(renderer, shadows::Settings{});
+    // Small maps and grid: the run is about memory over time, and lavapipe pays per texel.
+    shadows::Settings settings;
+    settings.izb.resolution = 256;
+    settings.cascades.map_size = 256;
+    settings.shadow_map.size = 256;
+    auto module = shadows::install(renderer, settings);
     module->set_collect_stats(false);
 
-    const std::vector<std::string> modes = {"off", "sm", "cascades", "izb", "izb+csm", "hybrid"};
+    for (const auto& mode : modes)
+      if (!shadows::parse_mode(mode, settings)) throw std::runtime_error("--modes: unknown mode '" + mode + "'");
     const int frames_per_mode = 100;
     const int cycle = frames_per_mode * int(modes.size());
     // The casters' starting places: each then circles its own.
@@ -77,18 +97,21 @@ int main(int argc, char** argv) {
     Sample start{};
     for (int f = 0; f < frames; ++f) {
       if (f % frames_per_mode == 0) {
-        auto next = shadows::parse_mode(modes[size_t(f / frames_per_mode) % modes.size()], module->settings());
+        auto next = shadows::parse_mode(modes[size_t(f / frames_per_mode) % modes.size()], settings);
         module->settings() = *next;
       }
       const float t = float(f) * 0.02f;
       light.direction = glm::normalize(glm::vec3(std::cos(t * 0.3f), -1.2f, std::sin(t * 0.3f)));
       scene->registry.each<engine::Transform>([&](engine::Entity e, engine::Transform& tr) {
         auto it = home.find(e.index);
-        if (it == home.end()) return;
+        if (it == home.end() || still) return;
         const float phase = float(e.index);
         tr.translation = it->second + 0.25f * glm::vec3(std::sin(t + phase), 0.0f, std::cos(t + phase));
       });
       renderer.render_frame(1.0f / 60.0f);
+      if (verbose && (f + 1) % frames_per_mode == 0)
+        std::printf("  frame %6d (%s): rss %.1f MiB, live allocations %u\n", f + 1,
+                    shadows::mode_name(module->settings()).c_str(), resident_mib(), ctx.live_allocation_count());
       if (f == 0) start = {1, resident_mib(), ctx.live_allocation_count()};
       if ((f + 1) % cycle == 0) {
         cycle_ends.push_back({f + 1, resident_mib(), ctx.live_allocation_count()});
