@@ -23,6 +23,19 @@ Aabb Aabb::transformed(const glm::mat4& m) const {
   return out;
 }
 
+bool Aabb::outside_clip(const glm::mat4& clip, const glm::vec4& ndc, float min_w) const {
+  if (!valid()) return false;  // unknown extent: never culled
+  // Bit k set: every corner so far lies beyond plane k (left, right, bottom, top, near).
+  uint32_t beyond_all = 0x1f;
+  for (int i = 0; i < 8 && beyond_all; ++i) {
+    const glm::vec4 c = clip * glm::vec4((i & 1) ? max.x : min.x, (i & 2) ? max.y : min.y, (i & 4) ? max.z : min.z, 1.0f);
+    const uint32_t beyond = (c.x < ndc.x * c.w ? 1u : 0u) | (c.x > ndc.z * c.w ? 2u : 0u) |
+                            (c.y < ndc.y * c.w ? 4u : 0u) | (c.y > ndc.w * c.w ? 8u : 0u) | (c.w < min_w ? 16u : 0u);
+    beyond_all &= beyond;
+  }
+  return beyond_all != 0;
+}
+
 void MeshData::compute_bounds() {
   bounds = Aabb{};
   for (const Vertex& v : vertices) bounds.extend(v.position);

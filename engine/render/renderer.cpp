@@ -173,6 +173,7 @@ void Renderer::build_draw_list() {
     d.entity = e;
     d.world = t.world;
     d.mesh = mesh.gpu_mesh;
+    if (mesh.data) d.bounds = mesh.data->bounds.transformed(t.world);
     if (const auto* m = scene_->registry.try_get<Material>(e)) {
       d.base_color = m->base_color;
       d.alpha_mode = m->alpha_mode;
@@ -268,6 +269,8 @@ void Renderer::record(VkCommandBuffer cmd) {
       for (const auto& d : draws_) {
         const auto& range = geometry_->mesh(d.mesh);
         if (range.index_count == 0) continue;
+        // Off-screen meshes cost a CPU rasterizer their whole vertex and setup work.
+        if (d.bounds.outside_clip(view_.view_projection, glm::vec4(-1.0f, -1.0f, 1.0f, 1.0f), 0.0f)) continue;
         gpu_shared::DrawPush push{};
         push.model = d.world;
         push.base_color = d.base_color;

@@ -63,16 +63,6 @@ void to_general(const Context& ctx, Image& image) {
   });
 }
 
-// World bounds of everything drawn: every shaded pixel lies on one of these.
-engine::Aabb receiver_bounds(const engine::FrameContext& frame) {
-  engine::Aabb bounds;
-  for (const auto& d : frame.draws) {
-    const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
-    if (mesh && mesh->data) bounds.extend(mesh->data->bounds.transformed(d.world));
-  }
-  return bounds;
-}
-
 // Map-texel xy bounds of `points` in `light_view_projection`.
 glm::vec4 texel_bounds(const glm::mat4& light_view_projection, const glm::vec3* points, int n, float size) {
   glm::vec4 r(std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
@@ -232,20 +222,10 @@ struct CascadesPass::Impl {
     const engine::FrameView& view = frame.view;
     const float size = float(map_size);
     const glm::mat4& lvp = fit.light_view_projection[c];
-    const float d[2] = {c == 0 ? fit.splits[0] : fit.blend_start[c - 1], fit.splits[c + 1]};
-    const float aspect = view.extent.height ? float(view.extent.width) / float(view.extent.height) : 1.0f;
-    const float tan_half = std::tan(view.vertical_fov * 0.5f);
-    const glm::mat4& v = view.view;
-    const glm::vec3 right(v[0][0], v[1][0], v[2][0]), up(v[0][1], v[1][1], v[2][1]);
-    const glm::vec3 forward = -glm::vec3(v[0][2], v[1][2], v[2][2]);
     glm::vec3 corners[8];
-    for (int i = 0; i < 8; ++i) {
-      const float depth = d[i >> 2];
-      corners[i] = view.camera_position + forward * depth + right * (((i & 1) ? 1.0f : -1.0f) * depth * tan_half * aspect) +
-                   up * (((i & 2) ? 1.0f : -1.0f) * depth * tan_half);
-    }
+    view_slice_corners(view, c == 0 ? fit.splits[0] : fit.blend_start[c - 1], fit.splits[c + 1], corners);
     glm::vec4 r = texel_bounds(lvp, corners, 8, size);
-    const engine::Aabb scene = receiver_bounds(frame);
+    const engine::Aabb scene = scene_bounds(frame);
     if (scene.valid()) {
       glm::vec3 box[8];
       for (int i = 0; i < 8; ++i)
@@ -331,19 +311,36 @@ struct CascadesPass::Impl {
                    VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   }
 
-  void record_depth(engine::FrameContext& frame, const CascadeSettings& s) {
+  // Each cascade is drawn only over the texels its receivers can read (the mask rectangle, which
+  // already holds the kernel, the offsets and a border, in map texels): the rest of a layer is never
+  // sampled, and on a raster-poor GPU the fill is most of this pass.
+  void record_depth(engine::FrameContext& frame, const CascadeSettings& s,
+                    const std::array<uint32_t, kMaxCascadeCount>& levels,
+                    const std::array<glm::ivec4, kMaxCascadeCount>& rects) {
     VkCommandBuffer cmd = frame.cmd;
     ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_depth");
     const Pipeline& pipeline = depth_pipeline[s.cull_front_faces ? 1 : 0];
     for (uint32_t c = 0; c < fit.count; ++c) {
-      begin_depth_rendering(cmd, depth.layer_view(c), depth.extent(), true);
+      const glm::ivec4 r = rects[c];
+      if (r.z < r.x || r.w < r.y) continue;  // no receiver reads this cascade
+      const int level = int(levels[c]), last = int(map_size) - 1;
+      const glm::ivec2 lo = glm::ivec2(r.x, r.y) << level;
+      const glm::ivec2 hi = glm::min(((glm::ivec2(r.z, r.w) + 1) << level) - 1, glm::ivec2(last));
+      const VkRect2D area{{lo.x, lo.y}, {uint32_t(hi.x - lo.x + 1), uint32_t(hi.y - lo.y + 1)}};
+      begin_depth_rendering(cmd, depth.layer_view(c), depth.extent(), true, &area);
       pipeline.bind(cmd);
       // Constant bias is applied in the filter (scaled per cascade); the rasterizer adds the slope part.
       vkCmdSetDepthBias(cmd, 0.0f, 0.0f, s.slope_bias);
-      draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
-        gs::CascadeDepthPush push{d.world, fit.light_view_projection[c]};
-        pipeline.push_constants(cmd, push);
-      });
+      // A caster wholly outside the drawn rectangle (in light space) cannot touch it.
+      const float size = float(map_size);
+      const glm::vec4 ndc = glm::vec4(glm::vec2(lo), glm::vec2(hi + 1)) / size * 2.0f - 1.0f;
+      draw_casters(
+          cmd, frame,
+          [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
+            gs::CascadeDepthPush push{d.world, fit.light_view_projection[c]};
+            pipeline.push_constants(cmd, push);
+          },
+          [&](const engine::DrawItem& d) { return d.bounds.outside_clip(fit.light_view_projection[c], ndc); });
       vkCmdEndRendering(cmd);
     }
   }
@@ -391,7 +388,7 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   m.blur_enabled = settings.blur;
 
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, gs::CASCADE_COUNTER_WORDS * 4, 0);
-  m.record_depth(frame, settings);
+  m.record_depth(frame, settings, levels, rects);
   full_barrier(cmd);
   if (settings.masking != Masking::Off) {
     const bool extent = settings.masking == Masking::DepthExtent;

@@ -605,6 +605,21 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     }
   }
   full_barrier(cmd);
+  // Light-space box around every point that can hold a node (the view, up to the IZB's range,
+  // within the scene): a caster wholly beside it shadows none of them.
+  const glm::mat4 receiver_region = [&] {
+    const float reach = settings.max_distance > 0.0f ? std::min(settings.max_distance, frame.view.far_plane)
+                                                     : frame.view.far_plane;
+    glm::vec3 corners[8];
+    view_slice_corners(frame.view, frame.view.near_plane, reach, corners);
+    engine::Aabb box;
+    for (const glm::vec3& c : corners) box.extend(c);
+    const engine::Aabb scene = scene_bounds(frame);
+    if (scene.valid()) box = {glm::max(box.min, scene.min), glm::min(box.max, scene.max)};
+    if (!box.valid()) return glm::mat4(0.0f);  // nothing to receive: every caster culled
+    // The shadow-ray offset and rounding may carry a node slightly outside.
+    return fit_orthographic(light_view, box, 1e-3f * glm::length(box.extent()) + 1e-3f);
+  }();
   auto draw_trace = [&](const Pipeline& trace, VkCompareOp compare, bool fill_depth) {
     begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
     if (fill_depth) {
@@ -619,11 +634,19 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     vkCmdSetDepthCompareOp(cmd, compare);
     m.push_all(cmd, frame, trace);
     uint32_t first_triangle = 0;  // the caster triangle buffers hold the casters in draw order
-    draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
-      gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset, first_triangle, 0u};
-      trace.push_constants(cmd, dp);
-      first_triangle += range.index_count / 3;
-    });
+    draw_casters(
+        cmd, frame,
+        [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
+          gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset, first_triangle, 0u};
+          trace.push_constants(cmd, dp);
+          first_triangle += range.index_count / 3;
+        },
+        [&](const engine::DrawItem& d) {
+          // Rasterizing a caster costs a CPU driver per triangle even where it covers no node.
+          if (!d.bounds.outside_clip(receiver_region)) return false;
+          first_triangle += frame.geometry.mesh(d.mesh).index_count / 3;
+          return true;
+        });
     vkCmdEndRendering(cmd);
   };
   if (use_compute_trace) {

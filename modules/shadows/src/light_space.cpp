@@ -36,6 +36,26 @@ engine::Aabb caster_bounds(const engine::FrameContext& frame) {
   return bounds;
 }
 
+engine::Aabb scene_bounds(const engine::FrameContext& frame) {
+  engine::Aabb bounds;
+  for (const auto& d : frame.draws) bounds.extend(d.bounds);
+  return bounds;
+}
+
+void view_slice_corners(const engine::FrameView& view, float d0, float d1, glm::vec3 corners[8]) {
+  const float aspect = view.extent.height ? float(view.extent.width) / float(view.extent.height) : 1.0f;
+  const float tan_half = std::tan(view.vertical_fov * 0.5f);
+  const glm::mat4& v = view.view;
+  const glm::vec3 right(v[0][0], v[1][0], v[2][0]), up(v[0][1], v[1][1], v[2][1]);
+  const glm::vec3 forward = -glm::vec3(v[0][2], v[1][2], v[2][2]);
+  for (int i = 0; i < 8; ++i) {
+    const float depth = (i >> 2) ? d1 : d0;
+    corners[i] = view.camera_position + forward * depth +
+                 right * (((i & 1) ? 1.0f : -1.0f) * depth * tan_half * aspect) +
+                 up * (((i & 2) ? 1.0f : -1.0f) * depth * tan_half);
+  }
+}
+
 void set_viewport(VkCommandBuffer cmd, VkExtent2D extent) {
   VkViewport viewport{0, 0, float(extent.width), float(extent.height), 0.0f, 1.0f};
   VkRect2D scissor{{0, 0}, extent};
@@ -43,7 +63,8 @@ void set_viewport(VkCommandBuffer cmd, VkExtent2D extent) {
   vkCmdSetScissor(cmd, 0, 1, &scissor);
 }
 
-void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear) {
+void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D extent, bool clear,
+                           const VkRect2D* area) {
   VkRenderingAttachmentInfo attachment{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
   attachment.imageView = depth;
   attachment.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
@@ -51,11 +72,12 @@ void begin_depth_rendering(VkCommandBuffer cmd, VkImageView depth, VkExtent2D ex
   attachment.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
   attachment.clearValue.depthStencil = {1.0f, 0};
   VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-  info.renderArea = {{0, 0}, extent};
+  info.renderArea = area ? *area : VkRect2D{{0, 0}, extent};
   info.layerCount = 1;
   info.pDepthAttachment = &attachment;
   vkCmdBeginRendering(cmd, &info);
   set_viewport(cmd, extent);
+  if (area) vkCmdSetScissor(cmd, 0, 1, area);
 }
 
 }  // namespace shadows::detail

@@ -46,6 +46,11 @@ struct Aabb {
   glm::vec3 center() const { return (min + max) * 0.5f; }
   glm::vec3 extent() const { return max - min; }
   Aabb transformed(const glm::mat4& m) const;
+  // True when the box lies wholly on the far side of one plane of the clip-space volume
+  // x/w in [ndc.x, ndc.z], y/w in [ndc.y, ndc.w], w >= min_w: nothing of it can reach that view.
+  // Each test is a half-space in world space, so it holds for corners behind a perspective camera too.
+  bool outside_clip(const glm::mat4& clip, const glm::vec4& ndc = glm::vec4(-1.0f, -1.0f, 1.0f, 1.0f),
+                    float min_w = -std::numeric_limits<float>::max()) const;
 };
 
 struct Vertex {

@@ -50,6 +50,7 @@ struct DrawItem {
   AlphaMode alpha_mode = AlphaMode::Opaque;
   float alpha_cutoff = 0.5f;
   ShadowCaster shadow;  // defaults when the entity has none
+  Aabb bounds;          // world space
 };
 
 struct FrameView {
