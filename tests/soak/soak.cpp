@@ -2,7 +2,8 @@
 // changing every 100 frames through every mode. Resident memory and the number of live Vulkan
 // memory allocations must stay flat once every mode has run once (warm-up): it fails when either grows.
 //
-//   shadow_soak [--frames 10000] [--size 64x48] [--rss-slack-mib 16] [--modes off,sm,...] [--verbose]
+//   shadow_soak [--frames 10000] [--size 64x48] [--rss-slack-mib 16] [--modes off,sm,...] [--trace auto|raster|compute]
+//               [--verbose] [--still]
 #include <unistd.h>
 
 #include <algorithm>
@@ -36,6 +37,7 @@ int main(int argc, char** argv) {
   double rss_slack_mib = 16.0;
   bool verbose = false;
   bool still = false;  // casters stay put (to tell their re-upload from other growth)
+  shadows::PassBackend trace = shadows::PassBackend::Auto;
   std::vector<std::string> modes = {"off", "sm", "cascades", "izb", "izb+csm", "hybrid"};
   for (int i = 1; i < argc; i += 2) {
     const std::string key = argv[i], value = i + 1 < argc ? argv[i + 1] : "";
@@ -49,6 +51,8 @@ int main(int argc, char** argv) {
         modes.push_back(value.substr(start, comma - start));
         start = comma + 1;
       }
+    } else if (key == "--trace" && shadows::parse_backend(value)) {
+      trace = *shadows::parse_backend(value);
     } else if (key == "--frames") {
       frames = std::atoi(value.c_str());
     } else if (key == "--size" && std::sscanf(value.c_str(), "%ux%u", &width, &height) == 2) {
@@ -70,6 +74,7 @@ int main(int argc, char** argv) {
     settings.izb.resolution = 256;
     settings.cascades.map_size = 256;
     settings.shadow_map.size = 256;
+    settings.izb.trace = trace;
     auto module = shadows::install(renderer, settings);
     module->set_collect_stats(false);
 
