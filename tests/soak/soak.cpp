@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
         tr.translation = it->second + 0.25f * glm::vec3(std::sin(t + phase), 0.0f, std::cos(t + phase));
       });
       renderer.render_frame(1.0f / 60.0f);
-      if (verbose && (f + 1) % frames_per_mode == 0)
+      if (verbose && (f + 1) % 10 == 0)
         std::printf("  frame %6d (%s): rss %.1f MiB, live allocations %u\n", f + 1,
                     shadows::mode_name(module->settings()).c_str(), resident_mib(), ctx.live_allocation_count());
       if (f == 0) start = {1, resident_mib(), ctx.live_allocation_count()};
