@@ -42,9 +42,9 @@ std::string one_line(const std::string& text) {
   return out;
 }
 
-// External buffers: tinygltf's default file callbacks expand each URI with wordexp (a URI such as
-// "$(command)" would run the command) and read any file, /dev/zero included. These take the path as
-// written, relative to the glTF's folder, and read only regular files of bounded size.
+// External buffers: the path exactly as written, relative to the glTF's folder (older tinygltf
+// releases expanded URIs with wordexp, which runs "$(command)"; these callbacks do not depend on the
+// release), and only regular files of bounded size (no devices or pipes).
 constexpr uintmax_t kMaxExternalFileBytes = uintmax_t(1) << 31;
 
 bool external_file_exists(const std::string& path, void*) {
