@@ -19,9 +19,10 @@ target_compile_definitions(gpu_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE
 engine_target_warnings(gpu_tests)
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
 # The same tests with the validation layer's synchronization checks on: a hazard between commands
-# (a missing or too narrow barrier) is a validation message, so a failure.
+# (a missing or too narrow barrier) is a validation message, so a failure. One variable only: the
+# discovered tests' properties take a single ENVIRONMENT entry (the variable implies the layer).
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_PREFIX syncval.
-                     PROPERTIES LABELS syncval ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_SYNC_VALIDATION=1;ENGINE_DEVICE=lavapipe")
+                     PROPERTIES LABELS syncval ENVIRONMENT ENGINE_SYNC_VALIDATION=1)
 
 add_subdirectory(window)
 

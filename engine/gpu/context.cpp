@@ -122,7 +122,9 @@ void Context::create_instance(const ContextOptions& options) {
 #else
   const bool debug_build = false;
 #endif
-  bool want_validation = options.validation || env_flag("ENGINE_VALIDATION") || debug_build;
+  // Synchronization validation implies the layer (one variable for test runners that set only one).
+  bool want_validation = options.validation || env_flag("ENGINE_VALIDATION") || env_flag("ENGINE_SYNC_VALIDATION") ||
+                         debug_build;
 
   uint32_t layer_count = 0;
   vkEnumerateInstanceLayerProperties(&layer_count, nullptr);

@@ -47,7 +47,7 @@ struct ContextOptions {
   // "subgroup_arithmetic". ENGINE_MASK_FEATURES (comma-separated) adds to the list.
   std::vector<std::string> masked_features;
   // The validation layer's synchronization checks (hazards between commands); needs validation.
-  // Also forced on by ENGINE_SYNC_VALIDATION=1.
+  // Also forced on by ENGINE_SYNC_VALIDATION=1 (which turns validation on too).
   bool sync_validation = false;
 };
 
