@@ -53,7 +53,7 @@ struct Options {
 const char* kUsage =
     "usage: walkthrough [--scene NAME|FILE.json|FILE.gltf] [--size WxH] [--frames N] [--headless] [--tour]\n"
     "                   [--input FILE] [--record FILE] [--screenshot FILE.png] [--out DIR]\n"
-    "                   [--device gpu|lavapipe|INDEX] [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm]\n"
+    "                   [--device gpu|lavapipe|INDEX] [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm|rt]\n"
     "                   [--seconds-per-view S] [--settings FILE.json] [--save-settings FILE.json] [--fixed-size] [--target-fps F]\n"
     "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats]\n"
     "                   [--switch-scene FILE]\n";
@@ -222,6 +222,7 @@ int run_headless(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   auto settings = shadows::parse_mode(o.mode, {});
   if (!o.overlay.empty()) settings->debug = *shadows::parse_debug_view(o.overlay);
   auto module = shadows::install(renderer, *settings);
+  if (std::string why; !module->supported(settings->technique, &why)) throw std::runtime_error("--mode " + o.mode + ": " + why);
   module->set_collect_stats(o.stats);
   if (!o.settings.empty()) {
     const std::string err = walkthrough::load_settings(o.settings, *module, game, nullptr);
@@ -299,6 +300,7 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   auto mode = *shadows::parse_mode(o.mode, {});
   if (!o.overlay.empty()) mode.debug = *shadows::parse_debug_view(o.overlay);
   auto module = shadows::install(*renderer, mode);
+  if (std::string why; !module->supported(mode.technique, &why)) throw std::runtime_error("--mode " + o.mode + ": " + why);
   module->set_collect_stats(o.stats);  // else the panel's checkbox turns the statistics passes on
 
   const bool cpu = ctx->properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;

@@ -214,10 +214,19 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
 
   auto& s = module.settings();
   if (ImGui::CollapsingHeader("Technique", ImGuiTreeNodeFlags_DefaultOpen)) {
-    const char* techniques[] = {"off", "shadow map", "cascades", "IZB", "hybrid"};
-    int technique = int(s.technique);
-    if (ImGui::Combo("technique", &technique, techniques, IM_ARRAYSIZE(techniques)))
-      s.technique = shadows::Technique(technique);
+    // A technique the device cannot run is listed greyed out, with the device's reason below.
+    const char* techniques[] = {"off", "shadow map", "cascades", "IZB", "hybrid", "ray traced"};
+    std::string rt_why;
+    const bool rt_ok = module.supported(shadows::Technique::RayTraced, &rt_why);
+    if (ImGui::BeginCombo("technique", techniques[int(s.technique)])) {
+      for (int t = 0; t < IM_ARRAYSIZE(techniques); ++t) {
+        const bool usable = shadows::Technique(t) != shadows::Technique::RayTraced || rt_ok;
+        if (ImGui::Selectable(techniques[t], int(s.technique) == t, usable ? 0 : ImGuiSelectableFlags_Disabled))
+          s.technique = shadows::Technique(t);
+      }
+      ImGui::EndCombo();
+    }
+    if (!rt_ok) ImGui::TextDisabled("ray traced: %s", rt_why.c_str());
     bool spp32 = s.izb.samples_per_pixel == 32;
     if (ImGui::Checkbox("32 samples per pixel", &spp32)) s.izb.samples_per_pixel = spp32 ? 32 : 1;
     ImGui::Checkbox("CSM z-prepass", &s.izb.csm);
@@ -276,6 +285,19 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
     }
     if (s.technique == shadows::Technique::Cascades || s.technique == shadows::Technique::Hybrid)
       ImGui::Text("expensive path %.1f%%", st.expensive_path_fraction * 100.0);
+    if (s.technique == shadows::Technique::RayTraced)
+      ImGui::Text("rays %llu (%.2f per point), occluded %llu; %llu instances", (unsigned long long)st.rays_traced,
+                  st.lit_candidates ? double(st.rays_traced) / double(st.lit_candidates) : 0.0,
+                  (unsigned long long)st.rays_occluded, (unsigned long long)st.rt_instances);
+    if (s.technique == shadows::Technique::Izb || s.technique == shadows::Technique::Hybrid)
+      ImGui::Text("triangle tests %.1f per point", st.triangle_tests_per_pixel);
+    // GPU memory the technique holds, largest resources first.
+    ImGui::Text("GPU memory %.1f MiB", double(st.memory_total_bytes) / (1024.0 * 1024.0));
+    std::vector<std::pair<uint64_t, std::string>> resources;
+    for (const auto& [name, bytes] : st.memory_bytes) resources.emplace_back(bytes, name);
+    std::sort(resources.rbegin(), resources.rend());
+    for (size_t i = 0; i < resources.size() && i < 6; ++i)
+      ImGui::Text("  %-30.30s %8.1f MiB", resources[i].second.c_str(), double(resources[i].first) / (1024.0 * 1024.0));
   }
 
 
@@ -357,6 +379,8 @@ std::string load_settings(const std::string& path, shadows::ShadowModule& module
       if (k == "mode") {
         auto m = shadows::parse_mode(v.get<std::string>(), s);
         if (!m) return bad("not a shadow mode");
+        std::string why;
+        if (!module.supported(m->technique, &why)) return bad(why);
         s = *m;
       } else if (k == "samples_per_pixel") {
         const int n = v.get<int>();

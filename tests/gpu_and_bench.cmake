@@ -150,6 +150,41 @@ if(EXISTS ${SPONZA_GLTF})
                        PASS_REGULAR_EXPRESSION "wrote .*frame_001.png")
 endif()
 
+# The ray-traced technique on a device without ray tracing (lavapipe): the benchmark and the
+# walkthrough refuse `--mode rt` with one line naming the missing extension.
+set(ONE_LINE_ERROR_NAMING_EXTENSION
+    "out=$(\"$@\" 2>&1); rc=$?; echo \"$out\"; [ $rc -ne 0 ] && [ $(printf '%s\\n' \"$out\" | wc -l) -eq 1 ] && printf '%s' \"$out\" | grep -q 'lacks VK_KHR_'")
+add_test(NAME shadow_bench_rt_without_ray_tracing_one_line
+         COMMAND sh -c "${ONE_LINE_ERROR_NAMING_EXTENSION}" sh $<TARGET_FILE:shadow_bench> --mode rt --size 64x64 --frames 1)
+add_test(NAME walkthrough_rt_without_ray_tracing_one_line
+         COMMAND sh -c "${ONE_LINE_ERROR_NAMING_EXTENSION}" sh $<TARGET_FILE:walkthrough> --headless --scene contact
+                 --size 64x64 --frames 1 --mode rt --out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_rt_out)
+set_tests_properties(shadow_bench_rt_without_ray_tracing_one_line walkthrough_rt_without_ray_tracing_one_line
+                     PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+
+# The paper suite at small sizes: every technique on every view of two scenes, both tables written.
+add_test(NAME shadow_bench_suite_paper_quick
+         COMMAND sh -c "rm -rf \"$1\" && \"$0\" --suite paper --quick --scene contact,atrium --views 1 --frames 2 --warmup 0 --out \"$1\" \
+&& grep -q 'Table 2 layout: 320x180' \"$1/suite.md\" && grep -q 'Table 3 layout' \"$1/suite.md\" \
+&& grep -q '\"mode\": \"rt\"' \"$1/suite.json\" && ! grep -q '\"validation_messages\": [1-9]' \"$1/suite.json\""
+                 $<TARGET_FILE:shadow_bench> ${CMAKE_CURRENT_BINARY_DIR}/suite_quick)
+set_tests_properties(shadow_bench_suite_paper_quick PROPERTIES LABELS gpu
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+
+# Scale on lavapipe: Sponza x16 (over a million triangles) with every technique at a small size; each
+# must run without validation messages (buffers are sized from the demand, or refused with the figures).
+if(EXISTS ${SPONZA_GLTF})
+  add_test(NAME shadow_bench_million_triangles
+           COMMAND sh -c "\"$0\" --scene \"$1\" --view 1 --instances 16 --size 160x90 --izb 256 \
+--mode sm,cascades,izb,izb+csm,hybrid+csm --trace compute --csm-backend compute --frames 1 --warmup 0 --json \"$2\" \
+&& python3 -c \"import json, sys; runs = json.load(open(sys.argv[1])); \
+sys.exit(0 if len(runs) == 5 and all(r['status'] == 'ran' and r['triangles'] >= 1000000 and r['validation_messages'] == 0 \
+and r['memory_total_bytes'] > 0 for r in runs) else 'a technique did not run at scale')\" \"$2\""
+                   $<TARGET_FILE:shadow_bench> ${SPONZA_GLTF} ${CMAKE_CURRENT_BINARY_DIR}/million_triangles.json)
+  set_tests_properties(shadow_bench_million_triangles PROPERTIES LABELS long TIMEOUT 600
+                       ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+endif()
+
 # Soak: 10,000 frames cycling every mode with moving sun and casters; resident memory and live
 # allocations must stay flat after warm-up. Long: under the `long` label, which .ci/run leaves out.
 add_executable(shadow_soak soak/soak.cpp)

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <unordered_map>
 
 #include "engine/assets/scene_file.hpp"
+#include "engine/core/animation.hpp"
 #include "engine/core/transform_system.hpp"
 
 namespace engine {
@@ -34,6 +36,55 @@ void Scene::apply_view(size_t index) {
     light_component->direction =
         (len > 0.0f && std::isfinite(len)) ? v.light_direction / len : glm::vec3(0.0f, -1.0f, 0.0f);
   }
+}
+
+void replicate_scene(Scene& scene, uint32_t copies) {
+  if (copies == 0) throw SceneError(scene.name + ": the instance count must be at least 1");
+  if (copies == 1) return;
+  const Aabb bounds = scene.world_bounds();
+  if (!bounds.valid()) return;
+  const glm::vec3 extent = bounds.extent();
+  const float gap = 0.1f * std::max(extent.x, extent.z);
+  const glm::vec2 spacing(extent.x + gap, extent.z + gap);
+  const uint32_t side = uint32_t(std::ceil(std::sqrt(double(copies))));
+  // Every entity of a mesh hierarchy: the meshes and their ancestors.
+  std::vector<Entity> sources;
+  std::unordered_map<uint32_t, bool> wanted;
+  for (Entity e : scene.registry.view<Transform, Mesh>()) {
+    for (Entity a = e; a != kNullEntity && !wanted.count(a.index); a = scene.registry.get<Transform>(a).parent) {
+      wanted[a.index] = true;
+      sources.push_back(a);
+      if (!scene.registry.has<Transform>(a)) break;
+    }
+  }
+  for (uint32_t k = 1; k < copies; ++k) {
+    const glm::vec3 offset(float(k % side) * spacing.x, 0.0f, float(k / side) * spacing.y);
+    std::unordered_map<uint32_t, Entity> clone;
+    for (Entity e : sources) clone[e.index] = scene.registry.create();
+    for (Entity e : sources) {
+      Registry& r = scene.registry;
+      const Entity c = clone[e.index];
+      Transform t = r.get<Transform>(e);
+      if (t.parent == kNullEntity) t.translation += offset;
+      else t.parent = clone.at(t.parent.index);
+      r.emplace<Transform>(c, t);
+      if (auto* x = r.try_get<Mesh>(e)) r.emplace<Mesh>(c, *x);
+      if (auto* x = r.try_get<Material>(e)) r.emplace<Material>(c, *x);
+      if (auto* x = r.try_get<ShadowCaster>(e)) r.emplace<ShadowCaster>(c, *x);
+      if (auto* x = r.try_get<Collider>(e)) r.emplace<Collider>(c, *x);
+      if (auto* x = r.try_get<Animated>(e)) {
+        Animated a = *x;
+        if (t.parent == kNullEntity) {  // a walking root walks its own copy of the path
+          a.rest_translation += offset;
+          for (auto& p : a.path) p += offset;
+        }
+        r.emplace<Animated>(c, std::move(a));
+      }
+      if (auto* x = r.try_get<Name>(e)) r.emplace<Name>(c, Name{x->value + " #" + std::to_string(k)});
+    }
+  }
+  scene.name += " x" + std::to_string(copies);
+  update_world_transforms(scene.registry);
 }
 
 size_t Scene::triangle_count() {

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <type_traits>
 
 namespace engine::gpu {
 
@@ -287,6 +288,26 @@ void Context::create_device(const ContextOptions& options) {
   f12.pNext = &f13;
   const bool has_bary = has_extension(available, VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME);
   if (has_bary) f13.pNext = &bary_features;
+  // Ray tracing feature queries, chained only for the extensions the device lists.
+  VkPhysicalDeviceAccelerationStructureFeaturesKHR as_features{
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR};
+  VkPhysicalDeviceRayTracingPipelineFeaturesKHR rtp_features{
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR};
+  VkPhysicalDeviceRayQueryFeaturesKHR rq_features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_QUERY_FEATURES_KHR};
+  const bool has_as = has_extension(available, VK_KHR_ACCELERATION_STRUCTURE_EXTENSION_NAME) &&
+                      has_extension(available, VK_KHR_DEFERRED_HOST_OPERATIONS_EXTENSION_NAME);
+  const bool has_rtp = has_as && has_extension(available, VK_KHR_RAY_TRACING_PIPELINE_EXTENSION_NAME);
+  const bool has_rq = has_as && has_extension(available, VK_KHR_RAY_QUERY_EXTENSION_NAME);
+  {
+    void** tail = has_bary ? &bary_features.pNext : &f13.pNext;
+    auto append = [&](auto& s) {
+      *tail = &s;
+      tail = &s.pNext;
+    };
+    if (has_as) append(as_features);
+    if (has_rtp) append(rtp_features);
+    if (has_rq) append(rq_features);
+  }
   vkGetPhysicalDeviceFeatures2(physical_device_, &f2);
 
   if (!f13.dynamicRendering || !f13.synchronization2)
@@ -346,7 +367,61 @@ void Context::create_device(const ContextOptions& options) {
     features_.fully_covered_fragment_input = cprops.fullyCoveredFragmentShaderInputVariable;
     features_.conservative_overestimation_size = cprops.maxExtraPrimitiveOverestimationSize;
   }
-  features_.ray_tracing_pipeline = has_extension(available, VK_KHR_RAY_TRACING_PIPELINE_EXTENSION_NAME);
+  features_.max_storage_buffer_range = properties_.limits.maxStorageBufferRange;
+  // Ray tracing: acceleration structures need buffer device addresses and deferred host operations;
+  // the technique traces through the pipeline (ray query alone is recorded, not used yet).
+  VkPhysicalDeviceAccelerationStructureFeaturesKHR enable_as{
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR};
+  VkPhysicalDeviceRayTracingPipelineFeaturesKHR enable_rtp{
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR};
+  VkPhysicalDeviceRayQueryFeaturesKHR enable_rq{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_QUERY_FEATURES_KHR};
+  const bool as_usable = has_as && as_features.accelerationStructure && f12.bufferDeviceAddress;
+  const bool rtp_usable = as_usable && has_rtp && rtp_features.rayTracingPipeline;
+  const bool rq_usable = as_usable && has_rq && rq_features.rayQuery;
+  if (as_usable && (rtp_usable || rq_usable)) {
+    extensions.push_back(VK_KHR_ACCELERATION_STRUCTURE_EXTENSION_NAME);
+    extensions.push_back(VK_KHR_DEFERRED_HOST_OPERATIONS_EXTENSION_NAME);
+    enable12.bufferDeviceAddress = VK_TRUE;
+    enable_as.accelerationStructure = VK_TRUE;
+    void** tail = features_.fragment_shader_barycentric ? &enable_bary.pNext : &enable13.pNext;
+    *tail = &enable_as;
+    tail = &enable_as.pNext;
+    if (rtp_usable) {
+      extensions.push_back(VK_KHR_RAY_TRACING_PIPELINE_EXTENSION_NAME);
+      enable_rtp.rayTracingPipeline = VK_TRUE;
+      *tail = &enable_rtp;
+      tail = &enable_rtp.pNext;
+    }
+    if (rq_usable) {
+      extensions.push_back(VK_KHR_RAY_QUERY_EXTENSION_NAME);
+      enable_rq.rayQuery = VK_TRUE;
+      *tail = &enable_rq;
+    }
+    features_.acceleration_structure = true;
+    features_.buffer_device_address = true;
+    features_.ray_tracing_pipeline = rtp_usable;
+    features_.ray_query = rq_usable;
+    VkPhysicalDeviceRayTracingPipelinePropertiesKHR rt_props{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_PROPERTIES_KHR};
+    VkPhysicalDeviceAccelerationStructurePropertiesKHR as_props{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_PROPERTIES_KHR};
+    as_props.pNext = rtp_usable ? &rt_props : nullptr;
+    VkPhysicalDeviceProperties2 rp2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    rp2.pNext = &as_props;
+    vkGetPhysicalDeviceProperties2(physical_device_, &rp2);
+    features_.scratch_offset_alignment = as_props.minAccelerationStructureScratchOffsetAlignment;
+    if (rtp_usable) {
+      features_.shader_group_handle_size = rt_props.shaderGroupHandleSize;
+      features_.shader_group_handle_alignment = rt_props.shaderGroupHandleAlignment;
+      features_.shader_group_base_alignment = rt_props.shaderGroupBaseAlignment;
+    }
+  }
+  if (!features_.ray_tracing_pipeline) {
+    features_.ray_tracing_missing =
+        !has_as ? std::string("device ") + properties_.deviceName + " lacks " VK_KHR_ACCELERATION_STRUCTURE_EXTENSION_NAME
+        : !as_usable ? std::string("device ") + properties_.deviceName + " lacks the accelerationStructure/bufferDeviceAddress features"
+        : std::string("device ") + properties_.deviceName + " lacks " VK_KHR_RAY_TRACING_PIPELINE_EXTENSION_NAME;
+  }
 
   VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
   VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
@@ -398,6 +473,22 @@ void Context::create_device(const ContextOptions& options) {
 
   cmd_push_descriptor_set =
       reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(device_, "vkCmdPushDescriptorSetKHR"));
+  if (features_.acceleration_structure) {
+    auto load = [&](auto& fn, const char* name) {
+      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(vkGetDeviceProcAddr(device_, name));
+      if (!fn) throw VulkanError(std::string("device ") + properties_.deviceName + " did not return " + name);
+    };
+    load(rt.create_acceleration_structure, "vkCreateAccelerationStructureKHR");
+    load(rt.destroy_acceleration_structure, "vkDestroyAccelerationStructureKHR");
+    load(rt.get_build_sizes, "vkGetAccelerationStructureBuildSizesKHR");
+    load(rt.get_acceleration_structure_address, "vkGetAccelerationStructureDeviceAddressKHR");
+    load(rt.cmd_build_acceleration_structures, "vkCmdBuildAccelerationStructuresKHR");
+    if (features_.ray_tracing_pipeline) {
+      load(rt.create_ray_tracing_pipelines, "vkCreateRayTracingPipelinesKHR");
+      load(rt.get_shader_group_handles, "vkGetRayTracingShaderGroupHandlesKHR");
+      load(rt.cmd_trace_rays, "vkCmdTraceRaysKHR");
+    }
+  }
 
   VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
@@ -406,12 +497,35 @@ void Context::create_device(const ContextOptions& options) {
   set_name(device_, VK_OBJECT_TYPE_DEVICE, "engine device");
 }
 
+void Context::track_allocation(VkDeviceMemory memory, const std::string& name, VkDeviceSize bytes) const {
+  std::lock_guard lock(g_message_mutex);
+  allocations_[memory] = {name, bytes};
+}
+
+void Context::untrack_allocation(VkDeviceMemory memory) const {
+  std::lock_guard lock(g_message_mutex);
+  allocations_.erase(memory);
+}
+
+std::vector<Context::Allocation> Context::allocations() const {
+  std::lock_guard lock(g_message_mutex);
+  std::vector<Allocation> out;
+  out.reserve(allocations_.size());
+  for (const auto& [memory, a] : allocations_) out.push_back(a);
+  return out;
+}
+
 uint32_t Context::find_memory_type(uint32_t type_bits, VkMemoryPropertyFlags properties) const {
   for (uint32_t i = 0; i < memory_properties_.memoryTypeCount; ++i) {
     if ((type_bits & (1u << i)) && (memory_properties_.memoryTypes[i].propertyFlags & properties) == properties)
       return i;
   }
   throw VulkanError("no memory type with the requested properties");
+}
+
+uint32_t Context::live_allocation_count() const {
+  std::lock_guard lock(g_message_mutex);
+  return static_cast<uint32_t>(allocations_.size());
 }
 
 VkDeviceMemory Context::allocate_memory(const VkMemoryAllocateInfo& info, const std::string& what) const {
@@ -425,14 +539,12 @@ VkDeviceMemory Context::allocate_memory(const VkMemoryAllocateInfo& info, const 
     throw VulkanError(what + " needs " + std::to_string(info.allocationSize) + " bytes, and " +
                       properties_.deviceName + " is out of memory (" + vk_result_name(r) + ")");
   VK_CHECK(r);
-  live_allocations_++;
   return memory;
 }
 
 void Context::free_memory(VkDeviceMemory memory) const {
   if (!memory) return;
   vkFreeMemory(device_, memory, nullptr);
-  live_allocations_--;
 }
 
 void Context::immediate_submit(const std::function<void(VkCommandBuffer)>& record) const {

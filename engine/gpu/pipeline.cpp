@@ -232,35 +232,136 @@ Pipeline PipelineFactory::graphics(const GraphicsPipelineDesc& desc) const {
   return p;
 }
 
+Pipeline PipelineFactory::ray_tracing(const RayTracingPipelineDesc& desc) const {
+  if (!ctx_.features().ray_tracing_pipeline) throw VulkanError(ctx_.features().ray_tracing_missing);
+  Pipeline p;
+  make_layout(p, desc.bindings, desc.push_constant_size);
+  p.bind_point_ = VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR;
+  Specialization spec(desc.specialization);
+  std::vector<std::unique_ptr<ShaderModule>> modules;
+  std::vector<VkPipelineShaderStageCreateInfo> stages;
+  auto add_stage = [&](const std::string& name, VkShaderStageFlagBits stage) -> uint32_t {
+    if (name.empty()) return VK_SHADER_UNUSED_KHR;
+    modules.push_back(std::make_unique<ShaderModule>(ctx_, name));
+    VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    s.stage = stage;
+    s.module = modules.back()->handle();
+    s.pName = "main";
+    s.pSpecializationInfo = spec.get();
+    stages.push_back(s);
+    return static_cast<uint32_t>(stages.size() - 1);
+  };
+  auto general_group = [](uint32_t stage) {
+    VkRayTracingShaderGroupCreateInfoKHR g{VK_STRUCTURE_TYPE_RAY_TRACING_SHADER_GROUP_CREATE_INFO_KHR};
+    g.type = VK_RAY_TRACING_SHADER_GROUP_TYPE_GENERAL_KHR;
+    g.generalShader = stage;
+    g.closestHitShader = g.anyHitShader = g.intersectionShader = VK_SHADER_UNUSED_KHR;
+    return g;
+  };
+  std::vector<VkRayTracingShaderGroupCreateInfoKHR> groups;
+  groups.push_back(general_group(add_stage(desc.raygen_shader, VK_SHADER_STAGE_RAYGEN_BIT_KHR)));
+  for (const auto& miss : desc.miss_shaders) groups.push_back(general_group(add_stage(miss, VK_SHADER_STAGE_MISS_BIT_KHR)));
+  for (const auto& hit : desc.hit_groups) {
+    VkRayTracingShaderGroupCreateInfoKHR g{VK_STRUCTURE_TYPE_RAY_TRACING_SHADER_GROUP_CREATE_INFO_KHR};
+    g.type = VK_RAY_TRACING_SHADER_GROUP_TYPE_TRIANGLES_HIT_GROUP_KHR;
+    g.generalShader = g.intersectionShader = VK_SHADER_UNUSED_KHR;
+    g.closestHitShader = add_stage(hit.closest_hit, VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR);
+    g.anyHitShader = add_stage(hit.any_hit, VK_SHADER_STAGE_ANY_HIT_BIT_KHR);
+    groups.push_back(g);
+  }
+  VkRayTracingPipelineCreateInfoKHR info{VK_STRUCTURE_TYPE_RAY_TRACING_PIPELINE_CREATE_INFO_KHR};
+  info.stageCount = static_cast<uint32_t>(stages.size());
+  info.pStages = stages.data();
+  info.groupCount = static_cast<uint32_t>(groups.size());
+  info.pGroups = groups.data();
+  info.maxPipelineRayRecursionDepth = desc.max_recursion_depth;
+  info.layout = p.layout_;
+  VK_CHECK(ctx_.rt.create_ray_tracing_pipelines(ctx_.device(), VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &info, nullptr,
+                                                &p.pipeline_));
+  ctx_.set_name(p.pipeline_, VK_OBJECT_TYPE_PIPELINE, desc.name.empty() ? desc.raygen_shader : desc.name);
+  return p;
+}
+
+ShaderBindingTable::ShaderBindingTable(const Context& ctx, const Pipeline& pipeline, uint32_t miss_count,
+                                       uint32_t hit_count, const std::string& name) {
+  const auto& f = ctx.features();
+  const uint32_t group_count = 1 + miss_count + hit_count;
+  const VkDeviceSize handle_size = f.shader_group_handle_size;
+  const VkDeviceSize stride = align_up(handle_size, f.shader_group_handle_alignment);
+  const VkDeviceSize base = f.shader_group_base_alignment;
+  std::vector<uint8_t> handles(size_t(group_count) * handle_size);
+  VK_CHECK(ctx.rt.get_shader_group_handles(ctx.device(), pipeline.handle(), 0, group_count, handles.size(),
+                                           handles.data()));
+  // Region offsets relative to an aligned start; the buffer gets `base` bytes of slack so its device
+  // address can be rounded up to the base alignment whatever the allocation's own alignment.
+  const VkDeviceSize raygen_offset = 0;
+  const VkDeviceSize miss_offset = align_up(raygen_offset + stride, base);
+  const VkDeviceSize hit_offset = align_up(miss_offset + stride * miss_count, base);
+  const VkDeviceSize total = hit_offset + stride * hit_count;
+  buffer_ = Buffer(ctx, total + base,
+                   VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT, true,
+                   name);
+  const VkDeviceAddress start = align_up(buffer_.device_address(), base);
+  const VkDeviceSize shift = start - buffer_.device_address();
+  auto copy = [&](uint32_t group, VkDeviceSize offset) {
+    buffer_.write(handles.data() + size_t(group) * handle_size, handle_size, shift + offset);
+  };
+  copy(0, raygen_offset);
+  for (uint32_t i = 0; i < miss_count; ++i) copy(1 + i, miss_offset + stride * i);
+  for (uint32_t i = 0; i < hit_count; ++i) copy(1 + miss_count + i, hit_offset + stride * i);
+  // The ray generation region's size must equal its stride.
+  raygen_ = {start + raygen_offset, stride, stride};
+  miss_ = {miss_count ? start + miss_offset : 0, stride, stride * miss_count};
+  hit_ = {hit_count ? start + hit_offset : 0, stride, stride * hit_count};
+}
+
+void ShaderBindingTable::trace(const Context& ctx, VkCommandBuffer cmd, uint32_t width, uint32_t height) const {
+  ctx.rt.cmd_trace_rays(cmd, &raygen_, &miss_, &hit_, &callable_, width, height, 1);
+}
+
+DescriptorWriter& DescriptorWriter::acceleration_structure(uint32_t binding, VkAccelerationStructureKHR structure) {
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, {}, {}, structure});
+  return *this;
+}
+
 DescriptorWriter& DescriptorWriter::storage_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset,
                                                    VkDeviceSize range) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {buffer, offset, range}, {}});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {buffer, offset, range}, {}, VK_NULL_HANDLE});
   return *this;
 }
 DescriptorWriter& DescriptorWriter::uniform_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset,
                                                    VkDeviceSize range) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {buffer, offset, range}, {}});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {buffer, offset, range}, {}, VK_NULL_HANDLE});
   return *this;
 }
 DescriptorWriter& DescriptorWriter::storage_image(uint32_t binding, VkImageView view) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {}, {VK_NULL_HANDLE, view, VK_IMAGE_LAYOUT_GENERAL}});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {}, {VK_NULL_HANDLE, view, VK_IMAGE_LAYOUT_GENERAL}, VK_NULL_HANDLE});
   return *this;
 }
 DescriptorWriter& DescriptorWriter::sampled_image(uint32_t binding, VkImageView view, VkSampler sampler,
                                                   VkImageLayout layout) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {}, {sampler, view, layout}});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {}, {sampler, view, layout}, VK_NULL_HANDLE});
   return *this;
 }
 
 void DescriptorWriter::push(const Context& ctx, VkCommandBuffer cmd, const Pipeline& pipeline) {
   std::vector<VkWriteDescriptorSet> writes;
   writes.reserve(entries_.size());
+  // Acceleration structure writes point at these; reserved so the pointers stay put.
+  std::vector<VkWriteDescriptorSetAccelerationStructureKHR> structures;
+  structures.reserve(entries_.size());
   for (auto& e : entries_) {
     VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     w.dstBinding = e.binding;
     w.descriptorCount = 1;
     w.descriptorType = e.type;
-    if (e.type == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER || e.type == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER)
+    if (e.type == VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR) {
+      VkWriteDescriptorSetAccelerationStructureKHR as{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET_ACCELERATION_STRUCTURE_KHR};
+      as.accelerationStructureCount = 1;
+      as.pAccelerationStructures = &e.structure;
+      structures.push_back(as);
+      w.pNext = &structures.back();
+    } else if (e.type == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER || e.type == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER)
       w.pBufferInfo = &e.buffer;
     else
       w.pImageInfo = &e.image;

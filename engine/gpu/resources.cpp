@@ -5,16 +5,16 @@ namespace engine::gpu {
 Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool host_visible,
                const std::string& name)
     : ctx_(&ctx), size_(size) {
+  // Storage buffers are bound whole, so one larger than the device's storage range could not be read
+  // past it: refuse it with the figures rather than let the shader see a truncated buffer.
+  const uint64_t storage_range = ctx.features().max_storage_buffer_range;
+  if ((usage & VK_BUFFER_USAGE_STORAGE_BUFFER_BIT) && storage_range && size > storage_range)
+    throw VulkanError("buffer '" + name + "' needs " + std::to_string(size) + " bytes, over " + ctx.device_name() +
+                      "'s maxStorageBufferRange of " + std::to_string(storage_range) + " bytes");
   VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   info.size = size > 0 ? size : 4;
   info.usage = usage;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  // Storage buffers are bound whole, so one beyond the device's range would be a validation error
-  // (and undefined reads) later: refuse it here, naming it.
-  const VkDeviceSize storage_range = ctx.properties().limits.maxStorageBufferRange;
-  if ((usage & VK_BUFFER_USAGE_STORAGE_BUFFER_BIT) && info.size > storage_range)
-    throw VulkanError("buffer '" + name + "' needs " + std::to_string(info.size) + " bytes, more than the " +
-                      std::to_string(storage_range) + "-byte storage buffer range of " + ctx.device_name());
   VK_CHECK(vkCreateBuffer(ctx.device(), &info, nullptr, &buffer_));
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(ctx.device(), buffer_, &req);
@@ -23,6 +23,12 @@ Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, 
   alloc.memoryTypeIndex = ctx.find_memory_type(
       req.memoryTypeBits, host_visible ? (VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
                                        : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  // Buffers read through device addresses (acceleration structure inputs, shader binding tables).
+  VkMemoryAllocateFlagsInfo flags{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
+  if (usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT) {
+    flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+    alloc.pNext = &flags;
+  }
   try {
     memory_ = ctx.allocate_memory(alloc, "buffer '" + name + "'");
   } catch (...) {
@@ -30,6 +36,12 @@ Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, 
     throw;
   }
   VK_CHECK(vkBindBufferMemory(ctx.device(), buffer_, memory_, 0));
+  ctx.track_allocation(memory_, name, req.size);
+  if (usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT) {
+    VkBufferDeviceAddressInfo address{VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
+    address.buffer = buffer_;
+    device_address_ = vkGetBufferDeviceAddress(ctx.device(), &address);
+  }
   if (host_visible) VK_CHECK(vkMapMemory(ctx.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
   ctx.set_name(buffer_, VK_OBJECT_TYPE_BUFFER, name);
 }
@@ -42,6 +54,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
     memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
     size_ = std::exchange(o.size_, 0);
     mapped_ = std::exchange(o.mapped_, nullptr);
+    device_address_ = std::exchange(o.device_address_, 0);
   }
   return *this;
 }
@@ -49,11 +62,15 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
 void Buffer::reset() {
   if (!ctx_) return;
   if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
-  ctx_->free_memory(memory_);
+  if (memory_) {
+    ctx_->untrack_allocation(memory_);
+    ctx_->free_memory(memory_);
+  }
   buffer_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
   mapped_ = nullptr;
   size_ = 0;
+  device_address_ = 0;
 }
 
 Buffer upload_buffer(const Context& ctx, const void* data, VkDeviceSize bytes, VkBufferUsageFlags usage,
@@ -120,6 +137,7 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
     throw;
   }
   VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
+  ctx.track_allocation(memory_, name, req.size);
 
   auto make_view = [&](uint32_t base_mip, uint32_t mips, uint32_t base_layer, uint32_t layer_count) {
     VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
@@ -183,7 +201,10 @@ void Image::reset() {
   layer_views_.clear();
   if (view_) vkDestroyImageView(d, view_, nullptr);
   if (image_) vkDestroyImage(d, image_, nullptr);
-  ctx_->free_memory(memory_);
+  if (memory_) {
+    ctx_->untrack_allocation(memory_);
+    ctx_->free_memory(memory_);
+  }
   view_ = VK_NULL_HANDLE;
   image_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;

@@ -51,7 +51,11 @@ SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
     meshes_.push_back(range);
   });
   total_indices_ = indices.size();
-  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  // Where the device ray traces, the same buffers feed acceleration structure builds.
+  if (ctx.features().acceleration_structure)
+    usage |= VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
+             VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
   vertices_ = upload_buffer(ctx, vertices.data(), vertices.size() * sizeof(Vertex),
                             usage | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "scene vertices");
   indices_ = upload_buffer(ctx, indices.data(), indices.size() * sizeof(uint32_t),

@@ -26,6 +26,7 @@ struct Options {
   size_t view = 0;
   uint32_t width = 512, height = 512;
   uint32_t izb = 1024;
+  uint32_t cascade_size = 0;  // 0: the module's default
   std::vector<std::string> modes = {"sm"};
   uint32_t spp = 1;
   std::vector<std::string> csm_tests = {"bary"};
@@ -44,18 +45,30 @@ struct Options {
   std::vector<std::string> traces = {"auto"};        // frustum trace backends to run
   std::vector<std::string> csm_backends = {"auto"};  // CSM backends to run
   std::string lists;  // empty: the default list layout
+  std::vector<uint32_t> instances = {1};  // copies of the scene on a grid (a list in the suite)
+  std::string suite;   // "paper": the paper's tables, every technique, every view, two sizes
+  bool quick = false;  // suite at small sizes (lavapipe, the tests)
+  std::string out_dir; // suite: where suite.json and suite.md go
+  std::vector<uint32_t> spps = {1};  // suite: samples per pixel to run
+  std::vector<size_t> views;         // suite: views to run (empty: every view)
 };
 
 const char* kUsage =
-    "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--mode LIST]\n"
+    "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--cascade-size N] [--mode LIST]\n"
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted]\n"
     "                    [--frames N] [--warmup N] [--reference] [--device gpu|lavapipe|INDEX]\n"
-    "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR]\n"
-    "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm;\n"
+    "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N]\n"
+    "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
+    "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
+    "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
     "  csm tests: hertel, bary, bary-hw, inner-hw; trace and CSM backends: auto, raster, compute\n"
-    "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up).\n";
+    "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up).\n"
+    "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
+    "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
+    "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
+    "  with sm, cascades, hybrid+csm and rt in the same run; writes DIR/suite.json and DIR/suite.md.\n";
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
@@ -64,6 +77,25 @@ std::vector<std::string> split(const std::string& s) {
   while (std::getline(ss, item, ',')) if (!item.empty()) out.push_back(item);
   return out;
 }
+
+std::vector<uint32_t> split_uints(const std::string& flag, const std::string& s) {
+  std::vector<uint32_t> out;
+  for (const auto& item : split(s)) {
+    char* end = nullptr;
+    const unsigned long v = std::strtoul(item.c_str(), &end, 10);
+    if (!end || *end || item[0] == '-' || v > 0xffffffffUL)
+      throw std::runtime_error(flag + " '" + s + "': expected a comma-separated list of counts");
+    out.push_back(uint32_t(v));
+  }
+  if (out.empty()) throw std::runtime_error(flag + " needs a value");
+  return out;
+}
+
+struct SizeConfig {
+  uint32_t width, height, izb;
+  std::string label;
+};
+std::vector<SizeConfig> g_suite_sizes;  // --sizes override for the suite
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -74,8 +106,26 @@ Options parse(int argc, char** argv) {
     else if (a == "--view") o.view = args.uint_value();
     else if (a == "--size") args.size_value(o.width, o.height);
     else if (a == "--izb") o.izb = args.uint_value();
+    else if (a == "--cascade-size") o.cascade_size = args.uint_value();
     else if (a == "--mode") o.modes = split(args.value());
-    else if (a == "--spp") o.spp = args.uint_value();
+    else if (a == "--spp") {
+      o.spps = split_uints("--spp", args.value());
+      o.spp = o.spps.front();
+    }
+    else if (a == "--instances") o.instances = split_uints("--instances", args.value());
+    else if (a == "--suite") o.suite = args.value();
+    else if (a == "--quick") o.quick = true;
+    else if (a == "--out") o.out_dir = args.value();
+    else if (a == "--views") for (uint32_t v : split_uints("--views", args.value())) o.views.push_back(v);
+    else if (a == "--sizes") {
+      for (const auto& item : split(args.value())) {
+        SizeConfig c{};
+        if (std::sscanf(item.c_str(), "%ux%u:%u", &c.width, &c.height, &c.izb) != 3 || !c.width || !c.height || !c.izb)
+          throw std::runtime_error("--sizes '" + item + "': expected WxH:IZB");
+        c.label = std::to_string(c.width) + "x" + std::to_string(c.height);
+        g_suite_sizes.push_back(c);
+      }
+    }
     else if (a == "--csm-test") o.csm_tests = split(args.value());
     else if (a == "--masking") o.masking = args.value();
     else if (a == "--csm-choice") o.csm_choice = args.value();
@@ -97,8 +147,14 @@ Options parse(int argc, char** argv) {
       std::exit(0);
     } else throw std::runtime_error("unknown option " + a + " (see --help)");
   }
-  if (o.spp != 1 && o.spp != 32) throw std::runtime_error("--spp must be 1 or 32");
+  for (uint32_t spp : o.spps)
+    if (spp != 1 && spp != 32) throw std::runtime_error("--spp must be 1 or 32");
   if (o.frames < 1) throw std::runtime_error("--frames must be at least 1");
+  if (!o.suite.empty() && o.suite != "paper") throw std::runtime_error("--suite '" + o.suite + "': expected paper");
+  if (o.suite.empty() && (o.instances.size() > 1 || o.spps.size() > 1))
+    throw std::runtime_error("lists for --instances and --spp need --suite");
+  for (uint32_t n : o.instances)
+    if (n == 0) throw std::runtime_error("--instances must be at least 1");
   return o;
 }
 
@@ -108,6 +164,7 @@ struct RunConfig {
   std::string trace = "none";
   std::string csm_backend = "none";
   shadows::Settings settings;
+  bool csm_everything = false;  // every caster in the CSM for this run (the paper's Table 3)
 };
 
 shadows::PassBackend backend_option(const std::string& flag, const std::string& name) {
@@ -121,6 +178,7 @@ std::vector<RunConfig> expand_runs(const Options& o) {
   for (const auto& mode : o.modes) {
     shadows::Settings base;
     base.izb.resolution = o.izb;
+    if (o.cascade_size) base.cascades.map_size = o.cascade_size;
     base.izb.samples_per_pixel = o.spp;
     base.izb.node_pool_override = o.node_pool;
     if (!o.lists.empty()) {
@@ -202,12 +260,21 @@ json stats_json(const shadows::Stats& s) {
   c["trace_fragments_after_cull"] = s.trace_fragments_after_cull;
   c["triangle_tests"] = s.triangle_tests;
   c["triangle_tests_per_pixel"] = s.triangle_tests_per_pixel;
+  // Per light-space fragment: per (triangle, texel) pair the trace kept (raster fragments after the
+  // depth cull, or the compute trace's pairs).
+  const uint64_t fragments = s.trace_pairs ? s.trace_pairs : s.trace_fragments_after_cull;
+  c["triangle_tests_per_fragment"] = fragments ? double(s.triangle_tests) / double(fragments) : 0.0;
   c["expensive_path_fraction"] = s.expensive_path_fraction;
   c["expensive_path_pixels"] = s.expensive_path_pixels;
   c["blurred_pixels"] = s.blurred_pixels;
   c["trace_pairs"] = s.trace_pairs;
   c["trace_records"] = s.trace_records;
   c["trace_tile_pairs"] = s.trace_tile_pairs;
+  c["rays_traced"] = s.rays_traced;
+  c["rays_occluded"] = s.rays_occluded;
+  c["rays_per_pixel"] = s.lit_candidates ? double(s.rays_traced) / double(s.lit_candidates) : 0.0;
+  c["rt_instances"] = s.rt_instances;
+  c["rt_triangles"] = s.rt_triangles;
   return c;
 }
 
@@ -215,166 +282,455 @@ json choice_json(const shadows::Stats::BackendChoice& c) {
   return {{"backend", c.backend}, {"reason", c.reason}, {"raster_ms", c.raster_ms}, {"compute_ms", c.compute_ms}};
 }
 
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// One scene (with its copies) on one device and renderer; runs configurations and returns their JSON.
+struct Bench {
+  const Options& o;
+  engine::gpu::Context& ctx;
+  engine::Scene& scene;
+  engine::Renderer& renderer;
+  std::shared_ptr<shadows::ShadowModule> module;
+  std::unique_ptr<reference::EmbreeTracer> tracer;
+  std::vector<float> reference_vis;  // for the current view, size and spp
+  size_t view = 0;
+  uint32_t instances = 1;
+
+  json measure(const RunConfig& run, bool print) {
+    module->settings() = run.settings;
+    const uint32_t spp = run.settings.izb.samples_per_pixel;
+    const VkExtent2D extent = renderer.extent();
+    json entry;
+    entry["device"] = ctx.device_name();
+    entry["driver"] = ctx.driver_description();
+    entry["scene"] = scene.name;
+    entry["view"] = view;
+    entry["instances"] = instances;
+    entry["triangles"] = scene.triangle_count();
+    entry["size"] = {extent.width, extent.height};
+    entry["izb"] = run.settings.izb.resolution;
+    entry["mode"] = run.mode;
+    entry["spp"] = spp;
+    entry["csm_test"] = run.csm_test;
+    entry["trace"] = run.trace;
+    entry["csm_backend"] = run.csm_backend;
+    entry["csm_everything"] = run.csm_everything;
+    std::string why;
+    if (!module->supported(run.settings.technique, &why) ||
+        (run.csm_test != "none" && !module->supported(run.settings.izb.csm_test, &why))) {
+      entry["status"] = "unavailable";
+      entry["reason"] = why;
+      if (print) std::printf("%-12s %-9s unavailable: %s\n", run.mode.c_str(), run.csm_test.c_str(), why.c_str());
+      return entry;
+    }
+    entry["status"] = "ran";
+    // Every caster in the CSM for this run only; the scene's own choices come back afterwards.
+    std::vector<std::pair<engine::Entity, engine::CsmChoice>> saved_choices;
+    if (run.csm_everything)
+      scene.registry.each<engine::ShadowCaster>([&](engine::Entity e, engine::ShadowCaster& c) {
+        saved_choices.emplace_back(e, c.csm);
+        c.csm = engine::CsmChoice::On;
+      });
+    struct Restore {
+      engine::Registry& registry;
+      std::vector<std::pair<engine::Entity, engine::CsmChoice>>& saved;
+      ~Restore() {
+        for (auto& [e, c] : saved) registry.get<engine::ShadowCaster>(e).csm = c;
+      }
+    } restore{scene.registry, saved_choices};
+    // Automatic backends first time both (a few frames), then keep the faster. Timed frames run
+    // without the statistics passes; one more frame after them collects the statistics.
+    module->set_collect_stats(true);
+    for (int f = 0; f < 16 && (module->stats().trace_choice.reason == "probing" ||
+                               module->stats().csm_choice.reason == "probing" || f == 0);
+         ++f)
+      renderer.render_frame(0.0f);
+    module->set_collect_stats(false);
+    for (int f = 0; f < o.warmup; ++f) renderer.render_frame(0.0f);
+    renderer.profiler().clear_history();
+    for (int f = 0; f < o.frames; ++f) renderer.render_frame(0.0f);
+
+    json gpu_ms;
+    for (const auto& name : renderer.profiler().region_names()) {
+      const double ms = renderer.profiler().median_ms(name);
+      if (ms > 0.0 || name == "shadows") gpu_ms[name] = ms;
+    }
+    // total: per frame, the sum of the technique's passes (statistics passes excluded); then the median.
+    {
+      std::vector<double> totals(size_t(o.frames), 0.0);
+      for (const auto& pass : module->pass_names()) {
+        const auto h = renderer.profiler().history(pass);
+        for (size_t f = 0; f < h.size() && f < totals.size(); ++f) totals[f] += h[f];
+      }
+      gpu_ms["total"] = median(totals);
+    }
+    entry["gpu_ms"] = gpu_ms;
+    entry["passes"] = module->pass_names();
+    const double frame_ms = renderer.profiler().median_ms("frame");
+    module->set_collect_stats(true);
+    renderer.render_frame(0.0f);
+    const shadows::Stats& st = module->stats();
+    entry["frames"] = o.frames;
+    entry["warmup"] = o.warmup;
+    entry["counts"] = stats_json(st);
+    entry["culling_rate"] = st.culling_rate;
+    entry["hardware_conservative"] = st.hardware_conservative;
+    entry["csm_status"] = st.csm_status;
+    entry["lists"] = shadows::list_layout_name(run.settings.izb.lists);
+    entry["memory_bytes"] = st.memory_bytes;
+    entry["memory_total_bytes"] = st.memory_total_bytes;
+    if (!st.trace_choice.backend.empty()) entry["trace_choice"] = choice_json(st.trace_choice);
+    if (!st.csm_choice.backend.empty()) entry["csm_choice"] = choice_json(st.csm_choice);
+    if (!st.cascade_splits.empty()) entry["cascade_splits"] = st.cascade_splits;
+    json decisions = json::array();
+    for (const auto& d : st.csm_decisions)
+      decisions.push_back({{"name", d.name}, {"in_csm", d.in_csm}, {"automatic", d.automatic},
+                           {"large_triangle_area_share", d.large_triangle_area_share}, {"reason", d.reason}});
+    if (!decisions.empty()) entry["csm_decisions"] = decisions;
+
+    double mismatch = -1, mae = -1;
+    uint64_t false_shadowed = 0;
+    const std::string tag = scene.name + "_v" + std::to_string(view) + "_" + run.mode + "_" + run.csm_test + "_spp" +
+                            std::to_string(spp);
+    if (tracer) {
+      if (reference_vis.empty()) reference_vis = support::reference_visibility(renderer, *tracer, spp);
+      const auto vis = module->read_visibility();
+      const auto cmp = reference::compare_visibility(vis, reference_vis);
+      entry["reference"] = {{"pixels", cmp.pixels},
+                            {"mismatched", cmp.mismatched},
+                            {"false_shadowed", cmp.false_shadowed},
+                            {"false_lit", cmp.false_lit},
+                            {"mismatch_rate", cmp.mismatch_rate},
+                            {"coverage_mae", cmp.coverage_mae},
+                            {"coverage_max_error", cmp.coverage_max_error}};
+      mismatch = cmp.mismatch_rate;
+      mae = cmp.coverage_mae;
+      false_shadowed = cmp.false_shadowed;
+      if (!o.diff_dir.empty()) {
+        std::filesystem::create_directories(o.diff_dir);
+        reference::write_diff_png(o.diff_dir + "/diff_" + tag + ".png", extent.width, extent.height, vis,
+                                  reference_vis);
+      }
+    }
+    if (!o.dump_dir.empty()) {
+      std::filesystem::create_directories(o.dump_dir);
+      const auto vis = module->read_visibility();
+      const std::string file = o.dump_dir + "/vis_" + tag + "_" + (o.raster.empty() ? "auto" : o.raster) + "_" +
+                               run.trace + "_" + run.csm_backend + ".f32";
+      std::ofstream out(file, std::ios::binary);
+      out.write(reinterpret_cast<const char*>(vis.data()), std::streamsize(vis.size() * sizeof(float)));
+    }
+    if (!o.screenshot_dir.empty()) {
+      std::filesystem::create_directories(o.screenshot_dir);
+      renderer.write_png(o.screenshot_dir + "/" + scene.name + "_v" + std::to_string(view) + "_" + run.mode + ".png");
+    }
+    entry["validation_messages"] = ctx.validation_message_count();
+    if (print) {
+      const auto ran = [](const shadows::Stats::BackendChoice& c, const std::string& asked) {
+        return asked == "none" || c.backend.empty() ? asked : c.backend;
+      };
+      std::printf("%-12s %-9s %-8s %-8s %4u %10.3f %10.3f %12.6f %12llu %10.5f %9.1f\n", run.mode.c_str(),
+                  run.csm_test.c_str(), ran(st.trace_choice, run.trace).c_str(),
+                  ran(st.csm_choice, run.csm_backend).c_str(), spp, gpu_ms["total"].get<double>(), frame_ms,
+                  mismatch, (unsigned long long)false_shadowed, mae, double(st.memory_total_bytes) / (1 << 20));
+      for (const auto& [name, value] : gpu_ms.items())
+        if (name != "total") std::printf("    %-26s %10.3f ms\n", name.c_str(), value.get<double>());
+    }
+    return entry;
+  }
+};
+
+void print_header() {
+  std::printf("%-12s %-9s %-8s %-8s %4s %10s %10s %12s %12s %10s %9s\n", "mode", "csm_test", "trace", "csm_pass",
+              "spp", "total_ms", "frame_ms", "mismatch", "false_shad", "cov_mae", "mem_MiB");
+}
+
+std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances, const std::string& csm_choice) {
+  auto scene = engine::load_scene(name);
+  engine::replicate_scene(*scene, instances);
+  apply_csm_choice(*scene, csm_choice);
+  return scene;
+}
+
+void write_json(const std::string& path, const json& results) {
+  const std::filesystem::path p(path);
+  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  out << results.dump(2) << "\n";
+  std::printf("wrote %s\n", path.c_str());
+}
+
+int run_single(const Options& o) {
+  const auto runs = expand_runs(o);
+  auto scene = load(o.scene, o.instances.front(), o.csm_choice);
+  scene->apply_view(o.view);
+
+  engine::gpu::Context ctx({.device = o.device});
+  engine::Renderer renderer(ctx, {o.width, o.height});
+  renderer.set_scene(*scene);
+  Bench bench{o, ctx, *scene, renderer, shadows::install(renderer, runs.front().settings), nullptr, {}, o.view,
+              o.instances.front()};
+  // A technique the device cannot run at all is an error here (one line naming what it lacks).
+  for (const auto& run : runs)
+    if (std::string why; !bench.module->supported(run.settings.technique, &why))
+      throw std::runtime_error("--mode " + run.mode + ": " + why);
+  if (o.reference) bench.tracer = std::make_unique<reference::EmbreeTracer>(scene->registry);
+
+  json results = json::array();
+  print_header();
+  for (const auto& run : runs) results.push_back(bench.measure(run, true));
+  if (bench.tracer && !o.screenshot_dir.empty() && !bench.reference_vis.empty()) {
+    // The lighting path fed by the reference instead of a technique: what the image should be.
+    renderer.set_external_shadow_term(bench.reference_vis);
+    renderer.render_frame(0.0f);
+    renderer.write_png(o.screenshot_dir + "/" + scene->name + "_v" + std::to_string(o.view) + "_reference.png");
+    renderer.set_external_shadow_term({});
+  }
+  if (!o.json_path.empty()) write_json(o.json_path, results);
+  return 0;
+}
+
+// ---- The paper suite ----
+
+// The configurations of one (view, size, spp): Table 2's izb and izb+csm (bary), Table 3's other
+// coverage tests, and the other techniques.
+// The trace and CSM backends are the first of --trace / --csm-backend (default auto).
+std::vector<RunConfig> suite_runs(const Options& o, uint32_t izb, uint32_t spp) {
+  std::vector<RunConfig> runs;
+  shadows::Settings base;
+  base.izb.resolution = izb;
+  base.izb.samples_per_pixel = spp;
+  const std::string trace = o.traces.front(), csm_backend = o.csm_backends.front();
+  base.izb.trace = backend_option("--trace", trace);
+  base.izb.csm_backend = backend_option("--csm-backend", csm_backend);
+  for (const char* mode : {"izb", "izb+csm", "sm", "cascades", "hybrid+csm", "rt"}) {
+    const shadows::Settings s = *shadows::parse_mode(mode, base);
+    const bool izb_mode = s.technique == shadows::Technique::Izb || s.technique == shadows::Technique::Hybrid;
+    runs.push_back({mode, s.izb.csm ? "bary" : "none", izb_mode ? trace : "none", s.izb.csm ? csm_backend : "none", s});
+  }
+  if (spp == 1) {
+    for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric, shadows::CsmTest::BarycentricHw,
+                      shadows::CsmTest::InnerHw}) {
+      const bool hardware_test = test == shadows::CsmTest::BarycentricHw || test == shadows::CsmTest::InnerHw;
+      RunConfig r{"izb+csm", shadows::csm_test_name(test), trace, hardware_test ? "raster" : csm_backend,
+                  *shadows::parse_mode("izb+csm", base)};
+      r.settings.izb.csm_test = test;
+      // The hardware coverage tests exist only as raster passes.
+      if (hardware_test) r.settings.izb.csm_backend = shadows::PassBackend::Raster;
+      r.csm_everything = true;
+      runs.push_back(r);
+    }
+  }
+  return runs;
+}
+
+const json* find_run(const json& results, const std::string& scene, size_t view, const std::string& size,
+                     uint32_t spp, const std::string& mode, const std::string& csm_test,
+                     bool csm_everything = false) {
+  for (const auto& r : results) {
+    const std::string s = std::to_string(r["size"][0].get<uint32_t>()) + "x" + std::to_string(r["size"][1].get<uint32_t>());
+    if (r["scene"] == scene && r["view"] == view && s == size && r["spp"] == spp && r["mode"] == mode &&
+        r["csm_test"] == csm_test && r.value("csm_everything", false) == csm_everything)
+      return &r;
+  }
+  return nullptr;
+}
+
+std::string ms_cell(const json* r, const std::string& pass) {
+  if (!r) return "—";
+  if (r->value("status", "") != "ran") return "n/a";
+  const auto& g = (*r)["gpu_ms"];
+  if (!g.contains(pass)) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.3f", g[pass].get<double>());
+  return buf;
+}
+
+std::string fmt(const char* format, double v) {
+  char buf[48];
+  std::snprintf(buf, sizeof(buf), format, v);
+  return buf;
+}
+
+// The suite's tables as Markdown: Table 2 per size (views side by side), techniques per view with
+// memory, Table 3, the 32/1 spp ratio and the scaling table.
+std::string suite_markdown(const json& results, const std::vector<SizeConfig>& sizes, const Options& o) {
+  std::ostringstream md;
+  if (results.empty()) return "";
+  md << "Device: " << results[0]["device"].get<std::string>() << ", driver " << results[0]["driver"].get<std::string>()
+     << "; medians of " << o.frames << " frames after " << o.warmup << " warm-up; GPU ms.\n\n";
+  std::vector<std::pair<std::string, size_t>> scene_views;  // in run order, instances = 1 first
+  std::vector<std::string> scenes;
+  for (const auto& r : results) {
+    const std::pair<std::string, size_t> sv{r["scene"], r["view"]};
+    if (std::find(scene_views.begin(), scene_views.end(), sv) == scene_views.end()) scene_views.push_back(sv);
+    if (std::find(scenes.begin(), scenes.end(), sv.first) == scenes.end()) scenes.push_back(sv.first);
+  }
+  const std::vector<std::pair<std::string, std::string>> passes = {
+      {"light frustum", "light_frustum"}, {"CSM generation", "csm"},     {"IZB build", "izb_build"},
+      {"frustum trace", "frustum_trace"}, {"fallback", "izb_fallback"}, {"resolve", "izb_resolve"},
+      {"**total**", "total"}};
+  for (uint32_t spp : o.spps) {
+    for (const auto& size : sizes) {
+      md << "### Table 2 layout: " << size.label << ", IZB " << size.izb << "², " << spp << " spp\n\n| pass |";
+      for (const auto& [scene, view] : scene_views) md << " " << scene << " v" << view << " izb | izb+csm |";
+      md << "\n|---|";
+      for (size_t i = 0; i < scene_views.size(); ++i) md << "---|---|";
+      md << "\n";
+      for (const auto& [label, pass] : passes) {
+        md << "| " << label << " |";
+        for (const auto& [scene, view] : scene_views)
+          md << " " << ms_cell(find_run(results, scene, view, size.label, spp, "izb", "none"), pass) << " | "
+             << ms_cell(find_run(results, scene, view, size.label, spp, "izb+csm", "bary"), pass) << " |";
+        md << "\n";
+      }
+      md << "| izb / izb+csm |";
+      for (const auto& [scene, view] : scene_views) {
+        const json* a = find_run(results, scene, view, size.label, spp, "izb", "none");
+        const json* b = find_run(results, scene, view, size.label, spp, "izb+csm", "bary");
+        const bool ok = a && b && (*a)["status"] == "ran" && (*b)["status"] == "ran" &&
+                        (*b)["gpu_ms"]["total"].get<double>() > 0.0;
+        md << " | " << (ok ? fmt("%.2f×", (*a)["gpu_ms"]["total"].get<double>() / (*b)["gpu_ms"]["total"].get<double>()) : "—")
+           << " |";
+      }
+      md << "\n\n";
+
+      md << "### Every technique: " << size.label << ", " << spp << " spp (total ms; GPU memory MiB; work)\n\n"
+         << "| scene, view | triangles | sm | cascades | izb | izb+csm | hybrid+csm | rt | rt vs izb+csm | memory MiB: sm / cascades / izb / izb+csm / hybrid+csm / rt | izb+csm tests per pixel / per fragment, list avg | rt rays per pixel |\n"
+         << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      const std::vector<std::pair<std::string, std::string>> techniques = {
+          {"sm", "none"}, {"cascades", "none"}, {"izb", "none"}, {"izb+csm", "bary"}, {"hybrid+csm", "bary"}, {"rt", "none"}};
+      for (const auto& [scene, view] : scene_views) {
+        const json* any = find_run(results, scene, view, size.label, spp, "sm", "none");
+        md << "| " << scene << " v" << view << " | " << (any ? std::to_string((*any)["triangles"].get<uint64_t>()) : "—")
+           << " |";
+        for (const auto& [mode, test] : techniques)
+          md << " " << ms_cell(find_run(results, scene, view, size.label, spp, mode, test), "total") << " |";
+        const json* rt = find_run(results, scene, view, size.label, spp, "rt", "none");
+        const json* csm = find_run(results, scene, view, size.label, spp, "izb+csm", "bary");
+        if (rt && csm && (*rt)["status"] == "ran" && (*csm)["status"] == "ran") {
+          const double a = (*rt)["gpu_ms"]["total"], b = (*csm)["gpu_ms"]["total"];
+          md << " " << (a < b ? "rt " + fmt("%.2f×", b / a) : "izb+csm " + fmt("%.2f×", a / b)) << " faster |";
+        } else {
+          md << " " << (rt && rt->contains("reason") ? "rt n/a" : "—") << " |";
+        }
+        md << " ";
+        for (size_t i = 0; i < techniques.size(); ++i) {
+          const json* r = find_run(results, scene, view, size.label, spp, techniques[i].first, techniques[i].second);
+          md << (i ? " / " : "")
+             << (r && (*r)["status"] == "ran" ? fmt("%.1f", (*r)["memory_total_bytes"].get<double>() / 1048576.0) : "—");
+        }
+        md << " |";
+        if (csm && (*csm)["status"] == "ran") {
+          const auto& c = (*csm)["counts"];
+          md << " " << fmt("%.1f", c["triangle_tests_per_pixel"].get<double>()) << " / "
+             << fmt("%.2f", c["triangle_tests_per_fragment"].get<double>()) << ", "
+             << fmt("%.1f", c["list_length_average"].get<double>()) << " |";
+        } else {
+          md << " — |";
+        }
+        md << " " << (rt && (*rt)["status"] == "ran" ? fmt("%.1f", (*rt)["counts"]["rays_per_pixel"].get<double>()) : "—")
+           << " |\n";
+      }
+      md << "\n";
+      if (spp != 1) continue;
+      md << "### Table 3 layout: " << size.label << ", IZB " << size.izb
+         << "²: CSM time and culling rate per coverage test (every caster in the CSM)\n\n"
+         << "| scene, view | hertel | bary | bary-hw | inner-hw |\n|---|---|---|---|---|\n";
+      for (const auto& [scene, view] : scene_views) {
+        md << "| " << scene << " v" << view << " |";
+        for (const char* test : {"hertel", "bary", "bary-hw", "inner-hw"}) {
+          const json* r = find_run(results, scene, view, size.label, 1, "izb+csm", test, true);
+          if (!r || (*r)["status"] != "ran") {
+            md << " " << (r ? "n/a" : "—") << " |";
+            continue;
+          }
+          md << " " << ms_cell(r, "csm") << " ms, " << fmt("%.1f%%", (*r)["culling_rate"].get<double>() * 100.0);
+          if ((*r)["csm_status"] != "ran") md << " (" << (*r)["csm_status"].get<std::string>() << ")";
+          md << " |";
+        }
+        md << "\n";
+      }
+      md << "\n";
+    }
+  }
+  // 32 spp / 1 spp per technique, when both ran.
+  if (std::find(o.spps.begin(), o.spps.end(), 1u) != o.spps.end() &&
+      std::find(o.spps.begin(), o.spps.end(), 32u) != o.spps.end()) {
+    md << "### 32 spp / 1 spp (total ms ratio)\n\n| size | scene, view | izb | izb+csm | hybrid+csm | rt |\n|---|---|---|---|---|---|\n";
+    for (const auto& size : sizes)
+      for (const auto& [scene, view] : scene_views) {
+        md << "| " << size.label << " | " << scene << " v" << view << " |";
+        for (const auto& [mode, test] : std::vector<std::pair<std::string, std::string>>{
+                 {"izb", "none"}, {"izb+csm", "bary"}, {"hybrid+csm", "bary"}, {"rt", "none"}}) {
+          const json* a = find_run(results, scene, view, size.label, 32, mode, test);
+          const json* b = find_run(results, scene, view, size.label, 1, mode, test);
+          const bool ok = a && b && (*a)["status"] == "ran" && (*b)["status"] == "ran" &&
+                          (*b)["gpu_ms"]["total"].get<double>() > 0.0;
+          md << " " << (ok ? fmt("%.2f", (*a)["gpu_ms"]["total"].get<double>() / (*b)["gpu_ms"]["total"].get<double>()) : "—")
+             << " |";
+        }
+        md << "\n";
+      }
+    md << "\n";
+  }
+  return md.str();
+}
+
+int run_suite(const Options& o) {
+  std::vector<SizeConfig> sizes = g_suite_sizes;
+  if (sizes.empty())
+    sizes = o.quick ? std::vector<SizeConfig>{{160, 90, 128, "160x90"}, {320, 180, 256, "320x180"}}
+                    : std::vector<SizeConfig>{{1920, 1080, 1024, "1920x1080"}, {3840, 2160, 2048, "3840x2160"}};
+  const std::string out_dir = o.out_dir.empty() ? "suite_out" : o.out_dir;
+  engine::gpu::Context ctx({.device = o.device});
+  json results = json::array();
+  print_header();
+  for (const auto& scene_name : split(o.scene)) {
+    for (uint32_t instances : o.instances) {
+      auto scene = load(scene_name, instances, o.csm_choice);
+      std::vector<size_t> views = o.views;
+      if (views.empty())
+        for (size_t v = 0; v < scene->views.size(); ++v) views.push_back(v);
+      engine::Renderer renderer(ctx, {sizes.front().width, sizes.front().height});
+      renderer.set_scene(*scene);
+      Bench bench{o, ctx, *scene, renderer, shadows::install(renderer, {}), nullptr, {}, 0, instances};
+      for (size_t view : views) {
+        scene->apply_view(view);
+        bench.view = view;
+        for (const auto& size : sizes) {
+          if (renderer.extent().width != size.width || renderer.extent().height != size.height)
+            renderer.resize({size.width, size.height});
+          for (uint32_t spp : o.spps) {
+            std::printf("-- %s v%zu, %u triangles, %s, IZB %u, %u spp\n", scene->name.c_str(), view,
+                        unsigned(scene->triangle_count()), size.label.c_str(), size.izb, spp);
+            for (const auto& run : suite_runs(o, size.izb, spp)) results.push_back(bench.measure(run, true));
+          }
+        }
+      }
+    }
+  }
+  write_json(out_dir + "/suite.json", results);
+  const std::string md_path = out_dir + "/suite.md";
+  std::ofstream md(md_path);
+  if (!md) throw std::runtime_error("cannot write " + md_path);
+  md << suite_markdown(results, sizes, o);
+  std::printf("wrote %s\n", md_path.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
     const Options o = parse(argc, argv);
-    const auto runs = expand_runs(o);
-    auto scene = engine::load_scene(o.scene);
-    apply_csm_choice(*scene, o.csm_choice);
-    scene->apply_view(o.view);
-
-    engine::gpu::Context ctx({.device = o.device});
-    engine::Renderer renderer(ctx, {o.width, o.height});
-    renderer.set_scene(*scene);
-    auto module = shadows::install(renderer, runs.front().settings);
-
-    std::unique_ptr<reference::EmbreeTracer> tracer;
-    std::vector<float> reference_vis;
-    if (o.reference) tracer = std::make_unique<reference::EmbreeTracer>(scene->registry);
-
-    json results = json::array();
-    std::printf("%-12s %-9s %-8s %-8s %4s %10s %10s %12s %12s %10s\n", "mode", "csm_test", "trace", "csm_pass",
-                "spp", "total_ms", "frame_ms", "mismatch", "false_shad", "cov_mae");
-    for (const auto& run : runs) {
-      module->settings() = run.settings;
-      json entry;
-      entry["device"] = ctx.device_name();
-      entry["driver"] = ctx.driver_description();
-      entry["scene"] = scene->name;
-      entry["view"] = o.view;
-      entry["triangles"] = scene->triangle_count();
-      entry["size"] = {o.width, o.height};
-      entry["izb"] = o.izb;
-      entry["mode"] = run.mode;
-      entry["spp"] = o.spp;
-      entry["csm_test"] = run.csm_test;
-      std::string why;
-      if (run.csm_test != "none" && !module->supported(run.settings.izb.csm_test, &why)) {
-        entry["status"] = "unavailable";
-        entry["reason"] = why;
-        std::printf("%-12s %-9s unavailable: %s\n", run.mode.c_str(), run.csm_test.c_str(), why.c_str());
-        results.push_back(entry);
-        continue;
-      }
-      // Automatic backends first time both (a few frames), then keep the faster. Timed frames run
-      // without the statistics passes; one more frame after them collects the statistics.
-      module->set_collect_stats(true);
-      for (int f = 0; f < 16 && (module->stats().trace_choice.reason == "probing" ||
-                                 module->stats().csm_choice.reason == "probing" || f == 0);
-           ++f)
-        renderer.render_frame(0.0f);
-      module->set_collect_stats(false);
-      for (int f = 0; f < o.warmup; ++f) renderer.render_frame(0.0f);
-      renderer.profiler().clear_history();
-      for (int f = 0; f < o.frames; ++f) renderer.render_frame(0.0f);
-
-      json gpu_ms;
-      for (const auto& name : renderer.profiler().region_names()) {
-        const double ms = renderer.profiler().median_ms(name);
-        if (ms > 0.0 || name == "shadows") gpu_ms[name] = ms;
-      }
-      // total: per frame, the sum of the technique's passes (statistics passes excluded); then the median.
-      {
-        std::vector<double> totals(size_t(o.frames), 0.0);
-        for (const auto& pass : module->pass_names()) {
-          const auto h = renderer.profiler().history(pass);
-          for (size_t f = 0; f < h.size() && f < totals.size(); ++f) totals[f] += h[f];
-        }
-        std::sort(totals.begin(), totals.end());
-        const size_t n = totals.size();
-        gpu_ms["total"] = n % 2 ? totals[n / 2] : 0.5 * (totals[n / 2 - 1] + totals[n / 2]);
-      }
-      entry["gpu_ms"] = gpu_ms;
-      const double frame_ms = renderer.profiler().median_ms("frame");
-      module->set_collect_stats(true);
-      renderer.render_frame(0.0f);
-      entry["frames"] = o.frames;
-      entry["warmup"] = o.warmup;
-      entry["counts"] = stats_json(module->stats());
-      entry["culling_rate"] = module->stats().culling_rate;
-      entry["hardware_conservative"] = module->stats().hardware_conservative;
-      entry["csm_status"] = module->stats().csm_status;
-      entry["trace"] = run.trace;
-      entry["lists"] = shadows::list_layout_name(run.settings.izb.lists);
-      entry["csm_backend"] = run.csm_backend;
-      if (!module->stats().trace_choice.backend.empty()) entry["trace_choice"] = choice_json(module->stats().trace_choice);
-      if (!module->stats().csm_choice.backend.empty()) entry["csm_choice"] = choice_json(module->stats().csm_choice);
-      if (!module->stats().cascade_splits.empty()) entry["cascade_splits"] = module->stats().cascade_splits;
-      json decisions = json::array();
-      for (const auto& d : module->stats().csm_decisions)
-        decisions.push_back({{"name", d.name}, {"in_csm", d.in_csm}, {"automatic", d.automatic},
-                             {"large_triangle_area_share", d.large_triangle_area_share}, {"reason", d.reason}});
-      if (!decisions.empty()) entry["csm_decisions"] = decisions;
-
-      double mismatch = -1, mae = -1;
-      uint64_t false_shadowed = 0;
-      if (tracer) {
-        if (reference_vis.empty()) reference_vis = support::reference_visibility(renderer, *tracer, o.spp);
-        const auto vis = module->read_visibility();
-        const auto cmp = reference::compare_visibility(vis, reference_vis);
-        entry["reference"] = {{"pixels", cmp.pixels},
-                              {"mismatched", cmp.mismatched},
-                              {"false_shadowed", cmp.false_shadowed},
-                              {"false_lit", cmp.false_lit},
-                              {"mismatch_rate", cmp.mismatch_rate},
-                              {"coverage_mae", cmp.coverage_mae},
-                              {"coverage_max_error", cmp.coverage_max_error}};
-        mismatch = cmp.mismatch_rate;
-        mae = cmp.coverage_mae;
-        false_shadowed = cmp.false_shadowed;
-        if (!o.diff_dir.empty()) {
-          const std::string file = o.diff_dir + "/diff_" + scene->name + "_v" + std::to_string(o.view) + "_" +
-                                   run.mode + "_" + run.csm_test + "_spp" + std::to_string(o.spp) + ".png";
-          std::filesystem::create_directories(o.diff_dir);
-          reference::write_diff_png(file, o.width, o.height, vis, reference_vis);
-        }
-      }
-      if (!o.dump_dir.empty()) {
-        std::filesystem::create_directories(o.dump_dir);
-        const auto vis = module->read_visibility();
-        const std::string file = o.dump_dir + "/vis_" + scene->name + "_v" + std::to_string(o.view) + "_" + run.mode +
-                                 "_" + run.csm_test + "_spp" + std::to_string(o.spp) + "_" +
-                                 (o.raster.empty() ? "auto" : o.raster) + "_" + run.trace + "_" + run.csm_backend +
-                                 ".f32";
-        std::ofstream out(file, std::ios::binary);
-        out.write(reinterpret_cast<const char*>(vis.data()), std::streamsize(vis.size() * sizeof(float)));
-      }
-      if (!o.screenshot_dir.empty()) {
-        std::filesystem::create_directories(o.screenshot_dir);
-        renderer.write_png(o.screenshot_dir + "/" + scene->name + "_v" + std::to_string(o.view) + "_" + run.mode +
-                           ".png");
-      }
-      entry["validation_messages"] = ctx.validation_message_count();
-      results.push_back(entry);
-      const auto ran = [](const shadows::Stats::BackendChoice& c, const std::string& asked) {
-        return asked == "none" || c.backend.empty() ? asked : c.backend;
-      };
-      std::printf("%-12s %-9s %-8s %-8s %4u %10.3f %10.3f %12.6f %12llu %10.5f\n", run.mode.c_str(),
-                  run.csm_test.c_str(), ran(module->stats().trace_choice, run.trace).c_str(),
-                  ran(module->stats().csm_choice, run.csm_backend).c_str(), o.spp,
-                  gpu_ms["total"].get<double>(), frame_ms, mismatch,
-                  (unsigned long long)false_shadowed, mae);
-      for (const auto& [name, value] : gpu_ms.items())
-        if (name != "total") std::printf("    %-26s %10.3f ms\n", name.c_str(), value.get<double>());
-    }
-    if (tracer && !o.screenshot_dir.empty() && !reference_vis.empty()) {
-      // The lighting path fed by the reference instead of a technique: what the image should be.
-      renderer.set_external_shadow_term(reference_vis);
-      renderer.render_frame(0.0f);
-      renderer.write_png(o.screenshot_dir + "/" + scene->name + "_v" + std::to_string(o.view) + "_reference.png");
-      renderer.set_external_shadow_term({});
-    }
-    if (!o.json_path.empty()) {
-      const std::filesystem::path p(o.json_path);
-      if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
-      std::ofstream out(o.json_path);
-      if (!out) throw std::runtime_error("cannot write " + o.json_path);
-      out << results.dump(2) << "\n";
-      std::printf("wrote %s\n", o.json_path.c_str());
-    }
-    return 0;
+    return o.suite.empty() ? run_single(o) : run_suite(o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "shadow_bench: %s\n", e.what());
     return 1;

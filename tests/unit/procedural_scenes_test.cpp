@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <set>
 
 #include "engine/assets/procedural_scenes.hpp"
 #include "engine/assets/scene.hpp"
@@ -339,3 +340,24 @@ TEST(MeshBuilders, GroundFacesUpAndDoubleSidedCardsHaveBothWindings) {
 }
 
 }  // namespace
+
+// Copies for scaling runs: N times the triangles, the meshes shared, each copy beside the others.
+TEST(ReplicateScene, CopiesShareMeshesAndTileTheGround) {
+  auto scene = engine::build_procedural_scene("atrium");
+  const size_t triangles = scene->triangle_count();
+  const engine::Aabb one = scene->world_bounds();
+  const size_t meshes = scene->registry.count<engine::Mesh>();
+  engine::replicate_scene(*scene, 5);
+  EXPECT_EQ(scene->triangle_count(), 5 * triangles);
+  EXPECT_EQ(scene->registry.count<engine::Mesh>(), 5 * meshes);
+  std::set<const engine::MeshData*> distinct;
+  scene->registry.each<engine::Mesh>([&](engine::Entity, engine::Mesh& m) { distinct.insert(m.data.get()); });
+  EXPECT_LE(distinct.size(), meshes);
+  const engine::Aabb all = scene->world_bounds();
+  // Three columns (ceil(sqrt(5))) and two rows of copies, each a footprint plus a tenth apart.
+  EXPECT_GT(all.extent().x, 2.5f * one.extent().x);
+  EXPECT_GT(all.extent().z, 1.5f * one.extent().z);
+  EXPECT_NEAR(all.extent().y, one.extent().y, 1e-3f);
+  EXPECT_NE(scene->name.find("x5"), std::string::npos);
+  EXPECT_THROW(engine::replicate_scene(*scene, 0), engine::SceneError);
+}

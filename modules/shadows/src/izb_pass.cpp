@@ -73,7 +73,7 @@ struct IzbPass::Impl {
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
     Pipeline tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
-    Pipeline trace_software, trace_hardware, count_software, count_hardware, depth_fill;
+    Pipeline trace_software, trace_hardware, count_software, count_hardware;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
   const Pipelines* p = nullptr;  // this frame's
@@ -211,20 +211,6 @@ struct IzbPass::Impl {
       ps.trace_hardware = raster("izb trace (hardware conservative)", 0, 0);
       ps.count_hardware = raster("izb fragment count (hardware conservative)", 0, 1);
     }
-    GraphicsPipelineDesc fill;
-    fill.name = "izb farthest depth fill";
-    fill.vertex_shader = "izb_fullscreen.vert";
-    fill.fragment_shader = "izb_depth_fill.frag";
-    fill.bindings = bindings;
-    fill.push_constant_size = sizeof(gpu_shared::IzbDrawPush);
-    fill.depth_test = true;
-    fill.depth_write = true;
-    fill.vertex_input = VertexInput::None;
-    fill.cull_mode = VK_CULL_MODE_NONE;
-    fill.depth_format = VK_FORMAT_D32_SFLOAT;
-    fill.depth_compare = VK_COMPARE_OP_ALWAYS;
-    fill.specialization = variant;
-    ps.depth_fill = factory.graphics(fill);
     return ps;
   }
 
@@ -243,9 +229,9 @@ struct IzbPass::Impl {
       tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
       tile_farthest = Buffer(ctx, VkDeviceSize(tiles_per_side) * tiles_per_side * 4, usage, false,
                              "izb farthest node depth per tile");
-      farthest = Buffer(ctx, texels * 4, usage, false, "izb farthest node depth");
+      farthest = Buffer(ctx, texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb farthest node depth");
       trace_depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
-                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                           "izb trace depth (farthest node)");
       ctx.immediate_submit([&](VkCommandBuffer cmd) {
         trace_depth.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAll, kAllAccess);
@@ -621,14 +607,17 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     return fit_orthographic(light_view, box, 1e-3f * glm::length(box.extent()) + 1e-3f);
   }();
   auto draw_trace = [&](const Pipeline& trace, VkCompareOp compare, bool fill_depth) {
-    begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
     if (fill_depth) {
-      // Writes each texel's farthest node depth; the trace draws after it in the same pass see it
-      // (depth tests follow primitive order).
-      m.p->depth_fill.bind(cmd);
-      m.push_all(cmd, frame, m.p->depth_fill);
-      vkCmdDraw(cmd, 3, 1, 0, 0);
+      // Each texel's farthest node depth becomes the depth the early test compares against (0 for an
+      // empty texel: nothing passes). The build keeps them in [0,1], where float order is bit order,
+      // so the buffer copies as it is; a full-screen depth-writing draw costs a CPU driver far more.
+      VkBufferImageCopy region{};
+      region.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
+      region.imageExtent = {m.resolution, m.resolution, 1};
+      vkCmdCopyBufferToImage(cmd, m.farthest.handle(), m.trace_depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &region);
+      full_barrier(cmd);
     }
+    begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
     trace.bind(cmd);
     vkCmdSetDepthBias(cmd, -1.0f, 0.0f, -1.0f);
     vkCmdSetDepthCompareOp(cmd, compare);

@@ -20,6 +20,8 @@ std::optional<Settings> parse_mode(const std::string& mode, Settings base) {
   } else if (mode == "hybrid+csm") {
     base.technique = Technique::Hybrid;
     base.izb.csm = true;
+  } else if (mode == "rt") {
+    base.technique = Technique::RayTraced;
   } else {
     return std::nullopt;
   }
@@ -33,6 +35,7 @@ std::string mode_name(const Settings& s) {
     case Technique::Cascades: return "cascades";
     case Technique::Izb: return s.izb.csm ? "izb+csm" : "izb";
     case Technique::Hybrid: return s.izb.csm ? "hybrid+csm" : "hybrid";
+    case Technique::RayTraced: return "rt";
   }
   return "?";
 }

@@ -1,8 +1,10 @@
+#include <cctype>
 #include <stdexcept>
 
 #include "cascades_pass.hpp"
 #include "engine/gpu/profiler.hpp"
 #include "izb_pass.hpp"
+#include "ray_traced_pass.hpp"
 #include "shadow_map_pass.hpp"
 #include "shadows/shadows.hpp"
 
@@ -34,11 +36,21 @@ class ShadowModuleImpl final : public ShadowModule {
         izb.insert(izb.begin(), cascades.begin(), cascades.end());
         return izb;
       }
+      case Technique::RayTraced: return {"rt_build", "rt_trace"};
     }
     return {};
   }
 
   bool supported(CsmTest test, std::string* why) const override { return izb().csm_test_supported(test, why); }
+  bool supported(Technique technique, std::string* why) const override {
+    if (technique != Technique::RayTraced || ctx_.features().ray_tracing_pipeline) return true;
+    if (why) *why = ctx_.features().ray_tracing_missing;
+    return false;
+  }
+
+  void on_scene(engine::gpu::Context&, engine::Scene&, engine::SceneGeometry&) override {
+    if (ray_traced_) ray_traced_->scene_changed();
+  }
 
   void record(engine::FrameContext& frame) override {
     engine::gpu::ScopedGpuRegion region(ctx_, frame.profiler, frame.cmd, "shadows");
@@ -64,6 +76,11 @@ class ShadowModuleImpl final : public ShadowModule {
         izb().record(frame, near, settings_.debug, true, collect_stats_, settings_.hybrid_soft_distance);
         break;
       }
+      case Technique::RayTraced:
+        // Throws the device's one-line reason where it cannot trace (supported() tells beforehand).
+        if (!ray_traced_) ray_traced_ = std::make_unique<RayTracedPass>(ctx_);
+        ray_traced_->record(frame, settings_.izb.samples_per_pixel, collect_stats_);
+        break;
     }
   }
 
@@ -72,7 +89,11 @@ class ShadowModuleImpl final : public ShadowModule {
     Stats fresh;  // only the techniques that ran this frame report
     if ((active_ == Technique::Izb || active_ == Technique::Hybrid) && izb_) izb_->after_frame(fresh);
     if ((active_ == Technique::Cascades || active_ == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh);
-    if (collect_stats_) stats_ = std::move(fresh);
+    if (active_ == Technique::RayTraced && ray_traced_) ray_traced_->after_frame(fresh);
+    if (collect_stats_) {
+      add_memory(fresh);
+      stats_ = std::move(fresh);
+    }
   }
 
   std::vector<float> read_visibility() override {
@@ -86,6 +107,33 @@ class ShadowModuleImpl final : public ShadowModule {
   CsmSnapshot read_csm() override { return izb_ ? izb_->read_csm() : CsmSnapshot{}; }
 
  private:
+  // The memory of the active technique's resources, found by the prefixes of their debug names.
+  void add_memory(Stats& s) const {
+    std::vector<std::string> prefixes;
+    switch (active_) {
+      case Technique::Off: break;
+      case Technique::ShadowMap: prefixes = {"sm "}; break;
+      case Technique::Cascades: prefixes = {"cascade "}; break;
+      case Technique::Izb: prefixes = {"izb "}; break;
+      case Technique::Hybrid: prefixes = {"izb ", "cascade "}; break;
+      case Technique::RayTraced: prefixes = {"rt "}; break;
+    }
+    if ((active_ == Technique::Izb || active_ == Technique::Hybrid) && settings_.izb.csm) prefixes.push_back("csm ");
+    for (const auto& a : ctx_.allocations()) {
+      // Staging and readback copies are transient or host-side; they are not the technique's memory.
+      if (a.name.find("staging") != std::string::npos || a.name.find("readback") != std::string::npos) continue;
+      for (const auto& prefix : prefixes) {
+        if (a.name.compare(0, prefix.size(), prefix) != 0) continue;
+        // Numbered resources (one bottom level per mesh) add up under one name.
+        std::string key = a.name;
+        while (!key.empty() && (std::isdigit(static_cast<unsigned char>(key.back())) || key.back() == ' ')) key.pop_back();
+        s.memory_bytes[key] += a.bytes;
+        s.memory_total_bytes += a.bytes;
+        break;
+      }
+    }
+  }
+
   IzbPass& izb() const {
     if (!izb_) izb_ = std::make_unique<IzbPass>(ctx_);
     return *izb_;
@@ -104,6 +152,7 @@ class ShadowModuleImpl final : public ShadowModule {
   std::unique_ptr<ShadowMapPass> shadow_map_;
   mutable std::unique_ptr<IzbPass> izb_;
   std::unique_ptr<CascadesPass> cascades_;
+  std::unique_ptr<RayTracedPass> ray_traced_;
 };
 
 }  // namespace detail

@@ -41,6 +41,13 @@ struct Scene {
   size_t triangle_count();
 };
 
+// Places `copies` copies of the scene's meshes (the original included) on a square grid in the
+// ground plane, spaced by the scene's footprint, for scaling measurements. The copies share the
+// originals' MeshData (one GPU mesh, one acceleration structure) and keep their hierarchy, materials,
+// shadow flags and animations; camera, light and views stay with the original. Throws SceneError for
+// copies == 0.
+void replicate_scene(Scene& scene, uint32_t copies);
+
 // The procedural scenes built in code: "contact", "atrium", "foliage".
 std::vector<std::string> procedural_scene_names();
 std::unique_ptr<Scene> build_procedural_scene(const std::string& name);

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <functional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <vulkan/vulkan.h>
@@ -23,7 +24,19 @@ struct DeviceFeatures {
   bool depth_clamp = false;
   bool timestamps = false;                       // timestampComputeAndGraphics on the queue
   float timestamp_period_ns = 1.0f;
-  bool ray_tracing_pipeline = false;             // VK_KHR_ray_tracing_pipeline (recorded, unused)
+  // Ray tracing: VK_KHR_acceleration_structure (+ deferred_host_operations, bufferDeviceAddress) with
+  // VK_KHR_ray_tracing_pipeline and/or VK_KHR_ray_query, all enabled together when present.
+  bool acceleration_structure = false;
+  bool ray_tracing_pipeline = false;
+  bool ray_query = false;
+  bool buffer_device_address = false;
+  // Empty when the ray-traced technique can run; else one line naming what the device lacks.
+  std::string ray_tracing_missing;
+  uint32_t shader_group_handle_size = 0;
+  uint32_t shader_group_handle_alignment = 0;
+  uint32_t shader_group_base_alignment = 0;
+  uint32_t scratch_offset_alignment = 0;         // minAccelerationStructureScratchOffsetAlignment
+  uint64_t max_storage_buffer_range = 0;         // limits.maxStorageBufferRange (bytes)
   bool shader_int64 = false;
   bool fragment_stores_and_atomics = false;
   bool vertex_stores_and_atomics = false;
@@ -78,16 +91,25 @@ class Context {
   void reset_validation_message_count() { validation_messages_ = 0; }
   std::vector<std::string> validation_messages() const;
 
+  // Live device memory allocations of Buffer and Image, by debug name: a pass's memory is the sum
+  // over the names it gives its resources (the shadow module reports it per technique).
+  struct Allocation {
+    std::string name;
+    VkDeviceSize bytes = 0;
+  };
+  void track_allocation(VkDeviceMemory memory, const std::string& name, VkDeviceSize bytes) const;
+  void untrack_allocation(VkDeviceMemory memory) const;
+  std::vector<Allocation> allocations() const;
+
   uint32_t find_memory_type(uint32_t type_bits, VkMemoryPropertyFlags properties) const;
   bool sync_validation_enabled() const { return sync_validation_enabled_; }
   const std::vector<std::string>& masked_features() const { return masked_features_; }
 
-  // Every device memory allocation goes through these, so leaks show as a growing live count. The
-  // allocation is checked against the device's largest allocation first (a clear error naming
-  // `what`, not a driver failure).
+  // Buffer and Image allocate through these: the allocation is checked against the device's largest
+  // single allocation first, and running out of memory is one line naming `what`, not a driver failure.
   VkDeviceMemory allocate_memory(const VkMemoryAllocateInfo& info, const std::string& what) const;
   void free_memory(VkDeviceMemory memory) const;
-  uint32_t live_allocation_count() const { return live_allocations_.load(); }
+  uint32_t live_allocation_count() const;  // Buffer and Image memory now allocated (allocations())
   VkDeviceSize max_memory_allocation_size() const { return max_allocation_size_; }
 
   // Records commands into a fresh command buffer, submits it and waits. For uploads, readbacks, tests.
@@ -108,6 +130,17 @@ class Context {
 
   // Extension entry points fetched at device creation.
   PFN_vkCmdPushDescriptorSetKHR cmd_push_descriptor_set = nullptr;
+  // Ray tracing entry points (null unless features().acceleration_structure / ray_tracing_pipeline).
+  struct RayTracingFunctions {
+    PFN_vkCreateAccelerationStructureKHR create_acceleration_structure = nullptr;
+    PFN_vkDestroyAccelerationStructureKHR destroy_acceleration_structure = nullptr;
+    PFN_vkGetAccelerationStructureBuildSizesKHR get_build_sizes = nullptr;
+    PFN_vkGetAccelerationStructureDeviceAddressKHR get_acceleration_structure_address = nullptr;
+    PFN_vkCmdBuildAccelerationStructuresKHR cmd_build_acceleration_structures = nullptr;
+    PFN_vkCreateRayTracingPipelinesKHR create_ray_tracing_pipelines = nullptr;
+    PFN_vkGetRayTracingShaderGroupHandlesKHR get_shader_group_handles = nullptr;
+    PFN_vkCmdTraceRaysKHR cmd_trace_rays = nullptr;
+  } rt;
 
  private:
   void create_instance(const ContextOptions& options);
@@ -129,10 +162,10 @@ class Context {
   bool sync_validation_enabled_ = false;
   std::vector<std::string> masked_features_;
   VkDeviceSize max_allocation_size_ = 0;
-  mutable std::atomic<uint32_t> live_allocations_{0};
   bool debug_utils_ = false;
   std::atomic<uint32_t> validation_messages_{0};
   mutable std::vector<std::string> message_log_;
+  mutable std::unordered_map<VkDeviceMemory, Allocation> allocations_;
   PFN_vkSetDebugUtilsObjectNameEXT set_object_name_ = nullptr;
   PFN_vkCmdBeginDebugUtilsLabelEXT cmd_begin_label_ = nullptr;
   PFN_vkCmdEndDebugUtilsLabelEXT cmd_end_label_ = nullptr;

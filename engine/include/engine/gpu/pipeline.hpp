@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "engine/gpu/context.hpp"
+#include "engine/gpu/resources.hpp"
 
 namespace engine::gpu {
 
@@ -108,15 +109,51 @@ struct GraphicsPipelineDesc {
   std::string name;
 };
 
+// A ray tracing pipeline of one ray generation shader, miss shaders and triangle hit groups (each
+// with optional closest-hit and any-hit shaders; a group with neither only records the hit). Shader
+// groups are numbered raygen, misses, hit groups, which is the order ShaderBindingTable lays out.
+struct RayTracingPipelineDesc {
+  std::string raygen_shader;
+  std::vector<std::string> miss_shaders;
+  struct HitGroup {
+    std::string closest_hit;  // empty: none
+    std::string any_hit;      // empty: none
+  };
+  std::vector<HitGroup> hit_groups;
+  std::vector<Binding> bindings;
+  uint32_t push_constant_size = 0;
+  std::vector<SpecializationConstant> specialization;
+  uint32_t max_recursion_depth = 1;
+  std::string name;
+};
+
 class PipelineFactory {
  public:
   explicit PipelineFactory(const Context& ctx) : ctx_(ctx) {}
   Pipeline compute(const ComputePipelineDesc& desc) const;
   Pipeline graphics(const GraphicsPipelineDesc& desc) const;
+  // Needs features().ray_tracing_pipeline.
+  Pipeline ray_tracing(const RayTracingPipelineDesc& desc) const;
 
  private:
   void make_layout(Pipeline& p, const std::vector<Binding>& bindings, uint32_t push_size) const;
   const Context& ctx_;
+};
+
+// The shader binding table of a ray tracing pipeline: one record per shader group (no shader record
+// data), each region starting at shaderGroupBaseAlignment and each record padded to
+// shaderGroupHandleAlignment, in a host-visible buffer read through its device address.
+class ShaderBindingTable {
+ public:
+  ShaderBindingTable() = default;
+  ShaderBindingTable(const Context& ctx, const Pipeline& pipeline, uint32_t miss_count, uint32_t hit_count,
+                     const std::string& name);
+  void trace(const Context& ctx, VkCommandBuffer cmd, uint32_t width, uint32_t height) const;
+  VkDeviceSize size() const { return buffer_.size(); }
+
+ private:
+  Buffer buffer_;
+  VkStridedDeviceAddressRegionKHR raygen_{}, miss_{}, hit_{}, callable_{};
 };
 
 // Collects descriptor writes for binding set 0 of a pipeline and pushes them in one call.
@@ -129,6 +166,7 @@ class DescriptorWriter {
   DescriptorWriter& storage_image(uint32_t binding, VkImageView view);
   DescriptorWriter& sampled_image(uint32_t binding, VkImageView view, VkSampler sampler,
                                   VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  DescriptorWriter& acceleration_structure(uint32_t binding, VkAccelerationStructureKHR structure);
   void push(const Context& ctx, VkCommandBuffer cmd, const Pipeline& pipeline);
 
  private:
@@ -137,6 +175,7 @@ class DescriptorWriter {
     VkDescriptorType type;
     VkDescriptorBufferInfo buffer;
     VkDescriptorImageInfo image;
+    VkAccelerationStructureKHR structure;
   };
   std::vector<Entry> entries_;
 };

@@ -27,6 +27,8 @@ class Buffer {
   VkBuffer handle() const { return buffer_; }
   VkDeviceSize size() const { return size_; }
   void* mapped() const { return mapped_; }
+  // Nonzero only for buffers created with VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT.
+  VkDeviceAddress device_address() const { return device_address_; }
   bool valid() const { return buffer_ != VK_NULL_HANDLE; }
   template <typename T>
   T* as() const { return static_cast<T*>(mapped_); }
@@ -39,6 +41,7 @@ class Buffer {
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   VkDeviceSize size_ = 0;
   void* mapped_ = nullptr;
+  VkDeviceAddress device_address_ = 0;
 };
 
 // Creates a device-local buffer and fills it with `bytes` through a staging copy.
@@ -109,6 +112,11 @@ class Sampler {
   const Context* ctx_ = nullptr;
   VkSampler sampler_ = VK_NULL_HANDLE;
 };
+
+// `value` rounded up to a multiple of `alignment` (0: unchanged).
+inline VkDeviceSize align_up(VkDeviceSize value, VkDeviceSize alignment) {
+  return alignment ? (value + alignment - 1) / alignment * alignment : value;
+}
 
 // Memory barrier helpers (synchronization2).
 void memory_barrier(VkCommandBuffer cmd, VkPipelineStageFlags2 src_stage, VkAccessFlags2 src_access,

@@ -22,6 +22,7 @@ enum class Technique {
   Cascades,   // cascaded filtered shadow maps ("cascades")
   Izb,        // frustum-traced irregular z-buffer hard shadows ("izb"; with IzbSettings::csm: "izb+csm")
   Hybrid,     // IZB near the camera blended into cascades far away ("hybrid")
+  RayTraced,  // one hardware shadow ray per shading point or μQuad sample ("rt"; needs ray tracing)
 };
 
 // Full-coverage test of the conservative shadow map pass.
@@ -145,6 +146,16 @@ struct Stats {
   uint64_t trace_records = 0;
   uint64_t trace_tile_pairs = 0;
   uint64_t trace_pairs = 0;
+  // Ray traced: rays (candidates x samples), those that hit a caster, top-level instances, and the
+  // triangles in the bottom levels (each mesh once, however many instances use it).
+  uint64_t rays_traced = 0;
+  uint64_t rays_occluded = 0;
+  uint64_t rt_instances = 0;
+  uint64_t rt_triangles = 0;
+  // GPU memory the technique holds, by resource (debug name -> bytes), and its sum. Resources shared
+  // with the renderer (G-buffer, scene geometry) are not counted.
+  std::map<std::string, uint64_t> memory_bytes;
+  uint64_t memory_total_bytes = 0;
   // Cascades
   double expensive_path_fraction = 0.0;
   uint64_t expensive_path_pixels = 0;
@@ -165,6 +176,7 @@ class ShadowModule : public engine::RenderFeature {
   virtual std::vector<std::string> pass_names() const = 0;
   // Whether a coverage test / technique can run on this device, and why not.
   virtual bool supported(CsmTest test, std::string* why = nullptr) const = 0;
+  virtual bool supported(Technique technique, std::string* why = nullptr) const = 0;
   // Per-pixel visibility of the last frame (1 lit .. 0 shadowed, -1 background), for tests/tools.
   virtual std::vector<float> read_visibility() = 0;
   // The last frame's conservative shadow map (row-major, resolution^2 depths, 1 = nothing stored) and
@@ -180,7 +192,8 @@ class ShadowModule : public engine::RenderFeature {
 // Creates the module, adds it to the renderer, and returns it.
 std::shared_ptr<ShadowModule> install(engine::Renderer& renderer, const Settings& settings = {});
 
-// Parsing/printing helpers for command lines and JSON ("sm", "cascades", "izb", "izb+csm", "hybrid").
+// Parsing/printing helpers for command lines and JSON ("sm", "cascades", "izb", "izb+csm", "hybrid",
+// "hybrid+csm", "rt").
 std::optional<Settings> parse_mode(const std::string& mode, Settings base);
 std::string mode_name(const Settings& settings);
 std::optional<CsmTest> parse_csm_test(const std::string& name);

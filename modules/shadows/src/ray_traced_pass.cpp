@@ -1,0 +1,324 @@
+#include "ray_traced_pass.hpp"
+
+#include <cstring>
+#include <stdexcept>
+
+#include "engine/gpu/pipeline.hpp"
+#include "engine/gpu/profiler.hpp"
+#include "shared/ray_traced.h"
+
+namespace shadows::detail {
+
+using namespace engine::gpu;
+
+namespace {
+
+// An acceleration structure and the buffer that stores it.
+struct Structure {
+  const Context* ctx = nullptr;
+  Buffer storage;
+  VkAccelerationStructureKHR handle = VK_NULL_HANDLE;
+  VkDeviceAddress address = 0;
+
+  Structure() = default;
+  Structure(const Context& c, VkAccelerationStructureTypeKHR type, VkDeviceSize size, const std::string& name)
+      : ctx(&c) {
+    storage = Buffer(c, size,
+                     VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_STORAGE_BIT_KHR | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                     false, name);
+    VkAccelerationStructureCreateInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_CREATE_INFO_KHR};
+    info.buffer = storage.handle();
+    info.size = size;
+    info.type = type;
+    VK_CHECK(c.rt.create_acceleration_structure(c.device(), &info, nullptr, &handle));
+    VkAccelerationStructureDeviceAddressInfoKHR a{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_DEVICE_ADDRESS_INFO_KHR};
+    a.accelerationStructure = handle;
+    address = c.rt.get_acceleration_structure_address(c.device(), &a);
+    c.set_name(handle, VK_OBJECT_TYPE_ACCELERATION_STRUCTURE_KHR, name);
+  }
+  ~Structure() { reset(); }
+  Structure(Structure&& o) noexcept { *this = std::move(o); }
+  Structure& operator=(Structure&& o) noexcept {
+    if (this != &o) {
+      reset();
+      ctx = o.ctx;
+      storage = std::move(o.storage);
+      handle = std::exchange(o.handle, VK_NULL_HANDLE);
+      address = std::exchange(o.address, 0);
+    }
+    return *this;
+  }
+  void reset() {
+    if (ctx && handle) ctx->rt.destroy_acceleration_structure(ctx->device(), handle, nullptr);
+    handle = VK_NULL_HANDLE;
+    address = 0;
+    storage.reset();
+  }
+};
+
+// A scratch buffer whose device address is rounded up to the device's scratch alignment.
+struct Scratch {
+  Buffer buffer;
+  VkDeviceAddress address = 0;
+  void ensure(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
+    const VkDeviceSize alignment = std::max<VkDeviceSize>(ctx.features().scratch_offset_alignment, 1);
+    if (buffer.valid() && buffer.size() >= bytes + alignment) return;
+    buffer = Buffer(ctx, bytes + alignment,
+                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT, false, name);
+    address = align_up(buffer.device_address(), alignment);
+  }
+};
+
+VkTransformMatrixKHR to_transform(const glm::mat4& m) {
+  VkTransformMatrixKHR t{};
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) t.matrix[row][col] = m[col][row];  // glm is column-major
+  return t;
+}
+
+}  // namespace
+
+struct RayTracedPass::Impl {
+  Context& ctx;
+  Pipeline pipeline;
+  ShaderBindingTable sbt;
+  // Bottom levels, one per SceneGeometry mesh slot (empty meshes have none).
+  std::vector<Structure> bottom;
+  const engine::SceneGeometry* built_for = nullptr;
+  VkBuffer built_vertices = VK_NULL_HANDLE;
+  Structure top;
+  uint32_t top_capacity = 0;
+  Scratch top_scratch;
+  Buffer instances;  // host-visible VkAccelerationStructureInstanceKHR array
+  Buffer counters, counters_readback;
+  bool collected = false;
+  uint32_t instance_count = 0;
+  uint64_t bottom_triangles = 0;
+
+  explicit Impl(Context& c) : ctx(c) {
+    PipelineFactory factory(ctx);
+    RayTracingPipelineDesc d;
+    d.name = "rt shadow";
+    d.raygen_shader = "rt_shadow.rgen";
+    d.miss_shaders = {"rt_shadow.rmiss"};
+    d.hit_groups = {{}};  // occlusion only: a hit needs no shader
+    d.push_constant_size = sizeof(gpu_shared::RayTracedPush);
+    d.bindings = {{gpu_shared::RT_BINDING_SCENE, VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR},
+                  {gpu_shared::RT_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {gpu_shared::RT_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {gpu_shared::RT_BINDING_ALBEDO, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {gpu_shared::RT_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {gpu_shared::RT_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+    pipeline = factory.ray_tracing(d);
+    sbt = ShaderBindingTable(ctx, pipeline, 1, 1, "rt shader binding table");
+    const VkDeviceSize counter_bytes = gpu_shared::RT_COUNTER_COUNT * sizeof(uint32_t);
+    counters = Buffer(ctx, counter_bytes,
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                      false, "rt counters");
+    counters_readback = Buffer(ctx, counter_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "rt counters readback");
+  }
+
+  // One bottom level per mesh of the scene, built together in one submission (opaque triangles
+  // straight from the scene's shared vertex and index buffers).
+  void build_bottom_levels(const engine::SceneGeometry& geometry) {
+    bottom.clear();
+    bottom.resize(geometry.mesh_count());
+    bottom_triangles = 0;
+    const size_t n = geometry.mesh_count();
+    std::vector<VkAccelerationStructureGeometryKHR> geometries(n);
+    std::vector<VkAccelerationStructureBuildGeometryInfoKHR> infos;
+    std::vector<VkAccelerationStructureBuildRangeInfoKHR> ranges;
+    std::vector<VkDeviceSize> scratch_offsets;
+    VkDeviceSize scratch_total = 0;
+    const VkDeviceSize scratch_alignment = std::max<VkDeviceSize>(ctx.features().scratch_offset_alignment, 1);
+    for (uint32_t slot = 0; slot < n; ++slot) {
+      const engine::GpuMeshRange& mesh = geometry.mesh(slot);
+      if (mesh.index_count < 3 || mesh.vertex_count == 0) continue;
+      VkAccelerationStructureGeometryKHR& g = geometries[slot];
+      g = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+      g.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+      g.flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
+      auto& tri = g.geometry.triangles;
+      tri = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR};
+      tri.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+      tri.vertexData.deviceAddress = geometry.vertices().device_address();  // + firstVertex * stride
+      tri.vertexStride = sizeof(engine::Vertex);
+      tri.maxVertex = mesh.vertex_count - 1;  // relative to firstVertex
+      tri.indexType = VK_INDEX_TYPE_UINT32;
+      tri.indexData.deviceAddress = geometry.indices().device_address();  // + primitiveOffset
+
+      VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
+      info.type = VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
+      info.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
+      info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
+      info.geometryCount = 1;
+      info.pGeometries = &g;
+      const uint32_t triangles = mesh.index_count / 3;
+      VkAccelerationStructureBuildSizesInfoKHR sizes{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR};
+      ctx.rt.get_build_sizes(ctx.device(), VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR, &info, &triangles, &sizes);
+      bottom[slot] = Structure(ctx, VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, sizes.accelerationStructureSize,
+                               "rt bottom level " + std::to_string(slot));
+      info.dstAccelerationStructure = bottom[slot].handle;
+      scratch_offsets.push_back(scratch_total);
+      scratch_total += align_up(sizes.buildScratchSize, scratch_alignment);
+      infos.push_back(info);
+      VkAccelerationStructureBuildRangeInfoKHR range{};
+      range.primitiveCount = triangles;
+      range.primitiveOffset = mesh.first_index * uint32_t(sizeof(uint32_t));
+      range.firstVertex = uint32_t(mesh.vertex_offset);
+      ranges.push_back(range);
+      bottom_triangles += triangles;
+    }
+    if (!infos.empty()) {
+      // Scratch lives only for the build; the structures keep their own storage.
+      Scratch scratch;
+      scratch.ensure(ctx, scratch_total, "rt bottom level build scratch");
+      std::vector<const VkAccelerationStructureBuildRangeInfoKHR*> range_pointers;
+      for (size_t i = 0; i < infos.size(); ++i) {
+        infos[i].scratchData.deviceAddress = scratch.address + scratch_offsets[i];
+        range_pointers.push_back(&ranges[i]);
+      }
+      ctx.immediate_submit([&](VkCommandBuffer cmd) {
+        ctx.rt.cmd_build_acceleration_structures(cmd, uint32_t(infos.size()), infos.data(), range_pointers.data());
+      });
+    }
+    built_for = &geometry;
+    built_vertices = geometry.vertices().handle();
+  }
+
+  // Rebuilds the top level over every casting draw with its transform of this frame.
+  void build_top_level(VkCommandBuffer cmd, const engine::FrameContext& frame) {
+    std::vector<VkAccelerationStructureInstanceKHR> list;
+    list.reserve(frame.draws.size());
+    for (const auto& d : frame.draws) {
+      if (!d.shadow.casts_shadow || d.mesh >= bottom.size() || !bottom[d.mesh].handle) continue;
+      VkAccelerationStructureInstanceKHR inst{};
+      inst.transform = to_transform(d.world);
+      inst.instanceCustomIndex = 0;
+      inst.mask = 0xff;
+      inst.instanceShaderBindingTableRecordOffset = 0;
+      // Both faces occlude, as in the reference.
+      inst.flags = VK_GEOMETRY_INSTANCE_TRIANGLE_FACING_CULL_DISABLE_BIT_KHR | VK_GEOMETRY_INSTANCE_FORCE_OPAQUE_BIT_KHR;
+      inst.accelerationStructureReference = bottom[d.mesh].address;
+      list.push_back(inst);
+    }
+    instance_count = uint32_t(list.size());
+
+    VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+    g.geometryType = VK_GEOMETRY_TYPE_INSTANCES_KHR;
+    g.flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
+    g.geometry.instances = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR};
+    g.geometry.instances.arrayOfPointers = VK_FALSE;
+    VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
+    info.type = VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR;
+    info.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
+    info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
+    info.geometryCount = 1;
+    info.pGeometries = &g;
+
+    // Storage, scratch and the instance array are sized for a capacity that grows (doubling) with
+    // the caster count, so a changing scene does not reallocate every frame.
+    if (instance_count > top_capacity || !top.handle) {
+      top_capacity = std::max<uint32_t>({instance_count, top_capacity * 2, 16});
+      VkAccelerationStructureBuildSizesInfoKHR sizes{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR};
+      ctx.rt.get_build_sizes(ctx.device(), VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR, &info, &top_capacity, &sizes);
+      top = Structure(ctx, VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, sizes.accelerationStructureSize, "rt top level");
+      top_scratch.ensure(ctx, sizes.buildScratchSize, "rt top level build scratch");
+      instances = Buffer(ctx, VkDeviceSize(top_capacity) * sizeof(VkAccelerationStructureInstanceKHR),
+                         VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
+                             VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                         true, "rt instances");
+    }
+    // The host writes before the submission that reads them (one frame in flight).
+    if (!list.empty()) instances.write(list.data(), list.size() * sizeof(list[0]));
+    g.geometry.instances.data.deviceAddress = instances.device_address();
+    info.dstAccelerationStructure = top.handle;
+    info.scratchData.deviceAddress = top_scratch.address;
+    VkAccelerationStructureBuildRangeInfoKHR range{};
+    range.primitiveCount = instance_count;
+    const VkAccelerationStructureBuildRangeInfoKHR* range_pointer = &range;
+    // The previous trace's reads of the top level and scratch finish before this build rewrites them.
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR | VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
+                   VK_ACCESS_2_ACCELERATION_STRUCTURE_READ_BIT_KHR | VK_ACCESS_2_ACCELERATION_STRUCTURE_WRITE_BIT_KHR,
+                   VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
+                   VK_ACCESS_2_ACCELERATION_STRUCTURE_READ_BIT_KHR | VK_ACCESS_2_ACCELERATION_STRUCTURE_WRITE_BIT_KHR);
+    ctx.rt.cmd_build_acceleration_structures(cmd, 1, &info, &range_pointer);
+    // The trace reads the finished top level.
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
+                   VK_ACCESS_2_ACCELERATION_STRUCTURE_WRITE_BIT_KHR, VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR,
+                   VK_ACCESS_2_ACCELERATION_STRUCTURE_READ_BIT_KHR);
+  }
+};
+
+RayTracedPass::RayTracedPass(Context& ctx) {
+  if (!ctx.features().ray_tracing_pipeline) throw std::runtime_error(ctx.features().ray_tracing_missing);
+  impl_ = std::make_unique<Impl>(ctx);
+}
+
+RayTracedPass::~RayTracedPass() = default;
+
+void RayTracedPass::scene_changed() {
+  impl_->bottom.clear();
+  impl_->built_for = nullptr;
+}
+
+void RayTracedPass::record(engine::FrameContext& frame, uint32_t samples_per_pixel, bool collect_stats) {
+  Impl& m = *impl_;
+  VkCommandBuffer cmd = frame.cmd;
+  if (m.built_for != &frame.geometry || m.built_vertices != frame.geometry.vertices().handle())
+    m.build_bottom_levels(frame.geometry);
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "rt_build");
+    m.build_top_level(cmd, frame);
+  }
+  if (collect_stats) {
+    vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR,
+                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  {
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "rt_trace");
+    gpu_shared::RayTracedPush push{};
+    push.inverse_view_projection = frame.view.inverse_view_projection;
+    push.light_direction = glm::vec4(glm::normalize(frame.view.light_direction), 0.0f);
+    push.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, samples_per_pixel == 32 ? 32u : 1u,
+                             collect_stats ? 1u : 0u);
+    m.pipeline.bind(cmd);
+    DescriptorWriter()
+        .acceleration_structure(gpu_shared::RT_BINDING_SCENE, m.top.handle)
+        .storage_image(gpu_shared::RT_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
+        .storage_image(gpu_shared::RT_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+        .storage_image(gpu_shared::RT_BINDING_ALBEDO, frame.gbuffer.albedo.view())
+        .storage_image(gpu_shared::RT_BINDING_SHADOW_TERM, frame.shadow_term.view())
+        .storage_buffer(gpu_shared::RT_BINDING_COUNTERS, m.counters.handle())
+        .push(m.ctx, cmd, m.pipeline);
+    m.pipeline.push_constants(cmd, push);
+    m.sbt.trace(m.ctx, cmd, frame.view.extent.width, frame.view.extent.height);
+  }
+  if (collect_stats) {
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    VkBufferCopy copy{0, 0, m.counters.size()};
+    vkCmdCopyBuffer(cmd, m.counters.handle(), m.counters_readback.handle(), 1, &copy);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                   VK_ACCESS_2_HOST_READ_BIT);
+    m.collected = true;
+  }
+}
+
+void RayTracedPass::after_frame(Stats& s) {
+  Impl& m = *impl_;
+  s.rt_instances = m.instance_count;
+  s.rt_triangles = m.bottom_triangles;
+  if (!m.collected) return;
+  m.collected = false;
+  const auto* c = m.counters_readback.as<uint32_t>();
+  s.shading_points = c[gpu_shared::RT_COUNTER_SHADING_POINTS];
+  s.lit_candidates = c[gpu_shared::RT_COUNTER_CANDIDATES];
+  s.rays_traced = c[gpu_shared::RT_COUNTER_RAYS];
+  s.rays_occluded = c[gpu_shared::RT_COUNTER_OCCLUDED];
+}
+
+}  // namespace shadows::detail

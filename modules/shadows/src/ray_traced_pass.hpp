@@ -1,0 +1,27 @@
+#pragma once
+#include <memory>
+
+#include "engine/gpu/resources.hpp"
+#include "shadows/shadows.hpp"
+
+namespace shadows::detail {
+
+// The "rt" technique: one hard shadow ray per shading point (or per μQuad sample at 32 spp) through
+// the ray tracing pipeline. Bottom-level structures are built once per mesh of the scene; the top
+// level is rebuilt every frame from the casters' current transforms, so moving casters work.
+class RayTracedPass {
+ public:
+  // Throws std::runtime_error (one line naming the missing extension) where the device cannot trace.
+  explicit RayTracedPass(engine::gpu::Context& ctx);
+  ~RayTracedPass();
+  void record(engine::FrameContext& frame, uint32_t samples_per_pixel, bool collect_stats);
+  void after_frame(Stats& stats);
+  // Forgets the bottom levels (the scene's geometry changed).
+  void scene_changed();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace shadows::detail

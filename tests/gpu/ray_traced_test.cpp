@@ -1,0 +1,151 @@
+// The ray-traced technique ("rt") against the Embree reference. It needs a device with
+// VK_KHR_ray_tracing_pipeline: these tests pick the device as the applications do (ENGINE_DEVICE, else
+// the best GPU), so under CTest (ENGINE_DEVICE=lavapipe) the comparisons skip with the device's reason
+// and the one test that runs checks that reason; run `build/bin/gpu_tests --gtest_filter='*RayTraced*'`
+// on a ray tracing GPU for the comparisons. The validation layer is on either way.
+#include <cmath>
+
+#include "engine/core/animation.hpp"
+#include "frame_capture.hpp"
+#include "gpu_fixture.hpp"
+#include "shadows/shadows.hpp"
+
+namespace {
+
+constexpr uint32_t kSize = 128;
+
+class RayTracedTest : public GpuTest {
+ protected:
+  void SetUp() override {
+    ctx_ = std::make_unique<engine::gpu::Context>(engine::gpu::ContextOptions{.validation = true});
+    ASSERT_TRUE(ctx_->validation_enabled()) << "the Khronos validation layer must be installed for GPU tests";
+  }
+  void TearDown() override {
+    module_.reset();  // before the context goes
+    GpuTest::TearDown();
+  }
+  static shadows::Settings rt(uint32_t spp) {
+    shadows::Settings s;
+    s.technique = shadows::Technique::RayTraced;
+    s.izb.samples_per_pixel = spp;
+    return s;
+  }
+  // Whether this device traces rays; else the reason, for GTEST_SKIP.
+  bool can_trace(std::string* why) const {
+    if (ctx_->features().ray_tracing_pipeline) return true;
+    *why = ctx_->features().ray_tracing_missing;
+    return false;
+  }
+  std::shared_ptr<shadows::ShadowModule> module_;
+};
+
+TEST_F(RayTracedTest, DeviceWithoutRayTracingNamesTheMissingExtension) {
+  if (ctx_->features().ray_tracing_pipeline) GTEST_SKIP() << ctx_->device_name() << " traces rays";
+  auto& r = make_renderer("contact", 0, 64, 64);
+  module_ = shadows::install(r, rt(1));
+  std::string why;
+  EXPECT_FALSE(module_->supported(shadows::Technique::RayTraced, &why));
+  EXPECT_NE(why.find("VK_KHR_"), std::string::npos) << why;
+  EXPECT_EQ(why.find('\n'), std::string::npos) << "one line";
+  // Recording it anyway fails with the same line, and nothing was drawn with it.
+  try {
+    r.render_frame(0.0f);
+    ADD_FAILURE() << "rendering rt on a device without ray tracing did not fail";
+  } catch (const std::exception& e) {
+    EXPECT_EQ(std::string(e.what()), why);
+  }
+  EXPECT_TRUE(module_->supported(shadows::Technique::Izb));
+}
+
+struct SceneView {
+  std::string scene;
+  size_t view;
+};
+void PrintTo(const SceneView& v, std::ostream* os) { *os << v.scene << " view " << v.view; }
+
+class RayTracedSceneTest : public RayTracedTest, public testing::WithParamInterface<SceneView> {
+ protected:
+  reference::Comparison compare(uint32_t spp, shadows::Stats* stats = nullptr) {
+    auto& r = make_renderer(GetParam().scene, GetParam().view, kSize, kSize);
+    module_ = shadows::install(r, rt(spp));
+    r.render_frame(0.0f);
+    r.render_frame(0.0f);  // the second frame rebuilds only the top level
+    const auto visibility = module_->read_visibility();
+    if (stats) *stats = module_->stats();
+    reference::EmbreeTracer tracer(scene_->registry);
+    return reference::compare_visibility(visibility, support::reference_visibility(r, tracer, spp));
+  }
+};
+
+// The IZB's bounds (tests/gpu/izb_test.cpp): rays from the same origins must agree as closely.
+TEST_P(RayTracedSceneTest, OneSampleMatchesReference) {
+  if (std::string why; !can_trace(&why)) GTEST_SKIP() << why;
+  shadows::Stats stats;
+  const auto cmp = compare(1, &stats);
+  EXPECT_GT(cmp.pixels, kSize * kSize / 4);
+  EXPECT_LE(cmp.mismatch_rate, 0.0002) << cmp.mismatched << " of " << cmp.pixels << " pixels differ";
+  EXPECT_GT(stats.rays_traced, 0u);
+  EXPECT_EQ(stats.rays_traced, stats.lit_candidates);
+  EXPECT_GT(stats.memory_total_bytes, 0u);
+}
+
+TEST_P(RayTracedSceneTest, ThirtyTwoSamplesMatchReferenceCoverage) {
+  if (std::string why; !can_trace(&why)) GTEST_SKIP() << why;
+  shadows::Stats stats;
+  const auto cmp = compare(32, &stats);
+  EXPECT_LE(cmp.coverage_mae, 1.0 / 64.0);
+  EXPECT_LE(cmp.mismatch_rate, 0.001);
+  EXPECT_EQ(stats.rays_traced, 32 * stats.lit_candidates);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, RayTracedSceneTest,
+                         testing::Values(SceneView{"contact", 0}, SceneView{"contact", 1}, SceneView{"atrium", 0},
+                                         SceneView{"atrium", 1}, SceneView{"foliage", 0}, SceneView{"foliage", 1}),
+                         [](const testing::TestParamInfo<SceneView>& info) {
+                           return info.param.scene + "_view" + std::to_string(info.param.view);
+                         });
+
+// Moving casters: the top level is rebuilt every frame, so each frame matches Embree traced against
+// that frame's geometry, and the shadows move.
+TEST_F(RayTracedTest, MovingCastersMatchReferenceEveryFrame) {
+  if (std::string why; !can_trace(&why)) GTEST_SKIP() << why;
+  auto& r = make_renderer(std::string(ENGINE_SOURCE_DIR) + "/content/levels/courtyard.json", 0, kSize, kSize);
+  ASSERT_GT(scene_->registry.count<engine::Animated>(), 0u);
+  module_ = shadows::install(r, rt(1));
+  std::vector<float> previous;
+  size_t changed = 0;
+  for (int frame = 0; frame < 3; ++frame) {
+    engine::update_animations(scene_->registry, 0.9f * float(frame));
+    r.render_frame(0.0f);
+    const auto visibility = module_->read_visibility();
+    reference::EmbreeTracer tracer(scene_->registry);
+    const auto cmp = reference::compare_visibility(visibility, support::reference_visibility(r, tracer, 1));
+    EXPECT_LE(cmp.mismatch_rate, 0.0005) << "frame " << frame << ": " << cmp.mismatched << " of " << cmp.pixels;
+    if (frame > 0)
+      for (size_t i = 0; i < visibility.size(); ++i) changed += visibility[i] >= 0.0f && visibility[i] != previous[i];
+    previous = visibility;
+  }
+  EXPECT_GT(changed, 10u) << "moving casters did not move their shadows";
+}
+
+// Copies of a scene share their bottom levels: one per mesh, however many instances use it.
+TEST_F(RayTracedTest, InstancesShareBottomLevels) {
+  if (std::string why; !can_trace(&why)) GTEST_SKIP() << why;
+  scene_ = engine::load_scene("atrium");
+  const size_t single = scene_->triangle_count();
+  engine::replicate_scene(*scene_, 4);
+  EXPECT_EQ(scene_->triangle_count(), 4 * single);
+  scene_->apply_view(0);
+  renderer_ = std::make_unique<engine::Renderer>(*ctx_, VkExtent2D{kSize, kSize});
+  renderer_->set_scene(*scene_);
+  module_ = shadows::install(*renderer_, rt(1));
+  renderer_->render_frame(0.0f);
+  renderer_->render_frame(0.0f);
+  EXPECT_LE(module_->stats().rt_triangles, single);
+  reference::EmbreeTracer tracer(scene_->registry);
+  const auto cmp = reference::compare_visibility(module_->read_visibility(),
+                                                 support::reference_visibility(*renderer_, tracer, 1));
+  EXPECT_LE(cmp.mismatch_rate, 0.0002);
+}
+
+}  // namespace
