@@ -10,6 +10,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools
   libglm-dev libglfw3-dev libimgui-dev libtinygltf-dev libgtest-dev libstb-dev nlohmann-json3-dev
   libembree-dev xvfb xauth
+  clang libclang-rt-dev
 )
 missing=()
 for p in "${packages[@]}"; do

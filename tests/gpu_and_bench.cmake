@@ -18,6 +18,11 @@ target_link_libraries(gpu_tests PRIVATE shadow_test_support GTest::gtest_main)
 target_compile_definitions(gpu_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 engine_target_warnings(gpu_tests)
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
+# The same tests with the validation layer's synchronization checks on: a hazard between commands
+# (a missing or too narrow barrier) is a validation message, so a failure. One variable only: the
+# discovered tests' properties take a single ENVIRONMENT entry (the variable implies the layer).
+gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_PREFIX syncval.
+                     PROPERTIES LABELS syncval ENVIRONMENT ENGINE_SYNC_VALIDATION=1)
 
 add_subdirectory(window)
 
@@ -179,3 +184,12 @@ and r['memory_total_bytes'] > 0 for r in runs) else 'a technique did not run at 
   set_tests_properties(shadow_bench_million_triangles PROPERTIES LABELS long TIMEOUT 600
                        ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
 endif()
+
+# Soak: 10,000 frames cycling every mode with moving sun and casters; resident memory and live
+# allocations must stay flat after warm-up. Long: under the `long` label, which .ci/run leaves out.
+add_executable(shadow_soak soak/soak.cpp)
+target_link_libraries(shadow_soak PRIVATE engine_gpu shadows)
+engine_target_warnings(shadow_soak)
+add_test(NAME soak_contact_10000_frames COMMAND $<TARGET_FILE:shadow_soak> --frames 10000 --size 64x48)
+set_tests_properties(soak_contact_10000_frames PROPERTIES LABELS "long;soak" TIMEOUT 14400
+                     ENVIRONMENT "ENGINE_DEVICE=lavapipe")

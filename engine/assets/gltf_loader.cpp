@@ -44,9 +44,49 @@ std::string one_line(const std::string& text) {
   return out;
 }
 
+// External buffers: the path exactly as written, relative to the glTF's folder (older tinygltf
+// releases expanded URIs with wordexp, which runs "$(command)"; these callbacks do not depend on the
+// release), and only regular files of bounded size (no devices or pipes).
+constexpr uintmax_t kMaxExternalFileBytes = uintmax_t(1) << 31;
+
+bool external_file_exists(const std::string& path, void*) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(path, ec);
+}
+
+std::string external_file_path(const std::string& path, void*) { return path; }
+
+bool read_external_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    if (err) *err += "'" + path + "' is not a regular file. ";
+    return false;
+  }
+  const uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec || size > kMaxExternalFileBytes) {
+    if (err) *err += "'" + path + "' is unreadable or larger than 2 GiB. ";
+    return false;
+  }
+  std::ifstream in(path, std::ios::binary);
+  out->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) {
+    if (err) *err += "cannot read '" + path + "'. ";
+    return false;
+  }
+  return true;
+}
+
+bool refuse_file_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err += "writing files is not supported. ";
+  return false;
+}
+
 class Loader {
  public:
   explicit Loader(const std::filesystem::path& path) : path_(path), file_(path.string()) {}
+  // Bytes already in memory; `name` stands for the file in errors, external files resolve in `base_dir`.
+  Loader(std::string bytes, const std::string& name, const std::filesystem::path& base_dir)
+      : path_(base_dir / name), file_(name), bytes_(std::move(bytes)), in_memory_(true) {}
 
   std::unique_ptr<Scene> load();
 
@@ -75,6 +115,8 @@ class Loader {
 
   std::filesystem::path path_;
   std::string file_;
+  std::string bytes_;
+  bool in_memory_ = false;
   tinygltf::Model model_;
   std::map<std::pair<int, int>, std::shared_ptr<const MeshData>> primitive_cache_;
   std::vector<std::pair<Entity, int>> camera_nodes_;  // node entity, camera index
@@ -109,17 +151,21 @@ TextureWrap wrap_mode(int gltf_wrap) {
 }
 
 void Loader::parse() {
-  std::error_code ec;
-  if (!std::filesystem::exists(path_, ec)) fail("file not found");
-  if (!std::filesystem::is_regular_file(path_, ec)) fail("not a regular file");
-  std::ifstream in(path_, std::ios::binary);
-  if (!in) fail("cannot open file");
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in_memory_) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path_, ec)) fail("file not found");
+    if (!std::filesystem::is_regular_file(path_, ec)) fail("not a regular file");
+    std::ifstream in(path_, std::ios::binary);
+    if (!in) fail("cannot open file");
+    bytes_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string& bytes = bytes_;
   if (bytes.empty()) fail("file is empty");
   if (bytes.size() > UINT32_MAX) fail("file is larger than 4 GiB");
 
   tinygltf::TinyGLTF gltf;
   gltf.SetImageLoader(decode_image, nullptr);
+  gltf.SetFsCallbacks({external_file_exists, external_file_path, read_external_file, refuse_file_write, nullptr});
   std::string err, warn;
   const std::string base_dir = path_.parent_path().string();
   const bool is_binary = bytes.compare(0, 4, "glTF") == 0;
@@ -653,5 +699,10 @@ std::unique_ptr<Scene> Loader::load() {
 }  // namespace
 
 std::unique_ptr<Scene> load_gltf_scene(const std::filesystem::path& path) { return Loader(path).load(); }
+
+std::unique_ptr<Scene> load_gltf_scene_from_memory(std::string bytes, const std::string& name,
+                                                   const std::filesystem::path& base_dir) {
+  return Loader(std::move(bytes), name, base_dir).load();
+}
 
 }  // namespace engine

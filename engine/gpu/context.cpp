@@ -46,7 +46,28 @@ bool is_gpu(VkPhysicalDeviceType t) {
          t == VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU;
 }
 
+std::vector<std::string> split_list(const char* text) {
+  std::vector<std::string> out;
+  std::string item;
+  for (const char* c = text; c && *c; ++c) {
+    if (*c == ',') {
+      if (!item.empty()) out.push_back(item);
+      item.clear();
+    } else if (*c != ' ') {
+      item += *c;
+    }
+  }
+  if (!item.empty()) out.push_back(item);
+  return out;
+}
+
 }  // namespace
+
+const std::vector<std::string>& maskable_feature_names() {
+  static const std::vector<std::string> names = {"conservative_rasterization", "geometry_shader",
+                                                 "fragment_shader_barycentric", "subgroup_arithmetic"};
+  return names;
+}
 
 VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                               VkDebugUtilsMessageTypeFlagsEXT,
@@ -67,6 +88,16 @@ std::vector<std::string> Context::validation_messages() const {
 }
 
 Context::Context(const ContextOptions& options) {
+  masked_features_ = options.masked_features;
+  for (const auto& name : split_list(std::getenv("ENGINE_MASK_FEATURES"))) masked_features_.push_back(name);
+  const auto& known = maskable_feature_names();
+  for (const auto& name : masked_features_) {
+    if (std::find(known.begin(), known.end(), name) == known.end()) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw VulkanError("cannot mask feature '" + name + "': expected one of " + list);
+    }
+  }
   create_instance(options);
   pick_physical_device(options);
   create_device(options);
@@ -92,7 +123,9 @@ void Context::create_instance(const ContextOptions& options) {
 #else
   const bool debug_build = false;
 #endif
-  bool want_validation = options.validation || env_flag("ENGINE_VALIDATION") || debug_build;
+  // Synchronization validation implies the layer (one variable for test runners that set only one).
+  bool want_validation = options.validation || env_flag("ENGINE_VALIDATION") || env_flag("ENGINE_SYNC_VALIDATION") ||
+                         debug_build;
 
   uint32_t layer_count = 0;
   vkEnumerateInstanceLayerProperties(&layer_count, nullptr);
@@ -138,10 +171,30 @@ void Context::create_instance(const ContextOptions& options) {
   info.pApplicationInfo = &app;
   info.enabledExtensionCount = static_cast<uint32_t>(extensions.size());
   info.ppEnabledExtensionNames = extensions.data();
+  // Synchronization validation: the layer also reports hazards between commands (missing barriers).
+  sync_validation_enabled_ = validation_enabled_ && (options.sync_validation || env_flag("ENGINE_SYNC_VALIDATION"));
+  const VkValidationFeatureEnableEXT sync_enable = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
+  VkValidationFeaturesEXT validation_features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
+  validation_features.enabledValidationFeatureCount = 1;
+  validation_features.pEnabledValidationFeatures = &sync_enable;
   if (validation_enabled_) {
     info.enabledLayerCount = 1;
     info.ppEnabledLayerNames = &kValidation;
     if (debug_utils_) info.pNext = &messenger_info;  // also catches instance creation messages
+    if (sync_validation_enabled_) {
+      uint32_t layer_ext_count = 0;
+      vkEnumerateInstanceExtensionProperties(kValidation, &layer_ext_count, nullptr);
+      std::vector<VkExtensionProperties> layer_extensions(layer_ext_count);
+      vkEnumerateInstanceExtensionProperties(kValidation, &layer_ext_count, layer_extensions.data());
+      if (!has_extension(layer_extensions, VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME))
+        throw VulkanError("synchronization validation requested but the validation layer lacks " 
+                          VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME);
+      extensions.push_back(VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME);
+      info.enabledExtensionCount = static_cast<uint32_t>(extensions.size());
+      info.ppEnabledExtensionNames = extensions.data();
+      validation_features.pNext = info.pNext;
+      info.pNext = &validation_features;
+    }
   }
   VkResult r = vkCreateInstance(&info, nullptr, &instance_);
   if (r == VK_ERROR_INCOMPATIBLE_DRIVER)
@@ -284,19 +337,25 @@ void Context::create_device(const ContextOptions& options) {
   enable2.features.independentBlend = f2.features.independentBlend;
   enable2.features.pipelineStatisticsQuery = f2.features.pipelineStatisticsQuery;
 
+  auto masked = [&](const char* name) {
+    return std::find(masked_features_.begin(), masked_features_.end(), name) != masked_features_.end();
+  };
+  // A masked feature is neither enabled nor recorded, so using it anyway is a validation error.
+  if (masked("geometry_shader")) f2.features.geometryShader = VK_FALSE;
+  enable2.features.geometryShader = f2.features.geometryShader;
   features_.geometry_shader = f2.features.geometryShader;
   features_.depth_clamp = f2.features.depthClamp;
   features_.fragment_stores_and_atomics = f2.features.fragmentStoresAndAtomics;
   features_.vertex_stores_and_atomics = f2.features.vertexPipelineStoresAndAtomics;
   features_.shader_int64 = f2.features.shaderInt64;
 
-  if (has_bary && bary_features.fragmentShaderBarycentric) {
+  if (has_bary && bary_features.fragmentShaderBarycentric && !masked("fragment_shader_barycentric")) {
     extensions.push_back(VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME);
     enable_bary.fragmentShaderBarycentric = VK_TRUE;
     enable13.pNext = &enable_bary;
     features_.fragment_shader_barycentric = true;
   }
-  if (has_extension(available, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME)) {
+  if (has_extension(available, VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME) && !masked("conservative_rasterization")) {
     extensions.push_back(VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME);
     VkPhysicalDeviceConservativeRasterizationPropertiesEXT cprops{
         VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_CONSERVATIVE_RASTERIZATION_PROPERTIES_EXT};
@@ -366,7 +425,9 @@ void Context::create_device(const ContextOptions& options) {
 
   VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
   VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+  VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
   subgroup.pNext = &driver;
+  driver.pNext = &maintenance3;
   VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   p2.pNext = &subgroup;
   vkGetPhysicalDeviceProperties2(physical_device_, &p2);
@@ -374,8 +435,10 @@ void Context::create_device(const ContextOptions& options) {
   const VkSubgroupFeatureFlags needed_ops = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
   const VkShaderStageFlags needed_stages = VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
   features_.subgroup_arithmetic_compute_fragment = (subgroup.supportedOperations & needed_ops) == needed_ops &&
-                                                   (subgroup.supportedStages & needed_stages) == needed_stages;
+                                                   (subgroup.supportedStages & needed_stages) == needed_stages &&
+                                                   !masked("subgroup_arithmetic");
   driver_description_ = std::string(driver.driverName) + " " + driver.driverInfo;
+  max_allocation_size_ = maintenance3.maxMemoryAllocationSize;
 
   uint32_t family_count = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &family_count, nullptr);
@@ -458,6 +521,30 @@ uint32_t Context::find_memory_type(uint32_t type_bits, VkMemoryPropertyFlags pro
       return i;
   }
   throw VulkanError("no memory type with the requested properties");
+}
+
+uint32_t Context::live_allocation_count() const {
+  std::lock_guard lock(g_message_mutex);
+  return static_cast<uint32_t>(allocations_.size());
+}
+
+VkDeviceMemory Context::allocate_memory(const VkMemoryAllocateInfo& info, const std::string& what) const {
+  if (max_allocation_size_ && info.allocationSize > max_allocation_size_)
+    throw VulkanError(what + " needs " + std::to_string(info.allocationSize) + " bytes, more than the " +
+                      std::to_string(max_allocation_size_) + " bytes " + properties_.deviceName +
+                      " allocates at once");
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  const VkResult r = vkAllocateMemory(device_, &info, nullptr, &memory);
+  if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
+    throw VulkanError(what + " needs " + std::to_string(info.allocationSize) + " bytes, and " +
+                      properties_.deviceName + " is out of memory (" + vk_result_name(r) + ")");
+  VK_CHECK(r);
+  return memory;
+}
+
+void Context::free_memory(VkDeviceMemory memory) const {
+  if (!memory) return;
+  vkFreeMemory(device_, memory, nullptr);
 }
 
 void Context::immediate_submit(const std::function<void(VkCommandBuffer)>& record) const {

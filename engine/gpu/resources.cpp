@@ -29,7 +29,12 @@ Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, 
     flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
     alloc.pNext = &flags;
   }
-  VK_CHECK(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_));
+  try {
+    memory_ = ctx.allocate_memory(alloc, "buffer '" + name + "'");
+  } catch (...) {
+    vkDestroyBuffer(ctx.device(), buffer_, nullptr);
+    throw;
+  }
   VK_CHECK(vkBindBufferMemory(ctx.device(), buffer_, memory_, 0));
   ctx.track_allocation(memory_, name, req.size);
   if (usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT) {
@@ -59,7 +64,7 @@ void Buffer::reset() {
   if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
   if (memory_) {
     ctx_->untrack_allocation(memory_);
-    vkFreeMemory(ctx_->device(), memory_, nullptr);
+    ctx_->free_memory(memory_);
   }
   buffer_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
@@ -105,6 +110,10 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
              uint32_t mip_levels, uint32_t layers)
     : ctx_(&ctx), format_(format), extent_(extent), mip_levels_(mip_levels), layers_(layers) {
   aspect_ = is_depth_format(format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+  const uint32_t max_side = ctx.properties().limits.maxImageDimension2D;
+  if (extent.width > max_side || extent.height > max_side)
+    throw VulkanError("image '" + name + "' of " + std::to_string(extent.width) + "x" + std::to_string(extent.height) +
+                      " exceeds the " + std::to_string(max_side) + "-texel image side of " + ctx.device_name());
   VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
   info.imageType = VK_IMAGE_TYPE_2D;
   info.format = format;
@@ -121,7 +130,12 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
   VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   alloc.allocationSize = req.size;
   alloc.memoryTypeIndex = ctx.find_memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  VK_CHECK(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_));
+  try {
+    memory_ = ctx.allocate_memory(alloc, "image '" + name + "'");
+  } catch (...) {
+    vkDestroyImage(ctx.device(), image_, nullptr);
+    throw;
+  }
   VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
   ctx.track_allocation(memory_, name, req.size);
 
@@ -189,7 +203,7 @@ void Image::reset() {
   if (image_) vkDestroyImage(d, image_, nullptr);
   if (memory_) {
     ctx_->untrack_allocation(memory_);
-    vkFreeMemory(d, memory_, nullptr);
+    ctx_->free_memory(memory_);
   }
   view_ = VK_NULL_HANDLE;
   image_ = VK_NULL_HANDLE;

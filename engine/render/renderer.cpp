@@ -67,6 +67,11 @@ SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
 
 Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(extent), profiler_(ctx) {
   if (extent.width == 0 || extent.height == 0) throw std::invalid_argument("render size must be non-zero");
+  // gbuffer.frag finds its triangle's vertices by gl_PrimitiveID, which Vulkan allows a fragment
+  // shader only with the geometryShader feature.
+  if (!ctx.features().geometry_shader)
+    throw gpu::VulkanError("the G-buffer pass reads gl_PrimitiveID, which needs geometry shaders; " +
+                           ctx.device_name() + " lacks them");
   frame_uniforms_ = Buffer(ctx, sizeof(gpu_shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
                            "frame uniforms");
   nearest_sampler_ = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "nearest clamp");

@@ -257,6 +257,51 @@ INSTANTIATE_TEST_SUITE_P(
       return name;
     });
 
+// Hostile buffer URIs: a shell substitution stays a file name (older tinygltf releases expanded URIs
+// with wordexp, which runs it), and a device file such as /dev/zero is refused, not read.
+TEST(GltfLoader, HostileBufferUrisAreRefusedInOneLine) {
+  TempDir dir;
+  std::ifstream in(test_file("triangle.gltf"));
+  const std::string triangle((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t uri = triangle.find("\"data:");
+  ASSERT_NE(uri, std::string::npos);
+  const size_t uri_end = triangle.find('"', uri + 1);
+  const fs::path marker = dir.path() / "substitution_ran";
+  for (const std::string& hostile : {"$(touch " + marker.string() + ")", "`touch " + marker.string() + "`",
+                                     std::string("/dev/zero")}) {
+    const fs::path file = dir.path() / "hostile.gltf";
+    std::ofstream(file) << triangle.substr(0, uri + 1) << hostile << triangle.substr(uri_end);
+    try {
+      load_gltf_scene(file);
+      ADD_FAILURE() << hostile << " loaded";
+    } catch (const SceneError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("hostile.gltf"), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+    EXPECT_FALSE(fs::exists(marker)) << hostile << " ran a command";
+  }
+}
+
+// Hostile inputs that found defects (content/test_gltf/fuzz_regressions/README.md), kept after the
+// fix: each loads or is rejected with one SceneError line naming the file; nothing else.
+TEST(GltfLoader, FuzzRegressionFilesLoadOrFailInOneLine) {
+  size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(test_file("fuzz_regressions"))) {
+    if (entry.path().extension() == ".md") continue;
+    ++files;
+    SCOPED_TRACE(entry.path().filename().string());
+    try {
+      auto scene = load_gltf_scene(entry.path());
+      for (size_t view = 0; view < scene->views.size(); ++view) scene->apply_view(view);
+    } catch (const SceneError& e) {
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(entry.path().filename().string()), std::string::npos) << e.what();
+    }
+  }
+  if (files == 0) GTEST_SKIP() << "no fuzz regression inputs kept yet";
+}
+
 TEST(SceneLoading, DispatchesByNameOrPath) {
   EXPECT_EQ(load_scene("contact")->name, "contact");
   EXPECT_EQ(load_scene(test_file("triangle.gltf").string())->triangle_count(), 1u);

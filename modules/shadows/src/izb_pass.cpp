@@ -265,6 +265,8 @@ struct IzbPass::Impl {
       const double per_pixel = spp == 32 ? std::max(2.0, 2.0 * texels_per_pixel) : 1.0;
       wanted = std::max<uint64_t>(uint64_t(double(pixels) * per_pixel * s.node_pool_factor), 1024);
       wanted = std::max(wanted, pool_demand);
+      // Never beyond one storage buffer's range: insertions past it take the exact overflow fallback.
+      wanted = std::min<uint64_t>(wanted, ctx.properties().limits.maxStorageBufferRange / 8);
     }
     if (wanted != pool_size || !nodes.valid()) {
       pool_size = wanted;

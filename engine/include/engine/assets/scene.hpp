@@ -56,6 +56,10 @@ std::unique_ptr<Scene> build_procedural_scene(const std::string& name);
 // cameras gets two default views derived from its bounds (0: overview from above, 1: inside at eye
 // height) and a default sun.
 std::unique_ptr<Scene> load_gltf_scene(const std::filesystem::path& path);
+// The same for a file's bytes already in memory: `name` stands for the file in errors (and names the
+// scene), external buffers resolve in `base_dir`.
+std::unique_ptr<Scene> load_gltf_scene_from_memory(std::string bytes, const std::string& name,
+                                                   const std::filesystem::path& base_dir);
 
 // A procedural scene name, a path to a glTF file, or a .json scene file (engine/assets/scene_file.hpp).
 std::unique_ptr<Scene> load_scene(const std::string& name_or_path);

@@ -55,7 +55,17 @@ struct ContextOptions {
   std::vector<const char*> instance_extensions;  // e.g. from the window system
   bool swapchain = false;                        // enable VK_KHR_swapchain on the device
   std::string application_name = "shadow_engine";
+  // Optional features to treat as absent, as on a device without them (tests of the other paths):
+  // "conservative_rasterization", "geometry_shader", "fragment_shader_barycentric",
+  // "subgroup_arithmetic". ENGINE_MASK_FEATURES (comma-separated) adds to the list.
+  std::vector<std::string> masked_features;
+  // The validation layer's synchronization checks (hazards between commands); needs validation.
+  // Also forced on by ENGINE_SYNC_VALIDATION=1 (which turns validation on too).
+  bool sync_validation = false;
 };
+
+// The names ContextOptions::masked_features accepts.
+const std::vector<std::string>& maskable_feature_names();
 
 class Context {
  public:
@@ -92,6 +102,15 @@ class Context {
   std::vector<Allocation> allocations() const;
 
   uint32_t find_memory_type(uint32_t type_bits, VkMemoryPropertyFlags properties) const;
+  bool sync_validation_enabled() const { return sync_validation_enabled_; }
+  const std::vector<std::string>& masked_features() const { return masked_features_; }
+
+  // Buffer and Image allocate through these: the allocation is checked against the device's largest
+  // single allocation first, and running out of memory is one line naming `what`, not a driver failure.
+  VkDeviceMemory allocate_memory(const VkMemoryAllocateInfo& info, const std::string& what) const;
+  void free_memory(VkDeviceMemory memory) const;
+  uint32_t live_allocation_count() const;  // Buffer and Image memory now allocated (allocations())
+  VkDeviceSize max_memory_allocation_size() const { return max_allocation_size_; }
 
   // Records commands into a fresh command buffer, submits it and waits. For uploads, readbacks, tests.
   void immediate_submit(const std::function<void(VkCommandBuffer)>& record) const;
@@ -140,6 +159,9 @@ class Context {
   DeviceFeatures features_;
   std::string driver_description_;
   bool validation_enabled_ = false;
+  bool sync_validation_enabled_ = false;
+  std::vector<std::string> masked_features_;
+  VkDeviceSize max_allocation_size_ = 0;
   bool debug_utils_ = false;
   std::atomic<uint32_t> validation_messages_{0};
   mutable std::vector<std::string> message_log_;
