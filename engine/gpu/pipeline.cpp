@@ -93,6 +93,26 @@ struct Specialization {
   }
   const VkSpecializationInfo* get() const { return entries.empty() ? nullptr : &info; }
 };
+
+// A pipeline's shader stages; the modules live until the pipeline is created.
+struct ShaderStages {
+  const Context& ctx;
+  const VkSpecializationInfo* specialization;
+  std::vector<std::unique_ptr<ShaderModule>> modules;
+  std::vector<VkPipelineShaderStageCreateInfo> stages;
+  // The new stage's index, or VK_SHADER_UNUSED_KHR when `name` is empty (no shader).
+  uint32_t add(const std::string& name, VkShaderStageFlagBits stage) {
+    if (name.empty()) return VK_SHADER_UNUSED_KHR;
+    modules.push_back(std::make_unique<ShaderModule>(ctx, name));
+    VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    s.stage = stage;
+    s.module = modules.back()->handle();
+    s.pName = "main";
+    s.pSpecializationInfo = specialization;
+    stages.push_back(s);
+    return static_cast<uint32_t>(stages.size() - 1);
+  }
+};
 }  // namespace
 
 Pipeline PipelineFactory::compute(const ComputePipelineDesc& desc) const {
@@ -119,21 +139,10 @@ Pipeline PipelineFactory::graphics(const GraphicsPipelineDesc& desc) const {
   p.bind_point_ = VK_PIPELINE_BIND_POINT_GRAPHICS;
   Specialization spec(desc.specialization);
 
-  std::vector<std::unique_ptr<ShaderModule>> modules;
-  std::vector<VkPipelineShaderStageCreateInfo> stages;
-  auto add_stage = [&](const std::string& name, VkShaderStageFlagBits stage) {
-    if (name.empty()) return;
-    modules.push_back(std::make_unique<ShaderModule>(ctx_, name));
-    VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
-    s.stage = stage;
-    s.module = modules.back()->handle();
-    s.pName = "main";
-    s.pSpecializationInfo = spec.get();
-    stages.push_back(s);
-  };
-  add_stage(desc.vertex_shader, VK_SHADER_STAGE_VERTEX_BIT);
-  add_stage(desc.geometry_shader, VK_SHADER_STAGE_GEOMETRY_BIT);
-  add_stage(desc.fragment_shader, VK_SHADER_STAGE_FRAGMENT_BIT);
+  ShaderStages shaders{ctx_, spec.get(), {}, {}};
+  shaders.add(desc.vertex_shader, VK_SHADER_STAGE_VERTEX_BIT);
+  shaders.add(desc.geometry_shader, VK_SHADER_STAGE_GEOMETRY_BIT);
+  shaders.add(desc.fragment_shader, VK_SHADER_STAGE_FRAGMENT_BIT);
 
   VkVertexInputBindingDescription vb{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
   VkVertexInputAttributeDescription attrs[3] = {
@@ -216,8 +225,8 @@ Pipeline PipelineFactory::graphics(const GraphicsPipelineDesc& desc) const {
 
   VkGraphicsPipelineCreateInfo info{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
   info.pNext = &rendering;
-  info.stageCount = static_cast<uint32_t>(stages.size());
-  info.pStages = stages.data();
+  info.stageCount = static_cast<uint32_t>(shaders.stages.size());
+  info.pStages = shaders.stages.data();
   info.pVertexInputState = &vertex_input;
   info.pInputAssemblyState = &assembly;
   info.pViewportState = &viewport;
@@ -238,19 +247,7 @@ Pipeline PipelineFactory::ray_tracing(const RayTracingPipelineDesc& desc) const 
   make_layout(p, desc.bindings, desc.push_constant_size);
   p.bind_point_ = VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR;
   Specialization spec(desc.specialization);
-  std::vector<std::unique_ptr<ShaderModule>> modules;
-  std::vector<VkPipelineShaderStageCreateInfo> stages;
-  auto add_stage = [&](const std::string& name, VkShaderStageFlagBits stage) -> uint32_t {
-    if (name.empty()) return VK_SHADER_UNUSED_KHR;
-    modules.push_back(std::make_unique<ShaderModule>(ctx_, name));
-    VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
-    s.stage = stage;
-    s.module = modules.back()->handle();
-    s.pName = "main";
-    s.pSpecializationInfo = spec.get();
-    stages.push_back(s);
-    return static_cast<uint32_t>(stages.size() - 1);
-  };
+  ShaderStages shaders{ctx_, spec.get(), {}, {}};
   auto general_group = [](uint32_t stage) {
     VkRayTracingShaderGroupCreateInfoKHR g{VK_STRUCTURE_TYPE_RAY_TRACING_SHADER_GROUP_CREATE_INFO_KHR};
     g.type = VK_RAY_TRACING_SHADER_GROUP_TYPE_GENERAL_KHR;
@@ -259,19 +256,19 @@ Pipeline PipelineFactory::ray_tracing(const RayTracingPipelineDesc& desc) const 
     return g;
   };
   std::vector<VkRayTracingShaderGroupCreateInfoKHR> groups;
-  groups.push_back(general_group(add_stage(desc.raygen_shader, VK_SHADER_STAGE_RAYGEN_BIT_KHR)));
-  for (const auto& miss : desc.miss_shaders) groups.push_back(general_group(add_stage(miss, VK_SHADER_STAGE_MISS_BIT_KHR)));
+  groups.push_back(general_group(shaders.add(desc.raygen_shader, VK_SHADER_STAGE_RAYGEN_BIT_KHR)));
+  for (const auto& miss : desc.miss_shaders) groups.push_back(general_group(shaders.add(miss, VK_SHADER_STAGE_MISS_BIT_KHR)));
   for (const auto& hit : desc.hit_groups) {
     VkRayTracingShaderGroupCreateInfoKHR g{VK_STRUCTURE_TYPE_RAY_TRACING_SHADER_GROUP_CREATE_INFO_KHR};
     g.type = VK_RAY_TRACING_SHADER_GROUP_TYPE_TRIANGLES_HIT_GROUP_KHR;
     g.generalShader = g.intersectionShader = VK_SHADER_UNUSED_KHR;
-    g.closestHitShader = add_stage(hit.closest_hit, VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR);
-    g.anyHitShader = add_stage(hit.any_hit, VK_SHADER_STAGE_ANY_HIT_BIT_KHR);
+    g.closestHitShader = shaders.add(hit.closest_hit, VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR);
+    g.anyHitShader = shaders.add(hit.any_hit, VK_SHADER_STAGE_ANY_HIT_BIT_KHR);
     groups.push_back(g);
   }
   VkRayTracingPipelineCreateInfoKHR info{VK_STRUCTURE_TYPE_RAY_TRACING_PIPELINE_CREATE_INFO_KHR};
-  info.stageCount = static_cast<uint32_t>(stages.size());
-  info.pStages = stages.data();
+  info.stageCount = static_cast<uint32_t>(shaders.stages.size());
+  info.pStages = shaders.stages.data();
   info.groupCount = static_cast<uint32_t>(groups.size());
   info.pGroups = groups.data();
   info.maxPipelineRayRecursionDepth = desc.max_recursion_depth;
