@@ -506,11 +506,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
 
   // CPU side of the frustum: the light's rotation and the casters' depth range along it.
   const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
-  engine::Aabb depth_box = caster_bounds(frame);
-  for (const auto& d : frame.draws) {
-    const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
-    if (mesh && mesh->data) depth_box.extend(mesh->data->bounds.transformed(d.world));
-  }
+  const engine::Aabb depth_box = scene_bounds(frame);  // casters and receivers
   float near_d = 0.0f, far_d = 1.0f;
   if (depth_box.valid()) {
     float lo = std::numeric_limits<float>::max(), hi = -lo;

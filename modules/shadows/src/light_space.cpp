@@ -30,11 +30,8 @@ glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box,
 
 engine::Aabb caster_bounds(const engine::FrameContext& frame) {
   engine::Aabb bounds;
-  for (const auto& d : frame.draws) {
-    if (!d.shadow.casts_shadow) continue;
-    const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
-    if (mesh && mesh->data) bounds.extend(mesh->data->bounds.transformed(d.world));
-  }
+  for (const auto& d : frame.draws)
+    if (d.shadow.casts_shadow) bounds.extend(d.bounds);
   return bounds;
 }
 
