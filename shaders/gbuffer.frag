@@ -5,27 +5,18 @@
 #include "material_textures.glsl"
 
 layout(set = 0, binding = GBUFFER_BINDING_FRAME) uniform Frame { FrameUniforms frame; };
-layout(set = 0, binding = GBUFFER_BINDING_VERTICES, std430) readonly buffer Vertices { float vertex_floats[]; };
-layout(set = 0, binding = GBUFFER_BINDING_INDICES, std430) readonly buffer Indices { uint indices[]; };
 layout(push_constant) uniform Push { DrawPush draw; };
 
 layout(location = 0) in vec3 in_world_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec2 in_uv;
+layout(location = 3) flat in vec3 in_corners[3];         // gbuffer.vert: the triangle, in world space
+layout(location = 6) flat in vec3 in_corner_normals[3];
 
 layout(location = 0) out vec4 out_albedo;
 layout(location = 1) out vec4 out_normal;
 layout(location = 2) out vec4 out_geometric_normal;
 layout(location = 3) out vec4 out_terminator_offset;
-
-uint corner_vertex(uint corner) {
-  return uint(int(indices[draw.first_index + 3u * uint(gl_PrimitiveID) + corner]) + draw.vertex_offset);
-}
-
-vec3 fetch_vec3(uint v, uint first) {
-  uint base = v * kVertexFloats + first;
-  return vec3(vertex_floats[base], vertex_floats[base + 1u], vertex_floats[base + 2u]);
-}
 
 vec3 srgb_to_linear(vec3 c) { return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045))); }
 
@@ -34,9 +25,7 @@ void main() {
   if (draw.alpha_threshold != 0u && !alpha_byte_kept(texel, draw.alpha_threshold)) discard;
   // The exact plane of the triangle, from its vertices: derivatives of the interpolated position
   // would be noisy, and the 32-sample footprint needs the true plane.
-  uint v[3] = uint[3](corner_vertex(0u), corner_vertex(1u), corner_vertex(2u));
-  vec3 p[3];
-  for (int k = 0; k < 3; ++k) p[k] = (draw.model * vec4(fetch_vec3(v[k], 0u), 1.0)).xyz;
+  vec3 p[3] = in_corners;
   vec3 geometric = cross(p[1] - p[0], p[2] - p[0]);
   float len = length(geometric);
   geometric = len > 0.0 ? geometric / len : normalize(in_normal);
@@ -62,9 +51,8 @@ void main() {
       float b1 = clamp((d11 * d20 - d01 * d21) / denom, 0.0, 1.0);
       float b2 = clamp((d00 * d21 - d01 * d20) / denom, 0.0, 1.0 - b1);
       float bary[3] = float[3](1.0 - b1 - b2, b1, b2);
-      mat3 normal_matrix = transpose(inverse(mat3(draw.model)));
       for (int k = 0; k < 3; ++k) {
-        vec3 n = normal_matrix * fetch_vec3(v[k], 3u);
+        vec3 n = in_corner_normals[k];
         float n_len = length(n);
         if (n_len == 0.0) continue;
         n = facing * n / n_len;

@@ -95,7 +95,7 @@ size_t Scene::triangle_count() {
   return total;
 }
 
-std::unique_ptr<Scene> load_scene(const std::string& name_or_path) {
+std::unique_ptr<Scene> load_scene(const std::string& name_or_path, Detail detail) {
   const std::vector<std::string> names = procedural_scene_names();
   if (std::find(names.begin(), names.end(), name_or_path) != names.end()) {
     return build_procedural_scene(name_or_path);
@@ -106,7 +106,7 @@ std::unique_ptr<Scene> load_scene(const std::string& name_or_path) {
   std::error_code ec;
   const bool is_file = std::filesystem::is_regular_file(path, ec);
   // A glTF extension goes to the loader even when the file is missing so the error names the file.
-  if (ext == ".json") return load_scene_file(path);
+  if (ext == ".json") return load_scene_file(path, detail);
   if (is_file || ext == ".gltf" || ext == ".glb") return load_gltf_scene(path);
   throw SceneError("unknown scene '" + name_or_path +
                    "': expected one of contact, atrium, foliage, canopy, a .gltf/.glb file or a .json scene file");

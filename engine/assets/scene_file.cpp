@@ -89,10 +89,15 @@ glm::vec3 any_perpendicular(const glm::vec3& n) {
   return glm::normalize(glm::cross(n, helper));
 }
 
-// A plant: a stem, a few branches and leaf cards around them.
-void make_plant(Random& rng, const glm::vec3& origin, float height, MeshData& stems, MeshData& leaves) {
+// A plant: a stem, a few branches and leaf cards around them. Low detail draws the same random
+// numbers (so every plant stands where it does at full detail) but keeps every fourth leaf card at
+// twice the size, and tessellates the stems more coarsely.
+void make_plant(Random& rng, const glm::vec3& origin, float height, Detail detail, MeshData& stems, MeshData& leaves) {
+  const bool low = detail == Detail::Low;
+  const int leaf_stride = low ? 4 : 1;
+  const float leaf_scale = low ? 2.0f : 1.0f;
   const float trunk_top = height * 0.6f;
-  append_mesh(stems, make_cylinder(origin, origin + glm::vec3(0, trunk_top, 0), 0.02f + 0.02f * height, 6, true));
+  append_mesh(stems, make_cylinder(origin, origin + glm::vec3(0, trunk_top, 0), 0.02f + 0.02f * height, low ? 4 : 6, true));
   const int branches = 5;
   for (int b = 0; b <= branches; ++b) {
     glm::vec3 start = origin + glm::vec3(0, trunk_top * rng.uniform(0.5f, 1.0f), 0), end;
@@ -103,13 +108,13 @@ void make_plant(Random& rng, const glm::vec3& origin, float height, MeshData& st
       end = start + glm::normalize(glm::vec3(std::cos(angle), rng.uniform(0.4f, 1.0f), std::sin(angle))) *
                         rng.uniform(0.3f, 0.6f) * height;
     }
-    append_mesh(stems, make_cylinder(start, end, 0.015f, 5, false));
+    append_mesh(stems, make_cylinder(start, end, 0.015f, low ? 3 : 5, false));
     for (int l = 0; l < 24; ++l) {
       const glm::vec3 c = glm::mix(start, end, rng.uniform(0.35f, 1.0f)) + rng.unit_vector() * rng.uniform(0.02f, 0.25f);
       const glm::vec3 n = rng.unit_vector();
       const glm::vec3 u = any_perpendicular(n), v = glm::cross(n, u);
-      const float half = rng.uniform(0.06f, 0.15f);
-      append_mesh(leaves, make_double_sided_quad(c, u * half, v * half * 0.6f));
+      const float half = rng.uniform(0.06f, 0.15f) * leaf_scale;
+      if (l % leaf_stride == 0) append_mesh(leaves, make_double_sided_quad(c, u * half, v * half * 0.6f));
     }
   }
 }
@@ -239,7 +244,7 @@ void add_animation(const Reader& rd, Registry& r, Entity e, const json& a, const
   make_animated(r, e, anim);
 }
 
-void add_object(Scene& scene, const Reader& rd, const json& o, size_t index) {
+void add_object(Scene& scene, const Reader& rd, const json& o, size_t index, Detail detail) {
   const std::string f = "objects[" + std::to_string(index) + "]";
   rd.only_keys(o, {"name", "shape", "shapes", "plants", "gltf", "translation", "rotation_deg", "scale", "color",
                    "leaf_color", "shadow", "animate", "collide", "cutout"},
@@ -299,7 +304,7 @@ void add_object(Scene& scene, const Reader& rd, const json& o, size_t index) {
     MeshData stems, leaves;
     for (int i = 0; i < count; ++i) {
       const glm::vec3 at{rng.uniform(lo.x, hi.x), 0.0f, rng.uniform(lo.y, hi.y)};
-      make_plant(rng, at, rng.uniform(height.x, height.y), stems, leaves);
+      make_plant(rng, at, rng.uniform(height.x, height.y), detail, stems, leaves);
     }
     glm::vec4 leaf{0.25f, 0.5f, 0.16f, 1.0f};
     if (o.contains("leaf_color")) leaf = glm::vec4(rd.vec3(o.at("leaf_color"), f + ".leaf_color"), 1.0f);
@@ -361,7 +366,7 @@ SceneView read_view(const Reader& rd, const json& v, const std::string& f, const
 
 }  // namespace
 
-std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path) {
+std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path, Detail detail) {
   const Reader rd(path);
   std::ifstream in(path);
   if (!in) throw SceneError(path.string() + ": cannot open scene file");
@@ -399,7 +404,7 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path) {
 
   const json& objects = rd.required(doc, "objects", "(top level)");
   if (!objects.is_array() || objects.empty()) rd.fail("objects", "expected a non-empty array");
-  for (size_t i = 0; i < objects.size(); ++i) add_object(*scene, rd, objects[i], i);
+  for (size_t i = 0; i < objects.size(); ++i) add_object(*scene, rd, objects[i], i, detail);
 
   const json& views = rd.required(doc, "views", "(top level)");
   if (!views.is_array() || views.empty()) rd.fail("views", "expected a non-empty array of views (the tour)");

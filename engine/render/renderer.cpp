@@ -67,11 +67,6 @@ SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
 
 Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(extent), profiler_(ctx) {
   if (extent.width == 0 || extent.height == 0) throw std::invalid_argument("render size must be non-zero");
-  // gbuffer.frag finds its triangle's vertices by gl_PrimitiveID, which Vulkan allows a fragment
-  // shader only with the geometryShader feature.
-  if (!ctx.features().geometry_shader)
-    throw gpu::VulkanError("the G-buffer pass reads gl_PrimitiveID, which needs geometry shaders; " +
-                           ctx.device_name() + " lacks them");
   frame_uniforms_ = Buffer(ctx, sizeof(gpu_shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
                            "frame uniforms");
   nearest_sampler_ = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "nearest clamp");
@@ -86,6 +81,7 @@ Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(ex
                 {gpu_shared::GBUFFER_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
                 {gpu_shared::GBUFFER_BINDING_TEXTURES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
   g.push_constant_size = sizeof(gpu_shared::DrawPush);
+  g.vertex_input = VertexInput::None;  // gbuffer.vert reads its triangle from the buffers
   g.color_formats = {kAlbedoFormat, kNormalFormat, kNormalFormat, kNormalFormat};
   g.depth_format = kDepthFormat;
   g.cull_mode = VK_CULL_MODE_NONE;  // glTF single-sided surfaces still occlude and must be seen from both sides
@@ -277,10 +273,6 @@ void Renderer::record(VkCommandBuffer cmd) {
           .storage_buffer(gpu_shared::GBUFFER_BINDING_INDICES, geometry_->indices().handle())
           .storage_buffer(gpu_shared::GBUFFER_BINDING_TEXTURES, geometry_->textures().handle())
           .push(ctx_, cmd, gbuffer_pipeline_);
-      VkDeviceSize offset = 0;
-      VkBuffer vb = geometry_->vertices().handle();
-      vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
-      vkCmdBindIndexBuffer(cmd, geometry_->indices().handle(), 0, VK_INDEX_TYPE_UINT32);
       for (const auto& d : draws_) {
         const auto& range = geometry_->mesh(d.mesh);
         if (range.index_count == 0) continue;
@@ -295,7 +287,7 @@ void Renderer::record(VkCommandBuffer cmd) {
         push.alpha_threshold = d.alpha_threshold;
         push.base_color_texture = d.base_color_texture;
         gbuffer_pipeline_.push_constants(cmd, push);
-        vkCmdDrawIndexed(cmd, range.index_count, 1, range.first_index, range.vertex_offset, 0);
+        vkCmdDraw(cmd, range.index_count, 1, 0, 0);
       }
       vkCmdEndRendering(cmd);
     }

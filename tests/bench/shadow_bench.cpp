@@ -32,6 +32,7 @@ struct Options {
   std::vector<std::string> csm_tests = {"bary"};
   std::string masking;  // empty: the default
   std::string csm_choice;  // empty: per entity; "on", "off", "auto" to force all
+  engine::Detail detail = engine::Detail::Full;  // of scene files' generated content
   int frames = 10;
   int warmup = 3;
   bool reference = false;
@@ -60,7 +61,7 @@ const char* kUsage =
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted]\n"
     "                    [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
-    "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N]\n"
+    "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
@@ -114,6 +115,11 @@ Options parse(int argc, char** argv) {
       o.spp = o.spps.front();
     }
     else if (a == "--instances") o.instances = split_uints("--instances", args.value());
+    else if (a == "--detail") {
+      const std::string v = args.value();
+      if (v != "full" && v != "low") throw std::runtime_error("--detail '" + v + "': expected full or low");
+      o.detail = v == "low" ? engine::Detail::Low : engine::Detail::Full;
+    }
     else if (a == "--suite") o.suite = args.value();
     else if (a == "--quick") o.quick = true;
     else if (a == "--out") o.out_dir = args.value();
@@ -452,10 +458,10 @@ void print_header() {
               "spp", "total_ms", "frame_ms", "mismatch", "false_shad", "cov_mae", "mem_MiB");
 }
 
-std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances, const std::string& csm_choice) {
-  auto scene = engine::load_scene(name);
+std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances, const Options& o) {
+  auto scene = engine::load_scene(name, o.detail);
   engine::replicate_scene(*scene, instances);
-  apply_csm_choice(*scene, csm_choice);
+  apply_csm_choice(*scene, o.csm_choice);
   return scene;
 }
 
@@ -470,7 +476,7 @@ void write_json(const std::string& path, const json& results) {
 
 int run_single(const Options& o) {
   const auto runs = expand_runs(o);
-  auto scene = load(o.scene, o.instances.front(), o.csm_choice);
+  auto scene = load(o.scene, o.instances.front(), o);
   scene->apply_view(o.view);
 
   engine::gpu::Context ctx({.device = o.device});
@@ -697,7 +703,7 @@ int run_suite(const Options& o) {
   print_header();
   for (const auto& scene_name : split(o.scene)) {
     for (uint32_t instances : o.instances) {
-      auto scene = load(scene_name, instances, o.csm_choice);
+      auto scene = load(scene_name, instances, o);
       std::vector<size_t> views = o.views;
       if (views.empty())
         for (size_t v = 0; v < scene->views.size(); ++v) views.push_back(v);

@@ -18,6 +18,12 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// How finely generated content (the plants of scene files) is built. Full is the content as authored,
+// which tests, the reference and the benchmark use; Low is for devices that cannot afford it (the
+// walkthrough on a CPU device): the same plants with a quarter of their leaf cards, each twice the
+// size (the same leaf area), and thinner stem tessellation.
+enum class Detail { Full, Low };
+
 struct SceneView {
   std::string name;
   glm::vec3 eye{0.0f};
@@ -62,6 +68,7 @@ std::unique_ptr<Scene> load_gltf_scene_from_memory(std::string bytes, const std:
                                                    const std::filesystem::path& base_dir);
 
 // A procedural scene name, a path to a glTF file, or a .json scene file (engine/assets/scene_file.hpp).
-std::unique_ptr<Scene> load_scene(const std::string& name_or_path);
+// `detail` applies to scene files' generated content.
+std::unique_ptr<Scene> load_scene(const std::string& name_or_path, Detail detail = Detail::Full);
 
 }  // namespace engine

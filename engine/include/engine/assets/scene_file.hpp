@@ -11,6 +11,6 @@ namespace engine {
 
 // Loads a .json scene file. Throws SceneError with one line naming the file and the field at fault,
 // e.g. "content/levels/x.json: objects[3].box.min: expected an array of 3 numbers".
-std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path);
+std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path, Detail detail = Detail::Full);
 
 }  // namespace engine
