@@ -118,6 +118,8 @@ void main() {
       visibility_mask[index] = mask;
     }
   }
+  // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.
+  if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) return;
   uint covered_sum = subgroupAdd(covered);
   uint candidate_sum = subgroupAdd(candidate);
   uint culled_sum = subgroupAdd(culled);
