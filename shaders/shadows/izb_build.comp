@@ -114,7 +114,7 @@ void main() {
     }
     pixel_state[index] = state;
     if (candidate != 0u) {  // only candidates' masks and occluder distances are ever read
-      occluder_distance[index] = floatBitsToUint(1.0e30);
+      if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
       visibility_mask[index] = mask;
     }
   }

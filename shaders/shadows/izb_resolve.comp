@@ -53,7 +53,8 @@ void main() {
     // The farther the nearest occluder sits above the point (in world units along the light), the
     // more the cascades' filtered term takes over; near the IZB's range limit they take over fully.
     // Surfaces facing away are 0 in both terms, so they need no blend.
-    float gap_world = uintBitsToFloat(occluder_distance[index]) * (params.depth_range.y - params.depth_range.x);
+    float gap_world = izb_flag(IZB_FLAG_GAPS) ? uintBitsToFloat(occluder_distance[index]) * (params.depth_range.y - params.depth_range.x)
+                                              : 1.0e30;
     float gap_weight = 0.0, fade = beyond ? 1.0 : 0.0;
     if ((state & IZB_PIXEL_CANDIDATE) != 0u && mask != 0u && gap_world < 1.0e20 && push.soft_distance > 0.0)
       gap_weight = clamp(gap_world / push.soft_distance, 0.0, 1.0);

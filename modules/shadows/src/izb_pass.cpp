@@ -549,6 +549,10 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   if (sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
+  if (std::any_of(frame.draws.begin(), frame.draws.end(),
+                  [](const engine::DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
+    flags |= gpu_shared::IZB_FLAG_ALPHA;
+  if (hybrid && soft_distance > 0.0f) flags |= gpu_shared::IZB_FLAG_GAPS;
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
   p.light_view = light_view;
