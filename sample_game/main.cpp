@@ -48,6 +48,7 @@ struct Options {
   std::string overlay;
   bool stats = false;
   std::string switch_scene;  // windowed: picked as if from the panel after the second frame
+  std::string detail = "auto";  // generated content: full, low, or auto (low on a CPU device with dynamic resolution)
 };
 
 const char* kUsage =
@@ -56,7 +57,7 @@ const char* kUsage =
     "                   [--device gpu|lavapipe|INDEX] [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm|rt]\n"
     "                   [--seconds-per-view S] [--settings FILE.json] [--save-settings FILE.json] [--fixed-size] [--target-fps F]\n"
     "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats]\n"
-    "                   [--switch-scene FILE]\n";
+    "                   [--switch-scene FILE] [--detail full|low|auto]\n";
 
 float float_value(engine::CommandLine& args, float lo, float hi) {
   const std::string flag = args.flag(), v = args.value();
@@ -101,6 +102,11 @@ Options parse(int argc, char** argv) {
         throw std::runtime_error("--overlay '" + o.overlay + "': expected none, visibility, list-length, cascades, csm or expensive");
     } else if (a == "--stats") o.stats = true;
     else if (a == "--switch-scene") o.switch_scene = args.value();
+    else if (a == "--detail") {
+      o.detail = args.value();
+      if (o.detail != "full" && o.detail != "low" && o.detail != "auto")
+        throw std::runtime_error("--detail '" + o.detail + "': expected full, low or auto");
+    }
     else if (a == "--help" || a == "-h") {
       std::fputs(kUsage, stdout);
       std::exit(0);
@@ -215,6 +221,8 @@ class LiveInput {
 
 int run_headless(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   engine::gpu::Context ctx({.device = o.device});
+  // No frame rate to hold here: auto keeps the full detail.
+  if (o.detail == "low") scene_in = engine::load_scene(o.scene, engine::Detail::Low);
   walkthrough::Game game(std::move(scene_in), o.seconds_per_view);
   apply_options(o, game);
   engine::Renderer renderer(ctx, {o.width, o.height});
@@ -291,6 +299,12 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
                                   .instance_extensions = engine::platform::Window::required_instance_extensions(),
                                   .swapchain = true});
   window->attach(*ctx);
+  const bool cpu = ctx->properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  // Where the frame rate is held on a CPU device, scaling the pixels down is not enough: the leaf cards
+  // of generated plants cost the rasterizer per triangle in every pass, so they are built coarser.
+  const engine::Detail detail =
+      o.detail == "low" || (o.detail == "auto" && cpu && !o.fixed_size) ? engine::Detail::Low : engine::Detail::Full;
+  if (detail == engine::Detail::Low) scene_in = engine::load_scene(o.scene, detail);
   walkthrough::Game game(std::move(scene_in), o.seconds_per_view);
   apply_options(o, game);
   const VkExtent2D extent = window->framebuffer_extent();
@@ -303,7 +317,6 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   if (std::string why; !module->supported(mode.technique, &why)) throw std::runtime_error("--mode " + o.mode + ": " + why);
   module->set_collect_stats(o.stats);  // else the panel's checkbox turns the statistics passes on
 
-  const bool cpu = ctx->properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
   walkthrough::DynamicResolution dynres(o.target_fps > 0.0f ? o.target_fps : (cpu ? 10.0f : 30.0f));
   dynres.enabled = !o.fixed_size;
   walkthrough::PanelState panel;
@@ -312,6 +325,8 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   for (size_t i = 0; i < panel.scenes.size(); ++i)
     if (panel.scenes[i].source == o.scene) panel.scene_index = int(i);
   panel.dynamic_resolution = &dynres;
+  panel.detail_line = std::string("generated detail: ") + (detail == engine::Detail::Low ? "low" : "full") +
+                      (o.detail == "auto" ? " (auto)" : "");
   if (!o.settings.empty()) {
     panel.settings_path = o.settings;
     const std::string err = walkthrough::load_settings(o.settings, *module, game, &dynres);
@@ -341,7 +356,7 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   LiveInput live(window->native_handle());
   const int frames = o.frames >= 0 ? o.frames : (script.empty() ? -1 : int(script.size()));
   int frame = 0, shots = 0;
-  bool switched = false;
+  bool switched = false, shot_pending = false;
   auto last = std::chrono::steady_clock::now();
   std::vector<float> frame_ms;
   while (!window->should_close() && (frames < 0 || frame < frames)) {
@@ -365,14 +380,8 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
       if (live.pressed(GLFW_KEY_P)) game.paused = !game.paused;
       if (live.pressed(GLFW_KEY_T)) game.playing = !game.playing;
       if (live.pressed(GLFW_KEY_F12)) {
-        uint32_t w = 0, h = 0;
-        auto pixels = window->read_last_frame(w, h);
-        if (w) {
-          char name[64];
-          std::snprintf(name, sizeof(name), "screenshot_%03d.png", shots++);
-          engine::write_rgba8_png(name, w, h, pixels.data());
-          panel.status_line = std::string("wrote ") + name;
-        }
+        shot_pending = true;  // written once the next frame, which is copied, has been drawn
+        window->capture_next_frame();
       }
     }
     if (!o.switch_scene.empty() && frame == 2 && !switched) {
@@ -384,7 +393,7 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
       const int pick = *panel.requested_scene;
       panel.requested_scene.reset();
       try {
-        auto next = engine::load_scene(panel.scenes[size_t(pick)].source);
+        auto next = engine::load_scene(panel.scenes[size_t(pick)].source, detail);
         vkDeviceWaitIdle(ctx->device());
         game.set_scene(std::move(next));  // the old scene lives until here; the renderer switches next
         renderer->set_scene(game.scene());
@@ -400,6 +409,8 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
     std::snprintf(status, sizeof(status), "%s  %s  F1 help", game.scene().name.c_str(),
                   game.paused ? "PAUSED" : (game.playing ? (game.player().flying() ? "flying" : "walking") : "tour"));
     if (panel.status_line.rfind("wrote", 0) != 0) panel.status_line = status;
+    // --screenshot writes the last frame; without a frame count any frame may be the last.
+    if (!o.screenshot.empty() && (frames < 0 || frame + 1 == frames)) window->capture_next_frame();
     if (window->draw_frame(*renderer,
                            [&] {
                              walkthrough::draw_panel(*renderer, *module, game, panel);
@@ -407,6 +418,15 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
                            },
                            current.dt)) {
       ++frame;
+      if (shot_pending) {
+        shot_pending = false;
+        uint32_t w = 0, h = 0;
+        auto pixels = window->read_last_frame(w, h);
+        char name[64];
+        std::snprintf(name, sizeof(name), "screenshot_%03d.png", shots++);
+        if (w) engine::write_rgba8_png(name, w, h, pixels.data());
+        panel.status_line = w ? std::string("wrote ") + name : "screenshot: no frame was captured";
+      }
       if (!o.record.empty()) recorded.push_back(current);  // only frames that were simulated
     }
   }
@@ -426,18 +446,24 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
     walkthrough::save_input_script(o.record, recorded);
     std::printf("recorded %zu frames to %s\n", recorded.size(), o.record.c_str());
   }
+  int status = 0;
   if (!o.screenshot.empty()) {
     uint32_t w = 0, h = 0;
     auto pixels = window->read_last_frame(w, h);
-    engine::write_rgba8_png(o.screenshot, w, h, pixels.data());
-    std::printf("wrote %s\n", o.screenshot.c_str());
+    if (w) {
+      engine::write_rgba8_png(o.screenshot, w, h, pixels.data());
+      std::printf("wrote %s\n", o.screenshot.c_str());
+    } else {
+      std::fprintf(stderr, "walkthrough: --screenshot: no frame was drawn\n");
+      status = 1;
+    }
   }
   vkDeviceWaitIdle(ctx->device());
   module.reset();
   renderer.reset();
   window.reset();
   ctx.reset();
-  return 0;
+  return status;
 }
 
 }  // namespace

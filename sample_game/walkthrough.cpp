@@ -209,6 +209,7 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
       if (ImGui::SliderFloat("fps", &fps, 5.0f, 120.0f, "%.0f")) dr->set_target_fps(fps);
       ImGui::Text("render %ux%u (scale %.2f), frame median %.1f ms", renderer.extent().width, renderer.extent().height,
                   dr->scale(), dr->median_ms());
+      if (!panel.detail_line.empty()) ImGui::TextUnformatted(panel.detail_line.c_str());
     }
   }
 

@@ -92,6 +92,7 @@ struct PanelState {
   std::string settings_message;
   std::map<std::string, std::deque<float>> pass_history;  // per-pass GPU ms, last kHistory frames
   DynamicResolution* dynamic_resolution = nullptr;
+  std::string detail_line;  // how finely generated content was built, and why
   std::string status_line;
 };
 

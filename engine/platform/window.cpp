@@ -101,10 +101,12 @@ struct Window::Impl {
   bool imgui_glfw = false;
   bool imgui_vulkan = false;
 
-  // Every presented frame is copied here: a presented image's contents cannot be read back later.
+  // A frame drawn after capture_next_frame is copied here (a presented image's contents cannot be
+  // read back later); other frames skip the copy, a full-window readback a CPU device pays per frame.
   gpu::Buffer capture;
   VkExtent2D capture_extent{};
   bool capture_valid = false;
+  bool capture_requested = false;
 
   VkDevice device() const { return ctx->device(); }
 
@@ -114,7 +116,7 @@ struct Window::Impl {
   void create_ui_pass();
   void init_imgui();
   void shutdown();
-  void record_present_part(Renderer& renderer, uint32_t image_index);
+  void record_present_part(Renderer& renderer, uint32_t image_index, bool copy_to_capture);
 };
 
 void Window::Impl::choose_surface_format() {
@@ -352,7 +354,7 @@ void Window::Impl::shutdown() {
   }
 }
 
-void Window::Impl::record_present_part(Renderer& renderer, uint32_t image_index) {
+void Window::Impl::record_present_part(Renderer& renderer, uint32_t image_index, bool copy_to_capture) {
   VkImage target = images[image_index];
   // The first sync scope matches the acquire semaphore's wait stage, so the layout change waits for it.
   image_barrier(cmd, target, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
@@ -384,12 +386,14 @@ void Window::Impl::record_present_part(Renderer& renderer, uint32_t image_index)
     vkCmdEndRenderPass(cmd);
   }
 
-  VkBufferImageCopy copy{};
-  copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-  copy.imageExtent = {extent.width, extent.height, 1};
-  vkCmdCopyImageToBuffer(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, capture.handle(), 1, &copy);
-  gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                      VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+  if (copy_to_capture) {
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    copy.imageExtent = {extent.width, extent.height, 1};
+    vkCmdCopyImageToBuffer(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, capture.handle(), 1, &copy);
+    gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                        VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+  }
   // Presentation is ordered by the render-finished semaphore, which waits for all commands.
   image_barrier(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
                 VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_NONE, 0);
@@ -541,7 +545,8 @@ bool Window::draw_frame(Renderer& renderer, const std::function<void()>& build_u
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   VK_CHECK(vkBeginCommandBuffer(s.cmd, &begin));
   renderer.record(s.cmd);
-  s.record_present_part(renderer, image_index);
+  const bool capturing = s.capture_requested;
+  s.record_present_part(renderer, image_index, capturing);
   VK_CHECK(vkEndCommandBuffer(s.cmd));
 
   VkSemaphoreSubmitInfo wait{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO};
@@ -577,9 +582,14 @@ bool Window::draw_frame(Renderer& renderer, const std::function<void()>& build_u
   // One frame in flight: the renderer's per-frame resources and `capture` are reused next frame.
   VK_CHECK(vkWaitForFences(s.device(), 1, &s.frame_fence, VK_TRUE, UINT64_MAX));
   renderer.after_frame();
-  s.capture_valid = true;
+  if (capturing) {
+    s.capture_valid = true;
+    s.capture_requested = false;
+  }
   return true;
 }
+
+void Window::capture_next_frame() { impl_->capture_requested = true; }
 
 std::vector<uint8_t> Window::read_last_frame(uint32_t& width, uint32_t& height) {
   Impl& s = *impl_;

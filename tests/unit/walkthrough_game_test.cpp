@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 
 #include "collision.hpp"
 #include "dynamic_resolution.hpp"
@@ -118,6 +119,37 @@ TEST(SceneFile, CourtyardLoadsWithAnimatedCastersAndFlags) {
   CollisionWorld w = CollisionWorld::from_scene(*scene, [&](engine::Entity e) { return scene->registry.has<engine::Animated>(e); });
   for (size_t i = 0; i < scene->views.size(); ++i)
     EXPECT_FALSE(w.segment_blocked(scene->views[i].eye, scene->views[(i + 1) % scene->views.size()].eye)) << "leg " << i;
+}
+
+// Low detail builds the same plants coarser: every plant where it stands at full detail (the same
+// bounds), a quarter of the leaf cards, and the rest of the level untouched.
+TEST(SceneFile, LowDetailPlantsStandWhereFullOnesDoWithAQuarterOfTheLeaves) {
+  auto full = engine::load_scene_file(kContent + "levels/courtyard.json");
+  auto low = engine::load_scene_file(kContent + "levels/courtyard.json", engine::Detail::Low);
+  auto meshes = [](engine::Scene& s) {
+    std::map<std::string, std::shared_ptr<const engine::MeshData>> out;
+    s.registry.each<engine::Name, engine::Mesh>([&](engine::Entity, engine::Name& n, engine::Mesh& m) { out[n.value] = m.data; });
+    return out;
+  };
+  const auto f = meshes(*full), l = meshes(*low);
+  ASSERT_EQ(f.size(), l.size());
+  for (const auto& [name, mesh] : f) {
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(l.count(name));
+    const auto& coarse = *l.at(name);
+    if (name == "hedge_plants_leaves") {
+      EXPECT_EQ(coarse.indices.size() * 4, mesh->indices.size());
+    } else if (name == "hedge_plants_stems") {
+      EXPECT_LT(coarse.indices.size(), mesh->indices.size());
+    } else {
+      EXPECT_EQ(coarse.indices, mesh->indices);
+      EXPECT_EQ(coarse.vertices.size(), mesh->vertices.size());
+      continue;
+    }
+    // Leaf cards twice the size may reach a little further out than the full ones.
+    EXPECT_LT(glm::distance(coarse.bounds.min, mesh->bounds.min), 0.5f);
+    EXPECT_LT(glm::distance(coarse.bounds.max, mesh->bounds.max), 0.5f);
+  }
 }
 
 TEST(SceneFile, ErrorsNameFileAndField) {

@@ -29,10 +29,12 @@ struct Frame {
 };
 
 // Frames may be skipped while the swapchain catches up with a resize; keep going until `count` drew.
+// Each frame is captured, so last_frame reads the last one drawn.
 void draw_frames(Window& window, engine::Renderer& renderer, const std::function<void()>& ui, int count) {
   int drawn = 0;
   for (int attempt = 0; attempt < 100 && drawn < count; ++attempt) {
     window.poll_events();
+    window.capture_next_frame();
     if (window.draw_frame(renderer, ui, 1.0f / 60.0f)) ++drawn;
   }
   ASSERT_EQ(drawn, count) << "frames kept being skipped";
@@ -154,6 +156,17 @@ TEST(Window, PresentsSceneAndOverlayThroughResize) {
   EXPECT_EQ(window.read_last_frame(w, h).size(), size_t(256) * 200 * 4);
   EXPECT_EQ(w, 256u);
   EXPECT_EQ(h, 200u);
+
+  // Frames drawn without a capture request are not copied: after the next resize nothing is readable.
+  window.set_size(200, 160);
+  int drawn = 0;
+  for (int attempt = 0; attempt < 100 && drawn < 2; ++attempt) {
+    window.poll_events();
+    if (window.draw_frame(renderer, ui, 1.0f / 60.0f)) ++drawn;
+  }
+  ASSERT_EQ(drawn, 2);
+  EXPECT_TRUE(window.read_last_frame(w, h).empty());
+  EXPECT_EQ(w, 0u);
 
   for (const auto& m : ctx.validation_messages()) ADD_FAILURE() << m;
   EXPECT_EQ(ctx.validation_message_count(), 0u);

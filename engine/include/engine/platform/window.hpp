@@ -49,7 +49,11 @@ class Window {
   // `build_ui`, present. Handles resize and minimise (skips drawing while minimised). Returns false
   // if the frame was skipped.
   bool draw_frame(Renderer& renderer, const std::function<void()>& build_ui, float dt);
-  // Reads back the last presented swapchain image (scene + overlay) as RGBA8.
+  // The next frame draw_frame draws (not one it skips) is also copied for read_last_frame. Only
+  // requested frames are copied: the readback of a whole window costs a CPU device every frame.
+  void capture_next_frame();
+  // Reads back the last captured swapchain image (scene + overlay) as RGBA8; empty (0 x 0) when no
+  // frame was captured since the swapchain last changed size.
   std::vector<uint8_t> read_last_frame(uint32_t& width, uint32_t& height);
 
   struct Impl;
