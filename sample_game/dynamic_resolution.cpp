@@ -23,7 +23,7 @@ bool DynamicResolution::add_frame(float ms) {
   } else if (median_ms_ < target_ms_ * 0.75f) {
     next = scale_ * 1.08f;
   }
-  next = std::clamp(std::round(next * 40.0f) / 40.0f, 0.25f, 1.0f);
+  next = std::clamp(std::round(next * 40.0f) / 40.0f, kMinScale, 1.0f);
   const bool changed = next != scale_;
   scale_ = next;
   return changed;

@@ -204,7 +204,7 @@ TEST(DynamicResolution, ShrinksWhenSlowGrowsWhenFastOffWhenDisabled) {
   EXPECT_GE(d.scale(), 0.7f);
   for (int step = 0; step < 10; ++step)
     for (int i = 0; i < 8; ++i) d.add_frame(400.0f);
-  EXPECT_FLOAT_EQ(d.scale(), 0.25f);  // the floor
+  EXPECT_FLOAT_EQ(d.scale(), DynamicResolution::kMinScale);  // the floor
   for (int step = 0; step < 40; ++step)
     for (int i = 0; i < 8; ++i) d.add_frame(20.0f);
   EXPECT_FLOAT_EQ(d.scale(), 1.0f);  // back to full size when fast
