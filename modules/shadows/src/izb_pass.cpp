@@ -149,8 +149,7 @@ struct IzbPass::Impl {
     const VkExtent2D want = hybrid ? e : VkExtent2D{1, 1};
     if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height) return;
     hybrid_extent = want;
-    soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                      "izb hybrid soft term");
+    soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT, "izb hybrid soft term");
     ctx.immediate_submit([&](VkCommandBuffer cmd) {
       soft_term.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAll, kAllAccess);
     });
