@@ -40,6 +40,7 @@ void main() {
       vec4 pq = imageLoad(world_position, q);
       if (pq.w == 0.0) continue;  // background
       float v = imageLoad(shadow_term, q).r;
+      if (v < 0.0) continue;  // not filtered this frame (a pass restricted to a pixel list)
       vec3 nq = imageLoad(geometric_normal, q).xyz;
       if (dot(n, nq) < 0.9 || abs(dot(n, pq.xyz - p)) > tolerance) continue;
       float w = w1[dx + 2] * w1[dy + 2];

@@ -34,6 +34,9 @@ layout(set = 0, binding = CASCADE_FILTER_BINDING_COUNTERS) buffer Counters { uin
 layout(set = 0, binding = CASCADE_FILTER_BINDING_BLUR_LIST) writeonly buffer BlurList { uint blur_list[]; };
 // Kernel entries from the front, band entries from the back: a pixel is in at most one.
 layout(set = 0, binding = CASCADE_FILTER_BINDING_WORK_LIST) buffer WorkList { uint work_list[]; };
+// CASCADE_STAGE_CLASSIFY_LIST: the only pixels to filter (e.g. those the hybrid's IZB leaves to us).
+layout(set = 0, binding = CASCADE_FILTER_BINDING_INPUT_LIST) readonly buffer InputList { uvec4 input_list[]; };
+layout(set = 0, binding = CASCADE_FILTER_BINDING_INPUT_COUNTERS) readonly buffer InputCounters { uint input_counters[]; };
 
 // A receiver's position in cascade c's map.
 struct Probe {
@@ -196,14 +199,23 @@ uint classify_pixel(ivec2 pixel) {
   return (facing ? 1u : 0u) | (kernel_only ? 1u << 10u : 0u) | (band ? 1u << 20u : 0u);
 }
 
-// Each invocation takes a 2x2 quad, so the subgroup scan and the atomics (costly on CPU
-// implementations) are shared by four times as many pixels.
+// Each invocation takes a 2x2 quad (or four consecutive input-list entries), so the subgroup scan and
+// the atomics (costly on CPU implementations) are shared by four times as many pixels.
 void classify() {
-  ivec2 quad = ivec2(gl_GlobalInvocationID.xy) * 2;
+  ivec2 pixels[4];
+  for (int k = 0; k < 4; ++k) {
+    if (kStage == CASCADE_STAGE_CLASSIFY_LIST) {
+      uint entry = (gl_WorkGroupID.x * CASCADE_LIST_GROUP + gl_LocalInvocationIndex) * 4u + uint(k);
+      uint packed_pixel = entry < input_counters[params.mode.w] ? input_list[entry].x : 0xffffffffu;  // none: outside
+      pixels[k] = ivec2(packed_pixel & 0xffffu, packed_pixel >> 16u);
+    } else {
+      pixels[k] = ivec2(gl_GlobalInvocationID.xy) * 2 + ivec2(k & 1, k >> 1);
+    }
+  }
   // Counts in 10-bit fields (facing, kernel list, band list): at most 4 x 128 per subgroup.
   uint flags = 0u, kernel_bits = 0u, band_bits = 0u;
   for (int k = 0; k < 4; ++k) {
-    uint f = classify_pixel(quad + ivec2(k & 1, k >> 1));
+    uint f = classify_pixel(pixels[k]);
     flags += f;
     kernel_bits |= ((f >> 10u) & 1u) << k;
     band_bits |= (f >> 20u) << k;
@@ -220,7 +232,7 @@ void classify() {
   uint kernel_slot = base.x + ((prefix >> 10u) & 0x3ffu);
   uint band_slot = params.extent.x * params.extent.y - 1u - (base.y + (prefix >> 20u));
   for (int k = 0; k < 4; ++k) {
-    uint packed_pixel = pack_pixel(quad + ivec2(k & 1, k >> 1));
+    uint packed_pixel = pack_pixel(pixels[k]);
     if ((kernel_bits & (1u << k)) != 0u) work_list[kernel_slot++] = packed_pixel;
     if ((band_bits & (1u << k)) != 0u) work_list[band_slot--] = packed_pixel;
   }
@@ -273,6 +285,6 @@ void finish() {
 }
 
 void main() {
-  if (kStage == CASCADE_STAGE_CLASSIFY) classify();
+  if (kStage == CASCADE_STAGE_CLASSIFY || kStage == CASCADE_STAGE_CLASSIFY_LIST) classify();
   else finish();
 }

@@ -12,8 +12,6 @@ layout(set = 0, binding = IZB_BINDING_NODES, std430) buffer Nodes { uvec2 nodes[
 layout(set = 0, binding = IZB_BINDING_MASK, std430) buffer Mask { uint visibility_mask[]; };
 layout(set = 0, binding = IZB_BINDING_PIXEL_STATE, std430) buffer PixelState { uint pixel_state[]; };
 layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer Quads { float quads[]; };
-layout(set = 0, binding = IZB_BINDING_VERTICES, std430) readonly buffer Vertices { float vertex_floats[]; };
-layout(set = 0, binding = IZB_BINDING_INDICES, std430) readonly buffer Indices { uint indices[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Casters { IzbCasterTriangle casters[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
 layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };

@@ -7,6 +7,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
 layout(set = 0, binding = IZB_BINDING_OVERLAY, rgba8) uniform image2D overlay;
+layout(set = 0, binding = IZB_BINDING_SOFT_TERM, r32f) writeonly uniform image2D soft_term;
+layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList { uvec4 hybrid_list[]; };
 
 const uint kDebugVisibility = 1u;
 const uint kDebugListLength = 2u;
@@ -21,42 +23,60 @@ vec3 heat(float t) {
 layout(constant_id = 12) const uint kDebug = 0u;
 layout(constant_id = 13) const uint kHybrid = 0u;
 
-// Visibility mask -> shadow term. kHybrid: blends toward the term already there (the
-// cascades') by occluder distance, and over the last tenth of the IZB's range.
+// Visibility mask -> shadow term. kHybrid: the term blends toward the cascades' by occluder distance
+// and over the last tenth of the IZB's range, and beyond it is the cascades' alone. The resolve runs
+// before the cascades then: it writes the hard term and lists the pixels that take any of the
+// cascades' term, with their two weights, so that the cascades filter only those (a CPU device pays
+// every pixel of a full-screen pass) and izb_hybrid_blend.comp mixes them.
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-  if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
+  bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
-  PixelPoint p = load_pixel(pixel);
-  if (!p.covered) return;
-  uint state = pixel_state[index];
+  PixelPoint p = inside ? load_pixel(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
+  uint state = p.covered ? pixel_state[index] : 0u;
   uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
-  float visibility;
+  float visibility = 1.0;
   bool facing = p.facing;
   float max_distance = params.camera_position.w;
   float dist = distance(p.position, params.camera_position.xyz);
+  bool beyond = false;  // past the IZB's range: the cascades' term alone
   if ((state & IZB_PIXEL_CANDIDATE) != 0u) {
     visibility = 1.0 - float(bitCount(mask)) / float(izb_samples());
   } else if (!facing) {
     visibility = 0.0;
   } else if (max_distance > 0.0 && dist > max_distance) {
-    return;  // beyond the IZB: the cascades' term stays
+    beyond = true;
+    visibility = 0.0;
   } else {
     visibility = 1.0;  // does not receive shadows
   }
   if (kHybrid != 0u) {
-    // Hybrid: hard at contact, soft away from it. The farther the nearest occluder sits above the
-    // point (in world units along the light), the more the cascades' filtered term takes over; and
-    // near the IZB's range limit the cascades take over completely.
-    float soft = imageLoad(shadow_term, pixel).r;
+    // The farther the nearest occluder sits above the point (in world units along the light), the
+    // more the cascades' filtered term takes over; near the IZB's range limit they take over fully.
+    // Surfaces facing away are 0 in both terms, so they need no blend.
     float gap_world = uintBitsToFloat(occluder_distance[index]) * (params.depth_range.y - params.depth_range.x);
+    float gap_weight = 0.0, fade = beyond ? 1.0 : 0.0;
     if ((state & IZB_PIXEL_CANDIDATE) != 0u && mask != 0u && gap_world < 1.0e20 && push.soft_distance > 0.0)
-      visibility = mix(visibility, soft, clamp(gap_world / push.soft_distance, 0.0, 1.0));
-    if (max_distance > 0.0) {
-      float fade = clamp((dist - 0.9 * max_distance) / (0.1 * max_distance), 0.0, 1.0);
-      visibility = mix(visibility, soft, fade);
+      gap_weight = clamp(gap_world / push.soft_distance, 0.0, 1.0);
+    if (max_distance > 0.0 && !beyond) fade = clamp((dist - 0.9 * max_distance) / (0.1 * max_distance), 0.0, 1.0);
+    bool listed = p.covered && facing && (gap_weight > 0.0 || fade > 0.0);
+    // One atomic per subgroup; the dispatch over the list grows with it.
+    uint total = subgroupAdd(listed ? 1u : 0u);
+    uint slot = subgroupExclusiveAdd(listed ? 1u : 0u);
+    uint base = 0u;
+    if (subgroupElect() && total != 0u) {
+      base = atomicAdd(counters[IZB_COUNTER_HYBRID], total);
+      atomicMax(counters[IZB_COUNTER_HYBRID + 1u], (base + total + kIzbHybridEntriesPerGroup - 1u) / kIzbHybridEntriesPerGroup);
     }
+    base = subgroupBroadcastFirst(base);
+    if (listed)
+      hybrid_list[base + slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
+                                       floatBitsToUint(fade), 0u);
+    else if (p.covered)
+      imageStore(soft_term, pixel, vec4(-1.0));  // the cascades' blur skips it as a neighbour
   }
+  if (!p.covered) return;
+  if (beyond && kHybrid == 0u) return;  // beyond the IZB: the term already there stays
   imageStore(shadow_term, pixel, vec4(visibility));
 
   if (kDebug == kDebugVisibility && (state & IZB_PIXEL_CANDIDATE) != 0u) {

@@ -52,4 +52,6 @@ void main() {
   // The overflow fallback's indirect dispatch: the build pass raises x as pixels overflow.
   counters[IZB_COUNTER_DISPATCH + 1u] = 1u;
   counters[IZB_COUNTER_DISPATCH + 2u] = 1u;
+  counters[IZB_COUNTER_HYBRID + 2u] = 1u;
+  counters[IZB_COUNTER_HYBRID + 3u] = 1u;
 }

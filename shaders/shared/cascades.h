@@ -50,6 +50,7 @@ SHARED_CONST uint CASCADE_COUNTER_WORDS = 16u;
 SHARED_CONST uint CASCADE_STAGE_CLASSIFY = 0u;  // every pixel: mask test, one tap; lists the rest
 SHARED_CONST uint CASCADE_STAGE_KERNEL = 1u;    // listed pixels: the kernel in one cascade
 SHARED_CONST uint CASCADE_STAGE_BAND = 2u;      // listed pixels: two cascades of a blend band
+SHARED_CONST uint CASCADE_STAGE_CLASSIFY_LIST = 3u;  // the classify stage over an input list of pixels
 SHARED_CONST uint CASCADE_LIST_GROUP = 64u;     // list entries per workgroup (8x8)
 
 SHARED_CONST uint CASCADE_BLUR_GROUP = 64u;
@@ -83,7 +84,7 @@ struct CascadeParams {
   vec4 camera_forward;          // xyz, unit
   vec4 light_direction;         // xyz: travel direction, unit
   uvec4 extent;                 // xy frame size, z map size, w cascade count
-  uvec4 mode;                   // x masking, y blur on, z debug view
+  uvec4 mode;                   // x masking, y blur on, z debug view, w the input list's count word (CASCADE_STAGE_CLASSIFY_LIST)
 };
 
 struct CascadeMaskPush {
@@ -114,6 +115,8 @@ SHARED_CONST uint CASCADE_FILTER_BINDING_OVERLAY = 7u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_COUNTERS = 8u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_BLUR_LIST = 9u;
 SHARED_CONST uint CASCADE_FILTER_BINDING_WORK_LIST = 10u;
+SHARED_CONST uint CASCADE_FILTER_BINDING_INPUT_LIST = 11u;      // CASCADE_STAGE_CLASSIFY_LIST: uvec4, x the pixel
+SHARED_CONST uint CASCADE_FILTER_BINDING_INPUT_COUNTERS = 12u;  // word CascadeParams::mode.w: entries in the input list
 
 SHARED_CONST uint CASCADE_ARGS_BINDING_COUNTERS = 0u;
 

@@ -62,12 +62,15 @@ SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch
 SHARED_CONST uint IZB_COUNTER_RECORD_DISPATCH = 24u;    // 3 uints: over records
 SHARED_CONST uint IZB_COUNTER_TILE_PAIR_DISPATCH = 28u; // 3 uints: over tile pairs
 SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel pairs
+// Hybrid: the pixels the resolve listed for the cascades, then 3 uints: indirect dispatch over them in
+// workgroups of kIzbHybridEntriesPerGroup entries.
+SHARED_CONST uint IZB_COUNTER_HYBRID = 36u;
 // The build's per-pixel counts, added once per subgroup by every subgroup of the frame, go to one of
 // kIzbCounterShards slots each (a single address would serialize hundreds of thousands of atomics);
 // the CPU sums the shards. Counter k (a sharded IZB_COUNTER_*) lives at IZB_COUNTER_SHARDS + k * shards.
 SHARED_CONST uint kIzbCounterShards = 64u;
-SHARED_CONST uint IZB_COUNTER_SHARDS = 36u;
-SHARED_CONST uint IZB_COUNTER_COUNT = 36u + 8u * 64u;
+SHARED_CONST uint IZB_COUNTER_SHARDS = 40u;
+SHARED_CONST uint IZB_COUNTER_COUNT = 40u + 8u * 64u;
 
 // Compute trace and compute CSM, hierarchically over light-space tiles of kIzbTile² texels (each
 // tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
@@ -111,8 +114,10 @@ SHARED_CONST uint IZB_BINDING_QUADS = 8u;
 SHARED_CONST uint IZB_BINDING_WORLD_POSITION = 9u;
 SHARED_CONST uint IZB_BINDING_GEOMETRIC_NORMAL = 10u;
 SHARED_CONST uint IZB_BINDING_ALBEDO = 11u;
-SHARED_CONST uint IZB_BINDING_VERTICES = 12u;
-SHARED_CONST uint IZB_BINDING_INDICES = 13u;
+// Hybrid: the resolve writes the hard term and lists the pixels that blend toward the cascades; the
+// cascades then filter only those (into the soft term), and a last pass blends them.
+SHARED_CONST uint IZB_BINDING_HYBRID_LIST = 12u;  // uvec4 {pixel x | y << 16, gap weight bits, fade bits, -}
+SHARED_CONST uint IZB_BINDING_SOFT_TERM = 13u;    // R32F: the cascades' term (-1 where not listed)
 SHARED_CONST uint IZB_BINDING_SHADOW_TERM = 14u;
 SHARED_CONST uint IZB_BINDING_OVERLAY = 15u;
 SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;          // per caster triangle: IzbCasterTriangle
@@ -133,6 +138,7 @@ SHARED_CONST uint IZB_BINDING_LIST_COUNTS = 29u;
 SHARED_CONST uint IZB_BINDING_LIST_CURSOR = 30u;
 SHARED_CONST uint IZB_BINDING_SCAN_BLOCKS = 31u;
 SHARED_CONST uint kIzbScanBlock = 1024u;  // texels per block of the prefix sum (256 threads x 4)
+SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per workgroup (64 threads x 4)
 
 SHARED_CONST uint IZB_DRAW_IN_CSM = 1u;
 

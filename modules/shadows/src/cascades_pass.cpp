@@ -38,6 +38,7 @@
 #include "cascade_fit.hpp"
 #include "light_space.hpp"
 #include "shared/cascades.h"
+#include "shared/izb.h"
 
 namespace shadows::detail {
 
@@ -100,7 +101,8 @@ struct CascadesPass::Impl {
   Pipeline alpha_depth;  // alpha-tested casters, either culling setting
   Pipeline edges_pipeline[2];  // [neighbourhoods]
   // [stage][masking][debug], created on first use.
-  Pipeline filter_pipelines[3][3][3];
+  Pipeline filter_pipelines[4][3][3];
+  Buffer no_input_list;  // bound where the classify stage runs over the frame
   Pipeline args_pipeline;
   Pipeline blur_pipeline[2];  // [apply]
   CascadeFit fit;
@@ -164,7 +166,9 @@ struct CascadesPass::Impl {
           {gs::CASCADE_FILTER_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gs::CASCADE_FILTER_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
           {gs::CASCADE_FILTER_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_WORK_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+          {gs::CASCADE_FILTER_BINDING_WORK_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+          {gs::CASCADE_FILTER_BINDING_INPUT_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+          {gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
          0,
          {{0, stage}, {1, masking}, {2, debug}}});
     return pipeline;
@@ -362,13 +366,16 @@ CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {
                       true, "cascade counters");
   std::memset(m.counters.mapped(), 0, gs::CASCADE_COUNTER_WORDS * 4);
   m.nearest = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "cascade nearest");
+  m.no_input_list = Buffer(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade input list placeholder");
   m.create_pipelines();
   m.create_rotation_texture();
 }
 
 CascadesPass::~CascadesPass() = default;
 
-void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& settings, Image& out, DebugView debug) {
+void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& settings, Image& out, DebugView debug,
+                          const PixelList* only) {
+  static_assert(gs::kIzbHybridEntriesPerGroup == 4 * gs::CASCADE_LIST_GROUP, "a list workgroup takes 4 entries a thread");
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
   m.ensure_maps(std::max(settings.map_size, 16u));
@@ -376,7 +383,8 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   m.fit = fit_cascades(frame.view, settings, caster_bounds(frame));
   std::array<uint32_t, kMaxCascadeCount> levels{};
   std::array<glm::ivec4, kMaxCascadeCount> rects{};
-  const gs::CascadeParams p = m.make_params(frame, settings, debug, &levels, &rects);
+  gs::CascadeParams p = m.make_params(frame, settings, debug, &levels, &rects);
+  if (only) p.mode.w = only->count_word;
   m.params.write(&p, sizeof(p));
   // Frames are recorded only once the previous one has finished, so the buffers may be replaced here.
   const VkDeviceSize texels = std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + [&] {
@@ -439,11 +447,18 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
           .storage_buffer(gs::CASCADE_FILTER_BINDING_COUNTERS, m.counters.handle())
           .storage_buffer(gs::CASCADE_FILTER_BINDING_BLUR_LIST, m.blur_list.handle())
           .storage_buffer(gs::CASCADE_FILTER_BINDING_WORK_LIST, m.work_list.handle())
+          .storage_buffer(gs::CASCADE_FILTER_BINDING_INPUT_LIST, only ? only->entries : m.no_input_list.handle())
+          .storage_buffer(gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, only ? only->counters : m.no_input_list.handle())
           .push(m.ctx, cmd, pipeline);
     };
-    bind_filter(gs::CASCADE_STAGE_CLASSIFY);
-    // 8x8 invocations of 2x2 pixels each.
-    vkCmdDispatch(cmd, (frame.view.extent.width + 15) / 16, (frame.view.extent.height + 15) / 16, 1);
+    if (only) {
+      bind_filter(gs::CASCADE_STAGE_CLASSIFY_LIST);
+      vkCmdDispatchIndirect(cmd, only->counters, VkDeviceSize(only->count_word + 1) * 4);
+    } else {
+      bind_filter(gs::CASCADE_STAGE_CLASSIFY);
+      // 8x8 invocations of 2x2 pixels each.
+      vkCmdDispatch(cmd, (frame.view.extent.width + 15) / 16, (frame.view.extent.height + 15) / 16, 1);
+    }
     m.record_dispatch_args(cmd);
     // The two lists hold different pixels: their stages need no barrier between them.
     bind_filter(gs::CASCADE_STAGE_KERNEL);

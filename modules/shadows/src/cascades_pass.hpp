@@ -4,6 +4,15 @@
 
 namespace shadows::detail {
 
+// Pixels a pass is restricted to: `entries` holds uvec4s whose x is the pixel (x | y << 16);
+// `counters` holds, from word `count_word`, the entry count and then indirect dispatch arguments in
+// workgroups of gpu_shared::kIzbHybridEntriesPerGroup entries.
+struct PixelList {
+  VkBuffer entries = VK_NULL_HANDLE;
+  VkBuffer counters = VK_NULL_HANDLE;
+  uint32_t count_word = 0;
+};
+
 // Cascaded filtered shadow maps with computation masking and selective blur.
 class CascadesPass {
  public:
@@ -12,7 +21,10 @@ class CascadesPass {
   // Writes the filtered visibility (1 lit .. 0 shadowed) of every covered pixel into `out` (R32F
   // storage image of the frame's size, GENERAL layout). Background pixels are left untouched.
   // With debug == Cascades or ExpensivePath, also draws that overlay into frame.overlay.
-  void record(engine::FrameContext& frame, const CascadeSettings& settings, engine::gpu::Image& out, DebugView debug);
+  // With `only`, filters just the listed pixels (the blur then takes neighbours whose term in `out` is
+  // not negative).
+  void record(engine::FrameContext& frame, const CascadeSettings& settings, engine::gpu::Image& out, DebugView debug,
+              const PixelList* only = nullptr);
   // After the frame's fence: fills the cascade fields of `stats`.
   void after_frame(Stats& stats);
 

@@ -35,8 +35,8 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gpu_shared::IZB_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gpu_shared::IZB_BINDING_ALBEDO, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-          {gpu_shared::IZB_BINDING_VERTICES, storage},
-          {gpu_shared::IZB_BINDING_INDICES, storage},
+          {gpu_shared::IZB_BINDING_HYBRID_LIST, storage},
+          {gpu_shared::IZB_BINDING_SOFT_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gpu_shared::IZB_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gpu_shared::IZB_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
           {gpu_shared::IZB_BINDING_TRIANGLES, storage},
@@ -89,6 +89,11 @@ struct IzbPass::Impl {
     return pipeline;
   }
   Buffer list_counts, list_cursor, scan_blocks;
+  // Hybrid: the cascades' term and the pixels that blend toward it (frame-sized only in hybrid).
+  Image soft_term;
+  Buffer hybrid_list;
+  VkExtent2D hybrid_extent{};
+  Pipeline hybrid_blend;
   Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
@@ -137,6 +142,19 @@ struct IzbPass::Impl {
     std::memset(counters_readback.mapped(), 0, counter_bytes);
     nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "izb nearest");
     csm = std::make_unique<CsmPass>(c);
+  }
+
+  // Frame-sized in hybrid; otherwise 1x1 placeholders keep the bindings valid.
+  void ensure_hybrid(VkExtent2D e, bool hybrid) {
+    const VkExtent2D want = hybrid ? e : VkExtent2D{1, 1};
+    if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height) return;
+    hybrid_extent = want;
+    soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT, "izb hybrid soft term");
+    ctx.immediate_submit([&](VkCommandBuffer cmd) {
+      soft_term.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAll, kAllAccess);
+    });
+    hybrid_list = Buffer(ctx, VkDeviceSize(want.width) * want.height * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                         "izb hybrid pixel list");
   }
 
   bool raster_trace_available() const {
@@ -355,8 +373,8 @@ struct IzbPass::Impl {
         .storage_image(gpu_shared::IZB_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
         .storage_image(gpu_shared::IZB_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
         .storage_image(gpu_shared::IZB_BINDING_ALBEDO, frame.gbuffer.albedo.view())
-        .storage_buffer(gpu_shared::IZB_BINDING_VERTICES, frame.geometry.vertices().handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_INDICES, frame.geometry.indices().handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_HYBRID_LIST, hybrid_list.handle())
+        .storage_image(gpu_shared::IZB_BINDING_SOFT_TERM, soft_term.view())
         .storage_image(gpu_shared::IZB_BINDING_SHADOW_TERM, frame.shadow_term.view())
         .storage_image(gpu_shared::IZB_BINDING_OVERLAY, frame.overlay.view())
         .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLES, triangles.handle())
@@ -446,6 +464,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   if (settings.resolution == 0 || settings.resolution > 16384)
     throw std::invalid_argument("IZB resolution must be in 1..16384");
   m.ensure_buffers(frame, settings);
+  m.ensure_hybrid(frame.view.extent, hybrid);
   m.ensure_triangles(frame);
   const bool run_csm = m.csm->plan(frame, settings, m.resolution);
   m.csm->prepare(run_csm ? m.resolution : 1);
@@ -683,6 +702,23 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   VkBufferCopy copy{0, 0, m.counters.size()};
   vkCmdCopyBuffer(cmd, m.counters.handle(), m.counters_readback.handle(), 1, &copy);
   m.collected = true;
+}
+
+engine::gpu::Image& IzbPass::soft_term() { return impl_->soft_term; }
+
+PixelList IzbPass::hybrid_list() const {
+  return {impl_->hybrid_list.handle(), impl_->counters.handle(), gpu_shared::IZB_COUNTER_HYBRID};
+}
+
+void IzbPass::record_hybrid_blend(engine::FrameContext& frame) {
+  Impl& m = *impl_;
+  VkCommandBuffer cmd = frame.cmd;
+  if (!m.hybrid_blend.valid())
+    m.hybrid_blend = m.factory.compute({"izb_hybrid_blend.comp", izb_bindings(), sizeof(gpu_shared::IzbComputePush)});
+  ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "hybrid_blend");
+  m.hybrid_blend.bind(cmd);
+  m.push_all(cmd, frame, m.hybrid_blend);
+  vkCmdDispatchIndirect(cmd, m.counters.handle(), (gpu_shared::IZB_COUNTER_HYBRID + 1) * 4);
 }
 
 ShadowModule::CsmSnapshot IzbPass::read_csm() {

@@ -1,6 +1,7 @@
 #pragma once
 #include <memory>
 
+#include "cascades_pass.hpp"
 #include "engine/gpu/resources.hpp"
 #include "shadows/shadows.hpp"
 
@@ -15,11 +16,15 @@ class IzbPass {
  public:
   explicit IzbPass(engine::gpu::Context& ctx);
   ~IzbPass();
-  // hybrid: the term already holds the cascades; the IZB overwrites its range and fades at the limit.
   // collect_stats adds the statistics passes (fragment count before culling, list lengths).
-  // hybrid with soft_distance > 0 also blends toward the cascades by occluder distance.
+  // hybrid: writes the hard term and lists the pixels that take some of the cascades' term (beyond the
+  // IZB's range, in its last tenth, and, with soft_distance > 0, by occluder distance); the cascades
+  // then filter those pixels into soft_term(), and record_hybrid_blend() mixes them into the term.
   void record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
               bool collect_stats, float soft_distance = 0.0f);
+  engine::gpu::Image& soft_term();
+  PixelList hybrid_list() const;
+  void record_hybrid_blend(engine::FrameContext& frame);
   void after_frame(Stats& stats);
   bool hardware_raster_available() const;
   bool csm_test_supported(CsmTest test, std::string* why) const;

@@ -69,11 +69,16 @@ class ShadowModuleImpl final : public ShadowModule {
         izb().record(frame, settings_.izb, settings_.debug, false, collect_stats_);
         break;
       case Technique::Hybrid: {
-        cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
-        engine::gpu::full_barrier(frame.cmd);
+        // IZB first: its resolve lists the pixels that take some of the cascades' term, and the
+        // cascades filter only those.
         IzbSettings near = settings_.izb;
         near.max_distance = settings_.hybrid_izb_distance;
         izb().record(frame, near, settings_.debug, true, collect_stats_, settings_.hybrid_soft_distance);
+        engine::gpu::full_barrier(frame.cmd);
+        const PixelList listed = izb().hybrid_list();
+        cascades().record(frame, settings_.cascades, izb().soft_term(), settings_.debug, &listed);
+        engine::gpu::full_barrier(frame.cmd);
+        izb().record_hybrid_blend(frame);
         break;
       }
       case Technique::RayTraced:

@@ -1,0 +1,24 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows/izb_prelude.glsl"
+layout(local_size_x = 64) in;
+
+layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
+layout(set = 0, binding = IZB_BINDING_SOFT_TERM, r32f) readonly uniform image2D soft_term;
+layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) readonly buffer HybridList { uvec4 hybrid_list[]; };
+
+// Hybrid, last step: each pixel the resolve listed mixes its hard term (in the shadow term) toward
+// the cascades' (in the soft term), first by occluder distance, then by the fade at the IZB's range.
+void main() {
+  uint count = counters[IZB_COUNTER_HYBRID];
+  for (uint k = 0u; k < 4u; ++k) {
+    uint entry = (gl_WorkGroupID.x * gl_WorkGroupSize.x + gl_LocalInvocationIndex) * 4u + k;
+    if (entry >= count) break;
+    uvec4 e = hybrid_list[entry];
+    ivec2 pixel = ivec2(e.x & 0xffffu, e.x >> 16u);
+    float hard = imageLoad(shadow_term, pixel).r;
+    float soft = imageLoad(soft_term, pixel).r;
+    float visibility = mix(hard, soft, uintBitsToFloat(e.y));
+    imageStore(shadow_term, pixel, vec4(mix(visibility, soft, uintBitsToFloat(e.z))));
+  }
+}
