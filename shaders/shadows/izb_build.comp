@@ -114,10 +114,12 @@ void main() {
     }
     pixel_state[index] = state;
     if (candidate != 0u) {  // only candidates' masks and occluder distances are ever read
-      occluder_distance[index] = floatBitsToUint(1.0e30);
+      if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
       visibility_mask[index] = mask;
     }
   }
+  // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.
+  if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) return;
   uint covered_sum = subgroupAdd(covered);
   uint candidate_sum = subgroupAdd(candidate);
   uint culled_sum = subgroupAdd(culled);

@@ -70,8 +70,8 @@ uint caster_draw(uint t) { return floatBitsToUint(casters[t].p0.w); }
 
 CasterAlpha load_caster_alpha(uint t) {
   CasterAlpha ca;
-  ca.threshold = floatBitsToUint(casters[t].p1.w);
-  ca.texture = floatBitsToUint(casters[t].p2.w);
+  ca.threshold = izb_flag(IZB_FLAG_ALPHA) ? floatBitsToUint(casters[t].p1.w) : 0u;
+  ca.texture = izb_flag(IZB_FLAG_ALPHA) ? floatBitsToUint(casters[t].p2.w) : 0u;
   if (ca.threshold != 0u) {
     ca.uv0 = casters[t].uv01.xy;
     ca.uv1 = casters[t].uv01.zw;
@@ -83,8 +83,9 @@ CasterAlpha load_caster_alpha(uint t) {
 // Whether the caster is solid where the light ray meets it: `w` are the barycentrics of the sample's
 // projection along the light in the grid-space triangle, which (the projection being parallel) are
 // those of the ray's hit on the world triangle, hence its texture coordinate there.
+// (Without IZB_FLAG_ALPHA the test compiles away: a CPU device would run it for every node otherwise.)
 bool caster_solid_at(CasterAlpha ca, vec3 w) {
-  if (ca.threshold == 0u) return true;
+  if (!izb_flag(IZB_FLAG_ALPHA) || ca.threshold == 0u) return true;
   return material_alpha_kept(ca.texture, ca.threshold, w.x * ca.uv0 + w.y * ca.uv1 + w.z * ca.uv2);
 }
 
@@ -160,6 +161,7 @@ uint full_mask() { return izb_samples() == 32u ? 0xffffffffu : 1u; }
 
 // Records the nearest occluder seen for `pixel` (light depth units; the hybrid blend reads it).
 void note_occluder_gap(uint pixel, float gap) {
+  if (!izb_flag(IZB_FLAG_GAPS)) return;
   uint bits = floatBitsToUint(max(gap, 0.0));
   if (bits < occluder_distance[pixel]) atomicMin(occluder_distance[pixel], bits);
 }

@@ -54,7 +54,8 @@ void main() {
     // The farther the nearest occluder sits above the point (in world units along the light), the
     // more the cascades' filtered term takes over; near the IZB's range limit they take over fully.
     // Surfaces facing away are 0 in both terms, so they need no blend.
-    float gap_world = uintBitsToFloat(occluder_distance[index]) * (params.depth_range.y - params.depth_range.x);
+    float gap_world = izb_flag(IZB_FLAG_GAPS) ? uintBitsToFloat(occluder_distance[index]) * (params.depth_range.y - params.depth_range.x)
+                                              : 1.0e30;
     float gap_weight = 0.0, fade = beyond ? 1.0 : 0.0;
     if ((state & IZB_PIXEL_CANDIDATE) != 0u && mask != 0u && gap_world < 1.0e20 && push.soft_distance > 0.0)
       gap_weight = clamp(gap_world / push.soft_distance, 0.0, 1.0);
@@ -73,7 +74,7 @@ void main() {
       hybrid_list[base + slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
                                        floatBitsToUint(fade), 0u);
     else if (p.covered)
-      imageStore(soft_term, pixel, vec4(-1.0));  // the cascades' blur skips it as a neighbour
+      imageStore(soft_term, pixel, vec4(-1.0));  // not filtered: the cascades' blur skips it as a neighbour
   }
   if (!p.covered) return;
   if (beyond && kHybrid == 0u) return;  // beyond the IZB: the term already there stays

@@ -32,6 +32,8 @@ SHARED_CONST uint IZB_FLAG_STATS = 16u;
 SHARED_CONST uint IZB_FLAG_NO_DEPTH_CULL = 32u;  // compute trace: test every touched texel's list
 SHARED_CONST uint IZB_FLAG_CSM_BUFFER = 64u;     // the CSM is the compute pass's buffer, not the depth image
 SHARED_CONST uint IZB_FLAG_SORTED_LISTS = 128u;  // lists are contiguous node ranges (counting sort), not linked
+SHARED_CONST uint IZB_FLAG_ALPHA = 256u;         // some caster is alpha-tested (else the node test skips that code)
+SHARED_CONST uint IZB_FLAG_GAPS = 512u;          // keep each pixel's nearest occluder distance (hybrid blending)
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x. Sorted lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous

@@ -548,6 +548,10 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   if (sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
+  if (std::any_of(frame.draws.begin(), frame.draws.end(),
+                  [](const engine::DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
+    flags |= gpu_shared::IZB_FLAG_ALPHA;
+  if (hybrid && soft_distance > 0.0f) flags |= gpu_shared::IZB_FLAG_GAPS;
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
   p.light_view = light_view;
@@ -629,7 +633,11 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     // The shadow-ray offset and rounding may carry a node slightly outside.
     return fit_orthographic(light_view, box, 1e-3f * glm::length(box.extent()) + 1e-3f);
   }();
-  auto draw_trace = [&](const Pipeline& trace, VkCompareOp compare, bool fill_depth) {
+  // The raster trace draws the opaque casters with pipelines whose node test has no alpha-test code
+  // (a CPU device runs both sides of a branch), then the alpha-tested ones with it.
+  const bool alpha = (flags & gpu_shared::IZB_FLAG_ALPHA) != 0;
+  const Impl::Pipelines& opaque_set = alpha ? m.pipelines(m.samples, flags & ~gpu_shared::IZB_FLAG_ALPHA) : *m.p;
+  auto draw_trace = [&](bool count_only, VkCompareOp compare, bool fill_depth) {
     if (fill_depth) {
       // Each texel's farthest node depth becomes the depth the early test compares against (0 for an
       // empty texel: nothing passes). The build keeps them in [0,1], where float order is bit order,
@@ -640,26 +648,35 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
       vkCmdCopyBufferToImage(cmd, m.farthest.handle(), m.trace_depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &region);
       full_barrier(cmd);
     }
+    // Each caster draw's first triangle in the caster triangle buffers (which hold them in draw order).
+    std::vector<uint32_t> first_triangle(frame.draws.size(), 0);
+    uint32_t triangles = 0;
+    for (size_t i = 0; i < frame.draws.size(); ++i) {
+      if (!frame.draws[i].shadow.casts_shadow) continue;
+      first_triangle[i] = triangles;
+      triangles += frame.geometry.mesh(frame.draws[i].mesh).index_count / 3;
+    }
     begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
-    trace.bind(cmd);
-    vkCmdSetDepthBias(cmd, -1.0f, 0.0f, -1.0f);
-    vkCmdSetDepthCompareOp(cmd, compare);
-    m.push_all(cmd, frame, trace);
-    uint32_t first_triangle = 0;  // the caster triangle buffers hold the casters in draw order
-    draw_casters(
-        cmd, frame,
-        [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
-          gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset, first_triangle, 0u};
-          trace.push_constants(cmd, dp);
-          first_triangle += range.index_count / 3;
-        },
-        CasterSet::All,
-        [&](const engine::DrawItem& d) {
+    for (const CasterSet set : {alpha ? CasterSet::Opaque : CasterSet::All, CasterSet::AlphaTested}) {
+      if (set == CasterSet::AlphaTested && !alpha) break;
+      const Impl::Pipelines& ps = set == CasterSet::AlphaTested ? *m.p : opaque_set;
+      const Pipeline& trace = count_only ? (use_hardware ? ps.count_hardware : ps.count_software)
+                                         : (use_hardware ? ps.trace_hardware : ps.trace_software);
+      trace.bind(cmd);
+      vkCmdSetDepthBias(cmd, -1.0f, 0.0f, -1.0f);
+      vkCmdSetDepthCompareOp(cmd, compare);
+      m.push_all(cmd, frame, trace);
+      draw_casters(
+          cmd, frame,
+          [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
+            gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset,
+                                       first_triangle[size_t(&d - frame.draws.data())], 0u};
+            trace.push_constants(cmd, dp);
+          },
+          set,
           // Rasterizing a caster costs a CPU driver per triangle even where it covers no node.
-          if (!d.bounds.outside_clip(receiver_region)) return false;
-          first_triangle += frame.geometry.mesh(d.mesh).index_count / 3;
-          return true;
-        });
+          [&](const engine::DrawItem& d) { return d.bounds.outside_clip(receiver_region); });
+    }
     vkCmdEndRendering(cmd);
   };
   if (use_compute_trace) {
@@ -674,8 +691,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     m.dispatch_step(cmd, frame, m.p->trace_compute, push, gpu_shared::IZB_ARGS_PAIRS, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
   } else {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    draw_trace(use_hardware ? m.p->trace_hardware : m.p->trace_software,
-               settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
+    draw_trace(false, settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
   }
   full_barrier(cmd);
   {
@@ -693,7 +709,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     // (The compute trace counts fragments before the cull as it bins.)
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_stats");
     if (!use_compute_trace) {
-      draw_trace(use_hardware ? m.p->count_hardware : m.p->count_software, VK_COMPARE_OP_ALWAYS, false);
+      draw_trace(true, VK_COMPARE_OP_ALWAYS, false);
       full_barrier(cmd);
     }
     m.dispatch(cmd, frame, m.p->list_stats, push, (m.resolution + 7) / 8, (m.resolution + 7) / 8);
