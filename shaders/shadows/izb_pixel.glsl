@@ -22,8 +22,11 @@ PixelPoint load_pixel(ivec2 pixel) {
   p.candidate = false;
   if (!p.covered) return p;
   bool receives = imageLoad(albedo_image, pixel).a > 0.5;
+  // No branch on the uniform alone (max_distance <= 0.0 || ...): Mesa 22.3's lavapipe can latch onto
+  // such a branch and compile a new copy of the shader at every dispatch, never freed (tests/soak).
   float max_distance = params.camera_position.w;
-  bool in_range = max_distance <= 0.0 || distance(p.position, params.camera_position.xyz) <= max_distance;
+  float reach = max_distance > 0.0 ? max_distance : 3.0e38;
+  bool in_range = distance(p.position, params.camera_position.xyz) <= reach;
   p.candidate = receives && p.facing && in_range;
   return p;
 }
