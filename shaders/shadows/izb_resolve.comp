@@ -32,7 +32,8 @@ void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
-  PixelPoint p = inside ? load_pixel(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
+  // Candidates are known from the build's per-pixel state: the surface is enough here.
+  PixelPoint p = inside ? load_surface(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
   uint state = p.covered ? pixel_state[index] : 0u;
   uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
   float visibility = 1.0;
