@@ -71,10 +71,15 @@ struct IzbPass::Impl {
   Context& ctx;
   PipelineFactory factory;
   // Every IZB pipeline, specialized for a sample count and a set of IZB_FLAG_* (see izb_common.glsl).
+  // The raster trace: software (geometry-shader quads + exact texel test) and hardware conservative
+  // rasterization, each also as a count-only variant for the before-culling fragment statistic.
+  struct TracePipelines {
+    Pipeline software, hardware, count_software, count_hardware;
+  };
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
     Pipeline tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
-    Pipeline trace_software, trace_hardware, count_software, count_hardware;
+    TracePipelines trace;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
   const Pipelines* p = nullptr;  // this frame's
@@ -194,13 +199,26 @@ struct IzbPass::Impl {
     ps.tile_far = compute("izb_tile_farthest.comp", shape);
     ps.trace_compute = compute("izb_trace.comp", shape);
     ps.dispatch_args = compute("izb_dispatch_args.comp", shape);
-    // Trace pipelines: software (geometry-shader quads + exact texel test) and hardware conservative
-    // rasterization, each also as a count-only variant for the before-culling fragment statistic.
+    ps.trace = trace_pipelines(samples_per_pixel, flags);
+    return ps;
+  }
+
+  // Opaque casters' raster trace where some are alpha-tested (see record()), made on first use.
+  std::map<uint64_t, TracePipelines> opaque_traces;
+  const TracePipelines& opaque_trace_pipelines(uint32_t samples_per_pixel, uint32_t flags) {
+    auto [it, fresh] = opaque_traces.try_emplace((uint64_t(samples_per_pixel) << 32) | flags);
+    if (fresh) it->second = trace_pipelines(samples_per_pixel, flags & ~gpu_shared::IZB_FLAG_ALPHA);
+    return it->second;
+  }
+
+  TracePipelines trace_pipelines(uint32_t samples_per_pixel, uint32_t flags) {
+    TracePipelines tp;
+    const std::vector<SpecializationConstant> variant = {{10, samples_per_pixel}, {11, flags}};
     // Depth: the attachment holds each texel's farthest node; the rasterized depth, biased by minus
     // one slope unit, is the triangle plane's nearest depth over the texel, so LESS culls exactly the
     // fragments behind every node. Depth clamp keeps biased depths below 0 from being clipped.
     GraphicsPipelineDesc trace;
-    trace.bindings = bindings;
+    trace.bindings = izb_bindings();
     trace.push_constant_size = sizeof(gpu_shared::IzbDrawPush);
     trace.vertex_input = VertexInput::PositionOnly;
     trace.cull_mode = VK_CULL_MODE_NONE;
@@ -221,16 +239,16 @@ struct IzbPass::Impl {
     };
     if (ctx.features().geometry_shader) {
       trace.geometry_shader = "izb_trace.geom";
-      ps.trace_software = raster("izb trace (software conservative)", 1, 0);
-      ps.count_software = raster("izb fragment count (software conservative)", 1, 1);
+      tp.software = raster("izb trace (software conservative)", 1, 0);
+      tp.count_software = raster("izb fragment count (software conservative)", 1, 1);
     }
     if (ctx.features().conservative_rasterization) {
       trace.geometry_shader.clear();
       trace.conservative = ConservativeMode::Overestimate;
-      ps.trace_hardware = raster("izb trace (hardware conservative)", 0, 0);
-      ps.count_hardware = raster("izb fragment count (hardware conservative)", 0, 1);
+      tp.hardware = raster("izb trace (hardware conservative)", 0, 0);
+      tp.count_hardware = raster("izb fragment count (hardware conservative)", 0, 1);
     }
-    return ps;
+    return tp;
   }
 
   void ensure_buffers(const engine::FrameContext& frame, const IzbSettings& s) {
@@ -638,7 +656,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   // The raster trace draws the opaque casters with pipelines whose node test has no alpha-test code
   // (a CPU device runs both sides of a branch), then the alpha-tested ones with it.
   const bool alpha = (flags & gpu_shared::IZB_FLAG_ALPHA) != 0;
-  const Impl::Pipelines& opaque_set = alpha ? m.pipelines(m.samples, flags & ~gpu_shared::IZB_FLAG_ALPHA) : *m.p;
+  const Impl::TracePipelines& opaque_trace = alpha ? m.opaque_trace_pipelines(m.samples, flags) : m.p->trace;
   auto draw_trace = [&](bool count_only, VkCompareOp compare, bool fill_depth) {
     if (fill_depth) {
       // Each texel's farthest node depth becomes the depth the early test compares against (0 for an
@@ -661,9 +679,9 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
     for (const CasterSet set : {alpha ? CasterSet::Opaque : CasterSet::All, CasterSet::AlphaTested}) {
       if (set == CasterSet::AlphaTested && !alpha) break;
-      const Impl::Pipelines& ps = set == CasterSet::AlphaTested ? *m.p : opaque_set;
-      const Pipeline& trace = count_only ? (use_hardware ? ps.count_hardware : ps.count_software)
-                                         : (use_hardware ? ps.trace_hardware : ps.trace_software);
+      const Impl::TracePipelines& tp = set == CasterSet::AlphaTested ? m.p->trace : opaque_trace;
+      const Pipeline& trace = count_only ? (use_hardware ? tp.count_hardware : tp.count_software)
+                                         : (use_hardware ? tp.hardware : tp.software);
       trace.bind(cmd);
       vkCmdSetDepthBias(cmd, -1.0f, 0.0f, -1.0f);
       vkCmdSetDepthCompareOp(cmd, compare);
