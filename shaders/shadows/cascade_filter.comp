@@ -205,7 +205,8 @@ void classify() {
   ivec2 pixels[4];
   for (int k = 0; k < 4; ++k) {
     if (kStage == CASCADE_STAGE_CLASSIFY_LIST) {
-      uint entry = (gl_WorkGroupID.x * CASCADE_LIST_GROUP + gl_LocalInvocationIndex) * 4u + uint(k);
+      // Consecutive invocations read consecutive entries (coalesced on a GPU, a SIMD row on a CPU).
+      uint entry = (gl_WorkGroupID.x * 4u + uint(k)) * CASCADE_LIST_GROUP + gl_LocalInvocationIndex;
       uint packed_pixel = entry < input_counters[params.mode.w] ? input_list[entry].x : 0xffffffffu;  // none: outside
       pixels[k] = ivec2(packed_pixel & 0xffffu, packed_pixel >> 16u);
     } else {

@@ -71,6 +71,25 @@ void main() {
       }
     }
   }
+  if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
+    // A pixel has at most one node and the pool holds one per pixel: no allocation, no overflow (a
+    // CPU device would otherwise run every atomic of the general path below for every pixel).
+    if (count != 0u) {
+      nodes[index] = uvec2(atomicExchange(heads[texel0], index), index);
+      raise_farthest(texel0, node_depth);
+    }
+    if (inside) {
+      pixel_state[index] = state;
+      if (candidate != 0u) {
+        if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
+        visibility_mask[index] = mask;
+      }
+    }
+    if (izb_flag(IZB_FLAG_STATS)) {
+      uint requested = subgroupAdd(count);
+      if (subgroupElect() && requested > 0u) atomicAdd(counters[IZB_COUNTER_NODES], requested);
+    }
+  } else {
   // One atomic per subgroup reserves every lane's nodes. Every texel is requested even past the pool,
   // so the counter measures the true demand the pool is grown to.
   uint offset = subgroupExclusiveAdd(count);
@@ -117,6 +136,7 @@ void main() {
       if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
       visibility_mask[index] = mask;
     }
+  }
   }
   // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.
   if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) return;

@@ -13,9 +13,22 @@ shared vec4 subgroup_bounds[256];
 // so no contention on a handful of addresses (izb_setup.comp reduces the partials).
 void main() {
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
+  float max_distance = params.camera_position.w;
+  float reach = max_distance > 0.0 ? max_distance : 3.0e38;  // (no branch on the uniform alone: see izb_pixel.glsl)
   for (uint k = 0u; k < 4u; ++k) {
     ivec2 pixel = ivec2(gl_WorkGroupID.xy * 32u + gl_LocalInvocationID.xy * 2u + uvec2(k & 1u, k >> 1u));
     if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;
+    if (izb_samples() == 1u) {
+      // Every covered point in range bounds the candidates among them (a superset: the window only
+      // needs to hold every node), and a ray origin lies within the normal offset of its point. So
+      // one image load instead of the candidate test's three.
+      vec4 position = imageLoad(world_position_image, pixel);
+      if (position.w <= 0.5 || distance(position.xyz, params.camera_position.xyz) > reach) continue;
+      vec2 v = (params.light_view * vec4(position.xyz, 1.0)).xy;
+      lo = min(lo, v - kShadowNormalOffset);
+      hi = max(hi, v + kShadowNormalOffset);
+      continue;
+    }
     PixelPoint p = load_pixel(pixel);
     if (!p.candidate) continue;
     if (izb_samples() == 32u) {

@@ -1,4 +1,4 @@
-// Per-pixel classification shared by the fit and build passes.
+// Per-pixel classification shared by the fit, build and resolve passes.
 layout(set = 0, binding = IZB_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position_image;
 layout(set = 0, binding = IZB_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly uniform image2D geometric_normal_image;
 layout(set = 0, binding = IZB_BINDING_ALBEDO, rgba8) readonly uniform image2D albedo_image;
@@ -11,7 +11,8 @@ struct PixelPoint {
   bool facing;     // faces_light (shadow_common.h)
 };
 
-PixelPoint load_pixel(ivec2 pixel) {
+// The surface only (`candidate` false): for passes that read the candidates from the build's state.
+PixelPoint load_surface(ivec2 pixel) {
   PixelPoint p;
   vec4 pos = imageLoad(world_position_image, pixel);
   p.covered = pos.w > 0.5;
@@ -20,10 +21,18 @@ PixelPoint load_pixel(ivec2 pixel) {
   p.normal = normal.xyz;
   p.facing = faces_light(normal);
   p.candidate = false;
+  return p;
+}
+
+PixelPoint load_pixel(ivec2 pixel) {
+  PixelPoint p = load_surface(pixel);
   if (!p.covered) return p;
   bool receives = imageLoad(albedo_image, pixel).a > 0.5;
+  // No branch on the uniform alone (max_distance <= 0.0 || ...): Mesa 22.3's lavapipe can latch onto
+  // such a branch and compile a new copy of the shader at every dispatch, never freed (tests/soak).
   float max_distance = params.camera_position.w;
-  bool in_range = max_distance <= 0.0 || distance(p.position, params.camera_position.xyz) <= max_distance;
+  float reach = max_distance > 0.0 ? max_distance : 3.0e38;
+  bool in_range = distance(p.position, params.camera_position.xyz) <= reach;
   p.candidate = receives && p.facing && in_range;
   return p;
 }

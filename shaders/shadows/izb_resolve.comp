@@ -7,6 +7,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
 layout(set = 0, binding = IZB_BINDING_OVERLAY, rgba8) uniform image2D overlay;
+layout(set = 0, binding = IZB_BINDING_SOFT_TERM, r32f) writeonly uniform image2D soft_term;
 layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList { uvec4 hybrid_list[]; };
 
 const uint kDebugVisibility = 1u;
@@ -31,19 +32,22 @@ void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
-  PixelPoint p = inside ? load_pixel(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
+  // Candidates are known from the build's per-pixel state: the surface is enough here.
+  PixelPoint p = inside ? load_surface(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
   uint state = p.covered ? pixel_state[index] : 0u;
   uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
   float visibility = 1.0;
   bool facing = p.facing;
+  // No branch on a uniform alone (see izb_pixel.glsl): selects instead.
   float max_distance = params.camera_position.w;
+  float reach = max_distance > 0.0 ? max_distance : 3.0e38;
   float dist = distance(p.position, params.camera_position.xyz);
   bool beyond = false;  // past the IZB's range: the cascades' term alone
   if ((state & IZB_PIXEL_CANDIDATE) != 0u) {
     visibility = 1.0 - float(bitCount(mask)) / float(izb_samples());
   } else if (!facing) {
     visibility = 0.0;
-  } else if (max_distance > 0.0 && dist > max_distance) {
+  } else if (dist > reach) {
     beyond = true;
     visibility = 0.0;
   } else {
@@ -53,12 +57,13 @@ void main() {
     // The farther the nearest occluder sits above the point (in world units along the light), the
     // more the cascades' filtered term takes over; near the IZB's range limit they take over fully.
     // Surfaces facing away are 0 in both terms, so they need no blend.
+    // IZB_FLAG_GAPS is set only with a positive soft distance.
     float gap_world = izb_flag(IZB_FLAG_GAPS) ? uintBitsToFloat(occluder_distance[index]) * (params.depth_range.y - params.depth_range.x)
                                               : 1.0e30;
-    float gap_weight = 0.0, fade = beyond ? 1.0 : 0.0;
-    if ((state & IZB_PIXEL_CANDIDATE) != 0u && mask != 0u && gap_world < 1.0e20 && push.soft_distance > 0.0)
-      gap_weight = clamp(gap_world / push.soft_distance, 0.0, 1.0);
-    if (max_distance > 0.0 && !beyond) fade = clamp((dist - 0.9 * max_distance) / (0.1 * max_distance), 0.0, 1.0);
+    bool occluded = (state & IZB_PIXEL_CANDIDATE) != 0u && mask != 0u && gap_world < 1.0e20;
+    float gap_weight = occluded ? clamp(gap_world / push.soft_distance, 0.0, 1.0) : 0.0;
+    // (Unlimited range: reach is huge and the fade 0.)
+    float fade = beyond ? 1.0 : clamp((dist - 0.9 * reach) / (0.1 * reach), 0.0, 1.0);
     bool listed = p.covered && facing && (gap_weight > 0.0 || fade > 0.0);
     // One atomic per subgroup; the dispatch over the list grows with it.
     uint total = subgroupAdd(listed ? 1u : 0u);
@@ -72,6 +77,8 @@ void main() {
     if (listed)
       hybrid_list[base + slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
                                        floatBitsToUint(fade), 0u);
+    else if (p.covered)
+      imageStore(soft_term, pixel, vec4(-1.0));  // not filtered: the cascades' blur skips it as a neighbour
   }
   if (!p.covered) return;
   if (beyond && kHybrid == 0u) return;  // beyond the IZB: the term already there stays

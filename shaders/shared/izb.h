@@ -34,6 +34,7 @@ SHARED_CONST uint IZB_FLAG_CSM_BUFFER = 64u;     // the CSM is the compute pass'
 SHARED_CONST uint IZB_FLAG_SORTED_LISTS = 128u;  // lists are contiguous node ranges (counting sort), not linked
 SHARED_CONST uint IZB_FLAG_ALPHA = 256u;         // some caster is alpha-tested (else the node test skips that code)
 SHARED_CONST uint IZB_FLAG_GAPS = 512u;          // keep each pixel's nearest occluder distance (hybrid blending)
+SHARED_CONST uint IZB_FLAG_DIRECT_NODES = 1024u; // 1 spp, linked lists, pool >= pixels: a pixel's node is its own index
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x. Sorted lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous
@@ -119,7 +120,7 @@ SHARED_CONST uint IZB_BINDING_ALBEDO = 11u;
 // Hybrid: the resolve writes the hard term and lists the pixels that blend toward the cascades; the
 // cascades then filter only those (into the soft term), and a last pass blends them.
 SHARED_CONST uint IZB_BINDING_HYBRID_LIST = 12u;  // uvec4 {pixel x | y << 16, gap weight bits, fade bits, -}
-SHARED_CONST uint IZB_BINDING_SOFT_TERM = 13u;    // R32F: the cascades' term of the listed pixels
+SHARED_CONST uint IZB_BINDING_SOFT_TERM = 13u;    // R32F: the cascades' term (-1 where not listed)
 SHARED_CONST uint IZB_BINDING_SHADOW_TERM = 14u;
 SHARED_CONST uint IZB_BINDING_OVERLAY = 15u;
 SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;          // per caster triangle: IzbCasterTriangle

@@ -452,11 +452,6 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
           .push(m.ctx, cmd, pipeline);
     };
     if (only) {
-      // Unlisted pixels read as -1, which the blur skips as neighbours.
-      const VkClearColorValue unfiltered{{-1.0f, 0.0f, 0.0f, 0.0f}};
-      const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-      vkCmdClearColorImage(cmd, out.handle(), VK_IMAGE_LAYOUT_GENERAL, &unfiltered, 1, &range);
-      full_barrier(cmd);
       bind_filter(gs::CASCADE_STAGE_CLASSIFY_LIST);
       vkCmdDispatchIndirect(cmd, only->counters, VkDeviceSize(only->count_word + 1) * 4);
     } else {

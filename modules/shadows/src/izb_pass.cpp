@@ -71,10 +71,15 @@ struct IzbPass::Impl {
   Context& ctx;
   PipelineFactory factory;
   // Every IZB pipeline, specialized for a sample count and a set of IZB_FLAG_* (see izb_common.glsl).
+  // The raster trace: software (geometry-shader quads + exact texel test) and hardware conservative
+  // rasterization, each also as a count-only variant for the before-culling fragment statistic.
+  struct TracePipelines {
+    Pipeline software, hardware, count_software, count_hardware;
+  };
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
     Pipeline tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
-    Pipeline trace_software, trace_hardware, count_software, count_hardware;
+    TracePipelines trace;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
   const Pipelines* p = nullptr;  // this frame's
@@ -149,8 +154,7 @@ struct IzbPass::Impl {
     const VkExtent2D want = hybrid ? e : VkExtent2D{1, 1};
     if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height) return;
     hybrid_extent = want;
-    soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                      "izb hybrid soft term");
+    soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT, "izb hybrid soft term");
     ctx.immediate_submit([&](VkCommandBuffer cmd) {
       soft_term.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAll, kAllAccess);
     });
@@ -195,13 +199,26 @@ struct IzbPass::Impl {
     ps.tile_far = compute("izb_tile_farthest.comp", shape);
     ps.trace_compute = compute("izb_trace.comp", shape);
     ps.dispatch_args = compute("izb_dispatch_args.comp", shape);
-    // Trace pipelines: software (geometry-shader quads + exact texel test) and hardware conservative
-    // rasterization, each also as a count-only variant for the before-culling fragment statistic.
+    ps.trace = trace_pipelines(samples_per_pixel, flags);
+    return ps;
+  }
+
+  // Opaque casters' raster trace where some are alpha-tested (see record()), made on first use.
+  std::map<uint64_t, TracePipelines> opaque_traces;
+  const TracePipelines& opaque_trace_pipelines(uint32_t samples_per_pixel, uint32_t flags) {
+    auto [it, fresh] = opaque_traces.try_emplace((uint64_t(samples_per_pixel) << 32) | flags);
+    if (fresh) it->second = trace_pipelines(samples_per_pixel, flags & ~gpu_shared::IZB_FLAG_ALPHA);
+    return it->second;
+  }
+
+  TracePipelines trace_pipelines(uint32_t samples_per_pixel, uint32_t flags) {
+    TracePipelines tp;
+    const std::vector<SpecializationConstant> variant = {{10, samples_per_pixel}, {11, flags}};
     // Depth: the attachment holds each texel's farthest node; the rasterized depth, biased by minus
     // one slope unit, is the triangle plane's nearest depth over the texel, so LESS culls exactly the
     // fragments behind every node. Depth clamp keeps biased depths below 0 from being clipped.
     GraphicsPipelineDesc trace;
-    trace.bindings = bindings;
+    trace.bindings = izb_bindings();
     trace.push_constant_size = sizeof(gpu_shared::IzbDrawPush);
     trace.vertex_input = VertexInput::PositionOnly;
     trace.cull_mode = VK_CULL_MODE_NONE;
@@ -222,16 +239,16 @@ struct IzbPass::Impl {
     };
     if (ctx.features().geometry_shader) {
       trace.geometry_shader = "izb_trace.geom";
-      ps.trace_software = raster("izb trace (software conservative)", 1, 0);
-      ps.count_software = raster("izb fragment count (software conservative)", 1, 1);
+      tp.software = raster("izb trace (software conservative)", 1, 0);
+      tp.count_software = raster("izb fragment count (software conservative)", 1, 1);
     }
     if (ctx.features().conservative_rasterization) {
       trace.geometry_shader.clear();
       trace.conservative = ConservativeMode::Overestimate;
-      ps.trace_hardware = raster("izb trace (hardware conservative)", 0, 0);
-      ps.count_hardware = raster("izb fragment count (hardware conservative)", 0, 1);
+      tp.hardware = raster("izb trace (hardware conservative)", 0, 0);
+      tp.count_hardware = raster("izb fragment count (hardware conservative)", 0, 1);
     }
-    return ps;
+    return tp;
   }
 
   void ensure_buffers(const engine::FrameContext& frame, const IzbSettings& s) {
@@ -553,6 +570,8 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
                   [](const engine::DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
     flags |= gpu_shared::IZB_FLAG_ALPHA;
   if (hybrid && soft_distance > 0.0f) flags |= gpu_shared::IZB_FLAG_GAPS;
+  if (m.samples == 1 && !sorted && m.pool_size >= uint64_t(frame.view.extent.width) * frame.view.extent.height)
+    flags |= gpu_shared::IZB_FLAG_DIRECT_NODES;
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
   p.light_view = light_view;
@@ -634,7 +653,11 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     // The shadow-ray offset and rounding may carry a node slightly outside.
     return fit_orthographic(light_view, box, 1e-3f * glm::length(box.extent()) + 1e-3f);
   }();
-  auto draw_trace = [&](const Pipeline& trace, VkCompareOp compare, bool fill_depth) {
+  // The raster trace draws the opaque casters with pipelines whose node test has no alpha-test code
+  // (a CPU device runs both sides of a branch), then the alpha-tested ones with it.
+  const bool alpha = (flags & gpu_shared::IZB_FLAG_ALPHA) != 0;
+  const Impl::TracePipelines& opaque_trace = alpha ? m.opaque_trace_pipelines(m.samples, flags) : m.p->trace;
+  auto draw_trace = [&](bool count_only, VkCompareOp compare, bool fill_depth) {
     if (fill_depth) {
       // Each texel's farthest node depth becomes the depth the early test compares against (0 for an
       // empty texel: nothing passes). The build keeps them in [0,1], where float order is bit order,
@@ -645,26 +668,35 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
       vkCmdCopyBufferToImage(cmd, m.farthest.handle(), m.trace_depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &region);
       full_barrier(cmd);
     }
+    // Each caster draw's first triangle in the caster triangle buffers (which hold them in draw order).
+    std::vector<uint32_t> first_triangle(frame.draws.size(), 0);
+    uint32_t triangles = 0;
+    for (size_t i = 0; i < frame.draws.size(); ++i) {
+      if (!frame.draws[i].shadow.casts_shadow) continue;
+      first_triangle[i] = triangles;
+      triangles += frame.geometry.mesh(frame.draws[i].mesh).index_count / 3;
+    }
     begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
-    trace.bind(cmd);
-    vkCmdSetDepthBias(cmd, -1.0f, 0.0f, -1.0f);
-    vkCmdSetDepthCompareOp(cmd, compare);
-    m.push_all(cmd, frame, trace);
-    uint32_t first_triangle = 0;  // the caster triangle buffers hold the casters in draw order
-    draw_casters(
-        cmd, frame,
-        [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
-          gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset, first_triangle, 0u};
-          trace.push_constants(cmd, dp);
-          first_triangle += range.index_count / 3;
-        },
-        CasterSet::All,
-        [&](const engine::DrawItem& d) {
+    for (const CasterSet set : {alpha ? CasterSet::Opaque : CasterSet::All, CasterSet::AlphaTested}) {
+      if (set == CasterSet::AlphaTested && !alpha) break;
+      const Impl::TracePipelines& tp = set == CasterSet::AlphaTested ? m.p->trace : opaque_trace;
+      const Pipeline& trace = count_only ? (use_hardware ? tp.count_hardware : tp.count_software)
+                                         : (use_hardware ? tp.hardware : tp.software);
+      trace.bind(cmd);
+      vkCmdSetDepthBias(cmd, -1.0f, 0.0f, -1.0f);
+      vkCmdSetDepthCompareOp(cmd, compare);
+      m.push_all(cmd, frame, trace);
+      draw_casters(
+          cmd, frame,
+          [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
+            gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset,
+                                       first_triangle[size_t(&d - frame.draws.data())], 0u};
+            trace.push_constants(cmd, dp);
+          },
+          set,
           // Rasterizing a caster costs a CPU driver per triangle even where it covers no node.
-          if (!d.bounds.outside_clip(receiver_region)) return false;
-          first_triangle += frame.geometry.mesh(d.mesh).index_count / 3;
-          return true;
-        });
+          [&](const engine::DrawItem& d) { return d.bounds.outside_clip(receiver_region); });
+    }
     vkCmdEndRendering(cmd);
   };
   if (use_compute_trace) {
@@ -679,8 +711,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     m.dispatch_step(cmd, frame, m.p->trace_compute, push, gpu_shared::IZB_ARGS_PAIRS, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
   } else {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    draw_trace(use_hardware ? m.p->trace_hardware : m.p->trace_software,
-               settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
+    draw_trace(false, settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
   }
   full_barrier(cmd);
   {
@@ -698,7 +729,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
     // (The compute trace counts fragments before the cull as it bins.)
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_stats");
     if (!use_compute_trace) {
-      draw_trace(use_hardware ? m.p->count_hardware : m.p->count_software, VK_COMPARE_OP_ALWAYS, false);
+      draw_trace(true, VK_COMPARE_OP_ALWAYS, false);
       full_barrier(cmd);
     }
     m.dispatch(cmd, frame, m.p->list_stats, push, (m.resolution + 7) / 8, (m.resolution + 7) / 8);
