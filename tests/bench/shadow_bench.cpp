@@ -57,7 +57,7 @@ struct Options {
 
 const char* kUsage =
     "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--cascade-size N] [--mode LIST]\n"
-    "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent]\n"
+    "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent|auto]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted]\n"
     "                    [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
@@ -202,7 +202,7 @@ std::vector<RunConfig> expand_runs(const Options& o) {
     }
     if (!o.masking.empty()) {
       auto m = shadows::parse_masking(o.masking);
-      if (!m) throw std::runtime_error("--masking '" + o.masking + "': expected off, edge or depth-extent");
+      if (!m) throw std::runtime_error("--masking '" + o.masking + "': expected off, edge, depth-extent or auto");
       base.cascades.masking = *m;
     }
     auto settings = shadows::parse_mode(mode, base);

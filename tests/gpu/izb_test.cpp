@@ -350,6 +350,7 @@ TEST_F(IzbTest, HybridFiltersOnlyThePixelsItBlends) {
 
   shadows::Settings cascades_only;
   cascades_only.technique = shadows::Technique::Cascades;
+  cascades_only.cascades.masking = shadows::Masking::Off;  // what Auto takes in the hybrid
   const auto soft = render("contact", 0, cascades_only, false);
   shadows::Settings all = none;
   all.hybrid_izb_distance = 1.0e-4f;

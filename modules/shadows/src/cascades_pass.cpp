@@ -383,7 +383,9 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   m.fit = fit_cascades(frame.view, settings, caster_bounds(frame));
   std::array<uint32_t, kMaxCascadeCount> levels{};
   std::array<glm::ivec4, kMaxCascadeCount> rects{};
-  gs::CascadeParams p = m.make_params(frame, settings, debug, &levels, &rects);
+  CascadeSettings s = settings;
+  if (s.masking == Masking::Auto) s.masking = only ? Masking::Off : Masking::Edge;
+  gs::CascadeParams p = m.make_params(frame, s, debug, &levels, &rects);
   if (only) p.mode.w = only->count_word;
   m.params.write(&p, sizeof(p));
   // Frames are recorded only once the previous one has finished, so the buffers may be replaced here.
@@ -402,8 +404,8 @@ void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& se
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, gs::CASCADE_COUNTER_WORDS * 4, 0);
   m.record_depth(frame, settings, levels, rects);
   full_barrier(cmd);
-  if (settings.masking != Masking::Off) {
-    const bool extent = settings.masking == Masking::DepthExtent;
+  if (s.masking != Masking::Off) {
+    const bool extent = s.masking == Masking::DepthExtent;
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_masks");
     // One dispatch per cascade over the texels its receivers can read, at the one level it uses; then
     // the same over their neighbourhoods.

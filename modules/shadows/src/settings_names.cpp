@@ -62,6 +62,7 @@ std::optional<Masking> parse_masking(const std::string& name) {
   if (name == "off") return Masking::Off;
   if (name == "edge") return Masking::Edge;
   if (name == "depth-extent") return Masking::DepthExtent;
+  if (name == "auto") return Masking::Auto;
   return std::nullopt;
 }
 
@@ -70,6 +71,7 @@ std::string masking_name(Masking masking) {
     case Masking::Off: return "off";
     case Masking::Edge: return "edge";
     case Masking::DepthExtent: return "depth-extent";
+    case Masking::Auto: return "auto";
   }
   return "?";
 }

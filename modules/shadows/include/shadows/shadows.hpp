@@ -33,7 +33,10 @@ enum class CsmTest {
   InnerHw,        // conservative rasterization underestimation (fully covered fragments only)
 };
 
-enum class Masking { Off, Edge, DepthExtent };
+// Auto: Edge where the cascades filter the whole frame; Off in the hybrid, where they filter only the
+// pixels the IZB leaves them, and building masks over the whole view costs more than the taps they
+// would skip (measured on lavapipe and the H200).
+enum class Masking { Off, Edge, DepthExtent, Auto };
 
 enum class DebugView { None, VisibilityMask, ListLength, Cascades, CsmCoverage, ExpensivePath };
 
@@ -65,7 +68,7 @@ struct CascadeSettings {
   float normal_offset = 1.0f;         // in texels, along the geometric normal
   bool cull_front_faces = false;      // render back faces into the maps (closed meshes only)
   float kernel_radius = 0.08f;        // PCF disk radius in world units (same across cascades)
-  Masking masking = Masking::Edge;    // where the 12-tap filter may be skipped
+  Masking masking = Masking::Auto;    // where the 12-tap filter may be skipped
   bool blur = true;                   // 5x5 blur on pixels whose taps disagreed
 };
 
