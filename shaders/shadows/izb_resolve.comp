@@ -7,7 +7,6 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
 layout(set = 0, binding = IZB_BINDING_OVERLAY, rgba8) uniform image2D overlay;
-layout(set = 0, binding = IZB_BINDING_SOFT_TERM, r32f) writeonly uniform image2D soft_term;
 layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList { uvec4 hybrid_list[]; };
 
 const uint kDebugVisibility = 1u;
@@ -77,8 +76,6 @@ void main() {
     if (listed)
       hybrid_list[base + slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
                                        floatBitsToUint(fade), 0u);
-    else if (p.covered)
-      imageStore(soft_term, pixel, vec4(-1.0));  // not filtered: the cascades' blur skips it as a neighbour
   }
   if (!p.covered) return;
   if (beyond && kHybrid == 0u) return;  // beyond the IZB: the term already there stays

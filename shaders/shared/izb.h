@@ -120,7 +120,7 @@ SHARED_CONST uint IZB_BINDING_ALBEDO = 11u;
 // Hybrid: the resolve writes the hard term and lists the pixels that blend toward the cascades; the
 // cascades then filter only those (into the soft term), and a last pass blends them.
 SHARED_CONST uint IZB_BINDING_HYBRID_LIST = 12u;  // uvec4 {pixel x | y << 16, gap weight bits, fade bits, -}
-SHARED_CONST uint IZB_BINDING_SOFT_TERM = 13u;    // R32F: the cascades' term (-1 where not listed)
+SHARED_CONST uint IZB_BINDING_SOFT_TERM = 13u;    // R32F: the cascades' term of listed pixels, -1 elsewhere
 SHARED_CONST uint IZB_BINDING_SHADOW_TERM = 14u;
 SHARED_CONST uint IZB_BINDING_OVERLAY = 15u;
 SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;          // per caster triangle: IzbCasterTriangle

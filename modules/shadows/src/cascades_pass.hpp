@@ -21,8 +21,8 @@ class CascadesPass {
   // Writes the filtered visibility (1 lit .. 0 shadowed) of every covered pixel into `out` (R32F
   // storage image of the frame's size, GENERAL layout). Background pixels are left untouched.
   // With debug == Cascades or ExpensivePath, also draws that overlay into frame.overlay.
-  // With `only`, filters just the listed pixels; the caller has written a negative term to the other
-  // covered pixels of `out`, which the blur then takes no neighbours from.
+  // With `only`, filters just the listed pixels; the rest of `out` must hold a negative term (the caller
+  // keeps it so), and the blur takes no neighbours from there.
   void record(engine::FrameContext& frame, const CascadeSettings& settings, engine::gpu::Image& out, DebugView debug,
               const PixelList* only = nullptr);
   // After the frame's fence: fills the cascade fields of `stats`.

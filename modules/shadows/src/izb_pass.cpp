@@ -154,9 +154,16 @@ struct IzbPass::Impl {
     const VkExtent2D want = hybrid ? e : VkExtent2D{1, 1};
     if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height) return;
     hybrid_extent = want;
-    soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT, "izb hybrid soft term");
+    soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                      "izb hybrid soft term");
+    // -1 (not filtered) everywhere; the blend restores that after each frame (izb_hybrid_blend.comp).
     ctx.immediate_submit([&](VkCommandBuffer cmd) {
-      soft_term.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAll, kAllAccess);
+      soft_term.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                           VK_ACCESS_2_TRANSFER_WRITE_BIT);
+      const VkClearColorValue unfiltered{{-1.0f, 0.0f, 0.0f, 0.0f}};
+      const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+      vkCmdClearColorImage(cmd, soft_term.handle(), VK_IMAGE_LAYOUT_GENERAL, &unfiltered, 1, &range);
+      memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, kAll, kAllAccess);
     });
     hybrid_list = Buffer(ctx, VkDeviceSize(want.width) * want.height * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
                          "izb hybrid pixel list");
