@@ -1,5 +1,6 @@
 #include "dynamic_resolution.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace walkthrough {
@@ -11,7 +12,11 @@ bool DynamicResolution::add_frame(float ms) {
     return changed;
   }
   window_.push_back(ms);
-  if (window_.size() < 8) return false;
+  // Far over the target (every frame above 1.5x), act after half a window: a CPU device starting at
+  // full size would otherwise spend its first seconds at a fraction of the target rate.
+  const bool far_over = window_.size() >= 4 &&
+                        std::all_of(window_.begin(), window_.end(), [&](float f) { return f > 1.5f * target_ms_; });
+  if (window_.size() < 8 && !far_over) return false;
   std::vector<float> sorted = window_;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   median_ms_ = sorted[sorted.size() / 2];
@@ -19,7 +24,7 @@ bool DynamicResolution::add_frame(float ms) {
   float next = scale_;
   if (median_ms_ > target_ms_ * 1.05f) {
     // Cost goes with the pixel count, so the side scales with the square root of the ratio.
-    next = scale_ * std::max(0.7f, std::sqrt(target_ms_ / median_ms_));
+    next = scale_ * std::max(0.5f, std::sqrt(target_ms_ / median_ms_));
   } else if (median_ms_ < target_ms_ * 0.75f) {
     next = scale_ * 1.08f;
   }

@@ -199,9 +199,13 @@ TEST(Animation, PosesAreDeterministicAndMove) {
 
 TEST(DynamicResolution, ShrinksWhenSlowGrowsWhenFastOffWhenDisabled) {
   DynamicResolution d(10.0f);  // 100 ms target
-  for (int i = 0; i < 8; ++i) d.add_frame(400.0f);
-  EXPECT_LT(d.scale(), 0.75f);  // four times too slow: at most 30% smaller per step
-  EXPECT_GE(d.scale(), 0.7f);
+  for (int i = 0; i < 3; ++i) EXPECT_FALSE(d.add_frame(400.0f));
+  EXPECT_TRUE(d.add_frame(400.0f));  // far over the target: acts after four frames
+  EXPECT_FLOAT_EQ(d.scale(), 0.5f);  // four times too slow: half the side (at most half per step)
+  for (int i = 0; i < 7; ++i) d.add_frame(150.0f);
+  EXPECT_FLOAT_EQ(d.scale(), 0.5f);  // 1.5x over: waits for a full window of eight
+  EXPECT_TRUE(d.add_frame(150.0f));
+  EXPECT_LT(d.scale(), 0.5f);
   for (int step = 0; step < 10; ++step)
     for (int i = 0; i < 8; ++i) d.add_frame(400.0f);
   EXPECT_FLOAT_EQ(d.scale(), DynamicResolution::kMinScale);  // the floor
