@@ -76,6 +76,18 @@ VkTransformMatrixKHR to_transform(const glm::mat4& m) {
   return t;
 }
 
+// A fresh build of one geometry, tuned for tracing (both levels are built that way).
+VkAccelerationStructureBuildGeometryInfoKHR build_info(VkAccelerationStructureTypeKHR type,
+                                                       const VkAccelerationStructureGeometryKHR& geometry) {
+  VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
+  info.type = type;
+  info.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
+  info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
+  info.geometryCount = 1;
+  info.pGeometries = &geometry;
+  return info;
+}
+
 }  // namespace
 
 struct RayTracedPass::Impl {
@@ -153,12 +165,7 @@ struct RayTracedPass::Impl {
       tri.indexType = VK_INDEX_TYPE_UINT32;
       tri.indexData.deviceAddress = geometry.indices().device_address();  // + primitiveOffset
 
-      VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
-      info.type = VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR;
-      info.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
-      info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
-      info.geometryCount = 1;
-      info.pGeometries = &g;
+      VkAccelerationStructureBuildGeometryInfoKHR info = build_info(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g);
       const uint32_t triangles = mesh.index_count / 3;
       VkAccelerationStructureBuildSizesInfoKHR sizes{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR};
       ctx.rt.get_build_sizes(ctx.device(), VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR, &info, &triangles, &sizes);
@@ -219,12 +226,7 @@ struct RayTracedPass::Impl {
     g.flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
     g.geometry.instances = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_INSTANCES_DATA_KHR};
     g.geometry.instances.arrayOfPointers = VK_FALSE;
-    VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
-    info.type = VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR;
-    info.flags = VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR;
-    info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_BUILD_KHR;
-    info.geometryCount = 1;
-    info.pGeometries = &g;
+    VkAccelerationStructureBuildGeometryInfoKHR info = build_info(VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, g);
 
     // Storage, scratch and the instance array are sized for a capacity that grows (doubling) with
     // the caster count, so a changing scene does not reallocate every frame.
