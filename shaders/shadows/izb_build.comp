@@ -71,6 +71,7 @@ void main() {
       }
     }
   }
+  uint refused = 0u;  // nodes past the pool
   if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
     // A pixel has at most one node and the pool holds one per pixel: no allocation, no overflow (a
     // CPU device would otherwise run every atomic of the general path below for every pixel).
@@ -78,48 +79,41 @@ void main() {
       nodes[index] = uvec2(atomicExchange(heads[texel0], index), index);
       raise_farthest(texel0, node_depth);
     }
-    if (inside) {
-      pixel_state[index] = state;
-      if (candidate != 0u) {
-        if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
-        visibility_mask[index] = mask;
-      }
-    }
     if (izb_flag(IZB_FLAG_STATS)) {
       uint requested = subgroupAdd(count);
       if (subgroupElect() && requested > 0u) atomicAdd(counters[IZB_COUNTER_NODES], requested);
     }
   } else {
-  // One atomic per subgroup reserves every lane's nodes. Every texel is requested even past the pool,
-  // so the counter measures the true demand the pool is grown to.
-  uint offset = subgroupExclusiveAdd(count);
-  uint total = subgroupAdd(count);
-  uint base = 0u;
-  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_NODES], total);
-  base = subgroupBroadcastFirst(base) + offset;
-  uint refused = 0u;
-  if (sorted_lists()) {
-    // Counting sort, step 1: count each texel's nodes (izb_scatter.comp places them after the prefix
-    // sum). A pixel takes all its nodes or, past the pool, none.
-    if (base + count <= params.limits.x) {
-      for (uint k = 0u; k < count; ++k) {
-        uint texel = izb_samples() == 1u ? texel0 : texels[k];
-        atomicAdd(list_counts[texel], 1u);
-        raise_farthest(texel, node_depth);
+    // One atomic per subgroup reserves every lane's nodes. Every texel is requested even past the
+    // pool, so the counter measures the true demand the pool is grown to.
+    uint offset = subgroupExclusiveAdd(count);
+    uint total = subgroupAdd(count);
+    uint base = 0u;
+    if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_NODES], total);
+    base = subgroupBroadcastFirst(base) + offset;
+    if (sorted_lists()) {
+      // Counting sort, step 1: count each texel's nodes (izb_scatter.comp places them after the
+      // prefix sum). A pixel takes all its nodes or, past the pool, none.
+      if (base + count <= params.limits.x) {
+        for (uint k = 0u; k < count; ++k) {
+          uint texel = izb_samples() == 1u ? texel0 : texels[k];
+          atomicAdd(list_counts[texel], 1u);
+          raise_farthest(texel, node_depth);
+        }
+      } else {
+        refused = count;
       }
     } else {
-      refused = count;
-    }
-  } else {
-    for (uint k = 0u; k < count; ++k) {
-      uint node = base + k;
-      if (node >= params.limits.x) {
-        ++refused;
-        continue;
+      for (uint k = 0u; k < count; ++k) {
+        uint node = base + k;
+        if (node >= params.limits.x) {
+          ++refused;
+          continue;
+        }
+        uint texel = izb_samples() == 1u ? texel0 : texels[k];
+        nodes[node] = uvec2(atomicExchange(heads[texel], node), index);
+        raise_farthest(texel, node_depth);
       }
-      uint texel = izb_samples() == 1u ? texel0 : texels[k];
-      nodes[node] = uvec2(atomicExchange(heads[texel], node), index);
-      raise_farthest(texel, node_depth);
     }
   }
   if (inside) {
@@ -136,7 +130,6 @@ void main() {
       if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
       visibility_mask[index] = mask;
     }
-  }
   }
   // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.
   if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) return;
