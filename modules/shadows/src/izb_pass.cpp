@@ -664,6 +664,14 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   // (a CPU device runs both sides of a branch), then the alpha-tested ones with it.
   const bool alpha = (flags & gpu_shared::IZB_FLAG_ALPHA) != 0;
   const Impl::TracePipelines& opaque_trace = alpha ? m.opaque_trace_pipelines(m.samples, flags) : m.p->trace;
+  // Each caster draw's first triangle in the caster triangle buffers (which hold them in draw order).
+  std::vector<uint32_t> first_triangle(frame.draws.size(), 0);
+  uint32_t triangles = 0;
+  for (size_t i = 0; i < frame.draws.size(); ++i) {
+    if (!frame.draws[i].shadow.casts_shadow) continue;
+    first_triangle[i] = triangles;
+    triangles += frame.geometry.mesh(frame.draws[i].mesh).index_count / 3;
+  }
   auto draw_trace = [&](bool count_only, VkCompareOp compare, bool fill_depth) {
     if (fill_depth) {
       // Each texel's farthest node depth becomes the depth the early test compares against (0 for an
@@ -674,14 +682,6 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
       region.imageExtent = {m.resolution, m.resolution, 1};
       vkCmdCopyBufferToImage(cmd, m.farthest.handle(), m.trace_depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &region);
       full_barrier(cmd);
-    }
-    // Each caster draw's first triangle in the caster triangle buffers (which hold them in draw order).
-    std::vector<uint32_t> first_triangle(frame.draws.size(), 0);
-    uint32_t triangles = 0;
-    for (size_t i = 0; i < frame.draws.size(); ++i) {
-      if (!frame.draws[i].shadow.casts_shadow) continue;
-      first_triangle[i] = triangles;
-      triangles += frame.geometry.mesh(frame.draws[i].mesh).index_count / 3;
     }
     begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
     for (const CasterSet set : {alpha ? CasterSet::Opaque : CasterSet::All, CasterSet::AlphaTested}) {
