@@ -22,13 +22,14 @@ bool DynamicResolution::add_frame(float ms) {
   median_ms_ = sorted[sorted.size() / 2];
   window_.clear();
   float next = scale_;
-  if (median_ms_ > target_ms_ * 1.05f) {
-    // Cost goes with the pixel count, so the side scales with the square root of the ratio.
-    next = scale_ * std::max(0.5f, std::sqrt(target_ms_ / median_ms_));
-  } else if (median_ms_ < target_ms_ * 0.75f) {
-    next = scale_ * 1.08f;
+  if (median_ms_ > target_ms_) {
+    // Cost goes with the pixel count, so the side scales with the square root of the ratio. It aims a
+    // tenth under the target: aiming at the target itself would leave half the frames above it.
+    next = std::floor(scale_ * std::max(0.5f, std::sqrt(kAim * target_ms_ / median_ms_)) * kSteps) / kSteps;
+  } else if (median_ms_ < target_ms_ * kGrowBelow) {
+    next = std::round(scale_ * 1.08f * kSteps) / kSteps;
   }
-  next = std::clamp(std::round(next * 40.0f) / 40.0f, kMinScale, 1.0f);
+  next = std::clamp(next, kMinScale, 1.0f);
   const bool changed = next != scale_;
   scale_ = next;
   return changed;

@@ -91,7 +91,9 @@ glm::vec3 any_perpendicular(const glm::vec3& n) {
 
 // A plant: a stem, a few branches and leaf cards around them. Low detail draws the same random
 // numbers (so every plant stands where it does at full detail) but keeps every fourth leaf card at
-// twice the size, and tessellates the stems more coarsely.
+// twice the size, makes it one-sided (every pass draws both sides of a triangle, and the G-buffer
+// turns the normal toward the camera, so the back copy only doubles the rasterizer's work), and
+// tessellates the stems more coarsely.
 void make_plant(Random& rng, const glm::vec3& origin, float height, Detail detail, MeshData& stems, MeshData& leaves) {
   const bool low = detail == Detail::Low;
   const int leaf_stride = low ? 4 : 1;
@@ -114,7 +116,8 @@ void make_plant(Random& rng, const glm::vec3& origin, float height, Detail detai
       const glm::vec3 n = rng.unit_vector();
       const glm::vec3 u = any_perpendicular(n), v = glm::cross(n, u);
       const float half = rng.uniform(0.06f, 0.15f) * leaf_scale;
-      if (l % leaf_stride == 0) append_mesh(leaves, make_double_sided_quad(c, u * half, v * half * 0.6f));
+      if (l % leaf_stride != 0) continue;
+      append_mesh(leaves, low ? make_quad(c, u * half, v * half * 0.6f) : make_double_sided_quad(c, u * half, v * half * 0.6f));
     }
   }
 }

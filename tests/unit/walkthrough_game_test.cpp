@@ -122,8 +122,8 @@ TEST(SceneFile, CourtyardLoadsWithAnimatedCastersAndFlags) {
 }
 
 // Low detail builds the same plants coarser: every plant where it stands at full detail (the same
-// bounds), a quarter of the leaf cards, and the rest of the level untouched.
-TEST(SceneFile, LowDetailPlantsStandWhereFullOnesDoWithAQuarterOfTheLeaves) {
+// bounds), a quarter of the leaf cards, one-sided, and the rest of the level untouched.
+TEST(SceneFile, LowDetailPlantsStandWhereFullOnesDoWithAQuarterOfTheLeavesOneSided) {
   auto full = engine::load_scene_file(kContent + "levels/courtyard.json");
   auto low = engine::load_scene_file(kContent + "levels/courtyard.json", engine::Detail::Low);
   auto meshes = [](engine::Scene& s) {
@@ -138,7 +138,7 @@ TEST(SceneFile, LowDetailPlantsStandWhereFullOnesDoWithAQuarterOfTheLeaves) {
     ASSERT_TRUE(l.count(name));
     const auto& coarse = *l.at(name);
     if (name == "hedge_plants_leaves") {
-      EXPECT_EQ(coarse.indices.size() * 4, mesh->indices.size());
+      EXPECT_EQ(coarse.indices.size() * 8, mesh->indices.size());
     } else if (name == "hedge_plants_stems") {
       EXPECT_LT(coarse.indices.size(), mesh->indices.size());
     } else {
@@ -214,9 +214,12 @@ TEST(DynamicResolution, ShrinksWhenSlowGrowsWhenFastOffWhenDisabled) {
   EXPECT_FLOAT_EQ(d.scale(), 1.0f);  // back to full size when fast
   for (int i = 0; i < 8; ++i) d.add_frame(95.0f);
   EXPECT_FLOAT_EQ(d.scale(), 1.0f);  // within the band: no change
+  for (int i = 0; i < 8; ++i) d.add_frame(104.0f);
+  EXPECT_FLOAT_EQ(d.scale(), 0.925f);  // just over: aims a tenth under the target, sqrt(90 / 104) = 0.93
   d.enabled = false;
-  EXPECT_FALSE(d.add_frame(1000.0f));
+  EXPECT_TRUE(d.add_frame(1000.0f));  // off: full size at once, whatever the frame time
   EXPECT_FLOAT_EQ(d.scale(), 1.0f);
+  EXPECT_FALSE(d.add_frame(1000.0f));
 }
 
 }  // namespace
