@@ -4,7 +4,8 @@
 
 namespace engine::gpu {
 
-GpuProfiler::GpuProfiler(const Context& ctx, uint32_t max_regions) : ctx_(ctx), capacity_(max_regions * 2) {
+GpuProfiler::GpuProfiler(const Context& ctx, uint32_t max_regions, size_t history_frames)
+    : ctx_(ctx), capacity_(max_regions * 2), history_frames_(std::max<size_t>(history_frames, 1)) {
   if (!ctx.features().timestamps) return;  // profiler stays disabled; times read as 0
   VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   info.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -59,7 +60,9 @@ void GpuProfiler::collect() {
     auto it = frame.find(name);
     const double ms = it == frame.end() ? 0.0 : it->second;
     if (it != frame.end()) last_frame_.emplace_back(name, ms);
-    history_[name].push_back(ms);
+    auto& h = history_[name];
+    h.push_back(ms);
+    if (h.size() > history_frames_) h.pop_front();
   }
 }
 
@@ -76,7 +79,7 @@ double GpuProfiler::average_ms(const std::string& name, size_t last_n) const {
 double GpuProfiler::median_ms(const std::string& name) const {
   auto it = history_.find(name);
   if (it == history_.end() || it->second.empty()) return 0.0;
-  auto v = it->second;
+  std::vector<double> v(it->second.begin(), it->second.end());
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
@@ -84,7 +87,7 @@ double GpuProfiler::median_ms(const std::string& name) const {
 
 std::vector<double> GpuProfiler::history(const std::string& name) const {
   auto it = history_.find(name);
-  return it == history_.end() ? std::vector<double>{} : it->second;
+  return it == history_.end() ? std::vector<double>{} : std::vector<double>(it->second.begin(), it->second.end());
 }
 
 void GpuProfiler::clear_history() {

@@ -1,7 +1,9 @@
+#include <algorithm>
 #include <cmath>
 #include <set>
 
 #include "engine/assets/procedural_scenes.hpp"
+#include "engine/gpu/profiler.hpp"
 #include "gpu_fixture.hpp"
 
 namespace {
@@ -114,4 +116,21 @@ TEST_F(GpuTest, HeadlessImageShowsLitGeometry) {
   EXPECT_GT(colours.size(), 50u);
   r.write_png("gbuffer_test_contact.png");
   EXPECT_TRUE(std::filesystem::exists("gbuffer_test_contact.png"));
+}
+
+// The profiler's history is bounded: a game left running keeps the last frames, not every frame.
+TEST_F(GpuTest, ProfilerHistoryKeepsOnlyTheLastFrames) {
+  engine::gpu::GpuProfiler profiler(*ctx_, 4, 3);
+  ASSERT_TRUE(profiler.enabled());
+  for (int frame = 0; frame < 5; ++frame) {
+    ctx_->immediate_submit([&](VkCommandBuffer cmd) {
+      profiler.begin_frame(cmd);
+      profiler.begin(cmd, "pass");
+      profiler.end(cmd, "pass");
+    });
+    profiler.collect();
+    EXPECT_EQ(profiler.history("pass").size(), size_t(std::min(frame + 1, 3)));
+  }
+  profiler.clear_history();
+  EXPECT_TRUE(profiler.history("pass").empty());
 }

@@ -1,6 +1,7 @@
 #pragma once
 // GPU time per named pass from timestamp queries. Regions may nest; each frame's results are read
 // after its fence, and history is kept so callers can ask for averages or medians over frames.
+#include <deque>
 #include <map>
 #include <string>
 #include <vector>
@@ -11,7 +12,9 @@ namespace engine::gpu {
 
 class GpuProfiler {
  public:
-  explicit GpuProfiler(const Context& ctx, uint32_t max_regions = 64);
+  // The history keeps the last `history_frames` frames, so an application running for hours holds a
+  // bounded amount (a benchmark's timed frames fit many times over).
+  explicit GpuProfiler(const Context& ctx, uint32_t max_regions = 64, size_t history_frames = 4096);
   ~GpuProfiler();
   GpuProfiler(const GpuProfiler&) = delete;
   GpuProfiler& operator=(const GpuProfiler&) = delete;
@@ -28,7 +31,8 @@ class GpuProfiler {
   double average_ms(const std::string& name, size_t last_n = 0) const;
   double median_ms(const std::string& name) const;
   std::vector<std::string> region_names() const { return order_; }
-  // Per-frame times of one region since the last clear_history() (empty if never recorded).
+  // Per-frame times of one region since the last clear_history(), at most the last history_frames
+  // (empty if never recorded).
   std::vector<double> history(const std::string& name) const;
   void clear_history();
 
@@ -36,6 +40,7 @@ class GpuProfiler {
   const Context& ctx_;
   VkQueryPool pool_ = VK_NULL_HANDLE;
   uint32_t capacity_ = 0;
+  size_t history_frames_ = 0;
   uint32_t used_ = 0;
   struct Open {
     std::string name;
@@ -44,7 +49,7 @@ class GpuProfiler {
   };
   std::vector<Open> regions_;
   std::vector<std::string> order_;
-  std::map<std::string, std::vector<double>> history_;
+  std::map<std::string, std::deque<double>> history_;
   std::vector<std::pair<std::string, double>> last_frame_;
 };
 
