@@ -1,6 +1,7 @@
 // The walkthrough: loads a scene (default: the authored courtyard level), installs the shadow module,
 // and lets a player walk it (or tours its views). Windowed with an ImGui panel when a display exists;
 // otherwise headless, writing PNGs. Input can be recorded to and replayed from a script.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,20 @@
 #include "walkthrough.hpp"
 
 namespace {
+
+// Each GPU pass's median over the second half of the frames (the first half includes dynamic
+// resolution's settling), in the order the passes first ran.
+void print_pass_times(const engine::gpu::GpuProfiler& profiler) {
+  std::printf("GPU ms per pass, median of the last half of the frames:\n");
+  for (const auto& name : profiler.region_names()) {
+    auto h = profiler.history(name);
+    if (h.empty()) continue;
+    h.erase(h.begin(), h.begin() + std::ptrdiff_t(h.size() / 2));
+    std::sort(h.begin(), h.end());
+    if (h.back() == 0.0) continue;  // did not run in that half (e.g. the other trace backend's passes)
+    std::printf("  %-18s %8.2f\n", name.c_str(), h[h.size() / 2]);
+  }
+}
 
 using walkthrough::InputFrame;
 
@@ -47,6 +62,7 @@ struct Options {
   bool animate_sun = false;
   std::string overlay;
   bool stats = false;
+  bool pass_times = false;
   std::string switch_scene;  // windowed: picked as if from the panel after the second frame
   std::string detail = "auto";  // generated content: full, low, or auto (low on a CPU device with dynamic resolution)
 };
@@ -56,7 +72,7 @@ const char* kUsage =
     "                   [--input FILE] [--record FILE] [--screenshot FILE.png] [--out DIR]\n"
     "                   [--device gpu|lavapipe|INDEX] [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm|rt]\n"
     "                   [--seconds-per-view S] [--settings FILE.json] [--save-settings FILE.json] [--fixed-size] [--target-fps F]\n"
-    "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats]\n"
+    "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats] [--pass-times]\n"
     "                   [--switch-scene FILE] [--detail full|low|auto]\n";
 
 float float_value(engine::CommandLine& args, float lo, float hi) {
@@ -101,6 +117,7 @@ Options parse(int argc, char** argv) {
       if (!shadows::parse_debug_view(o.overlay))
         throw std::runtime_error("--overlay '" + o.overlay + "': expected none, visibility, list-length, cascades, csm or expensive");
     } else if (a == "--stats") o.stats = true;
+    else if (a == "--pass-times") o.pass_times = true;
     else if (a == "--switch-scene") o.switch_scene = args.value();
     else if (a == "--detail") {
       o.detail = args.value();
@@ -437,6 +454,7 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
     const VkExtent2D e = renderer->extent();
     std::printf("frames: %d, median frame %.1f ms, render size %ux%u (scale %.2f)\n", frame, sorted[sorted.size() / 2],
                 e.width, e.height, window->render_scale());
+    if (o.pass_times) print_pass_times(renderer->profiler());
   }
   if (!o.save_settings.empty()) {
     const std::string err = walkthrough::save_settings(o.save_settings, *module, game, &dynres);
