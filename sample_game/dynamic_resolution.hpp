@@ -6,7 +6,7 @@ namespace walkthrough {
 
 // Holds a frame-time target by scaling the render size: every 8 frames the median frame time is
 // compared with the target; over it shrinks each side by the square root of the ratio to 90% of the
-// target (at most by half), clearly fast (under 75% of the target) grows it by 8%; the scale stays in
+// target (at most by half), clearly fast (under 70% of the target) grows it by 8%; the scale stays in
 // [kMinScale, 1] in steps of 1/40.
 class DynamicResolution {
  public:
@@ -14,7 +14,7 @@ class DynamicResolution {
   // that keeps up beats a sharper one at half the rate.
   static constexpr float kMinScale = 0.2f;
   static constexpr float kAim = 0.9f;        // of the target, after a shrink
-  static constexpr float kGrowBelow = 0.75f; // of the target: grow only when this fast
+  static constexpr float kGrowBelow = 0.7f;  // of the target: grow only when this fast
   static constexpr float kSteps = 40.0f;     // scale steps per unit
   explicit DynamicResolution(float target_fps) : target_ms_(1000.0f / target_fps) {}
   // Feeds one frame's wall-clock time; returns true when scale() changed.

@@ -15,6 +15,8 @@ engine_target_warnings(shadow_bench)
 file(GLOB GPU_TEST_SOURCES CONFIGURE_DEPENDS gpu/*.cpp)
 add_executable(gpu_tests ${GPU_TEST_SOURCES})
 target_link_libraries(gpu_tests PRIVATE shadow_test_support GTest::gtest_main)
+# The backend probe is tested directly (modules/shadows/src/backend_probe.hpp, the module's own header).
+target_include_directories(gpu_tests PRIVATE ${PROJECT_SOURCE_DIR}/modules/shadows/src)
 target_compile_definitions(gpu_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 engine_target_warnings(gpu_tests)
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")

@@ -17,21 +17,22 @@ size_t slot(PassBackend b) { return b == PassBackend::Compute ? 1 : 0; }
 
 PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
                                const engine::gpu::GpuProfiler& profiler) {
-  if (key != key_) {
+  if (key != key_ || !probe_) {
     key_ = key;
-    samples_[0].clear();
-    samples_[1].clear();
-    decided_.reset();
-    pending_.reset();
+    if (probes_.size() >= kRememberedKeys && !probes_.count(key)) probes_.clear();
+    probe_ = &probes_[key];
+    pending_.reset();  // timed under the previous configuration
   }
+  auto& samples = probe_->samples;
+  auto& decided = probe_->decided;
   if (pending_) {
     // Only whole frames count: the previous frame's region, if this pass recorded it.
     for (const auto& [name, ms] : profiler.last_frame())
-      if (name == region_) samples_[slot(*pending_)].push_back(ms);
+      if (name == region_) samples[slot(*pending_)].push_back(ms);
     pending_.reset();
   }
-  choice_.raster_ms = best(samples_[0]);
-  choice_.compute_ms = best(samples_[1]);
+  choice_.raster_ms = best(samples[0]);
+  choice_.compute_ms = best(samples[1]);
   auto use = [&](PassBackend b, std::string reason) {
     choice_.backend = backend_name(b);
     choice_.reason = std::move(reason);
@@ -41,17 +42,17 @@ PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, boo
   if (!raster_available) return use(PassBackend::Compute, "only compute available");
   if (!compute_available) return use(PassBackend::Raster, "only raster available");
   if (!profiler.enabled()) return use(PassBackend::Compute, "no GPU timestamps to probe with: compute");
-  if (!decided_ && samples_[0].size() >= kFramesEach && samples_[1].size() >= kFramesEach) {
-    decided_ = choice_.compute_ms <= choice_.raster_ms ? PassBackend::Compute : PassBackend::Raster;
+  if (!decided && samples[0].size() >= kFramesEach && samples[1].size() >= kFramesEach) {
+    decided = choice_.compute_ms <= choice_.raster_ms ? PassBackend::Compute : PassBackend::Raster;
   }
-  if (decided_) {
+  if (decided) {
     std::ostringstream why;
     why.precision(3);
-    why << "auto: " << backend_name(*decided_) << " faster (raster " << choice_.raster_ms << " ms, compute "
+    why << "auto: " << backend_name(*decided) << " faster (raster " << choice_.raster_ms << " ms, compute "
         << choice_.compute_ms << " ms, best of " << kFramesEach << " frames each)";
-    return use(*decided_, why.str());
+    return use(*decided, why.str());
   }
-  const PassBackend next = samples_[0].size() <= samples_[1].size() ? PassBackend::Raster : PassBackend::Compute;
+  const PassBackend next = samples[0].size() <= samples[1].size() ? PassBackend::Raster : PassBackend::Compute;
   pending_ = next;
   return use(next, "probing");
 }

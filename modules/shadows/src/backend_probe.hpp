@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -11,12 +12,18 @@ namespace shadows::detail {
 
 // Chooses raster or compute for one pass under PassBackend::Auto by timing both: the first frames
 // alternate the two, reading the pass's GPU region of the previous frame from the profiler, then the
-// faster (by its best probe frame) is kept until the configuration key changes.
+// faster (by its best probe frame) is kept for that configuration key. Each key's probe is
+// remembered, so a configuration seen before (dynamic resolution stepping back and forth between
+// sizes) takes its decision at once instead of probing again: a probe frame of the slower backend is
+// a visible hitch on a CPU device.
 class BackendProbe {
  public:
   static constexpr size_t kFramesEach = 2;
+  static constexpr size_t kRememberedKeys = 64;  // beyond this many configurations, probing starts afresh
 
   explicit BackendProbe(std::string region) : region_(std::move(region)) {}
+  BackendProbe(const BackendProbe&) = delete;  // probe_ points into probes_
+  BackendProbe& operator=(const BackendProbe&) = delete;
   // This frame's backend. `key` identifies what the timing depends on (sizes, scene, mode).
   PassBackend pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
                    const engine::gpu::GpuProfiler& profiler);
@@ -29,8 +36,12 @@ class BackendProbe {
   std::string region_;
   uint64_t key_ = ~uint64_t(0);
   std::optional<PassBackend> pending_;  // ran last frame, its time not yet read
-  std::vector<double> samples_[2];      // raster, compute
-  std::optional<PassBackend> decided_;
+  struct Probe {
+    std::vector<double> samples[2];  // raster, compute
+    std::optional<PassBackend> decided;
+  };
+  std::map<uint64_t, Probe> probes_;
+  Probe* probe_ = nullptr;  // the current key's
   Stats::BackendChoice choice_;
 };
 
