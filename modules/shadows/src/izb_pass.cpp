@@ -103,6 +103,8 @@ struct IzbPass::Impl {
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
   Buffer grid_triangles, draw_flags, bounds_partials, csm_texels, tile_farthest;
+  Buffer triangle_staging;  // host-visible source of `triangles`, copied in the frame that changed it
+  size_t triangle_capacity = 0, draw_capacity = 0;
   // Compute trace / CSM work lists (see izb.h), each grown to the demand a frame measured.
   struct WorkList {
     Buffer buffer;
@@ -317,6 +319,9 @@ struct IzbPass::Impl {
     }
   }
 
+  // Records the copy into `triangles` when the casters changed since the last frame. The buffers only
+  // grow: moving casters (every frame in a game) cost a memcpy and a copy command, not allocations
+  // and a separate submission each frame.
   void ensure_triangles(const engine::FrameContext& frame) {
     std::vector<glm::mat4> matrices;
     std::vector<uint32_t> meshes;
@@ -357,12 +362,27 @@ struct IzbPass::Impl {
     }
     triangle_count = uint32_t(data.size());
     if (data.empty()) data.push_back({});
-    triangles = upload_buffer(ctx, data.data(), data.size() * sizeof(data[0]), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                              "izb caster triangles");
-    grid_triangles = Buffer(ctx, data.size() * 3 * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
-                            "izb grid-space caster triangles");
-    draw_flags = Buffer(ctx, std::max<size_t>(matrices.size(), 1) * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                        true, "izb caster draw flags");
+    if (data.size() > triangle_capacity) {
+      triangle_capacity = data.size();
+      const VkDeviceSize bytes = triangle_capacity * sizeof(data[0]);
+      triangle_staging = Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "izb caster triangles staging");
+      triangles = Buffer(ctx, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false,
+                         "izb caster triangles");
+      grid_triangles = Buffer(ctx, triangle_capacity * 3 * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                              "izb grid-space caster triangles");
+    }
+    if (matrices.size() > draw_capacity || !draw_flags.valid()) {
+      draw_capacity = std::max<size_t>(matrices.size(), 1);
+      draw_flags = Buffer(ctx, draw_capacity * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+                          "izb caster draw flags");
+    }
+    // One frame in flight: the previous frame, the last reader of both buffers, has completed.
+    const VkDeviceSize bytes = data.size() * sizeof(data[0]);
+    triangle_staging.write(data.data(), bytes);
+    const VkBufferCopy copy{0, 0, bytes};
+    vkCmdCopyBuffer(frame.cmd, triangle_staging.handle(), triangles.handle(), 1, &copy);
+    memory_barrier(frame.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
     triangle_source_matrices = std::move(matrices);
     triangle_source_meshes = std::move(meshes);
   }
