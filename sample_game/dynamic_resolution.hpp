@@ -16,7 +16,8 @@ class DynamicResolution {
   static constexpr float kAim = 0.9f;        // of the target, after a shrink
   static constexpr float kGrowBelow = 0.7f;  // of the target: grow only when this fast
   static constexpr float kSteps = 40.0f;     // scale steps per unit
-  explicit DynamicResolution(float target_fps) : target_ms_(1000.0f / target_fps) {}
+  explicit DynamicResolution(float target_fps, float initial_scale = 1.0f)
+      : target_ms_(1000.0f / target_fps), scale_(std::clamp(initial_scale, kMinScale, 1.0f)) {}
   // Feeds one frame's wall-clock time; returns true when scale() changed.
   bool add_frame(float ms);
   float scale() const { return scale_; }

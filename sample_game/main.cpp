@@ -335,7 +335,9 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   if (std::string why; !module->supported(mode.technique, &why)) throw std::runtime_error("--mode " + o.mode + ": " + why);
   module->set_collect_stats(o.stats);  // else the panel's checkbox turns the statistics passes on
 
-  walkthrough::DynamicResolution dynres(o.target_fps > 0.0f ? o.target_fps : (cpu ? 10.0f : 30.0f));
+  // A CPU device starts at half size: at full size its first frames take most of a second each.
+  walkthrough::DynamicResolution dynres(o.target_fps > 0.0f ? o.target_fps : (cpu ? 10.0f : 30.0f),
+                                        cpu ? 0.5f : 1.0f);
   dynres.enabled = !o.fixed_size;
   walkthrough::PanelState panel;
   panel.statistics = o.stats;
@@ -362,6 +364,10 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
     module->settings().izb.resolution = scaled(full_izb, 128);
     module->settings().cascades.map_size = scaled(full_cascade, 256);
   };
+  if (dynres.enabled && dynres.scale() != 1.0f) {
+    window->set_render_scale(dynres.scale());
+    follow_render_scale(dynres.scale());
+  }
 
   std::vector<InputFrame> script;
   if (!o.input.empty()) {

@@ -216,6 +216,8 @@ TEST(DynamicResolution, ShrinksWhenSlowGrowsWhenFastOffWhenDisabled) {
   EXPECT_FLOAT_EQ(d.scale(), 1.0f);  // within the band: no change
   for (int i = 0; i < 8; ++i) d.add_frame(104.0f);
   EXPECT_FLOAT_EQ(d.scale(), 0.925f);  // just over: aims a tenth under the target, sqrt(90 / 104) = 0.93
+  EXPECT_FLOAT_EQ(DynamicResolution(10.0f, 0.5f).scale(), 0.5f);  // a CPU device starts at half size
+  EXPECT_FLOAT_EQ(DynamicResolution(10.0f, 0.01f).scale(), DynamicResolution::kMinScale);
   d.enabled = false;
   EXPECT_TRUE(d.add_frame(1000.0f));  // off: full size at once, whatever the frame time
   EXPECT_FLOAT_EQ(d.scale(), 1.0f);
