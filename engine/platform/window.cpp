@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cstring>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -372,12 +371,13 @@ void Window::Impl::record_present_part(Renderer& renderer, uint32_t image_index,
   blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
   blit.dstOffsets[1] = {int32_t(extent.width), int32_t(extent.height), 1};
   const bool same_size = src.width == extent.width && src.height == extent.height;
-  // The window's own passes are timed with the renderer's, so the panel shows what a frame costs at
-  // the window's size (on a CPU device this part does not shrink with the render scale).
-  std::optional<gpu::ScopedGpuRegion> blit_region(std::in_place, *ctx, renderer.profiler(), cmd, "window_blit");
-  vkCmdBlitImage(cmd, renderer.output().handle(), VK_IMAGE_LAYOUT_GENERAL, target,
-                 VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, same_size ? VK_FILTER_NEAREST : VK_FILTER_LINEAR);
-  blit_region.reset();
+  {
+    // The window's own passes are timed with the renderer's, so the panel shows what a frame costs at
+    // the window's size (on a CPU device this part does not shrink with the render scale).
+    gpu::ScopedGpuRegion region(*ctx, renderer.profiler(), cmd, "window_blit");
+    vkCmdBlitImage(cmd, renderer.output().handle(), VK_IMAGE_LAYOUT_GENERAL, target,
+                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, same_size ? VK_FILTER_NEAREST : VK_FILTER_LINEAR);
+  }
   // The next frame's lighting pass overwrites the output.
   gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
 

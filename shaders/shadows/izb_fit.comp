@@ -13,8 +13,7 @@ shared vec4 subgroup_bounds[256];
 // so no contention on a handful of addresses (izb_setup.comp reduces the partials).
 void main() {
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
-  float max_distance = params.camera_position.w;
-  float reach = max_distance > 0.0 ? max_distance : 3.0e38;  // (no branch on the uniform alone: see izb_pixel.glsl)
+  float reach = izb_reach();
   for (uint k = 0u; k < 4u; ++k) {
     ivec2 pixel = ivec2(gl_WorkGroupID.xy * 32u + gl_LocalInvocationID.xy * 2u + uvec2(k & 1u, k >> 1u));
     if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;

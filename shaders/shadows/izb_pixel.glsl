@@ -24,15 +24,20 @@ PixelPoint load_surface(ivec2 pixel) {
   return p;
 }
 
+// The IZB's range from the camera (params.camera_position.w; 0: unlimited, read as a huge reach). A
+// select, not a branch on the uniform alone (max_distance <= 0.0 || ...): Mesa 22.3's lavapipe can
+// latch onto such a branch and compile a new copy of the shader at every dispatch, never freed
+// (tests/soak).
+float izb_reach() {
+  float max_distance = params.camera_position.w;
+  return max_distance > 0.0 ? max_distance : 3.0e38;
+}
+
 PixelPoint load_pixel(ivec2 pixel) {
   PixelPoint p = load_surface(pixel);
   if (!p.covered) return p;
   bool receives = imageLoad(albedo_image, pixel).a > 0.5;
-  // No branch on the uniform alone (max_distance <= 0.0 || ...): Mesa 22.3's lavapipe can latch onto
-  // such a branch and compile a new copy of the shader at every dispatch, never freed (tests/soak).
-  float max_distance = params.camera_position.w;
-  float reach = max_distance > 0.0 ? max_distance : 3.0e38;
-  bool in_range = distance(p.position, params.camera_position.xyz) <= reach;
+  bool in_range = distance(p.position, params.camera_position.xyz) <= izb_reach();
   p.candidate = receives && p.facing && in_range;
   return p;
 }

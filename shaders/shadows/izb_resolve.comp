@@ -37,9 +37,7 @@ void main() {
   uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
   float visibility = 1.0;
   bool facing = p.facing;
-  // No branch on a uniform alone (see izb_pixel.glsl): selects instead.
-  float max_distance = params.camera_position.w;
-  float reach = max_distance > 0.0 ? max_distance : 3.0e38;
+  float reach = izb_reach();
   float dist = distance(p.position, params.camera_position.xyz);
   bool beyond = false;  // past the IZB's range: the cascades' term alone
   if ((state & IZB_PIXEL_CANDIDATE) != 0u) {

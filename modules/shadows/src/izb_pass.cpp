@@ -105,6 +105,7 @@ struct IzbPass::Impl {
   Buffer grid_triangles, draw_flags, bounds_partials, csm_texels, tile_farthest;
   Buffer triangle_staging;  // host-visible source of `triangles`, copied in the frame that changed it
   size_t triangle_capacity = 0, draw_capacity = 0;
+  std::vector<uint32_t> first_triangle;  // per frame draw: its first caster triangle (casters only)
   // Compute trace / CSM work lists (see izb.h), each grown to the demand a frame measured.
   struct WorkList {
     Buffer buffer;
@@ -322,11 +323,17 @@ struct IzbPass::Impl {
   // Records the copy into `triangles` when the casters changed since the last frame. The buffers only
   // grow: moving casters (every frame in a game) cost a memcpy and a copy command, not allocations
   // and a separate submission each frame.
+  // Also finds each caster draw's first triangle in those buffers (they hold them in draw order).
   void ensure_triangles(const engine::FrameContext& frame) {
     std::vector<glm::mat4> matrices;
     std::vector<uint32_t> meshes;
-    for (const auto& d : frame.draws) {
+    first_triangle.assign(frame.draws.size(), 0);
+    uint32_t caster_triangles = 0;
+    for (size_t i = 0; i < frame.draws.size(); ++i) {
+      const engine::DrawItem& d = frame.draws[i];
       if (!d.shadow.casts_shadow) continue;
+      first_triangle[i] = caster_triangles;
+      caster_triangles += frame.geometry.mesh(d.mesh).index_count / 3;
       matrices.push_back(d.world);
       meshes.push_back(d.mesh);
       meshes.push_back(d.alpha_threshold);
@@ -684,14 +691,6 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   // (a CPU device runs both sides of a branch), then the alpha-tested ones with it.
   const bool alpha = (flags & gpu_shared::IZB_FLAG_ALPHA) != 0;
   const Impl::TracePipelines& opaque_trace = alpha ? m.opaque_trace_pipelines(m.samples, flags) : m.p->trace;
-  // Each caster draw's first triangle in the caster triangle buffers (which hold them in draw order).
-  std::vector<uint32_t> first_triangle(frame.draws.size(), 0);
-  uint32_t triangles = 0;
-  for (size_t i = 0; i < frame.draws.size(); ++i) {
-    if (!frame.draws[i].shadow.casts_shadow) continue;
-    first_triangle[i] = triangles;
-    triangles += frame.geometry.mesh(frame.draws[i].mesh).index_count / 3;
-  }
   auto draw_trace = [&](bool count_only, VkCompareOp compare, bool fill_depth) {
     if (fill_depth) {
       // Each texel's farthest node depth becomes the depth the early test compares against (0 for an
@@ -717,7 +716,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
           cmd, frame,
           [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
             gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset,
-                                       first_triangle[size_t(&d - frame.draws.data())], 0u};
+                                       m.first_triangle[size_t(&d - frame.draws.data())], 0u};
             trace.push_constants(cmd, dp);
           },
           set,
