@@ -16,7 +16,7 @@
 #include "engine/platform/headless.hpp"
 #include "engine/platform/window.hpp"
 #include "engine/render/renderer.hpp"
-#include "shadows/shadows.hpp"
+#include "shadows_engine/shadows_engine.hpp"
 #include "walkthrough.hpp"
 
 namespace {

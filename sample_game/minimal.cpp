@@ -10,7 +10,7 @@
 #include "engine/assets/scene.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/render/renderer.hpp"
-#include "shadows/shadows.hpp"
+#include "shadows_engine/shadows_engine.hpp"
 
 int main(int argc, char** argv) {
   const std::string scene_name = argc > 1 ? argv[1] : "contact";

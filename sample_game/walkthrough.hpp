@@ -14,7 +14,7 @@
 #include "engine/render/renderer.hpp"
 #include "input.hpp"
 #include "player.hpp"
-#include "shadows/shadows.hpp"
+#include "shadows_engine/shadows_engine.hpp"
 
 namespace walkthrough {
 

@@ -3,7 +3,7 @@ find_package(nlohmann_json 3 CONFIG REQUIRED)
 # Frame capture + reference glue shared by the GPU tests and the benchmark.
 add_library(shadow_test_support STATIC support/frame_capture.cpp)
 target_include_directories(shadow_test_support PUBLIC support)
-target_link_libraries(shadow_test_support PUBLIC engine_gpu shadows shadow_reference)
+target_link_libraries(shadow_test_support PUBLIC engine_gpu shadows_engine shadow_reference)
 engine_target_warnings(shadow_test_support)
 
 # The benchmark: headless, no window-system libraries (it runs on GPU machines without a display).
@@ -190,7 +190,7 @@ endif()
 # Soak: 10,000 frames cycling every mode with moving sun and casters; resident memory and live
 # allocations must stay flat after warm-up. Long: under the `long` label, which .ci/run leaves out.
 add_executable(shadow_soak soak/soak.cpp)
-target_link_libraries(shadow_soak PRIVATE engine_gpu shadows)
+target_link_libraries(shadow_soak PRIVATE engine_gpu shadows_engine)
 engine_target_warnings(shadow_soak)
 add_test(NAME soak_contact_10000_frames COMMAND $<TARGET_FILE:shadow_soak> --frames 10000 --size 64x48)
 set_tests_properties(soak_contact_10000_frames PROPERTIES LABELS "long;soak" TIMEOUT 14400

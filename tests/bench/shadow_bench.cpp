@@ -15,7 +15,7 @@
 #include "engine/core/command_line.hpp"
 #include "engine/render/renderer.hpp"
 #include "frame_capture.hpp"
-#include "shadows/shadows.hpp"
+#include "shadows_engine/shadows_engine.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include "engine/assets/scene.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/render/renderer.hpp"
-#include "shadows/shadows.hpp"
+#include "shadows_engine/shadows_engine.hpp"
 
 class GpuTest : public ::testing::Test {
  protected:

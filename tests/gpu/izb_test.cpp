@@ -4,7 +4,7 @@
 
 #include "frame_capture.hpp"
 #include "gpu_fixture.hpp"
-#include "shadows/shadows.hpp"
+#include "shadows_engine/shadows_engine.hpp"
 
 namespace {
 

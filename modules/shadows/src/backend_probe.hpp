@@ -6,7 +6,8 @@
 #include <vector>
 
 #include "engine/gpu/profiler.hpp"
-#include "shadows/shadows.hpp"
+#include "frame.hpp"
+#include "shadows/settings.hpp"
 
 namespace shadows::detail {
 

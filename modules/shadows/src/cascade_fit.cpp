@@ -8,7 +8,7 @@
 
 namespace shadows::detail {
 
-CascadeFit fit_cascades(const engine::FrameView& view, const CascadeSettings& settings, const engine::Aabb& casters) {
+CascadeFit fit_cascades(const View& view, const CascadeSettings& settings, const engine::Aabb& casters) {
   CascadeFit fit;
   fit.count = std::clamp(settings.count, 1u, kMaxCascadeCount);
   const float near_plane = std::max(view.near_plane, 1e-3f);
@@ -26,10 +26,8 @@ CascadeFit fit_cascades(const engine::FrameView& view, const CascadeSettings& se
   for (uint32_t c = 0; c < fit.count; ++c)
     fit.blend_start[c] = fit.splits[c + 1] - band * (fit.splits[c + 1] - fit.splits[c]);
 
-  const float aspect = view.extent.height ? float(view.extent.width) / float(view.extent.height) : 1.0f;
   // Lateral distance of a slice corner per unit of view depth.
-  const float tan_half = std::tan(view.vertical_fov * 0.5f);
-  const float corner = tan_half * std::sqrt(1.0f + aspect * aspect);
+  const float corner = glm::length(view.tan_half_fov);
   const glm::vec3 forward = -glm::vec3(view.view[0][2], view.view[1][2], view.view[2][2]);
 
   fit.light_view = light_view_matrix(view.light_direction);

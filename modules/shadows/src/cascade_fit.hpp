@@ -6,8 +6,8 @@
 #include <glm/glm.hpp>
 
 #include "engine/core/components.hpp"
-#include "engine/render/renderer.hpp"
-#include "shadows/shadows.hpp"
+#include "frame.hpp"
+#include "shadows/settings.hpp"
 
 namespace shadows::detail {
 
@@ -28,6 +28,6 @@ struct CascadeFit {
 
 // Fits `settings.count` cascades to `view`'s frustum up to settings.max_distance. `casters` (world
 // bounds of every shadow caster) pulls each cascade's near depth toward the light so no caster is clipped.
-CascadeFit fit_cascades(const engine::FrameView& view, const CascadeSettings& settings, const engine::Aabb& casters);
+CascadeFit fit_cascades(const View& view, const CascadeSettings& settings, const engine::Aabb& casters);
 
 }  // namespace shadows::detail

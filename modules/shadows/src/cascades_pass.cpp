@@ -224,8 +224,8 @@ struct CascadesPass::Impl {
   // fitted, blend band included), clipped to the bounds of everything drawn, grown by the kernel,
   // the offsets and the mask's one-texel border. Masks are built only there; the filter takes the
   // full kernel for any footprint outside, so a loose or wrong rectangle costs time, never accuracy.
-  glm::ivec4 mask_rect(const engine::FrameContext& frame, uint32_t c, uint32_t level, float kernel) const {
-    const engine::FrameView& view = frame.view;
+  glm::ivec4 mask_rect(const Frame& frame, uint32_t c, uint32_t level, float kernel) const {
+    const View& view = frame.view;
     const float size = float(map_size);
     const glm::mat4& lvp = fit.light_view_projection[c];
     glm::vec3 corners[8];
@@ -252,7 +252,7 @@ struct CascadesPass::Impl {
     return glm::ivec4(glm::min(a, glm::ivec2(last)), glm::min(b, glm::ivec2(last)));
   }
 
-  gs::CascadeParams make_params(const engine::FrameContext& frame, const CascadeSettings& s, DebugView debug,
+  gs::CascadeParams make_params(const Frame& frame, const CascadeSettings& s, DebugView debug,
                                 std::array<uint32_t, kMaxCascadeCount>* levels,
                                 std::array<glm::ivec4, kMaxCascadeCount>* rects) const {
     gs::CascadeParams p{};
@@ -320,7 +320,7 @@ struct CascadesPass::Impl {
   // Each cascade is drawn only over the texels its receivers can read (the mask rectangle, which
   // already holds the kernel, the offsets and a border, in map texels): the rest of a layer is never
   // sampled, and on a raster-poor GPU the fill is most of this pass.
-  void record_depth(engine::FrameContext& frame, const CascadeSettings& s,
+  void record_depth(Frame& frame, const CascadeSettings& s,
                     const std::array<uint32_t, kMaxCascadeCount>& levels,
                     const std::array<glm::ivec4, kMaxCascadeCount>& rects) {
     VkCommandBuffer cmd = frame.cmd;
@@ -340,10 +340,10 @@ struct CascadesPass::Impl {
       // A caster wholly outside the drawn rectangle (in light space) cannot touch it.
       const float size = float(map_size);
       const glm::vec4 ndc = glm::vec4(glm::vec2(lo), glm::vec2(hi + 1)) / size * 2.0f - 1.0f;
-      auto outside = [&](const engine::DrawItem& d) { return d.bounds.outside_clip(fit.light_view_projection[c], ndc); };
+      auto outside = [&](const DrawItem& d) { return d.bounds.outside_clip(fit.light_view_projection[c], ndc); };
       draw_casters(
           cmd, frame,
-          [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
+          [&](const DrawItem& d, const MeshRange&) {
             gs::CascadeDepthPush push{d.world, fit.light_view_projection[c]};
             pipeline.push_constants(cmd, push);
           },
@@ -373,7 +373,7 @@ CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {
 
 CascadesPass::~CascadesPass() = default;
 
-void CascadesPass::record(engine::FrameContext& frame, const CascadeSettings& settings, Image& out, DebugView debug,
+void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& out, DebugView debug,
                           const PixelList* only) {
   static_assert(gs::kIzbHybridEntriesPerGroup == 4 * gs::CASCADE_LIST_GROUP, "a list workgroup takes 4 entries a thread");
   Impl& m = *impl_;

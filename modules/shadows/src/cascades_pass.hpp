@@ -1,6 +1,7 @@
 #pragma once
 #include "engine/gpu/resources.hpp"
-#include "shadows/shadows.hpp"
+#include "frame.hpp"
+#include "shadows/settings.hpp"
 
 namespace shadows::detail {
 
@@ -23,7 +24,7 @@ class CascadesPass {
   // With debug == Cascades or ExpensivePath, also draws that overlay into frame.overlay.
   // With `only`, filters just the listed pixels; the rest of `out` must hold a negative term (the caller
   // keeps it so), and the blur takes no neighbours from there.
-  void record(engine::FrameContext& frame, const CascadeSettings& settings, engine::gpu::Image& out, DebugView debug,
+  void record(Frame& frame, const CascadeSettings& settings, engine::gpu::Image& out, DebugView debug,
               const PixelList* only = nullptr);
   // After the frame's fence: fills the cascade fields of `stats`.
   void after_frame(Stats& stats);

@@ -65,7 +65,7 @@ struct CsmPass::Impl {
     float texel;
     CsmChoiceMeasure measure;
   };
-  std::map<uint32_t, Cached> cache;  // by entity index
+  std::map<uint64_t, Cached> cache;  // by instance id
   std::vector<CsmDecision> decisions;
   std::vector<bool> in_csm;  // per draw, this frame
   bool ran = false;
@@ -166,7 +166,7 @@ struct CsmPass::Impl {
   // Texel size estimate for the automatic choice: the IZB window is fitted on the GPU to the visible
   // points, so the CPU uses the casters' light-space extent, an upper bound (decisions err toward
   // leaving a mesh out, never toward a wrong shadow).
-  float estimate_texel_size(const engine::FrameContext& frame, uint32_t resolution) const {
+  float estimate_texel_size(const Frame& frame, uint32_t resolution) const {
     const engine::Aabb box = caster_bounds(frame);
     if (!box.valid()) return 1.0f;
     const glm::mat4 view = light_view_matrix(frame.view.light_direction);
@@ -180,9 +180,9 @@ struct CsmPass::Impl {
     return std::max(hi.x - lo.x, hi.y - lo.y) / float(resolution);
   }
 
-  std::set<uint32_t> warned_alpha_forced;  // entities already warned about
+  std::set<uint64_t> warned_alpha_forced;  // instances already warned about
 
-  void choose(const engine::FrameContext& frame, uint32_t resolution) {
+  void choose(const Frame& frame, uint32_t resolution) {
     decisions.clear();
     in_csm.assign(frame.draws.size(), false);
     const float texel = estimate_texel_size(frame, resolution);
@@ -190,15 +190,14 @@ struct CsmPass::Impl {
       const auto& d = frame.draws[i];
       if (!d.shadow.casts_shadow) continue;
       CsmDecision decision;
-      decision.entity = d.entity;
-      if (const auto* n = frame.registry.try_get<engine::Name>(d.entity)) decision.name = n->value;
-      const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
+      decision.instance_id = d.id;
+      decision.name = d.name;
       if (d.alpha_tested()) {
         // The CSM writes a texel only where one triangle provably covers all of it; an alpha-tested
         // triangle has holes wherever its texture says so, so it can prove nothing.
         decision.automatic = d.shadow.csm == engine::CsmChoice::Auto;
         decision.reason = "out: alpha-tested material (cut-outs cannot prove full texel coverage)";
-        if (d.shadow.csm == engine::CsmChoice::On && warned_alpha_forced.insert(d.entity.index).second)
+        if (d.shadow.csm == engine::CsmChoice::On && warned_alpha_forced.insert(d.id).second)
           std::cerr << "warning: entity '" << decision.name
                     << "' is forced into the CSM but its material is alpha-tested; it stays out\n";
       } else if (d.shadow.csm == engine::CsmChoice::On) {
@@ -206,13 +205,13 @@ struct CsmPass::Impl {
         decision.reason = "on: chosen for the entity";
       } else if (d.shadow.csm == engine::CsmChoice::Off) {
         decision.reason = "off: chosen for the entity";
-      } else if (mesh && mesh->data) {
+      } else if (d.cpu_mesh) {
         decision.automatic = true;
-        auto& cached = cache[d.entity.index];
+        auto& cached = cache[d.id];
         // Re-measure only when the light, the texel size or the entity's transform changed.
         if (cached.world != d.world || cached.light != frame.view.light_direction || cached.texel != texel) {
           cached = {d.world, frame.view.light_direction, texel,
-                    measure_csm_suitability(*mesh->data, d.world, frame.view.light_direction, texel)};
+                    measure_csm_suitability(*d.cpu_mesh, d.world, frame.view.light_direction, texel)};
         }
         decision.large_triangle_area_share = cached.measure.coverable_share;
         decision.in_csm = cached.measure.coverable_share >= kCsmAutoThreshold;
@@ -239,7 +238,7 @@ void CsmPass::prepare(uint32_t resolution) { impl_->ensure_depth(resolution); }
 VkImageView CsmPass::depth_view() const { return impl_->depth.view(); }
 bool CsmPass::supported(CsmTest test, std::string* why) const { return impl_->supported(test, why); }
 
-bool CsmPass::plan(const engine::FrameContext& frame, const IzbSettings& settings, uint32_t resolution) {
+bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t resolution) {
   Impl& m = *impl_;
   m.ran = false;
   if (!settings.csm) {
@@ -283,7 +282,7 @@ void CsmPass::note_yield(double culling_rate) {
   impl_->have_yield = true;
 }
 
-void CsmPass::record(engine::FrameContext& frame, const IzbSettings& settings, const Buffer& izb_frame,
+void CsmPass::record(Frame& frame, const IzbSettings& settings, const Buffer& izb_frame,
                      uint32_t resolution, bool collect_stats, const std::function<void(VkCommandBuffer)>& compute_fill,
                      const Buffer* compute_texels) {
   Impl& m = *impl_;

@@ -5,7 +5,8 @@
 #include <string>
 
 #include "engine/gpu/resources.hpp"
-#include "shadows/shadows.hpp"
+#include "frame.hpp"
+#include "shadows/settings.hpp"
 
 namespace shadows::detail {
 
@@ -47,14 +48,14 @@ class CsmPass {
   const std::vector<bool>& chosen_draws() const;
   // Chooses the casters for this frame and decides whether the prepass runs at all (see
   // kCsmMinimumYield); call once per frame before prepare().
-  bool plan(const engine::FrameContext& frame, const IzbSettings& settings, uint32_t resolution);
+  bool plan(const Frame& frame, const IzbSettings& settings, uint32_t resolution);
   // The culling rate the IZB measured on a frame the prepass ran.
   void note_yield(double culling_rate);
   // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`. With
   // `compute_fill`, that callback records compute work leaving the depths (float bits, [0,1]) in
   // `compute_texels` instead, which the IZB build reads directly; only statistics (the covered-texel
   // count, with `collect_stats`) copy them into the map.
-  void record(engine::FrameContext& frame, const IzbSettings& settings, const engine::gpu::Buffer& izb_frame,
+  void record(Frame& frame, const IzbSettings& settings, const engine::gpu::Buffer& izb_frame,
               uint32_t resolution, bool collect_stats, const std::function<void(VkCommandBuffer)>& compute_fill = {},
               const engine::gpu::Buffer* compute_texels = nullptr);
   void after_frame(Stats& stats);

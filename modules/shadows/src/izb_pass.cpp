@@ -261,7 +261,7 @@ struct IzbPass::Impl {
     return tp;
   }
 
-  void ensure_buffers(const engine::FrameContext& frame, const IzbSettings& s) {
+  void ensure_buffers(const Frame& frame, const IzbSettings& s) {
     const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     const uint32_t spp = s.samples_per_pixel == 32 ? 32 : 1;
     if (resolution != s.resolution) {
@@ -324,13 +324,13 @@ struct IzbPass::Impl {
   // grow: moving casters (every frame in a game) cost a memcpy and a copy command, not allocations
   // and a separate submission each frame.
   // Also finds each caster draw's first triangle in those buffers (they hold them in draw order).
-  void ensure_triangles(const engine::FrameContext& frame) {
+  void ensure_triangles(const Frame& frame) {
     std::vector<glm::mat4> matrices;
     std::vector<uint32_t> meshes;
     first_triangle.assign(frame.draws.size(), 0);
     uint32_t caster_triangles = 0;
     for (size_t i = 0; i < frame.draws.size(); ++i) {
-      const engine::DrawItem& d = frame.draws[i];
+      const DrawItem& d = frame.draws[i];
       if (!d.shadow.casts_shadow) continue;
       first_triangle[i] = caster_triangles;
       caster_triangles += frame.geometry.mesh(d.mesh).index_count / 3;
@@ -349,9 +349,8 @@ struct IzbPass::Impl {
     uint32_t ordinal = 0;
     for (const auto& d : frame.draws) {
       if (!d.shadow.casts_shadow) continue;
-      const auto* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
-      if (mesh && mesh->data) {
-        const auto& m = *mesh->data;
+      if (d.cpu_mesh) {
+        const auto& m = *d.cpu_mesh;
         for (size_t i = 0; i + 2 < m.indices.size(); i += 3) {
           const engine::Vertex* v[3] = {&m.vertices[m.indices[i]], &m.vertices[m.indices[i + 1]],
                                         &m.vertices[m.indices[i + 2]]};
@@ -411,7 +410,7 @@ struct IzbPass::Impl {
            "izb texel pairs");
   }
 
-  void push_all(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p) {
+  void push_all(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p) {
     DescriptorWriter()
         .uniform_buffer(gpu_shared::IZB_BINDING_PARAMS, params.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_FRAME, frame_data.handle())
@@ -448,31 +447,31 @@ struct IzbPass::Impl {
         .push(ctx, cmd, p);
   }
 
-  void bind_compute(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+  void bind_compute(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p,
                     const gpu_shared::IzbComputePush& push) {
     p.bind(cmd);
     push_all(cmd, frame, p);
     p.push_constants(cmd, push);
   }
 
-  void dispatch(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+  void dispatch(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p,
                 gpu_shared::IzbComputePush push, uint32_t x, uint32_t y = 1) {
     bind_compute(cmd, frame, p, push);
     vkCmdDispatch(cmd, x, y, 1);
   }
 
-  void dispatch_pixels(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+  void dispatch_pixels(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p,
                        gpu_shared::IzbComputePush push) {
     dispatch(cmd, frame, p, push, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8);
   }
 
-  void dispatch_indirect(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+  void dispatch_indirect(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p,
                          gpu_shared::IzbComputePush push, uint32_t counter) {
     bind_compute(cmd, frame, p, push);
     vkCmdDispatchIndirect(cmd, counters.handle(), VkDeviceSize(counter) * 4);
   }
 
-  void dispatch_step(VkCommandBuffer cmd, const engine::FrameContext& frame, const Pipeline& p,
+  void dispatch_step(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p,
                      gpu_shared::IzbComputePush push, uint32_t args, uint32_t counter) {
     gpu_shared::IzbComputePush a = push;
     a.debug = args;
@@ -483,7 +482,7 @@ struct IzbPass::Impl {
 
   // Compute trace / compute CSM, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*), each step in a nested
   // profiler region "<region>_records", "<region>_tiles", "<region>_texels".
-  void record_tile_work(VkCommandBuffer cmd, const engine::FrameContext& frame, gpu_shared::IzbComputePush push,
+  void record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,
                         uint32_t mode, const std::string& region) {
     push.mode = mode;
     {
@@ -509,7 +508,7 @@ bool IzbPass::hardware_raster_available() const { return impl_->ctx.features().c
 
 bool IzbPass::csm_test_supported(CsmTest test, std::string* why) const { return impl_->csm->supported(test, why); }
 
-void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
+void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
                      bool collect_stats, float soft_distance) {
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
@@ -601,7 +600,7 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
   if (std::any_of(frame.draws.begin(), frame.draws.end(),
-                  [](const engine::DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
+                  [](const DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
     flags |= gpu_shared::IZB_FLAG_ALPHA;
   if (hybrid && soft_distance > 0.0f) flags |= gpu_shared::IZB_FLAG_GAPS;
   if (m.samples == 1 && !sorted && m.pool_size >= uint64_t(frame.view.extent.width) * frame.view.extent.height)
@@ -714,14 +713,14 @@ void IzbPass::record(engine::FrameContext& frame, const IzbSettings& settings, D
       m.push_all(cmd, frame, trace);
       draw_casters(
           cmd, frame,
-          [&](const engine::DrawItem& d, const engine::GpuMeshRange& range) {
+          [&](const DrawItem& d, const MeshRange& range) {
             gpu_shared::IzbDrawPush dp{d.world, range.first_index, range.vertex_offset,
                                        m.first_triangle[size_t(&d - frame.draws.data())], 0u};
             trace.push_constants(cmd, dp);
           },
           set,
           // Rasterizing a caster costs a CPU driver per triangle even where it covers no node.
-          [&](const engine::DrawItem& d) { return d.bounds.outside_clip(receiver_region); });
+          [&](const DrawItem& d) { return d.bounds.outside_clip(receiver_region); });
     }
     vkCmdEndRendering(cmd);
   };
@@ -772,7 +771,7 @@ PixelList IzbPass::hybrid_list() const {
   return {impl_->hybrid_list.handle(), impl_->counters.handle(), gpu_shared::IZB_COUNTER_HYBRID};
 }
 
-void IzbPass::record_hybrid_blend(engine::FrameContext& frame) {
+void IzbPass::record_hybrid_blend(Frame& frame) {
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
   if (!m.hybrid_blend.valid())
@@ -783,9 +782,9 @@ void IzbPass::record_hybrid_blend(engine::FrameContext& frame) {
   vkCmdDispatchIndirect(cmd, m.counters.handle(), (gpu_shared::IZB_COUNTER_HYBRID + 1) * 4);
 }
 
-ShadowModule::CsmSnapshot IzbPass::read_csm() {
+CsmSnapshot IzbPass::read_csm() {
   Impl& m = *impl_;
-  ShadowModule::CsmSnapshot snapshot;
+  CsmSnapshot snapshot;
   if (!m.last_used_csm) return snapshot;
   snapshot.resolution = m.resolution;
   if (m.used_compute_csm) {

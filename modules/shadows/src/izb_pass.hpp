@@ -3,7 +3,8 @@
 
 #include "cascades_pass.hpp"
 #include "engine/gpu/resources.hpp"
-#include "shadows/shadows.hpp"
+#include "frame.hpp"
+#include "shadows/settings.hpp"
 
 namespace shadows::detail {
 
@@ -20,15 +21,15 @@ class IzbPass {
   // hybrid: writes the hard term and lists the pixels that take some of the cascades' term (beyond the
   // IZB's range, in its last tenth, and, with soft_distance > 0, by occluder distance); the cascades
   // then filter those pixels into soft_term(), and record_hybrid_blend() mixes them into the term.
-  void record(engine::FrameContext& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
+  void record(Frame& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
               bool collect_stats, float soft_distance = 0.0f);
   engine::gpu::Image& soft_term();
   PixelList hybrid_list() const;
-  void record_hybrid_blend(engine::FrameContext& frame);
+  void record_hybrid_blend(Frame& frame);
   void after_frame(Stats& stats);
   bool hardware_raster_available() const;
   bool csm_test_supported(CsmTest test, std::string* why) const;
-  ShadowModule::CsmSnapshot read_csm();
+  CsmSnapshot read_csm();
 
  private:
   struct Impl;

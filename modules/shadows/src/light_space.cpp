@@ -28,30 +28,28 @@ glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box,
   return glm::orthoRH_ZO(lo.x, hi.x, lo.y, hi.y, -hi.z, -lo.z);
 }
 
-engine::Aabb caster_bounds(const engine::FrameContext& frame) {
+engine::Aabb caster_bounds(const Frame& frame) {
   engine::Aabb bounds;
   for (const auto& d : frame.draws)
     if (d.shadow.casts_shadow) bounds.extend(d.bounds);
   return bounds;
 }
 
-engine::Aabb scene_bounds(const engine::FrameContext& frame) {
+engine::Aabb scene_bounds(const Frame& frame) {
   engine::Aabb bounds;
   for (const auto& d : frame.draws) bounds.extend(d.bounds);
   return bounds;
 }
 
-void view_slice_corners(const engine::FrameView& view, float d0, float d1, glm::vec3 corners[8]) {
-  const float aspect = view.extent.height ? float(view.extent.width) / float(view.extent.height) : 1.0f;
-  const float tan_half = std::tan(view.vertical_fov * 0.5f);
+void view_slice_corners(const View& view, float d0, float d1, glm::vec3 corners[8]) {
   const glm::mat4& v = view.view;
   const glm::vec3 right(v[0][0], v[1][0], v[2][0]), up(v[0][1], v[1][1], v[2][1]);
   const glm::vec3 forward = -glm::vec3(v[0][2], v[1][2], v[2][2]);
   for (int i = 0; i < 8; ++i) {
     const float depth = (i >> 2) ? d1 : d0;
     corners[i] = view.camera_position + forward * depth +
-                 right * (((i & 1) ? 1.0f : -1.0f) * depth * tan_half * aspect) +
-                 up * (((i & 2) ? 1.0f : -1.0f) * depth * tan_half);
+                 right * (((i & 1) ? 1.0f : -1.0f) * depth * view.tan_half_fov.x) +
+                 up * (((i & 2) ? 1.0f : -1.0f) * depth * view.tan_half_fov.y);
   }
 }
 
@@ -90,13 +88,13 @@ engine::gpu::Pipeline alpha_depth_pipeline(const engine::gpu::Context& ctx, engi
   return engine::gpu::PipelineFactory(ctx).graphics(opaque);
 }
 
-void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const engine::FrameContext& frame,
+void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const Frame& frame,
                         const engine::gpu::Pipeline& pipeline, const glm::mat4& light_view_projection,
-                        const std::function<bool(const engine::DrawItem&)>& cull) {
+                        const std::function<bool(const DrawItem&)>& cull) {
   bool bound = false;
   draw_casters(
       cmd, frame,
-      [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
+      [&](const DrawItem& d, const MeshRange&) {
         if (!bound) {
           pipeline.bind(cmd);
           engine::gpu::DescriptorWriter()
@@ -107,7 +105,7 @@ void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, co
         gpu_shared::AlphaDepthPush push{light_view_projection * d.world, d.base_color_texture, d.alpha_threshold, 0u, 0u};
         pipeline.push_constants(cmd, push);
       },
-      CasterSet::AlphaTested, [&](const engine::DrawItem& d) { return cull && cull(d); });
+      CasterSet::AlphaTested, [&](const DrawItem& d) { return cull && cull(d); });
 }
 
 }  // namespace shadows::detail

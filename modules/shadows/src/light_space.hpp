@@ -8,7 +8,7 @@
 
 #include "engine/core/components.hpp"
 #include "engine/gpu/pipeline.hpp"
-#include "engine/render/renderer.hpp"
+#include "frame.hpp"
 
 namespace shadows::detail {
 
@@ -20,16 +20,16 @@ glm::mat4 light_view_matrix(const glm::vec3& light_direction);
 glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box, float margin = 0.0f);
 
 // World bounds of every shadow-casting draw.
-engine::Aabb caster_bounds(const engine::FrameContext& frame);
+engine::Aabb caster_bounds(const Frame& frame);
 // Bounds of everything drawn (every receiver lies inside).
-engine::Aabb scene_bounds(const engine::FrameContext& frame);
+engine::Aabb scene_bounds(const Frame& frame);
 // The eight corners of the camera frustum between view depths d0 and d1 (near quad first).
-void view_slice_corners(const engine::FrameView& view, float d0, float d1, glm::vec3 corners[8]);
+void view_slice_corners(const View& view, float d0, float d1, glm::vec3 corners[8]);
 
 // Which shadow-casting draws draw_casters issues.
 enum class CasterSet { All, Opaque, AlphaTested };
 
-inline bool in_caster_set(const engine::DrawItem& d, CasterSet set) {
+inline bool in_caster_set(const DrawItem& d, CasterSet set) {
   if (!d.shadow.casts_shadow) return false;
   if (set == CasterSet::Opaque) return !d.alpha_tested();
   if (set == CasterSet::AlphaTested) return d.alpha_tested();
@@ -40,7 +40,7 @@ inline bool in_caster_set(const engine::DrawItem& d, CasterSet set) {
 // model matrix. With `cull`, only those it keeps (the raster trace needs all of them, in order, to
 // find a fragment's triangle).
 template <typename PushFn, typename CullFn = std::nullptr_t>
-void draw_casters(VkCommandBuffer cmd, const engine::FrameContext& frame, PushFn&& push, CasterSet set = CasterSet::All,
+void draw_casters(VkCommandBuffer cmd, const Frame& frame, PushFn&& push, CasterSet set = CasterSet::All,
                   CullFn&& cull = nullptr) {
   VkDeviceSize offset = 0;
   VkBuffer vb = frame.geometry.vertices().handle();
@@ -67,9 +67,9 @@ engine::gpu::Pipeline alpha_depth_pipeline(const engine::gpu::Context& ctx, engi
 // Draws the alpha-tested casters with `pipeline` (from alpha_depth_pipeline) into the bound depth
 // target through `light_view_projection`; the caller has set the depth bias.
 // `cull` (optional) skips the draws it returns true for.
-void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const engine::FrameContext& frame,
+void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const Frame& frame,
                         const engine::gpu::Pipeline& pipeline, const glm::mat4& light_view_projection,
-                        const std::function<bool(const engine::DrawItem&)>& cull = {});
+                        const std::function<bool(const DrawItem&)>& cull = {});
 
 // Begins depth-only dynamic rendering into `depth` (GENERAL layout) over `extent` and sets the
 // viewport; with `clear` the target starts at depth 1 (far), else its contents are kept.

@@ -96,7 +96,7 @@ struct RayTracedPass::Impl {
   ShaderBindingTable sbt;
   // Bottom levels, one per SceneGeometry mesh slot (empty meshes have none).
   std::vector<Structure> bottom;
-  const engine::SceneGeometry* built_for = nullptr;
+  const Geometry* built_for = nullptr;
   VkBuffer built_vertices = VK_NULL_HANDLE;
   Structure top;
   uint32_t top_capacity = 0;
@@ -138,7 +138,7 @@ struct RayTracedPass::Impl {
 
   // One bottom level per mesh of the scene, built together in one submission (opaque triangles
   // straight from the scene's shared vertex and index buffers).
-  void build_bottom_levels(const engine::SceneGeometry& geometry) {
+  void build_bottom_levels(const Geometry& geometry) {
     bottom.clear();
     bottom.resize(geometry.mesh_count());
     bottom_triangles = 0;
@@ -150,7 +150,7 @@ struct RayTracedPass::Impl {
     VkDeviceSize scratch_total = 0;
     const VkDeviceSize scratch_alignment = std::max<VkDeviceSize>(ctx.features().scratch_offset_alignment, 1);
     for (uint32_t slot = 0; slot < n; ++slot) {
-      const engine::GpuMeshRange& mesh = geometry.mesh(slot);
+      const MeshRange& mesh = geometry.mesh(slot);
       if (mesh.index_count < 3 || mesh.vertex_count == 0) continue;
       VkAccelerationStructureGeometryKHR& g = geometries[slot];
       g = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
@@ -200,7 +200,7 @@ struct RayTracedPass::Impl {
   }
 
   // Rebuilds the top level over every casting draw with its transform of this frame.
-  void build_top_level(VkCommandBuffer cmd, const engine::FrameContext& frame) {
+  void build_top_level(VkCommandBuffer cmd, const Frame& frame) {
     std::vector<VkAccelerationStructureInstanceKHR> list;
     std::vector<gpu_shared::RayTracedInstance> materials;
     list.reserve(frame.draws.size());
@@ -216,7 +216,7 @@ struct RayTracedPass::Impl {
                    (d.alpha_tested() ? VK_GEOMETRY_INSTANCE_FORCE_NO_OPAQUE_BIT_KHR : VK_GEOMETRY_INSTANCE_FORCE_OPAQUE_BIT_KHR);
       inst.accelerationStructureReference = bottom[d.mesh].address;
       list.push_back(inst);
-      const engine::GpuMeshRange& range = frame.geometry.mesh(d.mesh);
+      const MeshRange& range = frame.geometry.mesh(d.mesh);
       materials.push_back({range.first_index, range.vertex_offset, d.base_color_texture, d.alpha_threshold});
     }
     instance_count = uint32_t(list.size());
@@ -279,7 +279,7 @@ void RayTracedPass::scene_changed() {
   impl_->built_for = nullptr;
 }
 
-void RayTracedPass::record(engine::FrameContext& frame, uint32_t samples_per_pixel, bool collect_stats) {
+void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collect_stats) {
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
   if (m.built_for != &frame.geometry || m.built_vertices != frame.geometry.vertices().handle())

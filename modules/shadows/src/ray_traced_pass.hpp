@@ -2,7 +2,8 @@
 #include <memory>
 
 #include "engine/gpu/resources.hpp"
-#include "shadows/shadows.hpp"
+#include "frame.hpp"
+#include "shadows/settings.hpp"
 
 namespace shadows::detail {
 
@@ -14,7 +15,7 @@ class RayTracedPass {
   // Throws std::runtime_error (one line naming the missing extension) where the device cannot trace.
   explicit RayTracedPass(engine::gpu::Context& ctx);
   ~RayTracedPass();
-  void record(engine::FrameContext& frame, uint32_t samples_per_pixel, bool collect_stats);
+  void record(Frame& frame, uint32_t samples_per_pixel, bool collect_stats);
   void after_frame(Stats& stats);
   // Forgets the bottom levels (the scene's geometry changed).
   void scene_changed();

@@ -1,4 +1,4 @@
-#include "shadows/shadows.hpp"
+#include "shadows/settings.hpp"
 
 namespace shadows {
 

@@ -46,7 +46,7 @@ void ShadowMapPass::ensure_map(uint32_t size) {
   });
 }
 
-void ShadowMapPass::record(engine::FrameContext& frame, const ShadowMapSettings& settings) {
+void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
   ensure_map(settings.size);
   VkCommandBuffer cmd = frame.cmd;
   const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
@@ -59,7 +59,7 @@ void ShadowMapPass::record(engine::FrameContext& frame, const ShadowMapSettings&
     begin_depth_rendering(cmd, map_.view(), map_.extent(), true);
     vkCmdSetDepthBias(cmd, 0.0f, 0.0f, settings.slope_bias);
     depth_pipeline_.bind(cmd);
-    draw_casters(cmd, frame, [&](const engine::DrawItem& d, const engine::GpuMeshRange&) {
+    draw_casters(cmd, frame, [&](const DrawItem& d, const MeshRange&) {
       gpu_shared::ShadowMapPush push{d.world, light_vp};
       depth_pipeline_.push_constants(cmd, push);
     }, CasterSet::Opaque);

@@ -1,6 +1,7 @@
 #pragma once
 #include "engine/gpu/resources.hpp"
-#include "shadows/shadows.hpp"
+#include "frame.hpp"
+#include "shadows/settings.hpp"
 
 namespace shadows::detail {
 
@@ -8,7 +9,7 @@ namespace shadows::detail {
 class ShadowMapPass {
  public:
   explicit ShadowMapPass(engine::gpu::Context& ctx);
-  void record(engine::FrameContext& frame, const ShadowMapSettings& settings);
+  void record(Frame& frame, const ShadowMapSettings& settings);
 
  private:
   void ensure_map(uint32_t size);

@@ -1,0 +1,291 @@
+#pragma once
+// The shadow module on a host's own Vulkan device: the API a studio's renderer uses.
+//
+//   // before vkCreateDevice: what to enable
+//   shadows::DeviceRequirements req = shadows::device_requirements(physical_device);
+//   // once
+//   auto shadows = shadows::Context::create({.instance = ..., .device = ..., .frames_in_flight = 2, ...});
+//   shadows::MeshId rock = shadows->register_mesh({.positions = {...}, .indices = {...}, ...});
+//   // per frame, into the host's command buffer, after its G-buffer pass
+//   shadows->record(cmd, {.frame_index = n, .depth = {...}, .normals = {...}, .camera = {...},
+//                         .lights = &sun, .light_count = 1, .instances = ..., .output = {...}});
+//
+// Only Vulkan and the standard library appear here. Matrices are column-major float[16] (the layout of
+// GLSL and GLM), world space is right-handed, clip space is Vulkan's (y down, depth in [0, 1]).
+//
+// Synchronization contract (every call of record()):
+//   - Inputs (depth, normals, geometric normals, terminator offset, receiver mask, alpha textures) are
+//     read only by compute shaders, through sampled-image descriptors. They must be in the layout named
+//     in their ImageInput (SHADER_READ_ONLY_OPTIMAL, DEPTH_READ_ONLY_OPTIMAL,
+//     DEPTH_STENCIL_READ_ONLY_OPTIMAL or GENERAL) when the command buffer executes, and the host's
+//     writes to them must be made visible to VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT /
+//     VK_ACCESS_2_SHADER_SAMPLED_READ_BIT by a barrier the host records before record(). The module
+//     never changes their layout.
+//   - The output (and the optional overlay) must be in VK_IMAGE_LAYOUT_GENERAL, with every earlier
+//     access by the host finished before VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT (a barrier whose
+//     second scope is COMPUTE_SHADER / SHADER_STORAGE_WRITE). The module writes them with compute
+//     shaders only and leaves them in GENERAL: the host's next barrier on them needs
+//     srcStageMask = COMPUTE_SHADER, srcAccessMask = SHADER_STORAGE_WRITE.
+//   - Host mesh buffers are read by compute shaders (storage-buffer reads) in the first record() after
+//     register_mesh(), so they must hold their data, visible to COMPUTE_SHADER / SHADER_STORAGE_READ,
+//     until that frame's commands have executed.
+//   - Inside record() the module orders its own resources with barriers that name their stages and
+//     accesses; it records no barrier on a host resource and no ALL_COMMANDS barrier.
+//   - The command buffer must support compute and graphics (a queue of the family given at creation),
+//     be outside a render pass, and have no pipeline or descriptor state the host relies on afterwards:
+//     the module binds its own pipelines and push descriptors (the host rebinds after record()).
+//
+// Frames in flight: record() for frame N writes only the per-frame data of slot N % frames_in_flight,
+// and reads back (statistics, pass timings, pool demand) the slot it last wrote frames_in_flight frames
+// ago. The host promises what every renderer with F frames in flight already waits for: when it
+// records frame N, the commands recorded for frame N - F have completed. Nothing in record() waits on
+// the CPU; statistics describe the frame F - 1 frames before the current one.
+//
+// Errors: a bad argument throws shadows::Error, one line naming the argument, before anything is
+// recorded. The context stays usable.
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "shadows/settings.hpp"
+
+namespace shadows {
+
+// One line naming the argument and what is wrong with it.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// What the host should enable before vkCreateDevice. Required items are needed by every technique;
+// optional ones unlock a path, each with what it unlocks. Only what `physical_device` supports is
+// listed among the optional items.
+struct DeviceRequirement {
+  std::string name;     // extension name ("VK_KHR_push_descriptor") or feature ("geometryShader")
+  std::string unlocks;  // for optional items: which technique or path needs it
+};
+struct DeviceRequirements {
+  uint32_t api_version = VK_API_VERSION_1_3;
+  std::vector<DeviceRequirement> required_extensions;
+  std::vector<DeviceRequirement> required_features;
+  std::vector<DeviceRequirement> optional_extensions;
+  std::vector<DeviceRequirement> optional_features;
+  std::string missing;  // empty when the device can run the module; else the one-line reason
+};
+DeviceRequirements device_requirements(VkPhysicalDevice physical_device);
+
+struct ContextDesc {
+  VkInstance instance = VK_NULL_HANDLE;
+  VkPhysicalDevice physical_device = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+  uint32_t queue_family = 0;  // a family with graphics and compute; record()'s command buffers come from it
+  VkQueue queue = VK_NULL_HANDLE;  // used only at creation, for one-off uploads (it waits for them)
+  PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;  // required
+  PFN_vkGetDeviceProcAddr get_device_proc_addr = nullptr;      // required
+  // What the host enabled: the module uses exactly these (a feature the device has but the host did not
+  // enable counts as absent, and the techniques that need it say so in capabilities()).
+  std::vector<std::string> enabled_instance_extensions;
+  std::vector<std::string> enabled_device_extensions;
+  const VkPhysicalDeviceFeatures2* enabled_features = nullptr;  // the chain given to vkCreateDevice
+  uint32_t api_version = VK_API_VERSION_1_3;                    // the instance's apiVersion (>= 1.3)
+  const VkAllocationCallbacks* allocator = nullptr;             // for every object the module creates
+  VkPipelineCache pipeline_cache = VK_NULL_HANDLE;              // for every pipeline it creates
+  uint32_t frames_in_flight = 2;                                // 1..8
+  Settings settings;                                            // initial settings (settings() changes them)
+  // Counts validation messages on the host's instance (needs VK_EXT_debug_utils enabled there); tests.
+  bool count_validation_messages = false;
+  // Optional features to treat as absent (tests of the other paths): see capabilities().
+  std::vector<std::string> masked_features;
+};
+
+// A host buffer region: the buffer must have been created with VK_BUFFER_USAGE_STORAGE_BUFFER_BIT
+// (stated in `usage`, which the module checks), and `offset` must be a multiple of 4.
+struct BufferInput {
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceSize offset = 0;     // bytes
+  VkDeviceSize size = 0;       // bytes from offset the module may read
+  VkBufferUsageFlags usage = 0;  // the flags the buffer was created with
+};
+
+// A host image: 2D, one mip level and one layer in `view`; usage is the flags it was created with.
+struct ImageInput {
+  VkImage image = VK_NULL_HANDLE;
+  VkImageView view = VK_NULL_HANDLE;  // for depth/stencil formats: a view of the depth aspect only
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  VkExtent2D extent{};
+  VkImageUsageFlags usage = 0;
+  VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;  // the layout when the commands execute
+  bool present() const { return view != VK_NULL_HANDLE; }
+};
+
+using MeshId = uint32_t;
+inline constexpr MeshId kNoMesh = 0xffffffffu;
+
+enum class AlphaWrap : uint32_t { Repeat = 0, ClampToEdge = 1, MirroredRepeat = 2 };
+
+// A caster mesh, registered once. The module copies (and converts) it into its own buffers during the
+// next record(); the host's buffers must stay valid until that frame has executed.
+struct MeshDesc {
+  std::string name;                     // for statistics and messages
+  // Positions: VK_FORMAT_R32G32B32_SFLOAT or R32G32B32A32_SFLOAT (w ignored), `stride` bytes apart
+  // (a multiple of 4, at least the format's size), object space.
+  BufferInput positions;
+  VkFormat position_format = VK_FORMAT_R32G32B32_SFLOAT;
+  uint32_t position_stride = 12;
+  uint32_t vertex_count = 0;
+  // Triangle list; VK_INDEX_TYPE_UINT16 or UINT32. index_count a positive multiple of 3.
+  BufferInput indices;
+  VkIndexType index_type = VK_INDEX_TYPE_UINT32;
+  uint32_t index_count = 0;
+  // Optional alpha test (cut-out casters): per-vertex texture coordinates (VK_FORMAT_R32G32_SFLOAT,
+  // `uv_stride` bytes apart) and a texture whose alpha channel is tested against `alpha_cutoff`
+  // (kept where alpha >= cutoff, nearest texel of level 0). The texture must be R8G8B8A8_UNORM,
+  // R8G8B8A8_SRGB, B8G8R8A8_UNORM or R8_UNORM (alpha = r), with SAMPLED usage.
+  BufferInput uvs;
+  uint32_t uv_stride = 8;
+  ImageInput alpha_texture;
+  float alpha_cutoff = 0.5f;
+  float alpha_scale = 1.0f;  // the texture's alpha is multiplied by this first (glTF's base colour factor)
+  AlphaWrap wrap_u = AlphaWrap::Repeat, wrap_v = AlphaWrap::Repeat;
+  // Object-space bounds of the positions (required): the light-space fits and culling use them.
+  float bounds_min[3] = {1.0f, 1.0f, 1.0f};
+  float bounds_max[3] = {-1.0f, -1.0f, -1.0f};
+};
+
+// Whether an instance enters the conservative shadow map prepass.
+enum class CsmMode : uint32_t { Auto, On, Off };
+
+struct Instance {
+  MeshId mesh = kNoMesh;
+  float world[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  // object -> world
+  bool casts_shadow = true;
+  CsmMode csm = CsmMode::Auto;
+  uint64_t id = 0;              // the host's identifier, echoed in Stats::csm_decisions
+  const char* name = nullptr;   // for statistics and messages (null: the mesh's name)
+};
+
+enum class LightType : uint32_t { Directional, Spot, Point };
+
+struct Light {
+  LightType type = LightType::Directional;
+  float direction[3] = {0.0f, -1.0f, 0.0f};  // directional and spot: the direction light travels, unit
+  float position[3] = {0.0f, 0.0f, 0.0f};    // spot and point (world)
+  float range = 0.0f;                        // spot and point
+  float inner_cone = 0.0f, outer_cone = 0.0f;  // spot: half angles in radians
+};
+
+enum class NormalSpace : uint32_t { World, View };
+enum class NormalEncoding : uint32_t {
+  Xyz,         // rgb = normal * scale + bias per channel (e.g. UNORM storing n * 0.5 + 0.5: scale 2, bias -1)
+  Octahedral,  // rg = octahedral encoding * scale + bias, in [-1, 1] after scale and bias
+};
+struct NormalInput {
+  ImageInput image;
+  NormalSpace space = NormalSpace::World;
+  NormalEncoding encoding = NormalEncoding::Xyz;
+  float scale = 1.0f, bias = 0.0f;  // decoded = texel * scale + bias, then decoded as `encoding`
+  // Set when the normals already face the camera (a G-buffer that flips back faces). World-space Xyz
+  // normals with scale 1 and bias 0 are then used as stored (they must be unit length); otherwise the
+  // module normalizes them and turns them toward the camera itself.
+  bool facing_camera = false;
+};
+
+struct Camera {
+  float view[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};        // world -> view
+  float projection[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  // view -> Vulkan clip
+  bool reversed_z = true;    // depth 1 near, 0 far (else 0 near, 1 far)
+  float near_plane = 0.05f;  // view-space distances of the projection's planes (the cascades split
+  float far_plane = 200.0f;  // the range between them; an infinite projection: the farthest shadowed)
+};
+
+struct FrameDesc {
+  uint64_t frame_index = 0;  // increases by one per record(); slot = frame_index % frames_in_flight
+  // Depth: D32_SFLOAT, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT or D16_UNORM, SAMPLED usage. A pixel at
+  // the clear depth (0 reversed, 1 standard) is background: lit, not a shading point.
+  ImageInput depth;
+  // Shading normals (required), facing the camera or not (the module turns them toward it). Any
+  // float/UNORM/SNORM colour format with SAMPLED usage; `extent` equal to depth's.
+  NormalInput normals;
+  // Optional geometric (triangle) normals: shadow-ray origins are pushed off the surface along them.
+  // Without them the shading normal is used. When `facing_in_alpha` is set, the image's alpha holds
+  // the host's per-pixel decision whether the point faces the light (> 0.5 facing); otherwise the
+  // module decides from the shading normal.
+  NormalInput geometric_normals;
+  bool facing_in_alpha = false;
+  // Optional smooth-terminator offset (world-space xyz added to the shading point; the GLSL in
+  // shaders/shadows_host/terminator_offset.glsl computes it in a G-buffer shader). Float format.
+  ImageInput terminator_offset;
+  // Optional receiver mask: channel `receiver_channel` > 0.5 receives shadows; others stay lit.
+  ImageInput receiver_mask;
+  uint32_t receiver_channel = 3;
+  Camera camera;
+  const Light* lights = nullptr;  // this version shadows exactly one directional light
+  uint32_t light_count = 0;
+  const Instance* instances = nullptr;  // every caster this frame
+  uint32_t instance_count = 0;
+  // Visibility (1 lit .. 0 shadowed), per pixel of depth: R8_UNORM, R16_SFLOAT or R32_SFLOAT with
+  // STORAGE usage, GENERAL layout, extent equal to depth's.
+  ImageInput output;
+  // Optional debug overlay (Settings::debug): R8G8B8A8_UNORM, STORAGE usage, GENERAL; rgb colour, a
+  // blend weight. Pixels the overlay does not mark are written 0.
+  ImageInput overlay;
+};
+
+// What each technique can do on this device, with the one-line reason where not.
+struct Capability {
+  bool available = false;
+  std::string reason;  // empty when available
+};
+struct Capabilities {
+  Capability technique[6];  // indexed by Technique
+  Capability csm_test[4];   // indexed by CsmTest
+  bool hardware_conservative_raster = false;
+  const Capability& of(Technique t) const { return technique[static_cast<int>(t)]; }
+  const Capability& of(CsmTest t) const { return csm_test[static_cast<int>(t)]; }
+};
+
+class Context {
+ public:
+  // Throws shadows::Error (one line naming the field) on a bad description or a device that lacks a
+  // required feature; see device_requirements().
+  static std::unique_ptr<Context> create(const ContextDesc& desc);
+  virtual ~Context() = default;
+
+  virtual Capabilities capabilities() const = 0;
+  virtual Settings& settings() = 0;
+
+  // Caster meshes. The id stays valid until unregister_mesh(). Unregistering stops the mesh from being
+  // drawn; its space in the module's buffers is not reused (a new context compacts after a level change).
+  virtual MeshId register_mesh(const MeshDesc& mesh) = 0;
+  virtual void unregister_mesh(MeshId mesh) = 0;
+
+  // Records the frame's shadow passes into `cmd` (see the synchronization contract above). Throws
+  // shadows::Error before recording anything when an argument is invalid.
+  virtual void record(VkCommandBuffer cmd, const FrameDesc& frame) = 0;
+
+  // Optional: the host knows frame `frame_index` has completed (it waited for its fence). Its
+  // statistics and pass timings are read now instead of frames_in_flight frames later.
+  virtual void frame_completed(uint64_t frame_index) = 0;
+
+  // Statistics of the latest frame whose results have come back (see frames in flight); collected only
+  // while enabled (a small readback).
+  virtual void set_collect_stats(bool enabled) = 0;
+  virtual const Stats& stats() const = 0;
+  // The module's GPU passes of the latest completed frame: name and milliseconds, in recording order.
+  struct PassTime {
+    std::string name;
+    double ms = 0.0;
+  };
+  virtual std::vector<PassTime> pass_times() const = 0;
+  // Names of the passes the current settings record, in order.
+  virtual std::vector<std::string> pass_names() const = 0;
+
+  // Validation messages counted on the host's instance (ContextDesc::count_validation_messages).
+  virtual uint32_t validation_message_count() const = 0;
+};
+
+}  // namespace shadows

@@ -1,0 +1,179 @@
+#pragma once
+// The shadow module's settings and statistics: plain data, shared by the Vulkan host API
+// (shadows/context.hpp) and every client. Only the standard library appears here.
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace shadows {
+
+enum class Technique {
+  Off,        // everything lit
+  ShadowMap,  // one plain shadow map fitted to the scene, one tap: the aliasing baseline ("sm")
+  Cascades,   // cascaded filtered shadow maps ("cascades")
+  Izb,        // frustum-traced irregular z-buffer hard shadows ("izb"; with IzbSettings::csm: "izb+csm")
+  Hybrid,     // IZB near the camera blended into cascades far away ("hybrid")
+  RayTraced,  // one hardware shadow ray per shading point or μQuad sample ("rt"; needs ray tracing)
+};
+
+// Full-coverage test of the conservative shadow map pass.
+enum class CsmTest {
+  Hertel,         // texel centre's distance to every edge >= circumscribed radius (geometry shader)
+  Barycentric,    // barycentrics at the texel's four corners all positive (geometry shader)
+  BarycentricHw,  // the same with VK_KHR_fragment_shader_barycentric
+  InnerHw,        // conservative rasterization underestimation (fully covered fragments only)
+};
+
+// Auto: Edge where the cascades filter the whole frame; Off in the hybrid, where they filter only the
+// pixels the IZB leaves them, and building masks over the whole view costs more than the taps they
+// would skip (measured on lavapipe and the H200).
+enum class Masking { Off, Edge, DepthExtent, Auto };
+
+enum class DebugView { None, VisibilityMask, ListLength, Cascades, CsmCoverage, ExpensivePath };
+
+// Which rasterizer produces the raster trace's conservative fragments.
+enum class ConservativeRaster { Auto, Hardware, Software };
+
+// How a pass that exists both as raster and as compute work runs. Both give identical results; Auto
+// times each on the first frames (again after a size, scene or mode change) and keeps the faster.
+enum class PassBackend { Auto, Raster, Compute };
+
+// How the IZB's per-texel lists are built: linked lists (a node prepended per insertion) or a
+// counting sort (count per texel, prefix sum, scatter into contiguous ranges).
+enum class ListLayout { Linked, Sorted };
+
+struct ShadowMapSettings {
+  uint32_t size = 1024;
+  float constant_bias = 1.0e-4f;  // in light depth units ([0,1] over the fitted depth range)
+  float slope_bias = 1.0f;        // rasterizer slope-scaled bias
+};
+
+struct CascadeSettings {
+  uint32_t count = 4;                 // 1..4
+  uint32_t map_size = 1024;           // per cascade, square
+  float lambda = 0.75f;               // split blend: 0 uniform, 1 logarithmic
+  float max_distance = 60.0f;         // world units from the camera; the last cascade fades out here
+  float blend_band = 0.1f;            // fraction of a cascade's depth range blended into the next
+  float constant_bias = 0.5f;         // in texels of depth (scaled with each cascade's texel size)
+  float slope_bias = 1.5f;            // rasterizer slope-scaled bias
+  float normal_offset = 1.0f;         // in texels, along the geometric normal
+  bool cull_front_faces = false;      // render back faces into the maps (closed meshes only)
+  float kernel_radius = 0.08f;        // PCF disk radius in world units (same across cascades)
+  Masking masking = Masking::Auto;    // where the 12-tap filter may be skipped
+  bool blur = true;                   // 5x5 blur on pixels whose taps disagreed
+};
+
+struct IzbSettings {
+  uint32_t resolution = 1024;         // light-space grid, square
+  uint32_t samples_per_pixel = 1;     // 1 (ray per pixel) or 32 (frustum per pixel footprint)
+  float max_distance = 0.0f;          // 0: every visible point; else only points nearer the camera
+  bool csm = false;                   // conservative shadow map z-prepass culls certainly shadowed points
+  CsmTest csm_test = CsmTest::Barycentric;
+  ConservativeRaster raster = ConservativeRaster::Auto;  // for the raster trace
+  PassBackend trace = PassBackend::Auto;     // frustum trace: conservative raster or compute binning
+  PassBackend csm_backend = PassBackend::Auto;  // CSM (hertel/bary only; the hardware tests are raster)
+  ListLayout lists = ListLayout::Linked;
+  bool depth_cull = true;             // cull trace fragments behind the farthest node of their texel
+  bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed
+  float node_pool_factor = 1.25f;     // pool size = factor * pixels * (1 or expected texels per μQuad)
+  uint32_t node_pool_override = 0;    // nonzero: fixed pool size in nodes (tests of overflow)
+  // Validation path: no lists at all; every candidate is tested against every caster triangle by the
+  // same exact test (the overflow fallback). Slow; for checking the trace.
+  bool brute_force = false;
+};
+
+struct Settings {
+  Technique technique = Technique::Hybrid;
+  ShadowMapSettings shadow_map;
+  CascadeSettings cascades;
+  IzbSettings izb;
+  DebugView debug = DebugView::None;
+  // Hybrid: the IZB covers points up to this distance from the camera (fading over its last tenth
+  // into the cascades, which cover the rest up to cascades.max_distance).
+  float hybrid_izb_distance = 20.0f;
+  // Hybrid: hard at contact, soft away from it. A shadowed point whose nearest occluder lies this far
+  // (world units, along the light) or farther above it takes the cascades' filtered term; nearer
+  // occluders blend linearly toward the exact IZB term, which contact shadows keep.
+  float hybrid_soft_distance = 2.0f;
+};
+
+// Why the automatic CSM choice took or left an entity.
+struct CsmDecision {
+  uint64_t instance_id = 0;  // Instance::id of the host (the engine adapter: entity index << 32 | generation)
+  std::string name;
+  bool in_csm = false;
+  bool automatic = false;
+  double large_triangle_area_share = 0.0;  // share of light-space area in triangles >= kLargeTexels
+  std::string reason;
+};
+
+struct Stats {
+  // IZB
+  uint64_t shading_points = 0;        // covered pixels
+  uint64_t lit_candidates = 0;        // covered, receiving, facing the light, inside the IZB range
+  uint64_t nodes_inserted = 0;
+  uint64_t csm_culled = 0;            // candidates the CSM proved shadowed
+  double culling_rate = 0.0;          // csm_culled / lit_candidates
+  uint64_t csm_texels_covered = 0;
+  uint64_t node_pool_size = 0;
+  uint64_t node_overflow = 0;         // insertions that found the pool full
+  uint64_t overflow_pixels = 0;       // pixels resolved by the exact fallback because of that
+  uint64_t list_length_max = 0;
+  double list_length_average = 0.0;   // over non-empty texels
+  uint64_t nonempty_texels = 0;
+  uint64_t trace_fragments_before_cull = 0;
+  uint64_t trace_fragments_after_cull = 0;
+  uint64_t triangle_tests = 0;        // ray/frustum-triangle tests
+  double triangle_tests_per_pixel = 0.0;
+  bool hardware_conservative = false;
+  // Raster or compute, per pass: what ran, why ("forced", "only one available", "probing",
+  // "auto: ..."), and the probe's GPU times in ms (0 where not measured).
+  struct BackendChoice {
+    std::string backend;
+    std::string reason;
+    double raster_ms = 0.0;
+    double compute_ms = 0.0;
+  };
+  BackendChoice trace_choice;
+  BackendChoice csm_choice;
+  // Compute trace work: tile-row records, (triangle, tile) pairs kept, (triangle, texel) pairs kept.
+  uint64_t trace_records = 0;
+  uint64_t trace_tile_pairs = 0;
+  uint64_t trace_pairs = 0;
+  // Ray traced: rays (candidates x samples), those that hit a caster, top-level instances, and the
+  // triangles in the bottom levels (each mesh once, however many instances use it).
+  uint64_t rays_traced = 0;
+  uint64_t rays_occluded = 0;
+  uint64_t rt_instances = 0;
+  uint64_t rt_triangles = 0;
+  // GPU memory the technique holds, by resource (debug name -> bytes), and its sum. Resources shared
+  // with the renderer (G-buffer, scene geometry) are not counted.
+  std::map<std::string, uint64_t> memory_bytes;
+  uint64_t memory_total_bytes = 0;
+  // Cascades
+  double expensive_path_fraction = 0.0;
+  uint64_t expensive_path_pixels = 0;
+  uint64_t blurred_pixels = 0;
+  std::vector<float> cascade_splits;
+  // CSM caster choice, and whether the prepass ran this frame ("ran", "off", or "skipped: why")
+  std::vector<CsmDecision> csm_decisions;
+  std::string csm_status = "off";
+};
+
+// Parsing/printing helpers for command lines and JSON ("sm", "cascades", "izb", "izb+csm", "hybrid",
+// "hybrid+csm", "rt").
+std::optional<Settings> parse_mode(const std::string& mode, Settings base);
+std::string mode_name(const Settings& settings);
+std::optional<CsmTest> parse_csm_test(const std::string& name);
+std::string csm_test_name(CsmTest test);
+std::optional<Masking> parse_masking(const std::string& name);
+std::string masking_name(Masking masking);
+std::optional<DebugView> parse_debug_view(const std::string& name);
+std::optional<PassBackend> parse_backend(const std::string& name);  // "auto", "raster", "compute"
+std::string backend_name(PassBackend backend);
+std::optional<ListLayout> parse_list_layout(const std::string& name);  // "linked", "sorted"
+std::string list_layout_name(ListLayout layout);
+
+}  // namespace shadows

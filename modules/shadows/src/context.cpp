@@ -1,0 +1,565 @@
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+
+#include <glm/gtc/type_ptr.hpp>
+#include <shared/host.h>
+
+#include "context_impl.hpp"
+#include "input_checks.hpp"
+
+namespace shadows {
+
+using engine::gpu::Buffer;
+using engine::gpu::DescriptorWriter;
+using engine::gpu::Image;
+using engine::gpu::memory_barrier;
+
+namespace detail {
+
+namespace {
+
+uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
+
+bool is_depth(VkFormat f) {
+  return f == VK_FORMAT_D32_SFLOAT || f == VK_FORMAT_D24_UNORM_S8_UINT || f == VK_FORMAT_D32_SFLOAT_S8_UINT ||
+         f == VK_FORMAT_D16_UNORM || f == VK_FORMAT_X8_D24_UNORM_PACK32 || f == VK_FORMAT_D16_UNORM_S8_UINT ||
+         f == VK_FORMAT_S8_UINT;
+}
+
+bool is_integer_format(VkFormat f) {
+  switch (f) {
+    case VK_FORMAT_R8_UINT: case VK_FORMAT_R8_SINT: case VK_FORMAT_R8G8_UINT: case VK_FORMAT_R8G8_SINT:
+    case VK_FORMAT_R8G8B8A8_UINT: case VK_FORMAT_R8G8B8A8_SINT: case VK_FORMAT_R16_UINT: case VK_FORMAT_R16_SINT:
+    case VK_FORMAT_R16G16_UINT: case VK_FORMAT_R16G16_SINT: case VK_FORMAT_R16G16B16A16_UINT:
+    case VK_FORMAT_R16G16B16A16_SINT: case VK_FORMAT_R32_UINT: case VK_FORMAT_R32_SINT: case VK_FORMAT_R32G32_UINT:
+    case VK_FORMAT_R32G32_SINT: case VK_FORMAT_R32G32B32A32_UINT: case VK_FORMAT_R32G32B32A32_SINT:
+    case VK_FORMAT_A2B10G10R10_UINT_PACK32: return true;
+    default: return false;
+  }
+}
+
+// The module's passes read and write their per-pixel images in these stages.
+constexpr VkPipelineStageFlags2 kModuleImageStages = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
+                                                     VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT |
+                                                     VK_PIPELINE_STAGE_2_GEOMETRY_SHADER_BIT;
+constexpr VkAccessFlags2 kStorageReadWrite = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                                             VK_ACCESS_2_SHADER_SAMPLED_READ_BIT;
+
+}  // namespace
+
+std::string format_name(VkFormat format) {
+  switch (format) {
+    case VK_FORMAT_D32_SFLOAT: return "VK_FORMAT_D32_SFLOAT";
+    case VK_FORMAT_D24_UNORM_S8_UINT: return "VK_FORMAT_D24_UNORM_S8_UINT";
+    case VK_FORMAT_D32_SFLOAT_S8_UINT: return "VK_FORMAT_D32_SFLOAT_S8_UINT";
+    case VK_FORMAT_D16_UNORM: return "VK_FORMAT_D16_UNORM";
+    case VK_FORMAT_R8_UNORM: return "VK_FORMAT_R8_UNORM";
+    case VK_FORMAT_R16_SFLOAT: return "VK_FORMAT_R16_SFLOAT";
+    case VK_FORMAT_R32_SFLOAT: return "VK_FORMAT_R32_SFLOAT";
+    case VK_FORMAT_R8G8B8A8_UNORM: return "VK_FORMAT_R8G8B8A8_UNORM";
+    case VK_FORMAT_UNDEFINED: return "VK_FORMAT_UNDEFINED";
+    default: return "VkFormat " + std::to_string(int(format));
+  }
+}
+
+void check_buffer(const BufferInput& b, const std::string& name, VkDeviceSize minimum, bool half_aligned) {
+  if (b.buffer == VK_NULL_HANDLE) throw Error("shadows: " + name + ".buffer is VK_NULL_HANDLE");
+  if (!(b.usage & VK_BUFFER_USAGE_STORAGE_BUFFER_BIT))
+    throw Error("shadows: " + name + ".usage lacks VK_BUFFER_USAGE_STORAGE_BUFFER_BIT (the module reads it in compute)");
+  if (b.offset % (half_aligned ? 2 : 4))
+    throw Error("shadows: " + name + ".offset " + std::to_string(b.offset) + " is not a multiple of " +
+                (half_aligned ? "2" : "4"));
+  if (b.size < minimum)
+    throw Error("shadows: " + name + ".size is " + std::to_string(b.size) + " bytes, the mesh needs " +
+                std::to_string(minimum));
+}
+
+void check_image(const ImageInput& image, const std::string& name, std::initializer_list<VkFormat> formats,
+                 VkImageUsageFlags usage, std::initializer_list<VkImageLayout> layouts,
+                 std::optional<VkExtent2D> extent) {
+  if (image.image == VK_NULL_HANDLE) throw Error("shadows: " + name + ".image is VK_NULL_HANDLE");
+  if (image.view == VK_NULL_HANDLE) throw Error("shadows: " + name + ".view is VK_NULL_HANDLE");
+  if (formats.size() > 0) {
+    if (std::find(formats.begin(), formats.end(), image.format) == formats.end()) {
+      std::string list;
+      for (VkFormat f : formats) list += (list.empty() ? "" : ", ") + format_name(f);
+      throw Error("shadows: " + name + ".format " + format_name(image.format) + " is not supported (one of " + list + ")");
+    }
+  } else if (image.format == VK_FORMAT_UNDEFINED || is_depth(image.format) || is_integer_format(image.format)) {
+    throw Error("shadows: " + name + ".format " + format_name(image.format) +
+                " is not supported (a float, UNORM or SNORM colour format)");
+  }
+  if ((image.usage & usage) != usage)
+    throw Error("shadows: " + name + ".usage lacks " +
+                (usage & VK_IMAGE_USAGE_STORAGE_BIT ? "VK_IMAGE_USAGE_STORAGE_BIT" : "VK_IMAGE_USAGE_SAMPLED_BIT"));
+  if (std::find(layouts.begin(), layouts.end(), image.layout) == layouts.end())
+    throw Error("shadows: " + name + ".layout " + std::to_string(int(image.layout)) + " is not supported (" +
+                (layouts.size() == 1 ? "VK_IMAGE_LAYOUT_GENERAL" : "a read-only layout or GENERAL") + ")");
+  if (image.extent.width == 0 || image.extent.height == 0) throw Error("shadows: " + name + ".extent is empty");
+  if (extent && (image.extent.width != extent->width || image.extent.height != extent->height))
+    throw Error("shadows: " + name + ".extent " + std::to_string(image.extent.width) + "x" +
+                std::to_string(image.extent.height) + " differs from depth's " + std::to_string(extent->width) + "x" +
+                std::to_string(extent->height));
+}
+
+// ---------------------------------------------------------------------------------------------------
+
+ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
+  if (desc.instance == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.instance is VK_NULL_HANDLE");
+  if (desc.physical_device == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.physical_device is VK_NULL_HANDLE");
+  if (desc.device == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.device is VK_NULL_HANDLE");
+  if (desc.queue == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.queue is VK_NULL_HANDLE");
+  if (!desc.get_instance_proc_addr) throw Error("shadows: ContextDesc.get_instance_proc_addr is null");
+  if (!desc.get_device_proc_addr) throw Error("shadows: ContextDesc.get_device_proc_addr is null");
+  if (desc.frames_in_flight < 1 || desc.frames_in_flight > 8)
+    throw Error("shadows: ContextDesc.frames_in_flight is " + std::to_string(desc.frames_in_flight) + " (1..8)");
+  engine::gpu::AdoptedDevice adopted;
+  adopted.instance = desc.instance;
+  adopted.physical_device = desc.physical_device;
+  adopted.device = desc.device;
+  adopted.queue_family = desc.queue_family;
+  adopted.queue = desc.queue;
+  adopted.get_instance_proc_addr = desc.get_instance_proc_addr;
+  adopted.get_device_proc_addr = desc.get_device_proc_addr;
+  adopted.enabled_instance_extensions = desc.enabled_instance_extensions;
+  adopted.enabled_device_extensions = desc.enabled_device_extensions;
+  adopted.enabled_features = desc.enabled_features;
+  adopted.api_version = desc.api_version;
+  adopted.allocator = desc.allocator;
+  adopted.pipeline_cache = desc.pipeline_cache;
+  adopted.count_validation_messages = desc.count_validation_messages;
+  adopted.masked_features = desc.masked_features;
+  try {
+    gpu_ = std::make_unique<engine::gpu::Context>(adopted);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(e.what());
+  }
+  frames_in_flight_ = desc.frames_in_flight;
+  slots_.resize(frames_in_flight_);
+  for (auto& slot : slots_) slot.profiler = std::make_unique<engine::gpu::GpuProfiler>(*gpu_);
+
+  engine::gpu::Context& ctx = *gpu_;
+  geometry_.init(ctx, ctx.features().ray_tracing_pipeline);
+  nearest_ = engine::gpu::Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "shadows inputs sampler");
+  input_params_ = Buffer(ctx, sizeof(gpu_shared::HostInputs),
+                         VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "shadows input params");
+  using engine::gpu::Binding;
+  auto sampled = [](uint32_t b) { return Binding{b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}; };
+  auto storage = [](uint32_t b) { return Binding{b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}; };
+  namespace gs = gpu_shared;
+  inputs_pipeline_ = engine::gpu::PipelineFactory(ctx).compute(
+      {.shader = "host_inputs.comp",
+       .bindings = {{gs::HOST_INPUTS_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+                    sampled(gs::HOST_INPUTS_BINDING_DEPTH), sampled(gs::HOST_INPUTS_BINDING_NORMAL),
+                    sampled(gs::HOST_INPUTS_BINDING_GEOMETRIC), sampled(gs::HOST_INPUTS_BINDING_OFFSET),
+                    sampled(gs::HOST_INPUTS_BINDING_RECEIVER), storage(gs::HOST_INPUTS_BINDING_WORLD_POSITION),
+                    storage(gs::HOST_INPUTS_BINDING_GEOMETRIC_OUT), storage(gs::HOST_INPUTS_BINDING_ALBEDO_OUT),
+                    storage(gs::HOST_INPUTS_BINDING_TERM_OUT), storage(gs::HOST_INPUTS_BINDING_OVERLAY_OUT)}});
+  const char* output_shaders[3] = {"host_output_r8.comp", "host_output_r16f.comp", "host_output_r32f.comp"};
+  for (int i = 0; i < 3; ++i)
+    output_pipelines_[i] = engine::gpu::PipelineFactory(ctx).compute(
+        {.shader = output_shaders[i],
+         .bindings = {storage(gs::HOST_OUTPUT_BINDING_TERM), storage(gs::HOST_OUTPUT_BINDING_OVERLAY),
+                      storage(gs::HOST_OUTPUT_BINDING_OUT), storage(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT)},
+         .push_constant_size = 16});
+  // Bound in place of an optional input the host did not give (never read then).
+  dummy_input_ = Image(ctx, {1, 1}, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
+                       "shadows placeholder input");
+  ctx.immediate_submit([&](VkCommandBuffer cmd) {
+    dummy_input_.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                            VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  });
+}
+
+ContextImpl::~ContextImpl() {
+  // The host destroys the context only after its frames completed (as for any resource of its own).
+  retire_.release_all();
+}
+
+Capabilities ContextImpl::capabilities() const {
+  Capabilities c;
+  for (int t = 0; t < 6; ++t) {
+    Capability& cap = c.technique[t];
+    cap.available = true;
+    if (Technique(t) == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline) {
+      cap.available = false;
+      cap.reason = gpu_->features().ray_tracing_missing;
+    }
+  }
+  auto& self = const_cast<ContextImpl&>(*this);
+  for (int t = 0; t < 4; ++t) {
+    std::string why;
+    c.csm_test[t].available = self.izb().csm_test_supported(CsmTest(t), &why);
+    c.csm_test[t].reason = c.csm_test[t].available ? "" : why;
+  }
+  c.hardware_conservative_raster = self.izb().hardware_raster_available();
+  return c;
+}
+
+MeshId ContextImpl::register_mesh(const MeshDesc& mesh) { return geometry_.add(mesh); }
+void ContextImpl::unregister_mesh(MeshId mesh) { geometry_.remove(mesh); }
+
+void ContextImpl::validate(const FrameDesc& f) const {
+  check_image(f.depth, "FrameDesc.depth",
+              {VK_FORMAT_D32_SFLOAT, VK_FORMAT_D24_UNORM_S8_UINT, VK_FORMAT_D32_SFLOAT_S8_UINT, VK_FORMAT_D16_UNORM},
+              VK_IMAGE_USAGE_SAMPLED_BIT, kReadLayouts, std::nullopt);
+  const VkExtent2D extent = f.depth.extent;
+  check_image(f.normals.image, "FrameDesc.normals.image", {}, VK_IMAGE_USAGE_SAMPLED_BIT, kReadLayouts, extent);
+  if (f.geometric_normals.image.present())
+    check_image(f.geometric_normals.image, "FrameDesc.geometric_normals.image", {}, VK_IMAGE_USAGE_SAMPLED_BIT,
+                kReadLayouts, extent);
+  else if (f.facing_in_alpha)
+    throw Error("shadows: FrameDesc.facing_in_alpha is set but FrameDesc.geometric_normals has no image");
+  if (f.terminator_offset.present())
+    check_image(f.terminator_offset, "FrameDesc.terminator_offset", {}, VK_IMAGE_USAGE_SAMPLED_BIT, kReadLayouts, extent);
+  if (f.receiver_mask.present()) {
+    check_image(f.receiver_mask, "FrameDesc.receiver_mask", {}, VK_IMAGE_USAGE_SAMPLED_BIT, kReadLayouts, extent);
+    if (f.receiver_channel > 3) throw Error("shadows: FrameDesc.receiver_channel is " + std::to_string(f.receiver_channel) + " (0..3)");
+  }
+  check_image(f.output, "FrameDesc.output", {VK_FORMAT_R8_UNORM, VK_FORMAT_R16_SFLOAT, VK_FORMAT_R32_SFLOAT},
+              VK_IMAGE_USAGE_STORAGE_BIT, {VK_IMAGE_LAYOUT_GENERAL}, extent);
+  if (f.overlay.present())
+    check_image(f.overlay, "FrameDesc.overlay", {VK_FORMAT_R8G8B8A8_UNORM}, VK_IMAGE_USAGE_STORAGE_BIT,
+                {VK_IMAGE_LAYOUT_GENERAL}, extent);
+  if (f.light_count != 1 || !f.lights)
+    throw Error("shadows: FrameDesc.light_count is " + std::to_string(f.light_count) +
+                " (this version shadows exactly one light)");
+  if (f.lights[0].type != LightType::Directional)
+    throw Error("shadows: FrameDesc.lights[0].type: only LightType::Directional is shadowed in this version");
+  const glm::vec3 dir = glm::make_vec3(f.lights[0].direction);
+  if (!(glm::length(dir) > 0.5f && glm::length(dir) < 1.5f))
+    throw Error("shadows: FrameDesc.lights[0].direction must be a unit vector");
+  if (f.instance_count > 0 && !f.instances) throw Error("shadows: FrameDesc.instances is null with instance_count > 0");
+  for (uint32_t i = 0; i < f.instance_count; ++i)
+    if (!geometry_.find(f.instances[i].mesh))
+      throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].mesh " + std::to_string(f.instances[i].mesh) +
+                  " is not a registered mesh");
+  if (!(f.camera.near_plane > 0.0f) || !(f.camera.far_plane > f.camera.near_plane))
+    throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
+}
+
+void ContextImpl::ensure_targets(VkExtent2D extent, uint64_t frame) {
+  if (extent.width == extent_.width && extent.height == extent_.height && shadow_term_.valid()) return;
+  engine::gpu::Context& ctx = *gpu_;
+  for (Image* old : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_})
+    retire_.retire(frame, std::move(*old));
+  const VkImageUsageFlags usage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                                  VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  inputs_.world_position = Image(ctx, extent, VK_FORMAT_R32G32B32A32_SFLOAT, usage, "shadows world position");
+  inputs_.geometric_normal = Image(ctx, extent, VK_FORMAT_R16G16B16A16_SFLOAT, usage, "shadows geometric normal");
+  inputs_.albedo = Image(ctx, extent, VK_FORMAT_R8G8B8A8_UNORM, usage, "shadows receiver flags");
+  shadow_term_ = Image(ctx, extent, VK_FORMAT_R32_SFLOAT, usage, "shadows term");
+  overlay_ = Image(ctx, extent, VK_FORMAT_R8G8B8A8_UNORM, usage, "shadows overlay");
+  extent_ = extent;
+  targets_fresh_ = true;
+  // The passes size their own per-pixel resources from the extent they see in the frame.
+}
+
+void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const View& view) {
+  namespace gs = gpu_shared;
+  gs::HostInputs p{};
+  p.inverse_view_projection = view.inverse_view_projection;
+  p.view_to_world = glm::inverse(view.view);
+  p.camera_position = glm::vec4(view.camera_position, 1.0f);
+  p.light_direction = glm::vec4(view.light_direction, 0.0f);
+  p.normal_scale_bias = glm::vec4(f.normals.scale, f.normals.bias, f.geometric_normals.scale, f.geometric_normals.bias);
+  auto normal_bits = [](const NormalInput& n, bool as_given) {
+    uint32_t bits = 0;
+    if (n.encoding == NormalEncoding::Octahedral) bits |= gs::HOST_NORMAL_OCTAHEDRAL;
+    if (n.space == NormalSpace::View) bits |= gs::HOST_NORMAL_VIEW_SPACE;
+    if (as_given) bits |= gs::HOST_NORMAL_AS_GIVEN;
+    return bits;
+  };
+  // World-space xyz normals with no scale or bias that the host says face the camera are used bit for
+  // bit (the engine's own G-buffer): the shading points then equal the engine's exactly.
+  auto as_given = [](const NormalInput& n) {
+    return n.facing_camera && n.encoding == NormalEncoding::Xyz && n.space == NormalSpace::World && n.scale == 1.0f &&
+           n.bias == 0.0f;
+  };
+  uint32_t flags = 0;
+  if (f.camera.reversed_z) flags |= gs::HOST_REVERSED_Z;
+  if (f.geometric_normals.image.present()) flags |= gs::HOST_HAS_GEOMETRIC;
+  if (f.facing_in_alpha) flags |= gs::HOST_FACING_IN_ALPHA;
+  if (f.terminator_offset.present()) flags |= gs::HOST_HAS_OFFSET;
+  if (f.receiver_mask.present()) flags |= gs::HOST_HAS_RECEIVER_MASK;
+  flags |= normal_bits(f.normals, as_given(f.normals)) << gs::HOST_NORMAL_SHIFT;
+  flags |= normal_bits(f.geometric_normals, as_given(f.geometric_normals)) << gs::HOST_GEOMETRIC_SHIFT;
+  p.extent = glm::uvec4(extent_.width, extent_.height, flags, f.receiver_channel);
+
+  // The previous frame's reads of the parameters and of the module's per-pixel images finish before
+  // this frame rewrites them; fresh images move from UNDEFINED to GENERAL.
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, 0);
+  vkCmdUpdateBuffer(cmd, input_params_.handle(), 0, sizeof(p), &p);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_UNIFORM_READ_BIT);
+  for (Image* img : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_}) {
+    if (targets_fresh_)
+      img->transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  if (!targets_fresh_)
+    memory_barrier(cmd, kModuleImageStages | VK_PIPELINE_STAGE_2_COPY_BIT, kStorageReadWrite | VK_ACCESS_2_TRANSFER_READ_BIT,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  targets_fresh_ = false;
+
+  auto input_view = [&](const ImageInput& in) { return in.present() ? in.view : dummy_input_.view(); };
+  auto input_layout = [&](const ImageInput& in) { return in.present() ? in.layout : VK_IMAGE_LAYOUT_GENERAL; };
+  inputs_pipeline_.bind(cmd);
+  DescriptorWriter()
+      .uniform_buffer(gs::HOST_INPUTS_BINDING_PARAMS, input_params_.handle())
+      .sampled_image(gs::HOST_INPUTS_BINDING_DEPTH, f.depth.view, nearest_.handle(), f.depth.layout)
+      .sampled_image(gs::HOST_INPUTS_BINDING_NORMAL, f.normals.image.view, nearest_.handle(), f.normals.image.layout)
+      .sampled_image(gs::HOST_INPUTS_BINDING_GEOMETRIC, input_view(f.geometric_normals.image), nearest_.handle(),
+                     input_layout(f.geometric_normals.image))
+      .sampled_image(gs::HOST_INPUTS_BINDING_OFFSET, input_view(f.terminator_offset), nearest_.handle(),
+                     input_layout(f.terminator_offset))
+      .sampled_image(gs::HOST_INPUTS_BINDING_RECEIVER, input_view(f.receiver_mask), nearest_.handle(),
+                     input_layout(f.receiver_mask))
+      .storage_image(gs::HOST_INPUTS_BINDING_WORLD_POSITION, inputs_.world_position.view())
+      .storage_image(gs::HOST_INPUTS_BINDING_GEOMETRIC_OUT, inputs_.geometric_normal.view())
+      .storage_image(gs::HOST_INPUTS_BINDING_ALBEDO_OUT, inputs_.albedo.view())
+      .storage_image(gs::HOST_INPUTS_BINDING_TERM_OUT, shadow_term_.view())
+      .storage_image(gs::HOST_INPUTS_BINDING_OVERLAY_OUT, overlay_.view())
+      .push(*gpu_, cmd, inputs_pipeline_);
+  vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
+  // The module's inputs, term and overlay: written above, read and written by every pass that follows.
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                 kModuleImageStages | extra_image_stages(), kStorageReadWrite);
+}
+
+VkPipelineStageFlags2 ContextImpl::extra_image_stages() const {
+  return gpu_->features().ray_tracing_pipeline ? VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR : 0;
+}
+
+void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f) {
+  // Every pass's writes of the term and overlay, visible to the copy into the host's images.
+  memory_barrier(cmd, kModuleImageStages | extra_image_stages(), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+  const int which = f.output.format == VK_FORMAT_R8_UNORM ? 0 : f.output.format == VK_FORMAT_R16_SFLOAT ? 1 : 2;
+  const engine::gpu::Pipeline& p = output_pipelines_[which];
+  p.bind(cmd);
+  namespace gs = gpu_shared;
+  DescriptorWriter()
+      .storage_image(gs::HOST_OUTPUT_BINDING_TERM, shadow_term_.view())
+      .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY, overlay_.view())
+      .storage_image(gs::HOST_OUTPUT_BINDING_OUT, f.output.view)
+      .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT, f.overlay.present() ? f.overlay.view : overlay_.view())
+      .push(*gpu_, cmd, p);
+  const glm::uvec4 push(extent_.width, extent_.height, f.overlay.present() ? 1u : 0u, 0u);
+  p.push_constants(cmd, push);
+  vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
+}
+
+void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
+  if (cmd == VK_NULL_HANDLE) throw Error("shadows: record: cmd is VK_NULL_HANDLE");
+  validate(f);
+  Slot& slot = slots_[f.frame_index % frames_in_flight_];
+  // The host's promise: the frame recorded in this slot frames_in_flight frames ago has completed.
+  if (slot.frame) complete_slot(slot);
+  if (f.frame_index >= frames_in_flight_) retire_.release_through(f.frame_index - frames_in_flight_);
+
+  engine::gpu::GpuProfiler& profiler = external_profiler_ ? *external_profiler_ : *slot.profiler;
+  if (!external_profiler_) profiler.begin_frame(cmd);
+  engine::gpu::ScopedGpuRegion region(*gpu_, profiler, cmd, "shadows");
+
+  geometry_.record_imports(cmd, f.frame_index, retire_);
+
+  View& view = view_;
+  view.view = glm::make_mat4(f.camera.view);
+  glm::mat4 projection = glm::make_mat4(f.camera.projection);
+  if (!f.camera.reversed_z) {
+    // z' = w - z: standard depth becomes reversed (1 near, 0 far), the module's convention.
+    glm::mat4 flip(1.0f);
+    flip[2][2] = -1.0f;
+    flip[3][2] = 1.0f;
+    projection = flip * projection;
+  }
+  view.projection = projection;
+  view.view_projection = projection * view.view;
+  view.inverse_view_projection = glm::inverse(view.view_projection);
+  view.camera_position = glm::vec3(glm::inverse(view.view)[3]);
+  view.light_direction = glm::normalize(glm::make_vec3(f.lights[0].direction));
+  // A perspective projection scales x and y by the cotangent of the half field of view.
+  view.tan_half_fov = glm::vec2(1.0f / std::max(std::abs(projection[0][0]), 1e-6f),
+                                1.0f / std::max(std::abs(projection[1][1]), 1e-6f));
+  view.near_plane = f.camera.near_plane;
+  view.far_plane = f.camera.far_plane;
+  view.extent = f.depth.extent;
+  view.frame_index = f.frame_index;
+
+  draws_.clear();
+  draws_.reserve(f.instance_count);
+  for (uint32_t i = 0; i < f.instance_count; ++i) {
+    const Instance& in = f.instances[i];
+    const MeshInfo& mesh = *geometry_.find(in.mesh);
+    DrawItem d;
+    d.id = in.id;
+    d.name = in.name ? in.name : mesh.name;
+    d.world = glm::make_mat4(in.world);
+    d.mesh = in.mesh;
+    d.alpha_threshold = mesh.alpha_threshold;
+    d.base_color_texture = mesh.texture;
+    d.shadow.casts_shadow = in.casts_shadow;
+    d.shadow.csm = in.csm == CsmMode::On ? engine::CsmChoice::On : in.csm == CsmMode::Off ? engine::CsmChoice::Off
+                                                                                         : engine::CsmChoice::Auto;
+    d.bounds = mesh.bounds.transformed(d.world);
+    d.cpu_mesh = i < cpu_meshes_.size() ? cpu_meshes_[i] : nullptr;
+    draws_.push_back(std::move(d));
+  }
+  cpu_meshes_.clear();
+
+  ensure_targets(f.depth.extent, f.frame_index);
+  record_inputs(cmd, f, view);
+  Frame frame{*gpu_, cmd, profiler, view, inputs_, shadow_term_, overlay_, geometry_.geometry(), draws_,
+              uint32_t(f.frame_index % frames_in_flight_)};
+  record_technique(frame);
+  record_output(cmd, f);
+  slot.frame = f.frame_index;
+  slot.technique = settings_.technique;
+  slot.csm = settings_.izb.csm;
+}
+
+void ContextImpl::record_technique(Frame& frame) {
+  switch (settings_.technique) {
+    case Technique::Off:
+      break;
+    case Technique::ShadowMap:
+      if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
+      shadow_map_->record(frame, settings_.shadow_map);
+      break;
+    case Technique::Cascades:
+      cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
+      break;
+    case Technique::Izb:
+      izb().record(frame, settings_.izb, settings_.debug, false, collect_stats_);
+      break;
+    case Technique::Hybrid: {
+      // IZB first: its resolve lists the pixels that take some of the cascades' term, and the
+      // cascades filter only those.
+      IzbSettings near = settings_.izb;
+      near.max_distance = settings_.hybrid_izb_distance;
+      izb().record(frame, near, settings_.debug, true, collect_stats_, settings_.hybrid_soft_distance);
+      engine::gpu::full_barrier(frame.cmd);
+      const PixelList listed = izb().hybrid_list();
+      cascades().record(frame, settings_.cascades, izb().soft_term(), settings_.debug, &listed);
+      engine::gpu::full_barrier(frame.cmd);
+      izb().record_hybrid_blend(frame);
+      break;
+    }
+    case Technique::RayTraced:
+      if (!gpu_->features().ray_tracing_pipeline) throw Error("shadows: " + gpu_->features().ray_tracing_missing);
+      if (!ray_traced_) ray_traced_ = std::make_unique<RayTracedPass>(*gpu_);
+      ray_traced_->record(frame, settings_.izb.samples_per_pixel, collect_stats_);
+      break;
+  }
+}
+
+void ContextImpl::frame_completed(uint64_t frame_index) {
+  for (auto& slot : slots_)
+    if (slot.frame && *slot.frame == frame_index) complete_slot(slot);
+}
+
+void ContextImpl::complete_slot(Slot& slot) {
+  if (!external_profiler_) {
+    slot.profiler->collect();
+    last_pass_times_.clear();
+    for (const auto& [name, ms] : slot.profiler->last_frame()) last_pass_times_.push_back({name, ms});
+  }
+  // Always: the passes grow their pools and buffers to the demand they measured.
+  Stats fresh;  // only the techniques that ran this frame report
+  const Technique t = slot.technique;
+  if ((t == Technique::Izb || t == Technique::Hybrid) && izb_) izb_->after_frame(fresh);
+  if ((t == Technique::Cascades || t == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh);
+  if (t == Technique::RayTraced && ray_traced_) ray_traced_->after_frame(fresh);
+  if (collect_stats_) {
+    add_memory(fresh, t, slot.csm);
+    stats_ = std::move(fresh);
+  }
+  slot.frame.reset();
+}
+
+std::vector<Context::PassTime> ContextImpl::pass_times() const {
+  if (!external_profiler_) return last_pass_times_;
+  std::vector<PassTime> out;
+  for (const auto& [name, ms] : external_profiler_->last_frame()) out.push_back({name, ms});
+  return out;
+}
+
+// The technique's own passes (statistics-only passes such as izb_stats and csm_coverage excluded).
+std::vector<std::string> ContextImpl::pass_names() const {
+  std::vector<std::string> izb = {"light_frustum", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"};
+  if (settings_.izb.csm) izb.insert(izb.begin() + 1, "csm");
+  const std::vector<std::string> cascades = {"cascade_depth", "cascade_masks", "cascade_filter", "cascade_blur"};
+  switch (settings_.technique) {
+    case Technique::Off: return {};
+    case Technique::ShadowMap: return {"sm_depth", "sm_resolve"};
+    case Technique::Cascades: return cascades;
+    case Technique::Izb: return izb;
+    case Technique::Hybrid: {
+      izb.insert(izb.begin(), cascades.begin(), cascades.end());
+      return izb;
+    }
+    case Technique::RayTraced: return {"rt_build", "rt_trace"};
+  }
+  return {};
+}
+
+// The memory of the technique's resources, found by the prefixes of their debug names.
+void ContextImpl::add_memory(Stats& s, Technique technique, bool csm) const {
+  std::vector<std::string> prefixes;
+  switch (technique) {
+    case Technique::Off: break;
+    case Technique::ShadowMap: prefixes = {"sm "}; break;
+    case Technique::Cascades: prefixes = {"cascade "}; break;
+    case Technique::Izb: prefixes = {"izb "}; break;
+    case Technique::Hybrid: prefixes = {"izb ", "cascade "}; break;
+    case Technique::RayTraced: prefixes = {"rt "}; break;
+  }
+  if ((technique == Technique::Izb || technique == Technique::Hybrid) && csm) prefixes.push_back("csm ");
+  for (const auto& a : gpu_->allocations()) {
+    // Staging and readback copies are transient or host-side; they are not the technique's memory.
+    if (a.name.find("staging") != std::string::npos || a.name.find("readback") != std::string::npos) continue;
+    for (const auto& prefix : prefixes) {
+      if (a.name.compare(0, prefix.size(), prefix) != 0) continue;
+      // Numbered resources (one bottom level per mesh) add up under one name.
+      std::string key = a.name;
+      while (!key.empty() && (std::isdigit(static_cast<unsigned char>(key.back())) || key.back() == ' ')) key.pop_back();
+      s.memory_bytes[key] += a.bytes;
+      s.memory_total_bytes += a.bytes;
+      break;
+    }
+  }
+}
+
+IzbPass& ContextImpl::izb() {
+  if (!izb_) izb_ = std::make_unique<IzbPass>(*gpu_);
+  return *izb_;
+}
+CascadesPass& ContextImpl::cascades() {
+  if (!cascades_) cascades_ = std::make_unique<CascadesPass>(*gpu_);
+  return *cascades_;
+}
+
+}  // namespace detail
+
+std::unique_ptr<Context> Context::create(const ContextDesc& desc) { return std::make_unique<detail::ContextImpl>(desc); }
+
+DeviceRequirements device_requirements(VkPhysicalDevice physical_device) {
+  DeviceRequirements out;
+  if (physical_device == VK_NULL_HANDLE) {
+    out.missing = "shadows: device_requirements: physical_device is VK_NULL_HANDLE";
+    return out;
+  }
+  const engine::gpu::DeviceRequirements r = engine::gpu::device_requirements(physical_device);
+  for (const auto& e : r.required_device_extensions) out.required_extensions.push_back({e, "every technique"});
+  for (const auto& e : r.optional_device_extensions) out.optional_extensions.push_back({e, engine::gpu::what_unlocks(e)});
+  for (const auto& e : r.required_features) out.required_features.push_back({e, "every technique"});
+  for (const auto& e : r.optional_features) out.optional_features.push_back({e, engine::gpu::what_unlocks(e)});
+  out.missing = r.missing;
+  return out;
+}
+
+}  // namespace shadows

@@ -1,0 +1,96 @@
+#pragma once
+// The context behind shadows/context.hpp, with the few hooks the engine's own adapter
+// (modules/shadows_engine) uses beyond the public API: the renderer's profiler, the CPU mesh copies it
+// already holds, and test read-backs.
+#include <deque>
+#include <memory>
+#include <optional>
+
+#include "cascades_pass.hpp"
+#include "frame.hpp"
+#include "geometry_store.hpp"
+#include "izb_pass.hpp"
+#include "ray_traced_pass.hpp"
+#include "shadow_map_pass.hpp"
+#include "shadows/context.hpp"
+
+namespace shadows::detail {
+
+class ContextImpl final : public Context {
+ public:
+  explicit ContextImpl(const ContextDesc& desc);
+  ~ContextImpl() override;
+
+  Capabilities capabilities() const override;
+  Settings& settings() override { return settings_; }
+  MeshId register_mesh(const MeshDesc& mesh) override;
+  void unregister_mesh(MeshId mesh) override;
+  void record(VkCommandBuffer cmd, const FrameDesc& frame) override;
+  void frame_completed(uint64_t frame_index) override;
+  void set_collect_stats(bool enabled) override { collect_stats_ = enabled; }
+  const Stats& stats() const override { return stats_; }
+  std::vector<PassTime> pass_times() const override;
+  std::vector<std::string> pass_names() const override;
+  uint32_t validation_message_count() const override { return gpu_->validation_message_count(); }
+
+  // Engine adapter hooks.
+  engine::gpu::Context& gpu() { return *gpu_; }
+  // Pass timings go to this profiler instead of the context's own (the renderer's, so its panel and
+  // benchmark see the module's passes among its own). The caller collects it.
+  void use_profiler(engine::gpu::GpuProfiler* profiler) { external_profiler_ = profiler; }
+  // CPU copies of the instances' meshes, parallel to FrameDesc::instances, for the next record().
+  void set_cpu_meshes(std::vector<const engine::MeshData*> meshes) { cpu_meshes_ = std::move(meshes); }
+  CsmSnapshot read_csm() { return izb_ ? izb_->read_csm() : CsmSnapshot{}; }
+  engine::gpu::Image& shadow_term() { return shadow_term_; }
+
+ private:
+  struct Slot {
+    std::optional<uint64_t> frame;  // recorded and not yet completed
+    std::unique_ptr<engine::gpu::GpuProfiler> profiler;
+    Technique technique = Technique::Off;
+    bool csm = false;
+  };
+
+  void validate(const FrameDesc& frame) const;
+  void ensure_targets(VkExtent2D extent, uint64_t frame);
+  VkPipelineStageFlags2 extra_image_stages() const;
+  void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
+  void record_technique(Frame& frame);
+  void record_output(VkCommandBuffer cmd, const FrameDesc& frame);
+  void complete_slot(Slot& slot);
+  void add_memory(Stats& s, Technique technique, bool csm) const;
+  IzbPass& izb();
+  CascadesPass& cascades();
+
+  std::unique_ptr<engine::gpu::Context> gpu_;
+  uint32_t frames_in_flight_ = 2;
+  Settings settings_;
+  Stats stats_;
+  bool collect_stats_ = true;
+  std::vector<Slot> slots_;
+  engine::gpu::GpuProfiler* external_profiler_ = nullptr;
+  std::vector<PassTime> last_pass_times_;
+  std::vector<const engine::MeshData*> cpu_meshes_;
+
+  RetireQueue retire_;
+  GeometryStore geometry_;
+  View view_;
+  std::vector<DrawItem> draws_;
+  ShadingInputs inputs_;
+  engine::gpu::Image shadow_term_;
+  engine::gpu::Image overlay_;
+  VkExtent2D extent_{};
+  engine::gpu::Buffer input_params_;  // HostInputs, written in the command buffer each frame
+  engine::gpu::Sampler nearest_;
+  engine::gpu::Pipeline inputs_pipeline_;
+  engine::gpu::Pipeline output_pipelines_[3];  // R8, R16F, R32F
+  engine::gpu::Image dummy_input_;              // bound where an optional input is absent
+  bool targets_fresh_ = false;                  // just created: UNDEFINED until the first barrier
+
+  std::unique_ptr<ShadowMapPass> shadow_map_;
+  std::unique_ptr<IzbPass> izb_;
+  std::unique_ptr<CascadesPass> cascades_;
+  std::unique_ptr<RayTracedPass> ray_traced_;
+};
+
+}  // namespace shadows::detail

@@ -1,0 +1,95 @@
+#pragma once
+// What every pass records from: the module's own copy of the frame's inputs, made from the host's
+// images and instances by the context (context.cpp). No pass sees a host resource.
+#include <string>
+#include <vector>
+
+#include "engine/core/components.hpp"
+#include "engine/gpu/pipeline.hpp"
+#include "engine/gpu/profiler.hpp"
+#include "engine/gpu/resources.hpp"
+
+namespace shadows::detail {
+
+struct View {
+  glm::mat4 view{1.0f};
+  glm::mat4 projection{1.0f};  // reversed Z (the module's convention, whatever the host uses)
+  glm::mat4 view_projection{1.0f};
+  glm::mat4 inverse_view_projection{1.0f};  // NDC (y down, reversed depth) -> world
+  glm::vec3 camera_position{0.0f};
+  glm::vec3 light_direction{0.0f, -1.0f, 0.0f};  // travel direction, unit
+  float near_plane = 0.05f;
+  float far_plane = 200.0f;
+  glm::vec2 tan_half_fov{1.0f};  // x, y: tangent of the half field of view (from the projection)
+  VkExtent2D extent{};
+  uint64_t frame_index = 0;
+};
+
+// Per-pixel inputs in the module's layout, written from the host's images each frame.
+struct ShadingInputs {
+  engine::gpu::Image world_position;    // RGBA32F: shading point; w = 1 covered, 0 background
+  engine::gpu::Image geometric_normal;  // RGBA16F: unit normal facing the camera; w = faces the light
+  engine::gpu::Image albedo;            // RGBA8: a = receives shadows (rgb unused)
+};
+
+// One caster mesh in the module's vertex and index buffers.
+struct MeshRange {
+  uint32_t first_index = 0;
+  uint32_t index_count = 0;
+  int32_t vertex_offset = 0;
+  uint32_t vertex_count = 0;
+};
+
+// Every registered mesh in one vertex buffer (engine::Vertex layout: position, normal, uv) and one
+// 32-bit index buffer, plus the alpha textures in the material-texture word layout (shared/material.h).
+class Geometry {
+ public:
+  const engine::gpu::Buffer& vertices() const { return vertices_; }
+  const engine::gpu::Buffer& indices() const { return indices_; }
+  const engine::gpu::Buffer& textures() const { return textures_; }
+  const MeshRange& mesh(uint32_t slot) const { return meshes_.at(slot); }
+  size_t mesh_count() const { return meshes_.size(); }
+
+ private:
+  friend class GeometryStore;
+  engine::gpu::Buffer vertices_;
+  engine::gpu::Buffer indices_;
+  engine::gpu::Buffer textures_;
+  std::vector<MeshRange> meshes_;
+};
+
+// One caster instance this frame.
+struct DrawItem {
+  uint64_t id = 0;  // the host's Instance::id
+  std::string name;
+  glm::mat4 world{1.0f};
+  uint32_t mesh = 0;                          // Geometry slot
+  uint32_t alpha_threshold = 0;               // engine::alpha_threshold (0: not alpha-tested)
+  uint32_t base_color_texture = 0xffffffffu;  // texture index in Geometry::textures(), or none
+  bool alpha_tested() const { return alpha_threshold != 0; }
+  engine::ShadowCaster shadow;
+  engine::Aabb bounds;  // world space (invalid: unbounded)
+  const engine::MeshData* cpu_mesh = nullptr;  // CPU copy where the client has one (engine adapter)
+};
+
+// The last conservative shadow map, for tests and tools.
+struct CsmSnapshot {
+  uint32_t resolution = 0;
+  std::vector<float> depth;  // row-major, resolution^2, 1 = nothing stored
+  glm::mat4 light_view_projection{1.0f};
+};
+
+struct Frame {
+  engine::gpu::Context& ctx;
+  VkCommandBuffer cmd;
+  engine::gpu::GpuProfiler& profiler;
+  const View& view;
+  ShadingInputs& gbuffer;
+  engine::gpu::Image& shadow_term;  // R32F storage, GENERAL, 1 (lit) where no technique writes
+  engine::gpu::Image& overlay;      // RGBA8 storage, GENERAL, 0 where no overlay
+  Geometry& geometry;
+  const std::vector<DrawItem>& draws;
+  uint32_t slot = 0;  // frame-in-flight slot of this frame
+};
+
+}  // namespace shadows::detail

@@ -1,0 +1,274 @@
+#include "geometry_store.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+#include <shared/host.h>
+#include <shared/material.h>
+
+#include "input_checks.hpp"
+
+namespace shadows::detail {
+
+using engine::gpu::Buffer;
+using engine::gpu::DescriptorWriter;
+using engine::gpu::memory_barrier;
+
+namespace {
+
+// Header words reserved for textures (shared/material.h: count, then 4 words each); texels follow.
+constexpr uint32_t kMaxTextures = 1024;
+constexpr uint32_t kTexelBase = 1 + gpu_shared::kTextureHeaderWords * kMaxTextures;
+
+// Every stage that reads the module's geometry: vertex fetch and shader storage reads of the raster
+// and compute passes, ray tracing and acceleration-structure builds.
+constexpr VkPipelineStageFlags2 kGeometryReaders =
+    VK_PIPELINE_STAGE_2_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
+    VK_PIPELINE_STAGE_2_GEOMETRY_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT |
+    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+constexpr VkAccessFlags2 kGeometryReads = VK_ACCESS_2_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_2_INDEX_READ_BIT |
+                                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
+
+uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
+
+}  // namespace
+
+uint32_t alpha_threshold(float cutoff, float scale) {
+  for (uint32_t byte = 0; byte < 256; ++byte)
+    if (scale * float(byte) / 255.0f >= cutoff) return byte;
+  return 256;
+}
+
+void RetireQueue::release_through(uint64_t completed_frame) {
+  std::vector<Item> kept;
+  for (auto& item : items_)
+    if (item.frame > completed_frame) kept.push_back(std::move(item));
+  items_ = std::move(kept);
+}
+
+void GeometryStore::init(engine::gpu::Context& ctx, bool ray_tracing) {
+  ctx_ = &ctx;
+  geometry_usage_ = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                    VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  // Stages that exist only with ray tracing enabled (naming them otherwise is invalid).
+  extra_reader_stages_ = ray_tracing ? VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR |
+                                           VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR
+                                     : 0;
+  if (ray_tracing)
+    geometry_usage_ |= VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
+                       VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
+  using engine::gpu::Binding;
+  import_ = engine::gpu::PipelineFactory(ctx).compute(
+      {.shader = "mesh_import.comp",
+       .bindings = {{gpu_shared::MESH_IMPORT_BINDING_SOURCE, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                    {gpu_shared::MESH_IMPORT_BINDING_UVS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                    {gpu_shared::MESH_IMPORT_BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                    {gpu_shared::MESH_IMPORT_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+       .push_constant_size = sizeof(gpu_shared::MeshImportPush)});
+  texture_import_ = engine::gpu::PipelineFactory(ctx).compute(
+      {.shader = "texture_import.comp",
+       .bindings = {{gpu_shared::TEXTURE_IMPORT_BINDING_SOURCE, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                    {gpu_shared::TEXTURE_IMPORT_BINDING_WORDS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+       .push_constant_size = sizeof(gpu_shared::TextureImportPush)});
+  nearest_ = engine::gpu::Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "shadows nearest");
+  // Placeholders so every binding is valid before the first mesh arrives.
+  geometry_.vertices_ = Buffer(ctx, 32 * 3, geometry_usage_ | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, false, "shadows vertices");
+  geometry_.indices_ = Buffer(ctx, 4 * 3, geometry_usage_ | VK_BUFFER_USAGE_INDEX_BUFFER_BIT, false, "shadows indices");
+  geometry_.textures_ = Buffer(ctx, kTexelBase * 4, geometry_usage_, false, "shadows alpha textures");
+}
+
+MeshId GeometryStore::add(const MeshDesc& m) {
+  const std::string what = "MeshDesc '" + m.name + "'";
+  if (m.index_count == 0 || m.index_count % 3 != 0)
+    throw Error("shadows: " + what + ".index_count is " + std::to_string(m.index_count) +
+                " (a mesh needs a positive multiple of 3)");
+  if (m.vertex_count == 0) throw Error("shadows: " + what + ".vertex_count is 0");
+  if (m.position_format != VK_FORMAT_R32G32B32_SFLOAT && m.position_format != VK_FORMAT_R32G32B32A32_SFLOAT)
+    throw Error("shadows: " + what + ".position_format must be VK_FORMAT_R32G32B32_SFLOAT or R32G32B32A32_SFLOAT");
+  const uint32_t position_bytes = m.position_format == VK_FORMAT_R32G32B32_SFLOAT ? 12 : 16;
+  if (m.position_stride < position_bytes || m.position_stride % 4)
+    throw Error("shadows: " + what + ".position_stride " + std::to_string(m.position_stride) +
+                " must be a multiple of 4 of at least " + std::to_string(position_bytes));
+  check_buffer(m.positions, what + ".positions",
+               VkDeviceSize(m.vertex_count - 1) * m.position_stride + position_bytes);
+  if (m.index_type != VK_INDEX_TYPE_UINT16 && m.index_type != VK_INDEX_TYPE_UINT32)
+    throw Error("shadows: " + what + ".index_type must be VK_INDEX_TYPE_UINT16 or VK_INDEX_TYPE_UINT32");
+  const uint32_t index_bytes = m.index_type == VK_INDEX_TYPE_UINT16 ? 2 : 4;
+  check_buffer(m.indices, what + ".indices", VkDeviceSize(m.index_count) * index_bytes, index_bytes == 2);
+  MeshInfo info;
+  info.name = m.name;
+  if (m.alpha_texture.present()) {
+    if (m.uvs.buffer == VK_NULL_HANDLE) throw Error("shadows: " + what + ".uvs is required with an alpha_texture");
+    if (m.uv_stride < 8 || m.uv_stride % 4)
+      throw Error("shadows: " + what + ".uv_stride must be a multiple of 4 of at least 8");
+    check_buffer(m.uvs, what + ".uvs", VkDeviceSize(m.vertex_count - 1) * m.uv_stride + 8);
+    check_image(m.alpha_texture, what + ".alpha_texture",
+                {VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_R8G8B8A8_SRGB, VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8_UNORM},
+                VK_IMAGE_USAGE_SAMPLED_BIT, kReadLayouts, std::nullopt);
+    if (texture_count_ >= kMaxTextures)
+      throw Error("shadows: " + what + ".alpha_texture: more than " + std::to_string(kMaxTextures) + " alpha textures");
+    info.alpha_threshold = alpha_threshold(m.alpha_cutoff, m.alpha_scale);
+    info.texture = texture_count_++;
+  }
+  if (!(m.bounds_min[0] <= m.bounds_max[0] && m.bounds_min[1] <= m.bounds_max[1] && m.bounds_min[2] <= m.bounds_max[2]))
+    throw Error("shadows: " + what + ".bounds_min/bounds_max are not a box (min <= max on every axis)");
+  info.bounds.extend(glm::vec3(m.bounds_min[0], m.bounds_min[1], m.bounds_min[2]));
+  info.bounds.extend(glm::vec3(m.bounds_max[0], m.bounds_max[1], m.bounds_max[2]));
+  info.live = true;
+  const MeshId id = MeshId(meshes_.size());
+  MeshRange range;
+  range.first_index = index_count_;
+  range.index_count = m.index_count;
+  range.vertex_offset = int32_t(vertex_count_);
+  range.vertex_count = m.vertex_count;
+  index_count_ += m.index_count;
+  vertex_count_ += m.vertex_count;
+  Pending pending{id, m, 0};
+  if (m.alpha_texture.present()) {
+    pending.texture_first_word = kTexelBase + texel_words_;
+    texel_words_ += m.alpha_texture.extent.width * m.alpha_texture.extent.height;
+  }
+  meshes_.push_back(std::move(info));
+  geometry_.meshes_.push_back(range);
+  pending_.push_back(std::move(pending));
+  return id;
+}
+
+void GeometryStore::remove(MeshId id) {
+  if (id >= meshes_.size() || !meshes_[id].live)
+    throw Error("shadows: unregister_mesh: mesh id " + std::to_string(id) + " is not registered");
+  meshes_[id].live = false;
+  // Not yet imported: nothing will read the host's buffers.
+  std::erase_if(pending_, [&](const Pending& p) { return p.id == id; });
+}
+
+const MeshInfo* GeometryStore::find(MeshId id) const {
+  return id < meshes_.size() && meshes_[id].live ? &meshes_[id] : nullptr;
+}
+
+void GeometryStore::grow(Buffer& buffer, VkDeviceSize bytes, VkDeviceSize used, VkBufferUsageFlags usage,
+                         const char* name, VkCommandBuffer cmd, uint64_t frame, RetireQueue& retire) {
+  if (buffer.valid() && buffer.size() >= bytes) return;
+  Buffer grown(*ctx_, std::max(bytes, buffer.size() * 2), usage, false, name);
+  if (used > 0) {
+    // Earlier frames' readers of the old buffer are ordered before the copy by the barrier that
+    // opened this frame's imports; the copy's write is made visible with the imports' own.
+    const VkBufferCopy copy{0, 0, used};
+    vkCmdCopyBuffer(cmd, buffer.handle(), grown.handle(), 1, &copy);
+  }
+  retire.retire(frame, std::move(buffer));
+  buffer = std::move(grown);
+}
+
+void GeometryStore::record_imports(VkCommandBuffer cmd, uint64_t frame, RetireQueue& retire) {
+  if (pending_.empty()) return;
+  // Previous frames read these buffers (and may still run): their reads finish before this frame's
+  // copies and imports write.
+  memory_barrier(cmd, kGeometryReaders | extra_reader_stages_, 0,
+                 VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT, 0);
+  uint32_t first_pending_vertex = UINT32_MAX, first_pending_index = UINT32_MAX;
+  for (const auto& p : pending_) {
+    first_pending_vertex = std::min(first_pending_vertex, uint32_t(geometry_.meshes_[p.id].vertex_offset));
+    first_pending_index = std::min(first_pending_index, geometry_.meshes_[p.id].first_index);
+  }
+  grow(geometry_.vertices_, VkDeviceSize(vertex_count_) * 32, VkDeviceSize(first_pending_vertex) * 32,
+       geometry_usage_ | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "shadows vertices", cmd, frame, retire);
+  grow(geometry_.indices_, VkDeviceSize(index_count_) * 4, VkDeviceSize(first_pending_index) * 4,
+       geometry_usage_ | VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "shadows indices", cmd, frame, retire);
+  const VkDeviceSize texture_bytes = VkDeviceSize(kTexelBase + texel_words_) * 4;
+  const VkDeviceSize textures_used = geometry_.textures_.size();
+  grow(geometry_.textures_, texture_bytes, std::min<VkDeviceSize>(textures_used, texture_bytes), geometry_usage_,
+       "shadows alpha textures", cmd, frame, retire);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
+
+  const VkDeviceSize alignment = ctx_->properties().limits.minStorageBufferOffsetAlignment;
+  // A host region bound at its offset rounded down to the alignment; the shader starts `word` in.
+  auto bind_region = [&](const BufferInput& in, uint32_t& word) {
+    const VkDeviceSize base = in.offset / alignment * alignment;
+    word = uint32_t((in.offset - base) / 4);
+    return std::pair<VkDeviceSize, VkDeviceSize>(base, in.offset - base + in.size);
+  };
+  import_.bind(cmd);
+  for (const auto& p : pending_) {
+    const MeshRange& range = geometry_.meshes_[p.id];
+    const MeshDesc& m = p.desc;
+    gpu_shared::MeshImportPush push{};
+    uint32_t position_word = 0, uv_word = 0;
+    const auto [pos_base, pos_range] = bind_region(m.positions, position_word);
+    DescriptorWriter writer;
+    writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.positions.buffer, pos_base, pos_range)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle());
+    push.uv_word = gpu_shared::kNoUv;
+    if (m.uvs.buffer != VK_NULL_HANDLE) {
+      const auto [uv_base, uv_range] = bind_region(m.uvs, uv_word);
+      writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.uvs.buffer, uv_base, uv_range);
+      push.uv_word = uv_word;
+      push.uv_stride_words = m.uv_stride / 4;
+    } else {
+      writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.positions.buffer, pos_base, pos_range);
+    }
+    writer.push(*ctx_, cmd, import_);
+    push.mode = gpu_shared::MESH_IMPORT_VERTICES;
+    push.src_word = position_word;
+    push.stride_words = m.position_stride / 4;
+    push.count = m.vertex_count;
+    push.dst_first = uint32_t(range.vertex_offset);
+    import_.push_constants(cmd, push);
+    vkCmdDispatch(cmd, groups(m.vertex_count, 64), 1, 1);
+
+    // Indices: 16-bit ones may start at an odd half-word; the shader takes the half from stride_words.
+    const VkDeviceSize index_base = m.indices.offset / alignment * alignment;
+    const VkDeviceSize index_delta = m.indices.offset - index_base;
+    DescriptorWriter()
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.indices.buffer, index_base,
+                        (index_delta + m.indices.size + 3) / 4 * 4)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.indices.buffer, index_base,
+                        (index_delta + m.indices.size + 3) / 4 * 4)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
+        .push(*ctx_, cmd, import_);
+    gpu_shared::MeshImportPush ipush{};
+    ipush.src_word = uint32_t(index_delta / 4);
+    ipush.count = m.index_count;
+    ipush.dst_first = range.first_index;
+    ipush.uv_word = gpu_shared::kNoUv;
+    if (m.index_type == VK_INDEX_TYPE_UINT16) {
+      ipush.mode = gpu_shared::MESH_IMPORT_INDICES_16;
+      ipush.stride_words = uint32_t((index_delta / 2) & 1u);
+    } else {
+      ipush.mode = gpu_shared::MESH_IMPORT_INDICES_32;
+    }
+    import_.push_constants(cmd, ipush);
+    vkCmdDispatch(cmd, groups(m.index_count, 64), 1, 1);
+  }
+  // Alpha textures: texels by compute, headers and the count by updates.
+  texture_import_.bind(cmd);
+  for (const auto& p : pending_) {
+    const MeshDesc& m = p.desc;
+    if (!m.alpha_texture.present()) continue;
+    const MeshInfo& info = meshes_[p.id];
+    DescriptorWriter()
+        .sampled_image(gpu_shared::TEXTURE_IMPORT_BINDING_SOURCE, m.alpha_texture.view, nearest_.handle(),
+                       m.alpha_texture.layout)
+        .storage_buffer(gpu_shared::TEXTURE_IMPORT_BINDING_WORDS, geometry_.textures_.handle())
+        .push(*ctx_, cmd, texture_import_);
+    gpu_shared::TextureImportPush push{p.texture_first_word, m.alpha_texture.extent.width,
+                                       m.alpha_texture.extent.height, m.alpha_texture.format == VK_FORMAT_R8_UNORM};
+    texture_import_.push_constants(cmd, push);
+    vkCmdDispatch(cmd, groups(push.width, 8), groups(push.height, 8), 1);
+    const uint32_t header[4] = {p.texture_first_word, push.width, push.height,
+                                uint32_t(m.wrap_u) | (uint32_t(m.wrap_v) << 8)};
+    vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), VkDeviceSize(1 + 4 * info.texture) * 4, sizeof(header), header);
+  }
+  vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), 0, 4, &texture_count_);
+  // The imports' writes, visible to every reader of the geometry later in this frame.
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                 kGeometryReaders | extra_reader_stages_, kGeometryReads);
+  pending_.clear();
+}
+
+}  // namespace shadows::detail

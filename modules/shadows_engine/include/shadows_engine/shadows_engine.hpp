@@ -1,0 +1,53 @@
+#pragma once
+// The shadow module inside this repository's engine: installed into an engine::Renderer as a
+// RenderFeature that hands the renderer's G-buffer, meshes and draws to shadows::Context (the host
+// API of shadows/context.hpp, which other engines use directly).
+//
+//   auto shadows = shadows::install(renderer, shadows::Settings{});
+//   shadows->settings().technique = shadows::Technique::Izb;
+//   ... after a frame: shadows->stats().nodes_inserted
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/render/renderer.hpp"
+#include "shadows/shadows.hpp"
+
+namespace shadows {
+
+class ShadowModule : public engine::RenderFeature {
+ public:
+  virtual Settings& settings() = 0;
+  // Statistics of the last completed frame (the renderer waits for each frame, so: the last frame).
+  virtual const Stats& stats() const = 0;
+  // Statistics are read back every frame only while enabled (costs a small readback).
+  virtual void set_collect_stats(bool enabled) = 0;
+  // Names of the GPU passes the current settings record, in order (profiler region names).
+  virtual std::vector<std::string> pass_names() const = 0;
+  // Whether a coverage test / technique can run on this device, and why not.
+  virtual bool supported(CsmTest test, std::string* why = nullptr) const = 0;
+  virtual bool supported(Technique technique, std::string* why = nullptr) const = 0;
+  // Per-pixel visibility of the last frame (1 lit .. 0 shadowed, -1 background), for tests/tools.
+  virtual std::vector<float> read_visibility() = 0;
+  // The last frame's conservative shadow map (row-major, resolution^2 depths, 1 = nothing stored) and
+  // the GPU-fitted world -> light clip transform it was rendered with. Empty when the CSM did not run.
+  struct CsmSnapshot {
+    uint32_t resolution = 0;
+    std::vector<float> depth;
+    glm::mat4 light_view_projection{1.0f};
+  };
+  virtual CsmSnapshot read_csm() = 0;
+  // The host-API context the adapter drives.
+  virtual Context& context() = 0;
+};
+
+// Creates the module on the renderer's device, adds it to the renderer, and returns it.
+std::shared_ptr<ShadowModule> install(engine::Renderer& renderer, const Settings& settings = {});
+
+// The entity a CSM decision is about (the adapter's Instance::id is index << 32 | generation).
+inline engine::Entity entity_of(const CsmDecision& decision) {
+  return engine::Entity{uint32_t(decision.instance_id >> 32), uint32_t(decision.instance_id & 0xffffffffu)};
+}
+inline uint64_t instance_id_of(engine::Entity entity) { return (uint64_t(entity.index) << 32) | entity.generation; }
+
+}  // namespace shadows

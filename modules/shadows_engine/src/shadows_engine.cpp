@@ -1,0 +1,254 @@
+#include "shadows_engine/shadows_engine.hpp"
+
+#include <cstring>
+#include <map>
+#include <stdexcept>
+#include <tuple>
+
+#include <glm/gtc/type_ptr.hpp>
+#include <shared/material.h>
+
+#include "context_impl.hpp"
+#include "geometry_store.hpp"
+
+namespace shadows {
+
+namespace {
+
+// The usage flags Renderer::create_targets gives its images (gpu::Image does not record them).
+constexpr VkImageUsageFlags kColorTargetUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+                                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+constexpr VkImageUsageFlags kStorageTargetUsage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                                                  VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+constexpr VkImageUsageFlags kDepthTargetUsage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT |
+                                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+// SceneGeometry's buffers are storage buffers (and more); the module only needs that.
+constexpr VkBufferUsageFlags kGeometryUsage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+
+ImageInput image_input(engine::gpu::Image& image, VkImageUsageFlags usage) {
+  ImageInput in;
+  in.image = image.handle();
+  in.view = image.view();
+  in.format = image.format();
+  in.extent = image.extent();
+  in.usage = usage;
+  in.layout = VK_IMAGE_LAYOUT_GENERAL;  // the renderer keeps every target in GENERAL
+  return in;
+}
+
+class EngineShadowModule final : public ShadowModule {
+ public:
+  EngineShadowModule(engine::Renderer& renderer, const Settings& settings) : renderer_(renderer) {
+    engine::gpu::Context& ctx = renderer.context();
+    ContextDesc desc;
+    desc.instance = ctx.instance();
+    desc.physical_device = ctx.physical_device();
+    desc.device = ctx.device();
+    desc.queue_family = ctx.queue_family();
+    desc.queue = ctx.queue();
+    desc.get_instance_proc_addr = vkGetInstanceProcAddr;
+    desc.get_device_proc_addr = vkGetDeviceProcAddr;
+    desc.enabled_instance_extensions = ctx.enabled_instance_extensions();
+    desc.enabled_device_extensions = ctx.enabled_device_extensions();
+    desc.enabled_features = ctx.enabled_features();
+    desc.masked_features = ctx.masked_features();
+    // The renderer waits for each frame and says so through after_frame().
+    desc.frames_in_flight = 1;
+    desc.settings = settings;
+    context_ = std::make_unique<detail::ContextImpl>(desc);
+    context_->use_profiler(&renderer.profiler());
+  }
+
+  std::string name() const override { return "shadows"; }
+  Settings& settings() override { return context_->settings(); }
+  const Stats& stats() const override { return context_->stats(); }
+  void set_collect_stats(bool enabled) override { context_->set_collect_stats(enabled); }
+  std::vector<std::string> pass_names() const override { return context_->pass_names(); }
+  Context& context() override { return *context_; }
+
+  bool supported(CsmTest test, std::string* why) const override {
+    const Capability c = context_->capabilities().of(test);
+    if (why) *why = c.reason;
+    return c.available;
+  }
+  bool supported(Technique technique, std::string* why) const override {
+    const Capability c = context_->capabilities().of(technique);
+    if (why) *why = c.reason;
+    return c.available;
+  }
+
+  void on_scene(engine::gpu::Context&, engine::Scene&, engine::SceneGeometry& geometry) override {
+    // A new scene: its meshes and textures are registered as they are first drawn.
+    for (const auto& [key, id] : meshes_) context_->unregister_mesh(id);
+    meshes_.clear();
+    textures_.clear();
+    geometry_ = &geometry;
+  }
+
+  void record(engine::FrameContext& frame) override {
+    if (geometry_ != &frame.geometry) on_scene(frame.ctx, *renderer_.scene(), frame.geometry);
+    instances_.clear();
+    std::vector<const engine::MeshData*> cpu_meshes;
+    for (const auto& d : frame.draws) {
+      const engine::Mesh* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
+      Instance in;
+      in.mesh = mesh_for(frame, d, mesh);
+      std::memcpy(in.world, glm::value_ptr(d.world), sizeof(in.world));
+      in.casts_shadow = d.shadow.casts_shadow;
+      in.csm = d.shadow.csm == engine::CsmChoice::On ? CsmMode::On
+               : d.shadow.csm == engine::CsmChoice::Off ? CsmMode::Off
+                                                        : CsmMode::Auto;
+      in.id = instance_id_of(d.entity);
+      const auto* name = frame.registry.try_get<engine::Name>(d.entity);
+      in.name = name ? name->value.c_str() : "";
+      instances_.push_back(in);
+      cpu_meshes.push_back(mesh ? mesh->data.get() : nullptr);
+    }
+    context_->set_cpu_meshes(std::move(cpu_meshes));
+
+    engine::GBuffer& g = frame.gbuffer;
+    FrameDesc f;
+    f.frame_index = frame_index_++;
+    f.depth = image_input(g.depth, kDepthTargetUsage);
+    f.normals.image = image_input(g.normal, kColorTargetUsage);
+    f.normals.facing_camera = true;
+    f.geometric_normals.image = image_input(g.geometric_normal, kColorTargetUsage);
+    f.geometric_normals.facing_camera = true;
+    f.facing_in_alpha = true;  // gbuffer.frag's light-facing decision
+    if (renderer_.smooth_terminator()) f.terminator_offset = image_input(g.terminator_offset, kColorTargetUsage);
+    f.receiver_mask = image_input(g.albedo, kColorTargetUsage);
+    f.receiver_channel = 3;
+    std::memcpy(f.camera.view, glm::value_ptr(frame.view.view), sizeof(f.camera.view));
+    std::memcpy(f.camera.projection, glm::value_ptr(frame.view.projection), sizeof(f.camera.projection));
+    f.camera.reversed_z = true;
+    f.camera.near_plane = frame.view.near_plane;
+    f.camera.far_plane = frame.view.far_plane;
+    Light sun;
+    std::memcpy(sun.direction, glm::value_ptr(frame.view.light_direction), sizeof(sun.direction));
+    f.lights = &sun;
+    f.light_count = 1;
+    f.instances = instances_.data();
+    f.instance_count = uint32_t(instances_.size());
+    f.output = image_input(frame.shadow_term, kStorageTargetUsage);
+    f.overlay = image_input(frame.overlay, kStorageTargetUsage);
+    context_->record(frame.cmd, f);
+    last_frame_ = f.frame_index;
+  }
+
+  void after_frame(engine::gpu::Context&) override {
+    if (last_frame_) context_->frame_completed(*last_frame_);
+  }
+
+  std::vector<float> read_visibility() override {
+    auto term = renderer_.read_shadow_term();
+    const auto positions = renderer_.read_world_positions();
+    for (size_t i = 0; i < term.size(); ++i)
+      if (positions[i].w == 0.0f) term[i] = -1.0f;
+    return term;
+  }
+
+  CsmSnapshot read_csm() override {
+    detail::CsmSnapshot s = context_->read_csm();
+    return {s.resolution, std::move(s.depth), s.light_view_projection};
+  }
+
+ private:
+  // One host mesh per (mesh, texture, alpha threshold): the module keeps alpha tests per mesh, the
+  // engine per draw.
+  MeshId mesh_for(engine::FrameContext& frame, const engine::DrawItem& d, const engine::Mesh* mesh) {
+    const auto key = std::make_tuple(d.mesh, d.base_color_texture, d.alpha_threshold);
+    if (auto it = meshes_.find(key); it != meshes_.end()) return it->second;
+    const engine::GpuMeshRange& range = frame.geometry.mesh(d.mesh);
+    MeshDesc m;
+    m.name = mesh && mesh->data ? mesh->data->name : "mesh " + std::to_string(d.mesh);
+    const VkDeviceSize first_vertex = VkDeviceSize(range.vertex_offset) * sizeof(engine::Vertex);
+    m.positions = {frame.geometry.vertices().handle(), first_vertex, VkDeviceSize(range.vertex_count) * sizeof(engine::Vertex),
+                   kGeometryUsage};
+    m.position_format = VK_FORMAT_R32G32B32_SFLOAT;
+    m.position_stride = sizeof(engine::Vertex);
+    m.vertex_count = range.vertex_count;
+    m.indices = {frame.geometry.indices().handle(), VkDeviceSize(range.first_index) * 4,
+                 VkDeviceSize(range.index_count) * 4, kGeometryUsage};
+    m.index_type = VK_INDEX_TYPE_UINT32;
+    m.index_count = range.index_count;
+    engine::Aabb bounds;
+    if (mesh && mesh->data)
+      for (const auto& v : mesh->data->vertices) bounds.extend(v.position);
+    if (!bounds.valid()) bounds.extend(glm::vec3(0.0f));
+    std::memcpy(m.bounds_min, &bounds.min, sizeof(m.bounds_min));
+    std::memcpy(m.bounds_max, &bounds.max, sizeof(m.bounds_max));
+    if (d.alpha_tested() && d.base_color_texture != gpu_shared::kNoTexture) {
+      m.uvs = {frame.geometry.vertices().handle(), first_vertex + offsetof(engine::Vertex, uv),
+               VkDeviceSize(range.vertex_count) * sizeof(engine::Vertex) - offsetof(engine::Vertex, uv), kGeometryUsage};
+      m.uv_stride = sizeof(engine::Vertex);
+      const TextureImage& tex = texture(frame, d.base_color_texture);
+      m.alpha_texture = tex.input;
+      m.wrap_u = tex.wrap_u;
+      m.wrap_v = tex.wrap_v;
+      m.alpha_cutoff = d.alpha_mode == engine::AlphaMode::Blend ? 0.5f : d.alpha_cutoff;
+      m.alpha_scale = d.base_color.a;
+      if (detail::alpha_threshold(m.alpha_cutoff, m.alpha_scale) != d.alpha_threshold)
+        throw std::logic_error("shadows: the module's alpha threshold differs from the engine's for '" + m.name + "'");
+    }
+    const MeshId id = context_->register_mesh(m);
+    meshes_.emplace(key, id);
+    return id;
+  }
+
+  struct TextureImage {
+    engine::gpu::Image image;
+    ImageInput input;
+    AlphaWrap wrap_u = AlphaWrap::Repeat, wrap_v = AlphaWrap::Repeat;
+  };
+
+  // An engine texture (one entry of the packed texture words) as a sampled image, as a host has them.
+  const TextureImage& texture(engine::FrameContext& frame, uint32_t index) {
+    if (auto it = textures_.find(index); it != textures_.end()) return it->second;
+    const auto& words = frame.geometry.texture_table().words();
+    const uint32_t* header = &words[1 + gpu_shared::kTextureHeaderWords * index];
+    const VkExtent2D extent{header[1], header[2]};
+    engine::gpu::Context& ctx = renderer_.context();
+    TextureImage t;
+    t.image = engine::gpu::Image(ctx, extent, VK_FORMAT_R8G8B8A8_UNORM,
+                                 VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, "shadows adapter texture");
+    const VkDeviceSize bytes = VkDeviceSize(extent.width) * extent.height * 4;
+    engine::gpu::Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "shadows adapter texture staging");
+    staging.write(&words[header[0]], bytes);
+    // Set-up work before the frame is recorded, as any host uploads its textures.
+    ctx.immediate_submit([&](VkCommandBuffer cmd) {
+      t.image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                         VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+      VkBufferImageCopy copy{};
+      copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+      copy.imageExtent = {extent.width, extent.height, 1};
+      vkCmdCopyBufferToImage(cmd, staging.handle(), t.image.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
+      t.image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                         VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                         VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    });
+    t.input = image_input(t.image, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT);
+    t.input.layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    t.wrap_u = AlphaWrap(header[3] & 0xffu);
+    t.wrap_v = AlphaWrap((header[3] >> 8) & 0xffu);
+    return textures_.emplace(index, std::move(t)).first->second;
+  }
+
+  engine::Renderer& renderer_;
+  std::unique_ptr<detail::ContextImpl> context_;
+  const engine::SceneGeometry* geometry_ = nullptr;
+  std::map<std::tuple<uint32_t, uint32_t, uint32_t>, MeshId> meshes_;
+  std::map<uint32_t, TextureImage> textures_;
+  std::vector<Instance> instances_;
+  uint64_t frame_index_ = 0;
+  std::optional<uint64_t> last_frame_;
+};
+
+}  // namespace
+
+std::shared_ptr<ShadowModule> install(engine::Renderer& renderer, const Settings& settings) {
+  auto module = std::make_shared<EngineShadowModule>(renderer, settings);
+  renderer.add_feature(module);
+  return module;
+}
+
+}  // namespace shadows

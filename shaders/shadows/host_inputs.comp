@@ -1,0 +1,71 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "host.h"
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = HOST_INPUTS_BINDING_PARAMS) uniform Params { HostInputs params; };
+layout(set = 0, binding = HOST_INPUTS_BINDING_DEPTH) uniform sampler2D depth_image;
+layout(set = 0, binding = HOST_INPUTS_BINDING_NORMAL) uniform sampler2D normal_image;
+layout(set = 0, binding = HOST_INPUTS_BINDING_GEOMETRIC) uniform sampler2D geometric_image;
+layout(set = 0, binding = HOST_INPUTS_BINDING_OFFSET) uniform sampler2D offset_image;
+layout(set = 0, binding = HOST_INPUTS_BINDING_RECEIVER) uniform sampler2D receiver_image;
+layout(set = 0, binding = HOST_INPUTS_BINDING_WORLD_POSITION, rgba32f) writeonly uniform image2D world_position;
+layout(set = 0, binding = HOST_INPUTS_BINDING_GEOMETRIC_OUT, rgba16f) writeonly uniform image2D geometric_out;
+layout(set = 0, binding = HOST_INPUTS_BINDING_ALBEDO_OUT, rgba8) writeonly uniform image2D albedo_out;
+layout(set = 0, binding = HOST_INPUTS_BINDING_TERM_OUT, r32f) writeonly uniform image2D term_out;
+layout(set = 0, binding = HOST_INPUTS_BINDING_OVERLAY_OUT, rgba8) writeonly uniform image2D overlay_out;
+
+vec3 octahedral_decode(vec2 e) {
+  vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+  if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+  return n;
+}
+
+// A host normal texel in world space, unit length, turned toward the camera (unless the host said it
+// already is: then it is taken bit for bit, as the engine's own G-buffer normals are).
+vec3 decode_normal(vec4 texel, uint bits, float scale, float bias, vec3 position) {
+  vec4 v = texel * scale + bias;
+  vec3 n = (bits & HOST_NORMAL_OCTAHEDRAL) != 0u ? octahedral_decode(v.xy) : v.xyz;
+  if ((bits & HOST_NORMAL_AS_GIVEN) != 0u) return n;
+  if ((bits & HOST_NORMAL_VIEW_SPACE) != 0u) n = mat3(params.view_to_world) * n;
+  n = normalize(n);
+  return dot(n, params.camera_position.xyz - position) < 0.0 ? -n : n;
+}
+
+void main() {
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
+  uint flags = params.extent.z;
+  imageStore(term_out, pixel, vec4(1.0));
+  imageStore(overlay_out, pixel, vec4(0.0));
+  float host_depth = texelFetch(depth_image, pixel, 0).r;
+  bool reversed = (flags & HOST_REVERSED_Z) != 0u;
+  // The module works in reversed Z; background is the host's clear depth.
+  float depth = reversed ? host_depth : 1.0 - host_depth;
+  if (reversed ? host_depth <= 0.0 : host_depth >= 1.0) {
+    imageStore(world_position, pixel, vec4(0.0));
+    imageStore(geometric_out, pixel, vec4(0.0));
+    imageStore(albedo_out, pixel, vec4(0.0));
+    return;
+  }
+  vec2 ndc = (vec2(pixel) + 0.5) / vec2(params.extent.xy) * 2.0 - 1.0;
+  vec4 world = params.inverse_view_projection * vec4(ndc, depth, 1.0);
+  vec3 offset = (flags & HOST_HAS_OFFSET) != 0u ? texelFetch(offset_image, pixel, 0).xyz : vec3(0.0);
+  vec3 position = world.xyz / world.w + offset;
+  imageStore(world_position, pixel, vec4(position, 1.0));
+
+  vec3 shading = decode_normal(texelFetch(normal_image, pixel, 0), (flags >> HOST_NORMAL_SHIFT) & 0xfu,
+                               params.normal_scale_bias.x, params.normal_scale_bias.y, position);
+  vec3 geometric = shading;
+  float facing = dot(shading, -params.light_direction.xyz) > 0.0 ? 1.0 : 0.0;
+  if ((flags & HOST_HAS_GEOMETRIC) != 0u) {
+    vec4 texel = texelFetch(geometric_image, pixel, 0);
+    geometric = decode_normal(texel, (flags >> HOST_GEOMETRIC_SHIFT) & 0xfu, params.normal_scale_bias.z,
+                              params.normal_scale_bias.w, position);
+    if ((flags & HOST_FACING_IN_ALPHA) != 0u) facing = texel.a > 0.5 ? 1.0 : 0.0;
+  }
+  imageStore(geometric_out, pixel, vec4(geometric, facing));
+  float receives = 1.0;
+  if ((flags & HOST_HAS_RECEIVER_MASK) != 0u) receives = texelFetch(receiver_image, pixel, 0)[params.extent.w] > 0.5 ? 1.0 : 0.0;
+  imageStore(albedo_out, pixel, vec4(0.0, 0.0, 0.0, receives));
+}

@@ -1,0 +1,5 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The shadow term into an output image of this storage format.
+#define HOST_OUTPUT_FORMAT r32f
+#include "shadows/host_output.glsl"
