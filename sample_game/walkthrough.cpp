@@ -110,7 +110,7 @@ void object_table(engine::Renderer& renderer, shadows::ShadowModule& module) {
   if (!scene) return;
   std::map<uint64_t, const shadows::CsmDecision*> decisions;
   for (const auto& d : module.stats().csm_decisions)
-    decisions[(uint64_t(d.entity.index) << 32) | d.entity.generation] = &d;
+    decisions[d.instance_id] = &d;
   if (!ImGui::BeginTable("objects", 5, ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_ScrollY |
                                            ImGuiTableFlags_SizingFixedFit,
                          ImVec2(0, 260)))

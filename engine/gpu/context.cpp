@@ -438,9 +438,28 @@ Context::Context(const AdoptedDevice& host) : owns_device_(false) {
   create_command_pool();
 }
 
+void Context::defer_release(std::function<void()> destroy) const {
+  deferred_.push_back({recording_frame_, std::move(destroy)});
+}
+
+void Context::release_through(uint64_t completed_frame) const {
+  std::vector<Deferred> kept;
+  for (auto& d : deferred_) {
+    if (d.frame <= completed_frame) d.destroy();
+    else kept.push_back(std::move(d));
+  }
+  deferred_ = std::move(kept);
+}
+
+void Context::release_all_deferred() const {
+  for (auto& d : deferred_) d.destroy();
+  deferred_.clear();
+}
+
 Context::~Context() {
   if (device_) {
     vkDeviceWaitIdle(device_);
+    release_all_deferred();
     if (command_pool_) vkDestroyCommandPool(device_, command_pool_, allocator_);
     if (owns_device_) vkDestroyDevice(device_, allocator_);
   }

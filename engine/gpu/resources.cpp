@@ -61,11 +61,17 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
 
 void Buffer::reset() {
   if (!ctx_) return;
-  if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, ctx_->allocator());
-  if (memory_) {
-    ctx_->untrack_allocation(memory_);
-    ctx_->free_memory(memory_);
-  }
+  const Context* ctx = ctx_;
+  auto destroy = [ctx, buffer = buffer_, memory = memory_] {
+    if (buffer) vkDestroyBuffer(ctx->device(), buffer, ctx->allocator());
+    if (memory) {
+      ctx->untrack_allocation(memory);
+      ctx->free_memory(memory);
+    }
+  };
+  // Frames still in flight may use it (Context::defer_releases).
+  if (ctx->defers_releases() && (buffer_ || memory_)) ctx->defer_release(destroy);
+  else destroy();
   buffer_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
   mapped_ = nullptr;
@@ -194,17 +200,24 @@ Image& Image::operator=(Image&& o) noexcept {
 
 void Image::reset() {
   if (!ctx_) return;
-  VkDevice d = ctx_->device();
-  for (VkImageView v : mip_views_) vkDestroyImageView(d, v, ctx_->allocator());
-  for (VkImageView v : layer_views_) vkDestroyImageView(d, v, ctx_->allocator());
+  const Context* ctx = ctx_;
+  auto destroy = [ctx, mips = std::move(mip_views_), layers = std::move(layer_views_), view = view_, image = image_,
+                  memory = memory_] {
+    VkDevice d = ctx->device();
+    for (VkImageView v : mips) vkDestroyImageView(d, v, ctx->allocator());
+    for (VkImageView v : layers) vkDestroyImageView(d, v, ctx->allocator());
+    if (view) vkDestroyImageView(d, view, ctx->allocator());
+    if (image) vkDestroyImage(d, image, ctx->allocator());
+    if (memory) {
+      ctx->untrack_allocation(memory);
+      ctx->free_memory(memory);
+    }
+  };
+  // Frames still in flight may use it (Context::defer_releases).
+  if (ctx->defers_releases() && (image_ || memory_)) ctx->defer_release(std::move(destroy));
+  else destroy();
   mip_views_.clear();
   layer_views_.clear();
-  if (view_) vkDestroyImageView(d, view_, ctx_->allocator());
-  if (image_) vkDestroyImage(d, image_, ctx_->allocator());
-  if (memory_) {
-    ctx_->untrack_allocation(memory_);
-    ctx_->free_memory(memory_);
-  }
   view_ = VK_NULL_HANDLE;
   image_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;

@@ -7,6 +7,7 @@
 
 #include "../../modules/shadows/src/cascade_fit.hpp"
 #include "../../modules/shadows/src/cascades_pass.hpp"
+#include "../../modules/shadows/src/context_impl.hpp"
 #include "../../modules/shadows/src/light_space.hpp"
 #include "frame_capture.hpp"
 #include "gpu_fixture.hpp"
@@ -16,26 +17,39 @@ namespace {
 using shadows::CascadeSettings;
 using shadows::Masking;
 
-// Runs the pass as the renderer's only feature, writing the renderer's shadow term.
-class CascadesFeature final : public engine::RenderFeature {
+// The module with the cascades technique alone, installed in the renderer through the engine's adapter;
+// the fitted view and caster bounds of its last frame for the fit checks.
+class CascadesFeature {
  public:
-  explicit CascadesFeature(engine::gpu::Context& ctx) : pass_(ctx) {}
-  std::string name() const override { return "cascades_test"; }
-  void record(engine::FrameContext& frame) override {
-    pass_.record(frame, settings, frame.shadow_term, debug);
-    view = frame.view;
-    casters = shadows::detail::caster_bounds(frame);
+  explicit CascadesFeature(engine::Renderer& renderer)
+      : renderer_(renderer),
+        module_(shadows::install(renderer, cascades_only())),
+        settings(module_->settings().cascades),
+        debug(module_->settings().debug),
+        stats(module_->stats()) {}
+  const shadows::detail::View& view() const {
+    return static_cast<shadows::detail::ContextImpl&>(module_->context()).last_view();
   }
-  void after_frame(engine::gpu::Context&) override { pass_.after_frame(stats); }
-
-  CascadeSettings settings;
-  shadows::DebugView debug = shadows::DebugView::None;
-  shadows::Stats stats;
-  engine::FrameView view;
-  engine::Aabb casters;
+  engine::Aabb casters() const {
+    engine::Aabb bounds;
+    for (const auto& d : renderer_.draws())
+      if (d.shadow.casts_shadow) bounds.extend(d.bounds);
+    return bounds;
+  }
 
  private:
-  shadows::detail::CascadesPass pass_;
+  static shadows::Settings cascades_only() {
+    shadows::Settings s;
+    s.technique = shadows::Technique::Cascades;
+    return s;
+  }
+  engine::Renderer& renderer_;
+  std::shared_ptr<shadows::ShadowModule> module_;
+
+ public:
+  CascadeSettings& settings;
+  shadows::DebugView& debug;
+  const shadows::Stats& stats;
 };
 
 CascadeSettings small_settings() {
@@ -53,9 +67,8 @@ class CascadesTest : public GpuTest {
   }
   CascadesFeature& setup(const std::string& scene, size_t view, uint32_t size) {
     auto& r = make_renderer(scene, view, size, size);
-    feature_ = std::make_shared<CascadesFeature>(*ctx_);
+    feature_ = std::make_shared<CascadesFeature>(r);
     feature_->settings = small_settings();
-    r.add_feature(feature_);
     return *feature_;
   }
   // Renders one frame; visibility per pixel, -1 for background.
@@ -131,10 +144,10 @@ TEST_F(CascadesTest, MatchesReferenceAwayFromEdges) {
   const auto positions = renderer_->read_world_positions();
   float nearest = 1e30f;
   for (const auto& p : positions)
-    if (p.w != 0.0f) nearest = std::min(nearest, glm::distance(glm::vec3(p), f.view.camera_position));
-  const auto fit = shadows::detail::fit_cascades(f.view, f.settings, f.casters);
+    if (p.w != 0.0f) nearest = std::min(nearest, glm::distance(glm::vec3(p), f.view().camera_position));
+  const auto fit = shadows::detail::fit_cascades(f.view(), f.settings, f.casters());
   const float world = f.settings.kernel_radius + 2.0f * fit.texel_world[0];
-  const float px_per_unit = float(kSize) / (2.0f * nearest * std::tan(f.view.vertical_fov * 0.5f));
+  const float px_per_unit = float(kSize) / (2.0f * nearest * f.view().tan_half_fov.y);
   const float radius_px = std::max(3.0f, 2.0f * world * px_per_unit);
 
   const auto mask = reference::edge_distance_mask(ref, kSize, kSize, radius_px);
@@ -195,13 +208,13 @@ TEST_F(CascadesTest, MaskingMatchesUnmaskedAndSavesWork) {
 TEST_F(CascadesTest, SnappedGridMovesByWholeTexels) {
   auto& f = setup("contact", 0, 128);
   render();
-  const engine::FrameView a = f.view;
-  const auto fit_a = shadows::detail::fit_cascades(a, f.settings, f.casters);
+  const shadows::detail::View a = f.view();
+  const auto fit_a = shadows::detail::fit_cascades(a, f.settings, f.casters());
   for (const glm::vec3 delta : {glm::vec3(0.003f, 0.0f, 0.002f), glm::vec3(1.37f, 0.2f, -0.61f)}) {
-    engine::FrameView b = a;
+    shadows::detail::View b = a;
     b.camera_position += delta;
     b.view = glm::translate(a.view, -delta);
-    const auto fit_b = shadows::detail::fit_cascades(b, f.settings, f.casters);
+    const auto fit_b = shadows::detail::fit_cascades(b, f.settings, f.casters());
     for (uint32_t c = 0; c < fit_a.count; ++c) {
       ASSERT_EQ(fit_a.texel_world[c], fit_b.texel_world[c]);
       const glm::vec2 moved = (fit_b.grid_origin[c] - fit_a.grid_origin[c]) / fit_a.texel_world[c];
@@ -218,8 +231,8 @@ TEST_F(CascadesTest, ShadowsStayPutWhenTheCameraMovesOrTurns) {
   const engine::SceneView start = scene_->views[0];
   const auto va = render();
   const auto pa = renderer_->read_world_positions();
-  const glm::mat4 vp_a = f.view.view_projection;
-  const auto fit = shadows::detail::fit_cascades(f.view, f.settings, f.casters);
+  const glm::mat4 vp_a = f.view().view_projection;
+  const auto fit = shadows::detail::fit_cascades(f.view(), f.settings, f.casters());
 
   // Less than one texel of the finest cascade: the grid cannot move, nor can any stored depth.
   const glm::vec3 small(0.4f * fit.texel_world[0], 0.0f, 0.0f);

@@ -127,7 +127,7 @@ TEST_F(MaterialsTest, CsmDecisionsLeaveEveryAlphaTestedMeshOut) {
     const std::string warnings = testing::internal::GetCapturedStderr();
     size_t alpha_tested = 0, others_in = 0;
     for (const auto& d : module_->stats().csm_decisions) {
-      const auto* material = scene_->registry.try_get<engine::Material>(d.entity);
+      const auto* material = scene_->registry.try_get<engine::Material>(shadows::entity_of(d));
       ASSERT_NE(material, nullptr);
       if (engine::alpha_tested(*material)) {
         ++alpha_tested;

@@ -25,6 +25,7 @@
 // concave crease, e.g. a wall meeting the roof slab above it): there the full kernel lets a few taps
 // through and the single tap does not. Such pixels differ by fewer than half the taps, so they never
 // change between lit and shadowed at a 0.5 threshold.
+#include "barriers.hpp"
 #include "cascades_pass.hpp"
 
 #include <algorithm>
@@ -403,7 +404,7 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
 
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, gs::CASCADE_COUNTER_WORDS * 4, 0);
   m.record_depth(frame, settings, levels, rects);
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   if (s.masking != Masking::Off) {
     const bool extent = s.masking == Masking::DepthExtent;
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_masks");
@@ -428,7 +429,7 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
         vkCmdDispatch(cmd, uint32_t(rect.z - rect.x + 8) / 8, uint32_t(rect.w - rect.y + 8) / 8, 1);
       }
     }
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_filter");
@@ -468,7 +469,7 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
     bind_filter(gs::CASCADE_STAGE_BAND);
     vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH_BAND * 4);
   }
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   if (settings.blur) {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_blur");
     m.record_dispatch_args(cmd);
@@ -493,7 +494,7 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
       vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH_BLUR * 4);
     }
   }
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   // The counters are read on the host after the frame's fence.
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
                  VK_ACCESS_2_HOST_READ_BIT);

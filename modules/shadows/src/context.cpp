@@ -5,6 +5,7 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <shared/host.h>
 
+#include "barriers.hpp"
 #include "context_impl.hpp"
 #include "input_checks.hpp"
 
@@ -39,10 +40,6 @@ bool is_integer_format(VkFormat f) {
   }
 }
 
-// The module's passes read and write their per-pixel images in these stages.
-constexpr VkPipelineStageFlags2 kModuleImageStages = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
-                                                     VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT |
-                                                     VK_PIPELINE_STAGE_2_GEOMETRY_SHADER_BIT;
 constexpr VkAccessFlags2 kStorageReadWrite = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
                                              VK_ACCESS_2_SHADER_SAMPLED_READ_BIT;
 
@@ -138,6 +135,8 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
     throw Error(e.what());
   }
   frames_in_flight_ = desc.frames_in_flight;
+  // Resources the passes replace (pools growing, a resize) may still be read by frames in flight.
+  gpu_->defer_releases(true);
   slots_.resize(frames_in_flight_);
   for (auto& slot : slots_) slot.profiler = std::make_unique<engine::gpu::GpuProfiler>(*gpu_);
 
@@ -174,10 +173,9 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
   });
 }
 
-ContextImpl::~ContextImpl() {
-  // The host destroys the context only after its frames completed (as for any resource of its own).
-  retire_.release_all();
-}
+// The host destroys the context only after its frames completed (as for any resource of its own); the
+// adopted engine::gpu::Context then releases what it deferred.
+ContextImpl::~ContextImpl() = default;
 
 Capabilities ContextImpl::capabilities() const {
   Capabilities c;
@@ -241,11 +239,9 @@ void ContextImpl::validate(const FrameDesc& f) const {
     throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
 }
 
-void ContextImpl::ensure_targets(VkExtent2D extent, uint64_t frame) {
+void ContextImpl::ensure_targets(VkExtent2D extent) {
   if (extent.width == extent_.width && extent.height == extent_.height && shadow_term_.valid()) return;
   engine::gpu::Context& ctx = *gpu_;
-  for (Image* old : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_})
-    retire_.retire(frame, std::move(*old));
   const VkImageUsageFlags usage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
                                   VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
   inputs_.world_position = Image(ctx, extent, VK_FORMAT_R32G32B32A32_SFLOAT, usage, "shadows world position");
@@ -301,7 +297,7 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   }
   if (!targets_fresh_)
-    memory_barrier(cmd, kModuleImageStages | VK_PIPELINE_STAGE_2_COPY_BIT, kStorageReadWrite | VK_ACCESS_2_TRANSFER_READ_BIT,
+    memory_barrier(cmd, pass_shader_stages(*gpu_) | VK_PIPELINE_STAGE_2_COPY_BIT, kStorageReadWrite | VK_ACCESS_2_TRANSFER_READ_BIT,
                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
   targets_fresh_ = false;
 
@@ -327,16 +323,12 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
   vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
   // The module's inputs, term and overlay: written above, read and written by every pass that follows.
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                 kModuleImageStages | extra_image_stages(), kStorageReadWrite);
-}
-
-VkPipelineStageFlags2 ContextImpl::extra_image_stages() const {
-  return gpu_->features().ray_tracing_pipeline ? VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR : 0;
+                 pass_shader_stages(*gpu_), kStorageReadWrite);
 }
 
 void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f) {
   // Every pass's writes of the term and overlay, visible to the copy into the host's images.
-  memory_barrier(cmd, kModuleImageStages | extra_image_stages(), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+  memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   const int which = f.output.format == VK_FORMAT_R8_UNORM ? 0 : f.output.format == VK_FORMAT_R16_SFLOAT ? 1 : 2;
   const engine::gpu::Pipeline& p = output_pipelines_[which];
@@ -359,13 +351,14 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   Slot& slot = slots_[f.frame_index % frames_in_flight_];
   // The host's promise: the frame recorded in this slot frames_in_flight frames ago has completed.
   if (slot.frame) complete_slot(slot);
-  if (f.frame_index >= frames_in_flight_) retire_.release_through(f.frame_index - frames_in_flight_);
+  if (f.frame_index >= frames_in_flight_) gpu_->release_through(f.frame_index - frames_in_flight_);
+  gpu_->set_recording_frame(f.frame_index);
 
   engine::gpu::GpuProfiler& profiler = external_profiler_ ? *external_profiler_ : *slot.profiler;
   if (!external_profiler_) profiler.begin_frame(cmd);
   engine::gpu::ScopedGpuRegion region(*gpu_, profiler, cmd, "shadows");
 
-  geometry_.record_imports(cmd, f.frame_index, retire_);
+  geometry_.record_imports(cmd);
 
   View& view = view_;
   view.view = glm::make_mat4(f.camera.view);
@@ -411,7 +404,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   }
   cpu_meshes_.clear();
 
-  ensure_targets(f.depth.extent, f.frame_index);
+  ensure_targets(f.depth.extent);
   record_inputs(cmd, f, view);
   Frame frame{*gpu_, cmd, profiler, view, inputs_, shadow_term_, overlay_, geometry_.geometry(), draws_,
               uint32_t(f.frame_index % frames_in_flight_)};
@@ -442,15 +435,15 @@ void ContextImpl::record_technique(Frame& frame) {
       IzbSettings near = settings_.izb;
       near.max_distance = settings_.hybrid_izb_distance;
       izb().record(frame, near, settings_.debug, true, collect_stats_, settings_.hybrid_soft_distance);
-      engine::gpu::full_barrier(frame.cmd);
+      pass_barrier(*gpu_, frame.cmd);
       const PixelList listed = izb().hybrid_list();
       cascades().record(frame, settings_.cascades, izb().soft_term(), settings_.debug, &listed);
-      engine::gpu::full_barrier(frame.cmd);
+      pass_barrier(*gpu_, frame.cmd);
       izb().record_hybrid_blend(frame);
       break;
     }
     case Technique::RayTraced:
-      if (!gpu_->features().ray_tracing_pipeline) throw Error("shadows: " + gpu_->features().ray_tracing_missing);
+      if (!gpu_->features().ray_tracing_pipeline) throw Error(gpu_->features().ray_tracing_missing);  // as capabilities() says
       if (!ray_traced_) ray_traced_ = std::make_unique<RayTracedPass>(*gpu_);
       ray_traced_->record(frame, settings_.izb.samples_per_pixel, collect_stats_);
       break;
@@ -458,8 +451,10 @@ void ContextImpl::record_technique(Frame& frame) {
 }
 
 void ContextImpl::frame_completed(uint64_t frame_index) {
+  // One queue: every earlier frame has completed too.
   for (auto& slot : slots_)
-    if (slot.frame && *slot.frame == frame_index) complete_slot(slot);
+    if (slot.frame && *slot.frame <= frame_index) complete_slot(slot);
+  gpu_->release_through(frame_index);
 }
 
 void ContextImpl::complete_slot(Slot& slot) {
@@ -547,6 +542,23 @@ CascadesPass& ContextImpl::cascades() {
 
 std::unique_ptr<Context> Context::create(const ContextDesc& desc) { return std::make_unique<detail::ContextImpl>(desc); }
 
+namespace {
+
+// What an optional extension or feature unlocks, for DeviceRequirement::unlocks.
+std::string what_unlocks(const std::string& name) {
+  if (name.find("conservative") != std::string::npos) return "hardware conservative raster trace and CSM inner coverage";
+  if (name.find("barycentric") != std::string::npos) return "CSM coverage test bary-hw";
+  if (name.find("ray_tracing") != std::string::npos || name.find("acceleration_structure") != std::string::npos ||
+      name.find("deferred_host") != std::string::npos || name.find("ray_query") != std::string::npos ||
+      name == "bufferDeviceAddress" || name == "rayTracingPipeline" || name == "accelerationStructure")
+    return "technique rt (ray-traced shadows)";
+  if (name == "geometryShader") return "software conservative raster paths (raster trace and CSM on devices without conservative rasterization)";
+  if (name.find("debug_utils") != std::string::npos) return "object names and labels in captures";
+  return "faster paths";
+}
+
+}  // namespace
+
 DeviceRequirements device_requirements(VkPhysicalDevice physical_device) {
   DeviceRequirements out;
   if (physical_device == VK_NULL_HANDLE) {
@@ -555,10 +567,26 @@ DeviceRequirements device_requirements(VkPhysicalDevice physical_device) {
   }
   const engine::gpu::DeviceRequirements r = engine::gpu::device_requirements(physical_device);
   for (const auto& e : r.required_device_extensions) out.required_extensions.push_back({e, "every technique"});
-  for (const auto& e : r.optional_device_extensions) out.optional_extensions.push_back({e, engine::gpu::what_unlocks(e)});
+  for (const auto& e : r.optional_device_extensions) out.optional_extensions.push_back({e, what_unlocks(e)});
   for (const auto& e : r.required_features) out.required_features.push_back({e, "every technique"});
-  for (const auto& e : r.optional_features) out.optional_features.push_back({e, engine::gpu::what_unlocks(e)});
-  out.missing = r.missing;
+  for (const auto& e : r.optional_features) out.optional_features.push_back({e, what_unlocks(e)});
+  VkPhysicalDeviceProperties properties;
+  vkGetPhysicalDeviceProperties(physical_device, &properties);
+  if (properties.apiVersion < VK_API_VERSION_1_3) {
+    out.missing = "shadows: the device supports Vulkan " + std::to_string(VK_API_VERSION_MAJOR(properties.apiVersion)) +
+                  "." + std::to_string(VK_API_VERSION_MINOR(properties.apiVersion)) + " (1.3 needed)";
+    return out;
+  }
+  uint32_t count = 0;
+  vkEnumerateDeviceExtensionProperties(physical_device, nullptr, &count, nullptr);
+  std::vector<VkExtensionProperties> extensions(count);
+  vkEnumerateDeviceExtensionProperties(physical_device, nullptr, &count, extensions.data());
+  for (const auto& e : r.required_device_extensions)
+    if (std::none_of(extensions.begin(), extensions.end(),
+                     [&](const VkExtensionProperties& p) { return e == p.extensionName; })) {
+      out.missing = "shadows: the device lacks " + e;
+      break;
+    }
   return out;
 }
 

@@ -42,6 +42,7 @@ class ContextImpl final : public Context {
   void set_cpu_meshes(std::vector<const engine::MeshData*> meshes) { cpu_meshes_ = std::move(meshes); }
   CsmSnapshot read_csm() { return izb_ ? izb_->read_csm() : CsmSnapshot{}; }
   engine::gpu::Image& shadow_term() { return shadow_term_; }
+  const View& last_view() const { return view_; }
 
  private:
   struct Slot {
@@ -52,8 +53,7 @@ class ContextImpl final : public Context {
   };
 
   void validate(const FrameDesc& frame) const;
-  void ensure_targets(VkExtent2D extent, uint64_t frame);
-  VkPipelineStageFlags2 extra_image_stages() const;
+  void ensure_targets(VkExtent2D extent);
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
   void record_output(VkCommandBuffer cmd, const FrameDesc& frame);
@@ -72,7 +72,6 @@ class ContextImpl final : public Context {
   std::vector<PassTime> last_pass_times_;
   std::vector<const engine::MeshData*> cpu_meshes_;
 
-  RetireQueue retire_;
   GeometryStore geometry_;
   View view_;
   std::vector<DrawItem> draws_;

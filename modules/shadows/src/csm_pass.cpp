@@ -1,3 +1,4 @@
+#include "barriers.hpp"
 #include "csm_pass.hpp"
 
 #include <cmath>
@@ -330,7 +331,7 @@ void CsmPass::record(Frame& frame, const IzbSettings& settings, const Buffer& iz
     vkCmdCopyBufferToImage(cmd, compute_texels->handle(), m.depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
   }
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, VK_WHOLE_SIZE, 0);
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   m.coverage.bind(cmd);
   DescriptorWriter()
       .storage_buffer(gpu_shared::CSM_BINDING_FRAME, izb_frame.handle())

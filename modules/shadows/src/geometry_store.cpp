@@ -6,6 +6,7 @@
 #include <shared/host.h>
 #include <shared/material.h>
 
+#include "barriers.hpp"
 #include "input_checks.hpp"
 
 namespace shadows::detail {
@@ -20,12 +21,6 @@ namespace {
 constexpr uint32_t kMaxTextures = 1024;
 constexpr uint32_t kTexelBase = 1 + gpu_shared::kTextureHeaderWords * kMaxTextures;
 
-// Every stage that reads the module's geometry: vertex fetch and shader storage reads of the raster
-// and compute passes, ray tracing and acceleration-structure builds.
-constexpr VkPipelineStageFlags2 kGeometryReaders =
-    VK_PIPELINE_STAGE_2_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
-    VK_PIPELINE_STAGE_2_GEOMETRY_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT |
-    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
 constexpr VkAccessFlags2 kGeometryReads = VK_ACCESS_2_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_2_INDEX_READ_BIT |
                                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
 
@@ -39,21 +34,18 @@ uint32_t alpha_threshold(float cutoff, float scale) {
   return 256;
 }
 
-void RetireQueue::release_through(uint64_t completed_frame) {
-  std::vector<Item> kept;
-  for (auto& item : items_)
-    if (item.frame > completed_frame) kept.push_back(std::move(item));
-  items_ = std::move(kept);
+// Every stage that reads the module's geometry on this device: vertex fetch and shader storage reads
+// of the raster and compute passes, and acceleration-structure builds where ray tracing is on.
+VkPipelineStageFlags2 GeometryStore::geometry_readers() const {
+  VkPipelineStageFlags2 stages = pass_shader_stages(*ctx_) | VK_PIPELINE_STAGE_2_VERTEX_INPUT_BIT;
+  if (ctx_->features().acceleration_structure) stages |= VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR;
+  return stages;
 }
 
 void GeometryStore::init(engine::gpu::Context& ctx, bool ray_tracing) {
   ctx_ = &ctx;
   geometry_usage_ = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
                     VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-  // Stages that exist only with ray tracing enabled (naming them otherwise is invalid).
-  extra_reader_stages_ = ray_tracing ? VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR |
-                                           VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR
-                                     : 0;
   if (ray_tracing)
     geometry_usage_ |= VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
                        VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
@@ -147,7 +139,7 @@ const MeshInfo* GeometryStore::find(MeshId id) const {
 }
 
 void GeometryStore::grow(Buffer& buffer, VkDeviceSize bytes, VkDeviceSize used, VkBufferUsageFlags usage,
-                         const char* name, VkCommandBuffer cmd, uint64_t frame, RetireQueue& retire) {
+                         const char* name, VkCommandBuffer cmd) {
   if (buffer.valid() && buffer.size() >= bytes) return;
   Buffer grown(*ctx_, std::max(bytes, buffer.size() * 2), usage, false, name);
   if (used > 0) {
@@ -156,15 +148,14 @@ void GeometryStore::grow(Buffer& buffer, VkDeviceSize bytes, VkDeviceSize used, 
     const VkBufferCopy copy{0, 0, used};
     vkCmdCopyBuffer(cmd, buffer.handle(), grown.handle(), 1, &copy);
   }
-  retire.retire(frame, std::move(buffer));
-  buffer = std::move(grown);
+  buffer = std::move(grown);  // the old one is released once the frames that used it completed
 }
 
-void GeometryStore::record_imports(VkCommandBuffer cmd, uint64_t frame, RetireQueue& retire) {
+void GeometryStore::record_imports(VkCommandBuffer cmd) {
   if (pending_.empty()) return;
   // Previous frames read these buffers (and may still run): their reads finish before this frame's
   // copies and imports write.
-  memory_barrier(cmd, kGeometryReaders | extra_reader_stages_, 0,
+  memory_barrier(cmd, geometry_readers(), 0,
                  VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT, 0);
   uint32_t first_pending_vertex = UINT32_MAX, first_pending_index = UINT32_MAX;
   for (const auto& p : pending_) {
@@ -172,13 +163,13 @@ void GeometryStore::record_imports(VkCommandBuffer cmd, uint64_t frame, RetireQu
     first_pending_index = std::min(first_pending_index, geometry_.meshes_[p.id].first_index);
   }
   grow(geometry_.vertices_, VkDeviceSize(vertex_count_) * 32, VkDeviceSize(first_pending_vertex) * 32,
-       geometry_usage_ | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "shadows vertices", cmd, frame, retire);
+       geometry_usage_ | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "shadows vertices", cmd);
   grow(geometry_.indices_, VkDeviceSize(index_count_) * 4, VkDeviceSize(first_pending_index) * 4,
-       geometry_usage_ | VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "shadows indices", cmd, frame, retire);
+       geometry_usage_ | VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "shadows indices", cmd);
   const VkDeviceSize texture_bytes = VkDeviceSize(kTexelBase + texel_words_) * 4;
   const VkDeviceSize textures_used = geometry_.textures_.size();
   grow(geometry_.textures_, texture_bytes, std::min<VkDeviceSize>(textures_used, texture_bytes), geometry_usage_,
-       "shadows alpha textures", cmd, frame, retire);
+       "shadows alpha textures", cmd);
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
@@ -267,7 +258,7 @@ void GeometryStore::record_imports(VkCommandBuffer cmd, uint64_t frame, RetireQu
   // The imports' writes, visible to every reader of the geometry later in this frame.
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                 kGeometryReaders | extra_reader_stages_, kGeometryReads);
+                 geometry_readers(), kGeometryReads);
   pending_.clear();
 }
 

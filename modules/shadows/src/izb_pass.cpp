@@ -1,3 +1,4 @@
+#include "barriers.hpp"
 #include "izb_pass.hpp"
 
 #include <algorithm>
@@ -476,7 +477,7 @@ struct IzbPass::Impl {
     gpu_shared::IzbComputePush a = push;
     a.debug = args;
     dispatch(cmd, frame, this->p->dispatch_args, a, 1);
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
     dispatch_indirect(cmd, frame, p, push, counter);
   }
 
@@ -489,12 +490,12 @@ struct IzbPass::Impl {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
       dispatch(cmd, frame, p->tile_records, push, (triangle_count + 63) / 64);
     }
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_tiles");
       dispatch_step(cmd, frame, p->tile_bin, push, gpu_shared::IZB_ARGS_RECORDS, gpu_shared::IZB_COUNTER_RECORD_DISPATCH);
     }
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
     ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_texels");
     dispatch_step(cmd, frame, p->texel_bin, push, gpu_shared::IZB_ARGS_TILE_PAIRS,
                   gpu_shared::IZB_COUNTER_TILE_PAIR_DISPATCH);
@@ -625,16 +626,16 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (sorted) vkCmdFillBuffer(cmd, m.list_counts.handle(), 0, VK_WHOLE_SIZE, 0);
   else vkCmdFillBuffer(cmd, m.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
   vkCmdFillBuffer(cmd, m.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
     m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
     m.dispatch(cmd, frame, m.p->setup, push, 1);
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
     if (m.triangle_count > 0) m.dispatch(cmd, frame, m.p->grid_setup, push, (m.triangle_count + 63) / 64);
   }
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   if (run_csm) {
     if (use_compute_csm) {
       const uint32_t mode = settings.csm_test == CsmTest::Hertel ? gpu_shared::IZB_WORK_CSM_HERTEL
@@ -643,14 +644,14 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
           frame, settings, m.frame_data, m.resolution, collect_stats,
           [&](VkCommandBuffer c) {
             vkCmdFillBuffer(c, m.csm_texels.handle(), 0, VK_WHOLE_SIZE, 0x3f800000u);  // 1.0: nothing stored
-            full_barrier(c);
+            pass_barrier(frame.ctx, c);
             m.record_tile_work(c, frame, push, mode, "csm");
           },
           &m.csm_texels);
     } else {
       m.csm->record(frame, settings, m.frame_data, m.resolution, collect_stats);
     }
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
@@ -659,18 +660,18 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
       // Counting sort: counts (above) -> prefix sum -> scatter into contiguous ranges.
       const uint32_t blocks = uint32_t(m.scan_blocks.size() / 4);
       for (uint32_t step = 0; step < 3; ++step) {
-        full_barrier(cmd);
+        pass_barrier(frame.ctx, cmd);
         gpu_shared::IzbComputePush scan_push = push;
         scan_push.mode = step;
         const uint32_t rows = (blocks + gpu_shared::kIzbDispatchRow - 1) / gpu_shared::kIzbDispatchRow;
         if (step == 1) m.dispatch(cmd, frame, m.p->scan, scan_push, 1);
         else m.dispatch(cmd, frame, m.p->scan, scan_push, std::min(blocks, gpu_shared::kIzbDispatchRow), rows);
       }
-      full_barrier(cmd);
+      pass_barrier(frame.ctx, cmd);
       m.dispatch_pixels(cmd, frame, m.p->scatter, push);
     }
   }
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   // Light-space box around every point that can hold a node (the view, up to the IZB's range,
   // within the scene): a caster wholly beside it shadows none of them.
   const glm::mat4 receiver_region = [&] {
@@ -699,7 +700,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
       region.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
       region.imageExtent = {m.resolution, m.resolution, 1};
       vkCmdCopyBufferToImage(cmd, m.farthest.handle(), m.trace_depth.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &region);
-      full_barrier(cmd);
+      pass_barrier(frame.ctx, cmd);
     }
     begin_depth_rendering(cmd, m.trace_depth.view(), {m.resolution, m.resolution}, false);
     for (const CasterSet set : {alpha ? CasterSet::Opaque : CasterSet::All, CasterSet::AlphaTested}) {
@@ -729,33 +730,33 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     // and survive the texel's cull -> one thread per pair walks the texel's list.
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
     m.dispatch(cmd, frame, m.p->tile_far, push, m.tiles_per_side, m.tiles_per_side);
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
     m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_TRACE, "trace");
-    full_barrier(cmd);
+    pass_barrier(frame.ctx, cmd);
     ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "trace_pairs");
     m.dispatch_step(cmd, frame, m.p->trace_compute, push, gpu_shared::IZB_ARGS_PAIRS, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
   } else {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
     draw_trace(false, settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
   }
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_fallback");
     m.dispatch_indirect(cmd, frame, m.p->fallback, push, gpu_shared::IZB_COUNTER_DISPATCH);
   }
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_resolve");
     m.dispatch_pixels(cmd, frame, m.resolve_pipeline(m.samples, flags, debug_code(debug), hybrid), push);
   }
-  full_barrier(cmd);
+  pass_barrier(frame.ctx, cmd);
   if (collect_stats) {
     // Statistics only (excluded from the technique's total): fragments before depth culling.
     // (The compute trace counts fragments before the cull as it bins.)
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_stats");
     if (!use_compute_trace) {
       draw_trace(true, VK_COMPARE_OP_ALWAYS, false);
-      full_barrier(cmd);
+      pass_barrier(frame.ctx, cmd);
     }
     m.dispatch(cmd, frame, m.p->list_stats, push, (m.resolution + 7) / 8, (m.resolution + 7) / 8);
   }

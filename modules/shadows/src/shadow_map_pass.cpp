@@ -1,3 +1,4 @@
+#include "barriers.hpp"
 #include "shadow_map_pass.hpp"
 
 #include "light_space.hpp"
@@ -66,7 +67,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
     draw_alpha_casters(ctx_, cmd, frame, alpha_depth_pipeline_, light_vp);
     vkCmdEndRendering(cmd);
   }
-  full_barrier(cmd);
+  pass_barrier(ctx_, cmd);
   {
     ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_resolve");
     gpu_shared::ShadowMapResolveParams p{};

@@ -196,6 +196,17 @@ class Context {
   uint32_t live_allocation_count() const;  // Buffer and Image memory now allocated (allocations())
   VkDeviceSize max_memory_allocation_size() const { return max_allocation_size_; }
 
+  // Frames in flight. A context whose commands go into frames that may still run on the GPU (a
+  // module recording into a host's frames) turns deferral on: Buffer, Image and Sampler objects
+  // released then are destroyed only once release_through() reports the frame they were released in
+  // as completed. Off (the default), they are destroyed at once, as the engine waits for its frames.
+  void defer_releases(bool on) { defer_releases_ = on; }
+  bool defers_releases() const { return defer_releases_; }
+  void set_recording_frame(uint64_t frame) { recording_frame_ = frame; }
+  void defer_release(std::function<void()> destroy) const;
+  void release_through(uint64_t completed_frame) const;
+  void release_all_deferred() const;
+
   // Records commands into a fresh command buffer, submits it and waits. For uploads, readbacks, tests.
   void immediate_submit(const std::function<void(VkCommandBuffer)>& record) const;
   // Records into an existing command buffer (reset first), submits it with `fence` (reset first) and
@@ -255,6 +266,13 @@ class Context {
   std::vector<std::string> masked_features_;
   VkDeviceSize max_allocation_size_ = 0;
   bool debug_utils_ = false;
+  bool defer_releases_ = false;
+  uint64_t recording_frame_ = 0;
+  struct Deferred {
+    uint64_t frame;
+    std::function<void()> destroy;
+  };
+  mutable std::vector<Deferred> deferred_;
   bool owns_device_ = true;
   const VkAllocationCallbacks* allocator_ = nullptr;
   VkPipelineCache pipeline_cache_ = VK_NULL_HANDLE;

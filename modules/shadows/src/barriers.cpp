@@ -1,0 +1,44 @@
+#include "barriers.hpp"
+
+#include "engine/gpu/resources.hpp"
+
+namespace shadows::detail {
+
+VkPipelineStageFlags2 pass_shader_stages(const engine::gpu::Context& ctx) {
+  VkPipelineStageFlags2 stages = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
+                                 VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
+  if (ctx.features().geometry_shader) stages |= VK_PIPELINE_STAGE_2_GEOMETRY_SHADER_BIT;
+  if (ctx.features().ray_tracing_pipeline) stages |= VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR;
+  return stages;
+}
+
+void pass_barrier(const engine::gpu::Context& ctx, VkCommandBuffer cmd) {
+  const VkPipelineStageFlags2 shaders = pass_shader_stages(ctx);
+  VkPipelineStageFlags2 build = 0;
+  VkAccessFlags2 build_read = 0, build_write = 0;
+  if (ctx.features().acceleration_structure) {
+    build = VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR;
+    build_read = VK_ACCESS_2_ACCELERATION_STRUCTURE_READ_BIT_KHR;
+    build_write = VK_ACCESS_2_ACCELERATION_STRUCTURE_WRITE_BIT_KHR;
+  }
+  const VkPipelineStageFlags2 writers = shaders | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT |
+                                        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_COPY_BIT |
+                                        VK_PIPELINE_STAGE_2_CLEAR_BIT | build;
+  const VkAccessFlags2 writes = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
+                                VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT | build_write;
+  const VkPipelineStageFlags2 readers = shaders | VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT |
+                                        VK_PIPELINE_STAGE_2_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT |
+                                        VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT |
+                                        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_COPY_BIT |
+                                        VK_PIPELINE_STAGE_2_CLEAR_BIT | build;
+  const VkAccessFlags2 reads = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_SAMPLED_READ_BIT |
+                               VK_ACCESS_2_UNIFORM_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                               VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_VERTEX_ATTRIBUTE_READ_BIT |
+                               VK_ACCESS_2_INDEX_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT |
+                               VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT |
+                               VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_TRANSFER_READ_BIT |
+                               VK_ACCESS_2_TRANSFER_WRITE_BIT | build_read | build_write;
+  engine::gpu::memory_barrier(cmd, writers, writes, readers, reads);
+}
+
+}  // namespace shadows::detail
