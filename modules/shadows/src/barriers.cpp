@@ -1,5 +1,7 @@
 #include "barriers.hpp"
 
+#include <algorithm>
+
 #include "engine/gpu/resources.hpp"
 
 namespace shadows::detail {
@@ -39,6 +41,24 @@ void pass_barrier(const engine::gpu::Context& ctx, VkCommandBuffer cmd) {
                                VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_TRANSFER_READ_BIT |
                                VK_ACCESS_2_TRANSFER_WRITE_BIT | build_read | build_write;
   engine::gpu::memory_barrier(cmd, writers, writes, readers, reads);
+}
+
+}  // namespace shadows::detail
+
+namespace shadows::detail {
+
+void record_update(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const engine::gpu::Buffer& buffer,
+                   const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+  const VkPipelineStageFlags2 shaders = pass_shader_stages(ctx);
+  engine::gpu::memory_barrier(cmd, shaders, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, 0);
+  const auto* bytes_in = static_cast<const uint8_t*>(data);
+  for (VkDeviceSize done = 0; done < bytes;) {
+    const VkDeviceSize chunk = std::min<VkDeviceSize>(bytes - done, 65536);
+    vkCmdUpdateBuffer(cmd, buffer.handle(), offset + done, chunk, bytes_in + done);
+    done += chunk;
+  }
+  engine::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, shaders,
+                              VK_ACCESS_2_UNIFORM_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
 }
 
 }  // namespace shadows::detail

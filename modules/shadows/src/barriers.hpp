@@ -15,3 +15,18 @@ VkPipelineStageFlags2 pass_shader_stages(const engine::gpu::Context& ctx);
 void pass_barrier(const engine::gpu::Context& ctx, VkCommandBuffer cmd);
 
 }  // namespace shadows::detail
+
+namespace engine::gpu {
+class Buffer;
+}
+
+namespace shadows::detail {
+
+// Writes `bytes` of `data` into `buffer` at `offset` in the command stream (vkCmdUpdateBuffer, at
+// most 65536 bytes), so frames in flight each read their own values: earlier passes' reads finish
+// before the write, and the write is visible to every later pass's uniform and storage reads.
+// `buffer` must be created with VK_BUFFER_USAGE_TRANSFER_DST_BIT.
+void record_update(const engine::gpu::Context& ctx, VkCommandBuffer cmd, const engine::gpu::Buffer& buffer,
+                   const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
+
+}  // namespace shadows::detail

@@ -360,7 +360,8 @@ CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {
     throw VulkanError("the cascades need subgroup arithmetic in compute shaders, which " + ctx.device_name() +
                       " lacks");
   Impl& m = *impl_;
-  m.params = Buffer(ctx, sizeof(gs::CascadeParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "cascade params");
+  m.params = Buffer(ctx, sizeof(gs::CascadeParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                    false, "cascade params");
   m.counters = Buffer(ctx, gs::CASCADE_COUNTER_WORDS * 4,
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                           VK_BUFFER_USAGE_TRANSFER_DST_BIT,
@@ -388,7 +389,7 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
   if (s.masking == Masking::Auto) s.masking = only ? Masking::Off : Masking::Edge;
   gs::CascadeParams p = m.make_params(frame, s, debug, &levels, &rects);
   if (only) p.mode.w = only->count_word;
-  m.params.write(&p, sizeof(p));
+  record_update(m.ctx, cmd, m.params, &p, sizeof(p));
   // Frames are recorded only once the previous one has finished, so the buffers may be replaced here.
   const VkDeviceSize texels = std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + [&] {
     const glm::ivec4 r = rects[kMaxCascadeCount - 1];

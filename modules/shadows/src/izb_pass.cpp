@@ -139,7 +139,8 @@ struct IzbPass::Impl {
                         c.device_name() + " lacks");
     if (!c.features().depth_clamp)
       throw VulkanError("the IZB trace needs the depthClamp feature, which " + c.device_name() + " lacks");
-    params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "izb params");
+    params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                    false, "izb params");
     frame_data = Buffer(c, sizeof(gpu_shared::IzbFrame),
                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb frame");
     const VkDeviceSize counter_bytes = gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t);
@@ -618,7 +619,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
                         uint32_t(std::min<uint64_t>(m.records.capacity, UINT32_MAX)),
                         uint32_t(std::min<uint64_t>(m.pairs.capacity, UINT32_MAX)));
   p.capacities = glm::uvec4(uint32_t(std::min<uint64_t>(m.tile_pairs.capacity, UINT32_MAX)), m.tiles_per_side, 0u, 0u);
-  m.params.write(&p, sizeof(p));
+  record_update(m.ctx, cmd, m.params, &p, sizeof(p));
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, soft_distance};
 
   // Reset: counters, lists, farthest depths.

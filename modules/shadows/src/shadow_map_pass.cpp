@@ -13,8 +13,8 @@ constexpr VkFormat kMapFormat = VK_FORMAT_D32_SFLOAT;
 }
 
 ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
-  params_ = Buffer(ctx, sizeof(gpu_shared::ShadowMapResolveParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
-                   "sm resolve params");
+  params_ = Buffer(ctx, sizeof(gpu_shared::ShadowMapResolveParams),
+                   VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "sm resolve params");
   sampler_ = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "sm sampler");
   PipelineFactory factory(ctx);
   GraphicsPipelineDesc d;
@@ -75,7 +75,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
     p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
     p.bias = glm::vec4(settings.constant_bias, 0.0f, 0.0f, 0.0f);
     p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
-    params_.write(&p, sizeof(p));
+    record_update(ctx_, cmd, params_, &p, sizeof(p));
     resolve_pipeline_.bind(cmd);
     DescriptorWriter()
         .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
