@@ -18,8 +18,34 @@ SHARED_CONST uint CSM_TEST_BARYCENTRIC = 1u;
 SHARED_CONST float kCsmBarycentricSlack = 1.0e-5f;
 SHARED_CONST float kCsmDistanceSlack = 1.0e-4f;
 
+// The automatic per-instance CSM choice, measured on the GPU (csm_measure.comp): per instance, the
+// light-space projected area of its mesh and the part of it that can fully cover texels.
+SHARED_CONST uint CSM_MEASURE_BINDING_VERTICES = 0u;  // the module's vertices (engine::Vertex, 8 floats)
+SHARED_CONST uint CSM_MEASURE_BINDING_INDICES = 1u;   // the module's 32-bit indices
+SHARED_CONST uint CSM_MEASURE_BINDING_JOBS = 2u;      // CsmMeasureJob per measured instance
+SHARED_CONST uint CSM_MEASURE_BINDING_PARTIALS = 3u;  // vec2 (projected, coverable) per job and workgroup
+SHARED_CONST uint kCsmMeasureGroupSize = 64u;
+struct CsmMeasureJob {
+  mat4 world;
+  uint first_index;
+  int vertex_offset;
+  uint triangle_count;
+  uint pad;
+};
+struct CsmMeasurePush {
+  mat4 to_light;       // rotation into light space (the upper 3x3 is used)
+  float circumradius;  // of one CSM texel, world units
+  uint groups_per_job; // workgroups along x; each job's partials are that many vec2
+  uint pad0, pad1;
+};
+
 SHARED_CONST uint CSM_COUNTER_TEXELS = 0u;
 SHARED_CONST uint CSM_COUNTER_COUNT = 4u;
 
 SHARED_END
+
+#ifdef __cplusplus
+static_assert(sizeof(gpu_shared::CsmMeasureJob) == 80);
+static_assert(sizeof(gpu_shared::CsmMeasurePush) == 80);
+#endif
 #endif

@@ -145,13 +145,36 @@ SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per 
 
 SHARED_CONST uint IZB_DRAW_IN_CSM = 1u;
 
-// A caster triangle as uploaded (world space, rebuilt when casters move), in draw order.
+// A caster triangle in world space, in draw order, written by izb_casters.comp when casters move.
 struct IzbCasterTriangle {
   vec4 p0;    // xyz: vertex 0; w: its caster draw's ordinal (uint bits)
   vec4 p1;    // w: the material's alpha threshold (uint bits; 0: not alpha-tested)
   vec4 p2;    // w: the material's base-colour texture (uint bits; kNoTexture: none)
   vec4 uv01;  // texture coordinates of vertices 0 (xy) and 1 (zw)
   vec4 uv2;   // xy: of vertex 2
+};
+
+// A caster draw as izb_casters.comp reads it: one per draw that casts, in draw order.
+SHARED_CONST uint IZB_CASTERS_BINDING_VERTICES = 0u;  // the module's vertices (engine::Vertex, 8 floats)
+SHARED_CONST uint IZB_CASTERS_BINDING_INDICES = 1u;   // the module's 32-bit indices
+SHARED_CONST uint IZB_CASTERS_BINDING_DRAWS = 2u;     // IzbCasterDraw per caster draw
+SHARED_CONST uint IZB_CASTERS_BINDING_TRIANGLES = 3u; // IzbCasterTriangle per caster triangle (written)
+struct IzbCasterDraw {
+  mat4 world;
+  uint first_index;      // the mesh's first index in the module's index buffer
+  int vertex_offset;     // added to each of its indices
+  uint triangle_count;
+  uint first_triangle;   // its first triangle in the caster triangle buffer (ascending in draw order)
+  uint ordinal;          // caster draw ordinal (IzbCasterTriangle::p0.w)
+  uint alpha_threshold;  // IzbCasterTriangle::p1.w
+  uint texture;          // IzbCasterTriangle::p2.w
+  uint pad;
+};
+struct IzbCastersPush {
+  uint draw_count;
+  uint triangle_count;
+  uint groups_x;  // workgroups per dispatch row
+  uint pad;
 };
 
 // Push constants of the trace and CSM draws.
@@ -187,5 +210,6 @@ static_assert(sizeof(gpu_shared::IzbFrame) == 80);
 static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterTriangle) == 80);
+static_assert(sizeof(gpu_shared::IzbCasterDraw) == 96);
 #endif
 #endif

@@ -4,6 +4,7 @@
 
 #include "frame_capture.hpp"
 #include "gpu_fixture.hpp"
+#include "csm_pass.hpp"
 #include "shadows_engine/shadows_engine.hpp"
 
 namespace {
@@ -25,6 +26,8 @@ class IzbTest : public GpuTest {
                   int frames = 1, uint32_t size = kSize) {
     auto& r = make_renderer(scene, view, size, size);
     module_ = shadows::install(r, settings);
+    // The automatic CSM choice counts from the frame after the one that measured it on the GPU.
+    if (settings.izb.csm) frames += 2;
     for (int i = 0; i < frames; ++i) r.render_frame(0.0f);
     Rendered out;
     out.visibility = module_->read_visibility();
@@ -211,7 +214,7 @@ TEST_F(IzbTest, CsmDepthIsAtLeastTheCoveringTrianglesFarthestDepth) {
   for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric}) {
     auto& r = make_renderer("atrium", 0, kSize, kSize);
     module_ = shadows::install(r, izb(1, true, test));
-    r.render_frame(0.0f);
+    for (int i = 0; i < 3; ++i) r.render_frame(0.0f);  // the automatic choice's measure first
     const auto csm = module_->read_csm();
     ASSERT_EQ(csm.resolution, kGrid);
     // Caster triangles in grid space.
@@ -260,7 +263,8 @@ TEST_F(IzbTest, AutomaticCsmChoiceTakesArchitectureAndLeavesFoliage) {
   for (const char* scene : {"atrium", "foliage"}) {
     auto& r = make_renderer(scene, 0, kSize, kSize);
     module_ = shadows::install(r, izb(1, true));
-    r.render_frame(0.0f);
+    // The choice is measured on the GPU and counts from the frame after the one that measured it.
+    for (int i = 0; i < 3; ++i) r.render_frame(0.0f);
     const auto& decisions = module_->stats().csm_decisions;
     ASSERT_FALSE(decisions.empty());
     size_t leaves = 0, leaves_in = 0, architecture = 0, architecture_in = 0;
@@ -284,6 +288,43 @@ TEST_F(IzbTest, AutomaticCsmChoiceTakesArchitectureAndLeavesFoliage) {
       EXPECT_GT(leaves, 10u);
       EXPECT_EQ(leaves_in, 0u);
     }
+  }
+}
+
+// The automatic choice's GPU measure (float) against measure_csm_suitability (the CPU reference) on
+// every caster, and "out: measuring" before the first measure has arrived.
+TEST_F(IzbTest, AutomaticCsmChoiceGpuMeasureMatchesCpu) {
+  for (const char* scene : {"atrium", "foliage"}) {
+    auto& r = make_renderer(scene, 0, kSize, kSize);
+    module_ = shadows::install(r, izb(1, true));
+    r.render_frame(0.0f);
+    const auto first = module_->stats().csm_decisions;
+    ASSERT_FALSE(first.empty());
+    auto alpha_tested = [](const shadows::CsmDecision& d) { return d.reason.find("alpha-tested") != std::string::npos; };
+    for (const auto& d : first)
+      if (!alpha_tested(d)) EXPECT_EQ(d.reason.rfind("out: measuring", 0), 0u) << d.name << ": " << d.reason;
+    for (int i = 0; i < 2; ++i) r.render_frame(0.0f);
+    const glm::vec3 light = glm::normalize(r.frame_view().light_direction);
+    size_t compared = 0;
+    for (const auto& d : module_->stats().csm_decisions) {
+      if (alpha_tested(d)) continue;
+      ASSERT_EQ(d.reason.rfind("auto: ", 0), 0u) << d.name << ": " << d.reason;
+      // The texel size the module measured against, as its reason prints it (3 digits).
+      const size_t at = d.reason.find("texels of ~");
+      ASSERT_NE(at, std::string::npos) << d.reason;
+      const float texel = std::stof(d.reason.substr(at + 11));
+      const engine::Entity e = shadows::entity_of(d);
+      const auto* mesh = scene_->registry.try_get<engine::Mesh>(e);
+      const auto* transform = scene_->registry.try_get<engine::Transform>(e);
+      ASSERT_TRUE(mesh && transform && mesh->data) << d.name;
+      const auto cpu = shadows::detail::measure_csm_suitability(*mesh->data, transform->world, light, texel);
+      // Float sums, and the printed texel size's rounding (a relative 5e-4 moves the share by 1e-3 at most).
+      EXPECT_NEAR(d.large_triangle_area_share, cpu.coverable_share, 2e-3) << d.name;
+      if (std::abs(cpu.coverable_share - shadows::detail::kCsmAutoThreshold) > 2e-3)
+        EXPECT_EQ(d.in_csm, cpu.coverable_share >= shadows::detail::kCsmAutoThreshold) << d.name;
+      ++compared;
+    }
+    EXPECT_GT(compared, 3u);
   }
 }
 

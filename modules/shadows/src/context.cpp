@@ -399,10 +399,8 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     d.shadow.csm = in.csm == CsmMode::On ? engine::CsmChoice::On : in.csm == CsmMode::Off ? engine::CsmChoice::Off
                                                                                          : engine::CsmChoice::Auto;
     d.bounds = mesh.bounds.transformed(d.world);
-    d.cpu_mesh = i < cpu_meshes_.size() ? cpu_meshes_[i] : nullptr;
     draws_.push_back(std::move(d));
   }
-  cpu_meshes_.clear();
 
   ensure_targets(f.depth.extent);
   record_inputs(cmd, f, view);
@@ -466,7 +464,7 @@ void ContextImpl::complete_slot(Slot& slot) {
   // Always: the passes grow their pools and buffers to the demand they measured.
   Stats fresh;  // only the techniques that ran this frame report
   const Technique t = slot.technique;
-  if ((t == Technique::Izb || t == Technique::Hybrid) && izb_) izb_->after_frame(fresh);
+  if ((t == Technique::Izb || t == Technique::Hybrid) && izb_) izb_->after_frame(fresh, uint32_t(&slot - slots_.data()));
   if ((t == Technique::Cascades || t == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh);
   if (t == Technique::RayTraced && ray_traced_) ray_traced_->after_frame(fresh);
   if (collect_stats_) {

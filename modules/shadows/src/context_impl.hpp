@@ -1,7 +1,6 @@
 #pragma once
 // The context behind shadows/context.hpp, with the few hooks the engine's own adapter
-// (modules/shadows_engine) uses beyond the public API: the renderer's profiler, the CPU mesh copies it
-// already holds, and test read-backs.
+// (modules/shadows_engine) uses beyond the public API: the renderer's profiler and test read-backs.
 #include <deque>
 #include <memory>
 #include <optional>
@@ -38,8 +37,6 @@ class ContextImpl final : public Context {
   // Pass timings go to this profiler instead of the context's own (the renderer's, so its panel and
   // benchmark see the module's passes among its own). The caller collects it.
   void use_profiler(engine::gpu::GpuProfiler* profiler) { external_profiler_ = profiler; }
-  // CPU copies of the instances' meshes, parallel to FrameDesc::instances, for the next record().
-  void set_cpu_meshes(std::vector<const engine::MeshData*> meshes) { cpu_meshes_ = std::move(meshes); }
   CsmSnapshot read_csm() { return izb_ ? izb_->read_csm() : CsmSnapshot{}; }
   engine::gpu::Image& shadow_term() { return shadow_term_; }
   const View& last_view() const { return view_; }
@@ -70,7 +67,6 @@ class ContextImpl final : public Context {
   std::vector<Slot> slots_;
   engine::gpu::GpuProfiler* external_profiler_ = nullptr;
   std::vector<PassTime> last_pass_times_;
-  std::vector<const engine::MeshData*> cpu_meshes_;
 
   GeometryStore geometry_;
   View view_;

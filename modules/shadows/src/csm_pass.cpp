@@ -1,6 +1,7 @@
 #include "barriers.hpp"
 #include "csm_pass.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <iostream>
@@ -60,13 +61,40 @@ struct CsmPass::Impl {
   std::map<CsmTest, Pipeline> pipelines;
   Pipeline coverage;
   bool collected = false;
-  struct Cached {
+  // The automatic choice's measure, taken on the GPU (csm_measure.comp) and read back when the frame
+  // that took it completes. Taken again when the light, the texel size or the instance's matrix
+  // changes; meanwhile the last one stands (an instance never measured stays out: a mesh left out
+  // costs culling, never a wrong shadow).
+  struct MeasureKey {
     glm::mat4 world;
     glm::vec3 light;
     float texel;
-    CsmChoiceMeasure measure;
+    bool operator==(const MeasureKey&) const = default;
   };
-  std::map<uint64_t, Cached> cache;  // by instance id
+  struct Cached {
+    MeasureKey key{};  // of `measure`
+    CsmChoiceMeasure measure;
+    bool measured = false;
+    bool pending = false;  // a measure is in flight
+  };
+  // By instance id and mesh (instances sharing both share a measure).
+  std::map<std::pair<uint64_t, uint32_t>, Cached> cache;
+  struct Job {
+    std::pair<uint64_t, uint32_t> instance;
+    MeasureKey key;
+    uint64_t triangles;
+  };
+  // Per frame-in-flight slot: the jobs its frame measured and the buffers it used. A slot's previous
+  // frame has completed when it records again, so its buffers are rewritten or replaced freely.
+  struct MeasureSlot {
+    Buffer jobs, partials;
+    std::vector<Job> pending;
+    uint32_t groups_per_job = 0;
+  };
+  std::vector<MeasureSlot> measure_slots;
+  std::vector<Job> wanted;  // this frame's jobs
+  std::vector<gpu_shared::CsmMeasureJob> wanted_gpu;
+  Pipeline measure;
   std::vector<CsmDecision> decisions;
   std::vector<bool> in_csm;  // per draw, this frame
   bool ran = false;
@@ -90,6 +118,13 @@ struct CsmPass::Impl {
     ensure_depth(1);
     PipelineFactory factory(c);
     coverage = factory.compute({"csm_coverage.comp", csm_bindings(), 0});
+    const VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    measure = factory.compute({"csm_measure.comp",
+                               {{gpu_shared::CSM_MEASURE_BINDING_VERTICES, storage},
+                                {gpu_shared::CSM_MEASURE_BINDING_INDICES, storage},
+                                {gpu_shared::CSM_MEASURE_BINDING_JOBS, storage},
+                                {gpu_shared::CSM_MEASURE_BINDING_PARTIALS, storage}},
+                               sizeof(gpu_shared::CsmMeasurePush)});
   }
 
   void ensure_depth(uint32_t resolution) {
@@ -185,6 +220,8 @@ struct CsmPass::Impl {
 
   void choose(const Frame& frame, uint32_t resolution) {
     decisions.clear();
+    wanted.clear();
+    wanted_gpu.clear();
     in_csm.assign(frame.draws.size(), false);
     const float texel = estimate_texel_size(frame, resolution);
     for (size_t i = 0; i < frame.draws.size(); ++i) {
@@ -206,28 +243,98 @@ struct CsmPass::Impl {
         decision.reason = "on: chosen for the entity";
       } else if (d.shadow.csm == engine::CsmChoice::Off) {
         decision.reason = "off: chosen for the entity";
-      } else if (d.cpu_mesh) {
+      } else {
         decision.automatic = true;
-        auto& cached = cache[d.id];
-        // Re-measure only when the light, the texel size or the entity's transform changed.
-        if (cached.world != d.world || cached.light != frame.view.light_direction || cached.texel != texel) {
-          cached = {d.world, frame.view.light_direction, texel,
-                    measure_csm_suitability(*d.cpu_mesh, d.world, frame.view.light_direction, texel)};
+        const MeasureKey key{d.world, frame.view.light_direction, texel};
+        Cached& cached = cache[{d.id, d.mesh}];
+        if ((!cached.measured || cached.key != key) && !cached.pending && wanted.size() < kMaxMeasuresPerFrame) {
+          const MeshRange& range = frame.geometry.mesh(d.mesh);
+          cached.pending = true;
+          wanted.push_back({{d.id, d.mesh}, key, range.index_count / 3});
+          wanted_gpu.push_back({d.world, range.first_index, range.vertex_offset, range.index_count / 3, 0u});
         }
-        decision.large_triangle_area_share = cached.measure.coverable_share;
-        decision.in_csm = cached.measure.coverable_share >= kCsmAutoThreshold;
-        std::ostringstream reason;
-        reason.precision(3);
-        reason << "auto: " << cached.measure.coverable_share * 100.0 << "% of its light-space area can fully cover "
-               << resolution << "^2 texels of ~" << texel << " units (" << (decision.in_csm ? ">=" : "<") << " "
-               << kCsmAutoThreshold * 100.0 << "%)";
-        decision.reason = reason.str();
+        if (!cached.measured) {
+          decision.reason = "out: measuring (its light-space area is measured on the GPU)";
+        } else {
+          decision.large_triangle_area_share = cached.measure.coverable_share;
+          decision.in_csm = cached.measure.coverable_share >= kCsmAutoThreshold;
+          std::ostringstream reason;
+          reason.precision(3);
+          reason << "auto: " << cached.measure.coverable_share * 100.0 << "% of its light-space area can fully cover "
+                 << resolution << "^2 texels of ~" << cached.key.texel << " units (" << (decision.in_csm ? ">=" : "<")
+                 << " " << kCsmAutoThreshold * 100.0 << "%)";
+          decision.reason = reason.str();
+        }
       }
       in_csm[i] = decision.in_csm;
       decisions.push_back(std::move(decision));
     }
   }
+
+  void record_measures(const Frame& frame);
+  void take_measures(uint32_t slot);
 };
+
+void CsmPass::Impl::record_measures(const Frame& frame) {
+  if (measure_slots.size() <= frame.slot) measure_slots.resize(frame.slot + 1);
+  MeasureSlot& slot = measure_slots[frame.slot];
+  for (const Job& job : slot.pending) cache[job.instance].pending = false;  // never read back: ask again
+  slot.pending.clear();
+  if (wanted.empty()) return;
+  uint64_t most = 1;
+  for (const Job& job : wanted) most = std::max(most, job.triangles);
+  // Enough workgroups per instance that each thread sums a few dozen triangles at most.
+  const uint32_t groups = uint32_t(std::clamp<uint64_t>((most + 2047) / 2048, 1, 64));
+  const VkDeviceSize job_bytes = wanted_gpu.size() * sizeof(gpu_shared::CsmMeasureJob);
+  const VkDeviceSize partial_bytes = VkDeviceSize(wanted.size()) * groups * sizeof(glm::vec2);
+  if (!slot.jobs.valid() || slot.jobs.size() < job_bytes)
+    slot.jobs = Buffer(ctx, std::max(job_bytes, slot.jobs.size() * 2), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+                       "csm auto-choice jobs");
+  if (!slot.partials.valid() || slot.partials.size() < partial_bytes)
+    slot.partials = Buffer(ctx, std::max(partial_bytes, slot.partials.size() * 2), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                           true, "csm auto-choice readback");
+  slot.jobs.write(wanted_gpu.data(), job_bytes);  // made visible to the device by the submission
+  slot.groups_per_job = groups;
+  slot.pending = wanted;
+  VkCommandBuffer cmd = frame.cmd;
+  ScopedGpuRegion region(ctx, frame.profiler, cmd, "csm_choice");
+  measure.bind(cmd);
+  DescriptorWriter()
+      .storage_buffer(gpu_shared::CSM_MEASURE_BINDING_VERTICES, frame.geometry.vertices().handle())
+      .storage_buffer(gpu_shared::CSM_MEASURE_BINDING_INDICES, frame.geometry.indices().handle())
+      .storage_buffer(gpu_shared::CSM_MEASURE_BINDING_JOBS, slot.jobs.handle())
+      .storage_buffer(gpu_shared::CSM_MEASURE_BINDING_PARTIALS, slot.partials.handle())
+      .push(ctx, cmd, measure);
+  gpu_shared::CsmMeasurePush push{};
+  push.to_light = glm::mat4(glm::mat3(light_view_matrix(frame.view.light_direction)));
+  push.circumradius = float(0.70710678 * wanted.front().key.texel);
+  push.groups_per_job = groups;
+  measure.push_constants(cmd, push);
+  vkCmdDispatch(cmd, groups, uint32_t(wanted.size()), 1);
+  // The sums, read on the host once this frame has completed.
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+}
+
+void CsmPass::Impl::take_measures(uint32_t slot_index) {
+  if (slot_index >= measure_slots.size()) return;
+  MeasureSlot& slot = measure_slots[slot_index];
+  const auto* partials = slot.partials.as<glm::vec2>();
+  for (size_t k = 0; k < slot.pending.size(); ++k) {
+    const Job& job = slot.pending[k];
+    double projected = 0.0, coverable = 0.0;
+    for (uint32_t g = 0; g < slot.groups_per_job; ++g) {
+      projected += partials[k * slot.groups_per_job + g].x;
+      coverable += partials[k * slot.groups_per_job + g].y;
+    }
+    Cached& cached = cache[job.instance];
+    cached.pending = false;
+    cached.measured = true;
+    cached.key = job.key;
+    cached.measure = {projected > 0.0 ? coverable / projected : 0.0, projected, job.triangles};
+  }
+  slot.pending.clear();
+}
 
 CsmPass::CsmPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
 bool CsmPass::raster_available(CsmTest test) const {
@@ -248,6 +355,7 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
     return false;
   }
   m.choose(frame, resolution);
+  m.record_measures(frame);
   bool any = false, explicit_on = false;
   for (const auto& d : m.decisions) {
     any = any || d.in_csm;
@@ -345,6 +453,8 @@ void CsmPass::record(Frame& frame, const IzbSettings& settings, const Buffer& iz
   vkCmdCopyBuffer(cmd, m.counters.handle(), m.readback.handle(), 1, &counts);
   m.collected = true;
 }
+
+void CsmPass::frame_completed(uint32_t slot) { impl_->take_measures(slot); }
 
 void CsmPass::after_frame(Stats& stats) {
   Impl& m = *impl_;

@@ -14,7 +14,8 @@ namespace shadows::detail {
 // texels can ever write a depth, so a mesh of small triangles costs raster time and culls nothing.
 // The measure: of the mesh's area projected along the light, the share that lies at least a
 // circumscribed texel radius (√2/2 texel) inside its triangle's edges — the area that can be fully
-// covered. `texel_size` is the world size of one CSM texel.
+// covered. `texel_size` is the world size of one CSM texel. The module measures on the GPU
+// (csm_measure.comp, the same formula in float); this CPU version is the tests' reference.
 struct CsmChoiceMeasure {
   double coverable_share = 0.0;
   double projected_area = 0.0;
@@ -25,6 +26,8 @@ CsmChoiceMeasure measure_csm_suitability(const engine::MeshData& mesh, const glm
 // Entities whose coverable share reaches this enter the CSM under CsmChoice::Auto.
 // A fifth is enough: a mesh's CSM raster cost is small next to the trace work each culled point saves.
 inline constexpr double kCsmAutoThreshold = 0.2;
+// Instances measured per frame at most (the rest wait for the next frames).
+inline constexpr size_t kMaxMeasuresPerFrame = 4096;
 
 // Under CsmChoice::Auto the prepass must pay for itself: when the last frame it ran culled fewer
 // than this share of the candidate points, it is skipped, and probed again every kCsmReprobeFrames
@@ -47,7 +50,8 @@ class CsmPass {
   // Per draw of the frame: whether it enters the CSM (valid after plan()).
   const std::vector<bool>& chosen_draws() const;
   // Chooses the casters for this frame and decides whether the prepass runs at all (see
-  // kCsmMinimumYield); call once per frame before prepare().
+  // kCsmMinimumYield); call once per frame before prepare(). Records the measures the automatic
+  // choice still needs into frame.cmd; they count from the frame after the one that took them.
   bool plan(const Frame& frame, const IzbSettings& settings, uint32_t resolution);
   // The culling rate the IZB measured on a frame the prepass ran.
   void note_yield(double culling_rate);
@@ -58,6 +62,8 @@ class CsmPass {
   void record(Frame& frame, const IzbSettings& settings, const engine::gpu::Buffer& izb_frame,
               uint32_t resolution, bool collect_stats, const std::function<void(VkCommandBuffer)>& compute_fill = {},
               const engine::gpu::Buffer* compute_texels = nullptr);
+  // The frame recorded in frame-in-flight slot `slot` has completed: its measures count from now.
+  void frame_completed(uint32_t slot);
   void after_frame(Stats& stats);
   std::vector<float> read_depth();
 

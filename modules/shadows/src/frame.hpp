@@ -69,7 +69,6 @@ struct DrawItem {
   bool alpha_tested() const { return alpha_threshold != 0; }
   engine::ShadowCaster shadow;
   engine::Aabb bounds;  // world space (invalid: unbounded)
-  const engine::MeshData* cpu_mesh = nullptr;  // CPU copy where the client has one (engine adapter)
 };
 
 // The last conservative shadow map, for tests and tools.

@@ -2,7 +2,6 @@
 #include "izb_pass.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstring>
 
@@ -104,9 +103,12 @@ struct IzbPass::Impl {
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
   Buffer grid_triangles, draw_flags, bounds_partials, csm_texels, tile_farthest;
-  Buffer triangle_staging;  // host-visible source of `triangles`, copied in the frame that changed it
   size_t triangle_capacity = 0, draw_capacity = 0;
   std::vector<uint32_t> first_triangle;  // per frame draw: its first caster triangle (casters only)
+  std::vector<gpu_shared::IzbCasterDraw> caster_table;  // this frame's caster draws
+  std::vector<gpu_shared::IzbCasterDraw> built_table;   // the caster draws `triangles` was built from
+  std::vector<Buffer> caster_tables;                    // per frame-in-flight slot: the table the build read
+  Pipeline build_casters;
   // Compute trace / CSM work lists (see izb.h), each grown to the demand a frame measured.
   struct WorkList {
     Buffer buffer;
@@ -127,8 +129,6 @@ struct IzbPass::Impl {
   uint64_t pool_size = 0;
   uint64_t pool_demand = 0;
   uint32_t triangle_count = 0;
-  std::vector<glm::mat4> triangle_source_matrices;  // detects when caster transforms change
-  std::vector<uint32_t> triangle_source_meshes;
   bool used_hardware = false;
   bool last_used_csm = false;
   bool collected = false;
@@ -322,77 +322,95 @@ struct IzbPass::Impl {
     }
   }
 
-  // Records the copy into `triangles` when the casters changed since the last frame. The buffers only
-  // grow: moving casters (every frame in a game) cost a memcpy and a copy command, not allocations
-  // and a separate submission each frame.
-  // Also finds each caster draw's first triangle in those buffers (they hold them in draw order).
+  // The world-space caster triangles, in draw order (the raster trace finds a fragment's triangle as
+  // its draw's first triangle plus the primitive index), written on the GPU from the module's geometry
+  // and a table of the caster draws; each triangle also knows its caster draw, for the per-frame CSM
+  // choice, and what its alpha test needs. Rebuilt only when the table changed (casters moved, came,
+  // went or changed material): moving casters cost a small table upload and one dispatch. Buffers
+  // only grow. Also finds each caster draw's first triangle (for the raster trace's push constants).
+  // Where the caster triangles are read: the compute passes and the raster trace's fragment and (where
+  // the device has them) geometry shaders.
+  VkPipelineStageFlags2 triangle_readers() const {
+    return VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT |
+           (ctx.features().geometry_shader ? VK_PIPELINE_STAGE_2_GEOMETRY_SHADER_BIT : 0);
+  }
+
   void ensure_triangles(const Frame& frame) {
-    std::vector<glm::mat4> matrices;
-    std::vector<uint32_t> meshes;
     first_triangle.assign(frame.draws.size(), 0);
+    caster_table.clear();
     uint32_t caster_triangles = 0;
     for (size_t i = 0; i < frame.draws.size(); ++i) {
       const DrawItem& d = frame.draws[i];
       if (!d.shadow.casts_shadow) continue;
+      const MeshRange& range = frame.geometry.mesh(d.mesh);
+      gpu_shared::IzbCasterDraw c{};
+      c.world = d.world;
+      c.first_index = range.first_index;
+      c.vertex_offset = range.vertex_offset;
+      c.triangle_count = range.index_count / 3;
+      c.first_triangle = caster_triangles;
+      c.ordinal = uint32_t(caster_table.size());
+      c.alpha_threshold = d.alpha_threshold;
+      c.texture = d.base_color_texture;
+      caster_table.push_back(c);
       first_triangle[i] = caster_triangles;
-      caster_triangles += frame.geometry.mesh(d.mesh).index_count / 3;
-      matrices.push_back(d.world);
-      meshes.push_back(d.mesh);
-      meshes.push_back(d.alpha_threshold);
-      meshes.push_back(d.base_color_texture);
+      caster_triangles += c.triangle_count;
     }
-    caster_draws = uint32_t(matrices.size());
-    if (triangles.valid() && matrices == triangle_source_matrices && meshes == triangle_source_meshes) return;
-    // World-space caster triangles, in draw order (the raster trace finds a fragment's triangle as
-    // its draw's first triangle plus the primitive index), rebuilt only when casters move or change
-    // material; each triangle also knows its caster draw, for the per-frame CSM choice, and what
-    // its alpha test needs.
-    std::vector<gpu_shared::IzbCasterTriangle> data;
-    uint32_t ordinal = 0;
-    for (const auto& d : frame.draws) {
-      if (!d.shadow.casts_shadow) continue;
-      if (d.cpu_mesh) {
-        const auto& m = *d.cpu_mesh;
-        for (size_t i = 0; i + 2 < m.indices.size(); i += 3) {
-          const engine::Vertex* v[3] = {&m.vertices[m.indices[i]], &m.vertices[m.indices[i + 1]],
-                                        &m.vertices[m.indices[i + 2]]};
-          gpu_shared::IzbCasterTriangle t{};
-          t.p0 = glm::vec4(glm::vec3(d.world * glm::vec4(v[0]->position, 1.0f)), std::bit_cast<float>(ordinal));
-          t.p1 = glm::vec4(glm::vec3(d.world * glm::vec4(v[1]->position, 1.0f)), std::bit_cast<float>(d.alpha_threshold));
-          t.p2 = glm::vec4(glm::vec3(d.world * glm::vec4(v[2]->position, 1.0f)),
-                           std::bit_cast<float>(d.base_color_texture));
-          t.uv01 = glm::vec4(v[0]->uv, v[1]->uv);
-          t.uv2 = glm::vec4(v[2]->uv, 0.0f, 0.0f);
-          data.push_back(t);
-        }
-      }
-      ++ordinal;
-    }
-    triangle_count = uint32_t(data.size());
-    if (data.empty()) data.push_back({});
-    if (data.size() > triangle_capacity) {
-      triangle_capacity = data.size();
-      const VkDeviceSize bytes = triangle_capacity * sizeof(data[0]);
-      triangle_staging = Buffer(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "izb caster triangles staging");
-      triangles = Buffer(ctx, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false,
-                         "izb caster triangles");
-      grid_triangles = Buffer(ctx, triangle_capacity * 3 * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
-                              "izb grid-space caster triangles");
-    }
-    if (matrices.size() > draw_capacity || !draw_flags.valid()) {
-      draw_capacity = std::max<size_t>(matrices.size(), 1);
+    caster_draws = uint32_t(caster_table.size());
+    triangle_count = caster_triangles;
+    if (caster_table.size() > draw_capacity || !draw_flags.valid()) {
+      draw_capacity = std::max<size_t>(caster_table.size(), 1);
       draw_flags = Buffer(ctx, draw_capacity * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
                           "izb caster draw flags");
     }
-    // One frame in flight: the previous frame, the last reader of both buffers, has completed.
-    const VkDeviceSize bytes = data.size() * sizeof(data[0]);
-    triangle_staging.write(data.data(), bytes);
-    const VkBufferCopy copy{0, 0, bytes};
-    vkCmdCopyBuffer(frame.cmd, triangle_staging.handle(), triangles.handle(), 1, &copy);
-    memory_barrier(frame.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-    triangle_source_matrices = std::move(matrices);
-    triangle_source_meshes = std::move(meshes);
+    // Mesh ranges are never reused (the geometry only grows), so an equal table means equal triangles.
+    const size_t table_bytes = caster_table.size() * sizeof(gpu_shared::IzbCasterDraw);
+    if (triangles.valid() && built_table.size() == caster_table.size() &&
+        std::memcmp(built_table.data(), caster_table.data(), table_bytes) == 0)
+      return;
+    if (triangle_count > triangle_capacity || !triangles.valid()) {
+      triangle_capacity = std::max<size_t>(triangle_count, 1);
+      triangles = Buffer(ctx, triangle_capacity * sizeof(gpu_shared::IzbCasterTriangle),
+                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb caster triangles");
+      grid_triangles = Buffer(ctx, triangle_capacity * 3 * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                              "izb grid-space caster triangles");
+    }
+    built_table = caster_table;
+    if (triangle_count == 0) return;
+    // The table in this frame-in-flight slot's own host buffer: the frame that last read it (the
+    // slot's previous one) has completed, so it is rewritten and, when too small, replaced freely.
+    if (caster_tables.size() <= frame.slot) caster_tables.resize(frame.slot + 1);
+    Buffer& table = caster_tables[frame.slot];
+    if (!table.valid() || table.size() < table_bytes)
+      table = Buffer(ctx, std::max<VkDeviceSize>(table_bytes, table.size() * 2), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                     true, "izb caster draw table");
+    table.write(caster_table.data(), table_bytes);  // made visible to the device by the submission
+    if (!build_casters.valid())
+      build_casters = factory.compute({"izb_casters.comp",
+                                       {{gpu_shared::IZB_CASTERS_BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                                        {gpu_shared::IZB_CASTERS_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                                        {gpu_shared::IZB_CASTERS_BINDING_DRAWS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                                        {gpu_shared::IZB_CASTERS_BINDING_TRIANGLES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+                                       sizeof(gpu_shared::IzbCastersPush)});
+    VkCommandBuffer cmd = frame.cmd;
+    ScopedGpuRegion region(ctx, frame.profiler, cmd, "izb_casters");
+    // Earlier frames' reads of the triangles (compute passes, the raster trace's geometry and fragment
+    // shaders) finish before they are overwritten.
+    memory_barrier(cmd, triangle_readers(), 0, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0);
+    build_casters.bind(cmd);
+    DescriptorWriter()
+        .storage_buffer(gpu_shared::IZB_CASTERS_BINDING_VERTICES, frame.geometry.vertices().handle())
+        .storage_buffer(gpu_shared::IZB_CASTERS_BINDING_INDICES, frame.geometry.indices().handle())
+        .storage_buffer(gpu_shared::IZB_CASTERS_BINDING_DRAWS, table.handle())
+        .storage_buffer(gpu_shared::IZB_CASTERS_BINDING_TRIANGLES, triangles.handle())
+        .push(ctx, cmd, build_casters);
+    const uint32_t groups = (triangle_count + 63) / 64;
+    const uint32_t groups_x = std::min(groups, ctx.properties().limits.maxComputeWorkGroupCount[0]);
+    const gpu_shared::IzbCastersPush push{caster_draws, triangle_count, groups_x, 0u};
+    build_casters.push_constants(cmd, push);
+    vkCmdDispatch(cmd, groups_x, (groups + groups_x - 1) / groups_x, 1);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, triangle_readers(),
+                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   }
 
   // The compute passes' work lists: first sized from the scene and grid, then grown to the demand a
@@ -803,8 +821,9 @@ CsmSnapshot IzbPass::read_csm() {
   return snapshot;
 }
 
-void IzbPass::after_frame(Stats& s) {
+void IzbPass::after_frame(Stats& s, uint32_t slot) {
   Impl& m = *impl_;
+  m.csm->frame_completed(slot);
   if (!m.collected) return;
   m.collected = false;
   const auto* c = m.counters_readback.as<uint32_t>();

@@ -26,7 +26,8 @@ class IzbPass {
   engine::gpu::Image& soft_term();
   PixelList hybrid_list() const;
   void record_hybrid_blend(Frame& frame);
-  void after_frame(Stats& stats);
+  // The frame recorded in frame-in-flight slot `slot` has completed.
+  void after_frame(Stats& stats, uint32_t slot);
   bool hardware_raster_available() const;
   bool csm_test_supported(CsmTest test, std::string* why) const;
   CsmSnapshot read_csm();

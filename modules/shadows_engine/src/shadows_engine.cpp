@@ -88,7 +88,6 @@ class EngineShadowModule final : public ShadowModule {
   void record(engine::FrameContext& frame) override {
     if (geometry_ != &frame.geometry) on_scene(frame.ctx, *renderer_.scene(), frame.geometry);
     instances_.clear();
-    std::vector<const engine::MeshData*> cpu_meshes;
     for (const auto& d : frame.draws) {
       const engine::Mesh* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
       Instance in;
@@ -102,9 +101,7 @@ class EngineShadowModule final : public ShadowModule {
       const auto* name = frame.registry.try_get<engine::Name>(d.entity);
       in.name = name ? name->value.c_str() : "";
       instances_.push_back(in);
-      cpu_meshes.push_back(mesh ? mesh->data.get() : nullptr);
     }
-    context_->set_cpu_meshes(std::move(cpu_meshes));
 
     engine::GBuffer& g = frame.gbuffer;
     FrameDesc f;
