@@ -301,8 +301,11 @@ TEST_F(IzbTest, AutomaticCsmChoiceGpuMeasureMatchesCpu) {
     const auto first = module_->stats().csm_decisions;
     ASSERT_FALSE(first.empty());
     auto alpha_tested = [](const shadows::CsmDecision& d) { return d.reason.find("alpha-tested") != std::string::npos; };
-    for (const auto& d : first)
-      if (!alpha_tested(d)) EXPECT_EQ(d.reason.rfind("out: measuring", 0), 0u) << d.name << ": " << d.reason;
+    for (const auto& d : first) {
+      if (!alpha_tested(d)) {
+        EXPECT_EQ(d.reason.rfind("out: measuring", 0), 0u) << d.name << ": " << d.reason;
+      }
+    }
     for (int i = 0; i < 2; ++i) r.render_frame(0.0f);
     const glm::vec3 light = glm::normalize(r.frame_view().light_direction);
     size_t compared = 0;
@@ -320,8 +323,9 @@ TEST_F(IzbTest, AutomaticCsmChoiceGpuMeasureMatchesCpu) {
       const auto cpu = shadows::detail::measure_csm_suitability(*mesh->data, transform->world, light, texel);
       // Float sums, and the printed texel size's rounding (a relative 5e-4 moves the share by 1e-3 at most).
       EXPECT_NEAR(d.large_triangle_area_share, cpu.coverable_share, 2e-3) << d.name;
-      if (std::abs(cpu.coverable_share - shadows::detail::kCsmAutoThreshold) > 2e-3)
+      if (std::abs(cpu.coverable_share - shadows::detail::kCsmAutoThreshold) > 2e-3) {
         EXPECT_EQ(d.in_csm, cpu.coverable_share >= shadows::detail::kCsmAutoThreshold) << d.name;
+      }
       ++compared;
     }
     EXPECT_GT(compared, 3u);

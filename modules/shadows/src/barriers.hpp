@@ -17,6 +17,17 @@ void pass_barrier(const engine::gpu::Context& ctx, VkCommandBuffer cmd);
 }  // namespace shadows::detail
 
 namespace engine::gpu {
+class Image;
+}
+
+namespace shadows::detail {
+
+// A new image (UNDEFINED) into GENERAL, in the frame's command stream, before any pass uses it.
+void to_general(const engine::gpu::Context& ctx, VkCommandBuffer cmd, engine::gpu::Image& image);
+
+}  // namespace shadows::detail
+
+namespace engine::gpu {
 class Buffer;
 }
 

@@ -58,13 +58,6 @@ uint32_t mip_count(uint32_t size) {
   return levels;
 }
 
-void to_general(const Context& ctx, Image& image) {
-  ctx.immediate_submit([&](VkCommandBuffer cmd) {
-    image.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                     VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-  });
-}
-
 // Map-texel xy bounds of `points` in `light_view_projection`.
 glm::vec4 texel_bounds(const glm::mat4& light_view_projection, const glm::vec3* points, int n, float size) {
   glm::vec4 r(std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
@@ -107,7 +100,7 @@ struct CascadesPass::Impl {
   Pipeline args_pipeline;
   Pipeline blur_pipeline[2];  // [apply]
   CascadeFit fit;
-  bool recorded = false;
+  ReadbackRing readback;
   bool blur_enabled = false;
 
   void create_pipelines() {
@@ -201,13 +194,13 @@ struct CascadesPass::Impl {
     });
   }
 
-  void ensure_maps(uint32_t size) {
+  void ensure_maps(VkCommandBuffer cmd, uint32_t size) {
     if (map_size == size) return;
     map_size = size;
     // Always kMaxCascades layers: the views stay 2D arrays whatever the cascade count.
     depth = Image(ctx, {size, size}, kMapFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                   "cascade depth", 1, kMaxCascadeCount);
-    to_general(ctx, depth);
+    to_general(ctx, cmd, depth);
   }
 
   void ensure_frame(VkExtent2D extent) {
@@ -364,9 +357,8 @@ CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {
                     false, "cascade params");
   m.counters = Buffer(ctx, gs::CASCADE_COUNTER_WORDS * 4,
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
-                          VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                      true, "cascade counters");
-  std::memset(m.counters.mapped(), 0, gs::CASCADE_COUNTER_WORDS * 4);
+                          VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                      false, "cascade counters");
   m.nearest = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "cascade nearest");
   m.no_input_list = Buffer(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade input list placeholder");
   m.create_pipelines();
@@ -380,7 +372,7 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
   static_assert(gs::kIzbHybridEntriesPerGroup == 4 * gs::CASCADE_LIST_GROUP, "a list workgroup takes 4 entries a thread");
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
-  m.ensure_maps(std::max(settings.map_size, 16u));
+  m.ensure_maps(cmd, std::max(settings.map_size, 16u));
   m.ensure_frame(frame.view.extent);
   m.fit = fit_cascades(frame.view, settings, caster_bounds(frame));
   std::array<uint32_t, kMaxCascadeCount> levels{};
@@ -390,7 +382,7 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
   gs::CascadeParams p = m.make_params(frame, s, debug, &levels, &rects);
   if (only) p.mode.w = only->count_word;
   record_update(m.ctx, cmd, m.params, &p, sizeof(p));
-  // Frames are recorded only once the previous one has finished, so the buffers may be replaced here.
+  // Replaced buffers outlive the frames in flight that use them (Context::defer_releases).
   const VkDeviceSize texels = std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + [&] {
     const glm::ivec4 r = rects[kMaxCascadeCount - 1];
     return r.z >= r.x && r.w >= r.y ? VkDeviceSize(r.z - r.x + 1) * VkDeviceSize(r.w - r.y + 1) : VkDeviceSize(0);
@@ -496,16 +488,16 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
     }
   }
   pass_barrier(frame.ctx, cmd);
-  // The counters are read on the host after the frame's fence.
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
-                 VK_ACCESS_2_HOST_READ_BIT);
-  m.recorded = true;
+  // The counters are read on the host once this frame has completed.
+  m.readback.record_copy(frame, m.counters, gs::CASCADE_COUNTER_WORDS * 4, pass_shader_stages(m.ctx),
+                         VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, "cascade counters readback");
 }
 
-void CascadesPass::after_frame(Stats& stats) {
+void CascadesPass::after_frame(Stats& stats, uint32_t slot) {
   Impl& m = *impl_;
-  if (!m.recorded) return;
-  const uint32_t* c = m.counters.as<uint32_t>();
+  const Buffer* readback = m.readback.take(slot);
+  if (!readback) return;
+  const uint32_t* c = readback->as<uint32_t>();
   stats.expensive_path_pixels = c[gs::CASCADE_COUNTER_KERNEL] + c[gs::CASCADE_COUNTER_EXPENSIVE];
   stats.blurred_pixels = m.blur_enabled ? c[gs::CASCADE_COUNTER_BLUR] : 0;
   const uint64_t facing = c[gs::CASCADE_COUNTER_FACING];

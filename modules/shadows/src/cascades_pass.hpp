@@ -27,7 +27,7 @@ class CascadesPass {
   void record(Frame& frame, const CascadeSettings& settings, engine::gpu::Image& out, DebugView debug,
               const PixelList* only = nullptr);
   // After the frame's fence: fills the cascade fields of `stats`.
-  void after_frame(Stats& stats);
+  void after_frame(Stats& stats, uint32_t slot);
 
  private:
   struct Impl;

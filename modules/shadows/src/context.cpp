@@ -287,9 +287,9 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
 
   // The previous frame's reads of the parameters and of the module's per-pixel images finish before
   // this frame rewrites them; fresh images move from UNDEFINED to GENERAL.
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, 0);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
   vkCmdUpdateBuffer(cmd, input_params_.handle(), 0, sizeof(p), &p);
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_UNIFORM_READ_BIT);
   for (Image* img : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_}) {
     if (targets_fresh_)
@@ -405,7 +405,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   ensure_targets(f.depth.extent);
   record_inputs(cmd, f, view);
   Frame frame{*gpu_, cmd, profiler, view, inputs_, shadow_term_, overlay_, geometry_.geometry(), draws_,
-              uint32_t(f.frame_index % frames_in_flight_)};
+              uint32_t(f.frame_index % frames_in_flight_), frames_in_flight_};
   record_technique(frame);
   record_output(cmd, f);
   slot.frame = f.frame_index;
@@ -449,9 +449,12 @@ void ContextImpl::record_technique(Frame& frame) {
 }
 
 void ContextImpl::frame_completed(uint64_t frame_index) {
-  // One queue: every earlier frame has completed too.
+  // One queue: every earlier frame has completed too; they report in the order they ran.
+  std::vector<Slot*> done;
   for (auto& slot : slots_)
-    if (slot.frame && *slot.frame <= frame_index) complete_slot(slot);
+    if (slot.frame && *slot.frame <= frame_index) done.push_back(&slot);
+  std::sort(done.begin(), done.end(), [](const Slot* a, const Slot* b) { return *a->frame < *b->frame; });
+  for (Slot* slot : done) complete_slot(*slot);
   gpu_->release_through(frame_index);
 }
 
@@ -464,9 +467,10 @@ void ContextImpl::complete_slot(Slot& slot) {
   // Always: the passes grow their pools and buffers to the demand they measured.
   Stats fresh;  // only the techniques that ran this frame report
   const Technique t = slot.technique;
-  if ((t == Technique::Izb || t == Technique::Hybrid) && izb_) izb_->after_frame(fresh, uint32_t(&slot - slots_.data()));
-  if ((t == Technique::Cascades || t == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh);
-  if (t == Technique::RayTraced && ray_traced_) ray_traced_->after_frame(fresh);
+  const uint32_t index = uint32_t(&slot - slots_.data());
+  if ((t == Technique::Izb || t == Technique::Hybrid) && izb_) izb_->after_frame(fresh, index);
+  if ((t == Technique::Cascades || t == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh, index);
+  if (t == Technique::RayTraced && ray_traced_) ray_traced_->after_frame(fresh, index);
   if (collect_stats_) {
     add_memory(fresh, t, slot.csm);
     stats_ = std::move(fresh);

@@ -57,10 +57,10 @@ struct CsmPass::Impl {
   Context& ctx;
   Image depth;
   Sampler nearest;
-  Buffer counters, readback;
+  Buffer counters;
+  ReadbackRing readback;
   std::map<CsmTest, Pipeline> pipelines;
   Pipeline coverage;
-  bool collected = false;
   // The automatic choice's measure, taken on the GPU (csm_measure.comp) and read back when the frame
   // that took it completes. Taken again when the light, the texel size or the instance's matrix
   // changes; meanwhile the last one stands (an instance never measured stays out: a mesh left out
@@ -113,9 +113,6 @@ struct CsmPass::Impl {
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                       false, "csm counters");
-    readback = Buffer(c, gpu_shared::CSM_COUNTER_COUNT * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "csm readback");
-    std::memset(readback.mapped(), 0, readback.size());
-    ensure_depth(1);
     PipelineFactory factory(c);
     coverage = factory.compute({"csm_coverage.comp", csm_bindings(), 0});
     const VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -127,19 +124,18 @@ struct CsmPass::Impl {
                                sizeof(gpu_shared::CsmMeasurePush)});
   }
 
-  void ensure_depth(uint32_t resolution) {
+  // The map is cleared to 1 (nothing stored) when made, in the frame's command stream.
+  void ensure_depth(VkCommandBuffer cmd, uint32_t resolution) {
     if (depth.valid() && depth.extent().width == resolution) return;
     depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
                   VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
                       VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                   "conservative shadow map");
-    ctx.immediate_submit([&](VkCommandBuffer cmd) {
-      depth.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                       VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-      VkClearDepthStencilValue far{1.0f, 0};
-      VkImageSubresourceRange range{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
-      vkCmdClearDepthStencilImage(cmd, depth.handle(), VK_IMAGE_LAYOUT_GENERAL, &far, 1, &range);
-    });
+    to_general(ctx, cmd, depth);
+    VkClearDepthStencilValue far{1.0f, 0};
+    VkImageSubresourceRange range{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+    vkCmdClearDepthStencilImage(cmd, depth.handle(), VK_IMAGE_LAYOUT_GENERAL, &far, 1, &range);
+    pass_barrier(ctx, cmd);
   }
 
   bool supported(CsmTest test, std::string* why) const {
@@ -342,7 +338,7 @@ bool CsmPass::raster_available(CsmTest test) const {
 }
 const std::vector<bool>& CsmPass::chosen_draws() const { return impl_->in_csm; }
 CsmPass::~CsmPass() = default;
-void CsmPass::prepare(uint32_t resolution) { impl_->ensure_depth(resolution); }
+void CsmPass::prepare(VkCommandBuffer cmd, uint32_t resolution) { impl_->ensure_depth(cmd, resolution); }
 VkImageView CsmPass::depth_view() const { return impl_->depth.view(); }
 bool CsmPass::supported(CsmTest test, std::string* why) const { return impl_->supported(test, why); }
 
@@ -447,23 +443,19 @@ void CsmPass::record(Frame& frame, const IzbSettings& settings, const Buffer& iz
       .sampled_image(gpu_shared::CSM_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
       .push(m.ctx, cmd, m.coverage);
   vkCmdDispatch(cmd, (resolution + 7) / 8, (resolution + 7) / 8, 1);
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-  VkBufferCopy counts{0, 0, m.counters.size()};
-  vkCmdCopyBuffer(cmd, m.counters.handle(), m.readback.handle(), 1, &counts);
-  m.collected = true;
+  m.readback.record_copy(frame, m.counters, m.counters.size(), VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                         VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, "csm readback");
 }
 
 void CsmPass::frame_completed(uint32_t slot) { impl_->take_measures(slot); }
 
-void CsmPass::after_frame(Stats& stats) {
+void CsmPass::after_frame(Stats& stats, uint32_t slot) {
   Impl& m = *impl_;
   stats.csm_decisions = m.decisions;
   stats.csm_status = m.status;
   stats.csm_texels_covered = 0;
-  if (!m.collected) return;
-  m.collected = false;
-  stats.csm_texels_covered = m.readback.as<uint32_t>()[gpu_shared::CSM_COUNTER_TEXELS];
+  if (const Buffer* readback = m.readback.take(slot))
+    stats.csm_texels_covered = readback->as<uint32_t>()[gpu_shared::CSM_COUNTER_TEXELS];
 }
 
 }  // namespace shadows::detail

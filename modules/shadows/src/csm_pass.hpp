@@ -40,7 +40,7 @@ class CsmPass {
   explicit CsmPass(engine::gpu::Context& ctx);
   ~CsmPass();
   // Sizes the CSM for `resolution`; call before recording anything that binds depth_view().
-  void prepare(uint32_t resolution);
+  void prepare(VkCommandBuffer cmd, uint32_t resolution);
   VkImageView depth_view() const;
   bool supported(CsmTest test, std::string* why) const;
   // Whether `test` exists as a raster pass (the hardware tests always; Hertel and barycentric through
@@ -64,7 +64,7 @@ class CsmPass {
               const engine::gpu::Buffer* compute_texels = nullptr);
   // The frame recorded in frame-in-flight slot `slot` has completed: its measures count from now.
   void frame_completed(uint32_t slot);
-  void after_frame(Stats& stats);
+  void after_frame(Stats& stats, uint32_t slot);
   std::vector<float> read_depth();
 
  private:

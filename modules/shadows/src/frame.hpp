@@ -88,7 +88,43 @@ struct Frame {
   engine::gpu::Image& overlay;      // RGBA8 storage, GENERAL, 0 where no overlay
   Geometry& geometry;
   const std::vector<DrawItem>& draws;
-  uint32_t slot = 0;  // frame-in-flight slot of this frame
+  uint32_t slot = 0;   // frame-in-flight slot of this frame
+  uint32_t slots = 1;  // frames in flight
+};
+
+// Host-visible copies of a GPU buffer, one per frame in flight: a frame copies into its slot's copy,
+// which is read once that frame has completed, so frames in flight never share a readback.
+class ReadbackRing {
+ public:
+  // After `writers` / `writes` (the stages and accesses that produced `source`), copies `bytes` of it
+  // into the frame's copy and makes that visible to the host.
+  void record_copy(const Frame& frame, const engine::gpu::Buffer& source, VkDeviceSize bytes,
+                   VkPipelineStageFlags2 writers, VkAccessFlags2 writes, const char* name) {
+    if (copies_.size() != frame.slots) {
+      copies_.clear();
+      copies_.resize(frame.slots);
+      pending_.assign(frame.slots, false);
+    }
+    engine::gpu::Buffer& copy = copies_[frame.slot];
+    if (!copy.valid() || copy.size() < bytes)
+      copy = engine::gpu::Buffer(frame.ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, name);
+    engine::gpu::memory_barrier(frame.cmd, writers, writes, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    const VkBufferCopy region{0, 0, bytes};
+    vkCmdCopyBuffer(frame.cmd, source.handle(), copy.handle(), 1, &region);
+    engine::gpu::memory_barrier(frame.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+    pending_[frame.slot] = true;
+  }
+  // The slot's copy when its frame recorded one and it has not been taken yet; else null.
+  const engine::gpu::Buffer* take(uint32_t slot) {
+    if (slot >= pending_.size() || !pending_[slot]) return nullptr;
+    pending_[slot] = false;
+    return &copies_[slot];
+  }
+
+ private:
+  std::vector<engine::gpu::Buffer> copies_;
+  std::vector<bool> pending_;
 };
 
 }  // namespace shadows::detail

@@ -156,7 +156,7 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
   // Previous frames read these buffers (and may still run): their reads finish before this frame's
   // copies and imports write.
   memory_barrier(cmd, geometry_readers(), 0,
-                 VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT, 0);
+                 VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
   uint32_t first_pending_vertex = UINT32_MAX, first_pending_index = UINT32_MAX;
   for (const auto& p : pending_) {
     first_pending_vertex = std::min(first_pending_vertex, uint32_t(geometry_.meshes_[p.id].vertex_offset));
@@ -171,7 +171,7 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
   grow(geometry_.textures_, texture_bytes, std::min<VkDeviceSize>(textures_used, texture_bytes), geometry_usage_,
        "shadows alpha textures", cmd);
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
 
   const VkDeviceSize alignment = ctx_->properties().limits.minStorageBufferOffsetAlignment;
@@ -256,7 +256,7 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
   }
   vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), 0, 4, &texture_count_);
   // The imports' writes, visible to every reader of the geometry later in this frame.
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
                  geometry_readers(), kGeometryReads);
   pending_.clear();

@@ -17,8 +17,6 @@ namespace shadows::detail {
 using namespace engine::gpu;
 
 namespace {
-const VkPipelineStageFlags2 kAll = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-const VkAccessFlags2 kAllAccess = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
 
 std::vector<Binding> izb_bindings() {
   using gpu_shared::uint;
@@ -100,7 +98,8 @@ struct IzbPass::Impl {
   VkExtent2D hybrid_extent{};
   Pipeline hybrid_blend;
   Image trace_depth;
-  Buffer params, frame_data, counters, counters_readback;
+  Buffer params, frame_data, counters;
+  ReadbackRing counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
   Buffer grid_triangles, draw_flags, bounds_partials, csm_texels, tile_farthest;
   size_t triangle_capacity = 0, draw_capacity = 0;
@@ -131,7 +130,6 @@ struct IzbPass::Impl {
   uint32_t triangle_count = 0;
   bool used_hardware = false;
   bool last_used_csm = false;
-  bool collected = false;
 
   explicit Impl(Context& c) : ctx(c), factory(c) {
     if (!c.features().subgroup_arithmetic_compute_fragment)
@@ -148,28 +146,23 @@ struct IzbPass::Impl {
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
                       false, "izb counters");
-    counters_readback = Buffer(c, counter_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "izb counters readback");
-    std::memset(counters_readback.mapped(), 0, counter_bytes);
     nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "izb nearest");
     csm = std::make_unique<CsmPass>(c);
   }
 
   // Frame-sized in hybrid; otherwise 1x1 placeholders keep the bindings valid.
-  void ensure_hybrid(VkExtent2D e, bool hybrid) {
+  void ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid) {
     const VkExtent2D want = hybrid ? e : VkExtent2D{1, 1};
     if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height) return;
     hybrid_extent = want;
     soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                       "izb hybrid soft term");
     // -1 (not filtered) everywhere; the blend restores that after each frame (izb_hybrid_blend.comp).
-    ctx.immediate_submit([&](VkCommandBuffer cmd) {
-      soft_term.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-                           VK_ACCESS_2_TRANSFER_WRITE_BIT);
-      const VkClearColorValue unfiltered{{-1.0f, 0.0f, 0.0f, 0.0f}};
-      const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-      vkCmdClearColorImage(cmd, soft_term.handle(), VK_IMAGE_LAYOUT_GENERAL, &unfiltered, 1, &range);
-      memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, kAll, kAllAccess);
-    });
+    to_general(ctx, cmd, soft_term);
+    const VkClearColorValue unfiltered{{-1.0f, 0.0f, 0.0f, 0.0f}};
+    const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    vkCmdClearColorImage(cmd, soft_term.handle(), VK_IMAGE_LAYOUT_GENERAL, &unfiltered, 1, &range);
+    pass_barrier(ctx, cmd);
     hybrid_list = Buffer(ctx, VkDeviceSize(want.width) * want.height * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
                          "izb hybrid pixel list");
   }
@@ -282,9 +275,7 @@ struct IzbPass::Impl {
       trace_depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
                           VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                           "izb trace depth (farthest node)");
-      ctx.immediate_submit([&](VkCommandBuffer cmd) {
-        trace_depth.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAll, kAllAccess);
-      });
+      to_general(ctx, frame.cmd, trace_depth);
     }
     const VkExtent2D e = frame.view.extent;
     const VkDeviceSize pixels = VkDeviceSize(e.width) * e.height;
@@ -535,10 +526,10 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (settings.resolution == 0 || settings.resolution > 16384)
     throw std::invalid_argument("IZB resolution must be in 1..16384");
   m.ensure_buffers(frame, settings);
-  m.ensure_hybrid(frame.view.extent, hybrid);
+  m.ensure_hybrid(frame.cmd, frame.view.extent, hybrid);
   m.ensure_triangles(frame);
   const bool run_csm = m.csm->plan(frame, settings, m.resolution);
-  m.csm->prepare(run_csm ? m.resolution : 1);
+  m.csm->prepare(frame.cmd, run_csm ? m.resolution : 1);
 
   // Raster or compute, per pass. The timing of either depends on the sizes, the scene and the mode.
   // The render size counts in half-octaves of pixels, so dynamic resolution's small steps do not
@@ -779,10 +770,10 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     }
     m.dispatch(cmd, frame, m.p->list_stats, push, (m.resolution + 7) / 8, (m.resolution + 7) / 8);
   }
-  memory_barrier(cmd, kAll, kAllAccess, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-  VkBufferCopy copy{0, 0, m.counters.size()};
-  vkCmdCopyBuffer(cmd, m.counters.handle(), m.counters_readback.handle(), 1, &copy);
-  m.collected = true;
+  m.counters_readback.record_copy(frame, m.counters, m.counters.size(),
+                                  pass_shader_stages(m.ctx) | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+                                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                  "izb counters readback");
 }
 
 engine::gpu::Image& IzbPass::soft_term() { return impl_->soft_term; }
@@ -824,9 +815,9 @@ CsmSnapshot IzbPass::read_csm() {
 void IzbPass::after_frame(Stats& s, uint32_t slot) {
   Impl& m = *impl_;
   m.csm->frame_completed(slot);
-  if (!m.collected) return;
-  m.collected = false;
-  const auto* c = m.counters_readback.as<uint32_t>();
+  const Buffer* readback = m.counters_readback.take(slot);
+  if (!readback) return;
+  const auto* c = readback->as<uint32_t>();
   auto sharded = [&](uint32_t counter) {
     uint64_t sum = 0;
     for (uint32_t k = 0; k < gpu_shared::kIzbCounterShards; ++k)
@@ -873,7 +864,7 @@ void IzbPass::after_frame(Stats& s, uint32_t slot) {
   grow(m.tile_pairs, std::max(c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]));
   grow(m.pairs, c[gpu_shared::IZB_COUNTER_PAIRS]);
   m.csm->note_yield(s.culling_rate);
-  m.csm->after_frame(s);
+  m.csm->after_frame(s, slot);
   // Grow the pool for the next frame when this one overflowed (unless a fixed size was asked for).
   if (requested > m.pool_size) m.pool_demand = uint64_t(double(requested) * 1.25);
 }

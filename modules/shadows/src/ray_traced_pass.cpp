@@ -103,8 +103,8 @@ struct RayTracedPass::Impl {
   Scratch top_scratch;
   Buffer instances;  // host-visible VkAccelerationStructureInstanceKHR array
   Buffer instance_materials;  // host-visible RayTracedInstance per instance (the any-hit alpha test)
-  Buffer counters, counters_readback;
-  bool collected = false;
+  Buffer counters;
+  ReadbackRing counters_readback;
   uint32_t instance_count = 0;
   uint64_t bottom_triangles = 0;
 
@@ -133,7 +133,6 @@ struct RayTracedPass::Impl {
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                       false, "rt counters");
-    counters_readback = Buffer(ctx, counter_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "rt counters readback");
   }
 
   // One bottom level per mesh of the scene, built together in one submission (opaque triangles
@@ -318,23 +317,18 @@ void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collec
     m.sbt.trace(m.ctx, cmd, frame.view.extent.width, frame.view.extent.height);
   }
   if (collect_stats) {
-    memory_barrier(cmd, VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
-    VkBufferCopy copy{0, 0, m.counters.size()};
-    vkCmdCopyBuffer(cmd, m.counters.handle(), m.counters_readback.handle(), 1, &copy);
-    memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
-                   VK_ACCESS_2_HOST_READ_BIT);
-    m.collected = true;
+    m.counters_readback.record_copy(frame, m.counters, m.counters.size(), VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR,
+                                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, "rt counters readback");
   }
 }
 
-void RayTracedPass::after_frame(Stats& s) {
+void RayTracedPass::after_frame(Stats& s, uint32_t slot) {
   Impl& m = *impl_;
   s.rt_instances = m.instance_count;
   s.rt_triangles = m.bottom_triangles;
-  if (!m.collected) return;
-  m.collected = false;
-  const auto* c = m.counters_readback.as<uint32_t>();
+  const Buffer* readback = m.counters_readback.take(slot);
+  if (!readback) return;
+  const auto* c = readback->as<uint32_t>();
   s.shading_points = c[gpu_shared::RT_COUNTER_SHADING_POINTS];
   s.lit_candidates = c[gpu_shared::RT_COUNTER_CANDIDATES];
   s.rays_traced = c[gpu_shared::RT_COUNTER_RAYS];

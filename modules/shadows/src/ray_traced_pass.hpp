@@ -16,7 +16,7 @@ class RayTracedPass {
   explicit RayTracedPass(engine::gpu::Context& ctx);
   ~RayTracedPass();
   void record(Frame& frame, uint32_t samples_per_pixel, bool collect_stats);
-  void after_frame(Stats& stats);
+  void after_frame(Stats& stats, uint32_t slot);
   // Forgets the bottom levels (the scene's geometry changed).
   void scene_changed();
 

@@ -37,18 +37,15 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
   alpha_depth_pipeline_ = alpha_depth_pipeline(ctx, d);
 }
 
-void ShadowMapPass::ensure_map(uint32_t size) {
+void ShadowMapPass::ensure_map(VkCommandBuffer cmd, uint32_t size) {
   if (map_.valid() && map_.extent().width == size) return;
   map_ = Image(ctx_, {size, size}, kMapFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                "sm depth map");
-  ctx_.immediate_submit([&](VkCommandBuffer cmd) {
-    map_.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-  });
+  to_general(ctx_, cmd, map_);
 }
 
 void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
-  ensure_map(settings.size);
+  ensure_map(frame.cmd, settings.size);
   VkCommandBuffer cmd = frame.cmd;
   const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
   const engine::Aabb bounds = caster_bounds(frame);

@@ -12,7 +12,7 @@ class ShadowMapPass {
   void record(Frame& frame, const ShadowMapSettings& settings);
 
  private:
-  void ensure_map(uint32_t size);
+  void ensure_map(VkCommandBuffer cmd, uint32_t size);
   engine::gpu::Context& ctx_;
   engine::gpu::Image map_;
   engine::gpu::Buffer params_;
