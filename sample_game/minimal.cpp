@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   try {
-    engine::gpu::Context ctx({});                     // a GPU if there is one, else lavapipe
+    engine::gpu::Context ctx(engine::gpu::ContextOptions{});  // a GPU if there is one, else lavapipe
     auto scene = engine::load_scene(scene_name);      // glTF file or procedural scene
     engine::Renderer renderer(ctx, {width, height});  // G-buffer, lighting, PNG output
     renderer.set_scene(*scene);

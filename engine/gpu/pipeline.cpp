@@ -27,12 +27,12 @@ ShaderModule::ShaderModule(const Context& ctx, const std::string& name) : ctx_(c
   VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   info.codeSize = size;
   info.pCode = code.data();
-  VK_CHECK(vkCreateShaderModule(ctx.device(), &info, nullptr, &module_));
+  VK_CHECK(vkCreateShaderModule(ctx.device(), &info, ctx.allocator(), &module_));
   ctx.set_name(module_, VK_OBJECT_TYPE_SHADER_MODULE, name);
 }
 
 ShaderModule::~ShaderModule() {
-  if (module_) vkDestroyShaderModule(ctx_.device(), module_, nullptr);
+  if (module_) vkDestroyShaderModule(ctx_.device(), module_, ctx_.allocator());
 }
 
 Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
@@ -50,9 +50,9 @@ Pipeline& Pipeline::operator=(Pipeline&& o) noexcept {
 void Pipeline::reset() {
   if (!ctx_) return;
   VkDevice d = ctx_->device();
-  if (pipeline_) vkDestroyPipeline(d, pipeline_, nullptr);
-  if (layout_) vkDestroyPipelineLayout(d, layout_, nullptr);
-  if (set_layout_) vkDestroyDescriptorSetLayout(d, set_layout_, nullptr);
+  if (pipeline_) vkDestroyPipeline(d, pipeline_, ctx_->allocator());
+  if (layout_) vkDestroyPipelineLayout(d, layout_, ctx_->allocator());
+  if (set_layout_) vkDestroyDescriptorSetLayout(d, set_layout_, ctx_->allocator());
   pipeline_ = VK_NULL_HANDLE;
   layout_ = VK_NULL_HANDLE;
   set_layout_ = VK_NULL_HANDLE;
@@ -66,14 +66,14 @@ void PipelineFactory::make_layout(Pipeline& p, const std::vector<Binding>& bindi
   set_info.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
   set_info.bindingCount = static_cast<uint32_t>(vk_bindings.size());
   set_info.pBindings = vk_bindings.data();
-  VK_CHECK(vkCreateDescriptorSetLayout(ctx_.device(), &set_info, nullptr, &p.set_layout_));
+  VK_CHECK(vkCreateDescriptorSetLayout(ctx_.device(), &set_info, ctx_.allocator(), &p.set_layout_));
   VkPushConstantRange range{VK_SHADER_STAGE_ALL, 0, push_size};
   VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   layout_info.setLayoutCount = 1;
   layout_info.pSetLayouts = &p.set_layout_;
   layout_info.pushConstantRangeCount = push_size ? 1 : 0;
   layout_info.pPushConstantRanges = &range;
-  VK_CHECK(vkCreatePipelineLayout(ctx_.device(), &layout_info, nullptr, &p.layout_));
+  VK_CHECK(vkCreatePipelineLayout(ctx_.device(), &layout_info, ctx_.allocator(), &p.layout_));
 }
 
 namespace {
@@ -128,7 +128,7 @@ Pipeline PipelineFactory::compute(const ComputePipelineDesc& desc) const {
   info.stage.pName = "main";
   info.stage.pSpecializationInfo = spec.get();
   info.layout = p.layout_;
-  VK_CHECK(vkCreateComputePipelines(ctx_.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_));
+  VK_CHECK(vkCreateComputePipelines(ctx_.device(), ctx_.pipeline_cache(), 1, &info, ctx_.allocator(), &p.pipeline_));
   ctx_.set_name(p.pipeline_, VK_OBJECT_TYPE_PIPELINE, desc.shader);
   return p;
 }
@@ -236,7 +236,7 @@ Pipeline PipelineFactory::graphics(const GraphicsPipelineDesc& desc) const {
   info.pColorBlendState = &blend;
   info.pDynamicState = &dynamic;
   info.layout = p.layout_;
-  VK_CHECK(vkCreateGraphicsPipelines(ctx_.device(), VK_NULL_HANDLE, 1, &info, nullptr, &p.pipeline_));
+  VK_CHECK(vkCreateGraphicsPipelines(ctx_.device(), ctx_.pipeline_cache(), 1, &info, ctx_.allocator(), &p.pipeline_));
   ctx_.set_name(p.pipeline_, VK_OBJECT_TYPE_PIPELINE, desc.name.empty() ? desc.vertex_shader : desc.name);
   return p;
 }
@@ -273,7 +273,8 @@ Pipeline PipelineFactory::ray_tracing(const RayTracingPipelineDesc& desc) const 
   info.pGroups = groups.data();
   info.maxPipelineRayRecursionDepth = desc.max_recursion_depth;
   info.layout = p.layout_;
-  VK_CHECK(ctx_.rt.create_ray_tracing_pipelines(ctx_.device(), VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &info, nullptr,
+  VK_CHECK(ctx_.rt.create_ray_tracing_pipelines(ctx_.device(), VK_NULL_HANDLE, ctx_.pipeline_cache(), 1, &info,
+                                                ctx_.allocator(),
                                                 &p.pipeline_));
   ctx_.set_name(p.pipeline_, VK_OBJECT_TYPE_PIPELINE, desc.name.empty() ? desc.raygen_shader : desc.name);
   return p;

@@ -10,12 +10,12 @@ GpuProfiler::GpuProfiler(const Context& ctx, uint32_t max_regions, size_t histor
   VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   info.queryType = VK_QUERY_TYPE_TIMESTAMP;
   info.queryCount = capacity_;
-  VK_CHECK(vkCreateQueryPool(ctx.device(), &info, nullptr, &pool_));
+  VK_CHECK(vkCreateQueryPool(ctx.device(), &info, ctx.allocator(), &pool_));
   ctx.set_name(pool_, VK_OBJECT_TYPE_QUERY_POOL, "gpu profiler timestamps");
 }
 
 GpuProfiler::~GpuProfiler() {
-  if (pool_) vkDestroyQueryPool(ctx_.device(), pool_, nullptr);
+  if (pool_) vkDestroyQueryPool(ctx_.device(), pool_, ctx_.allocator());
 }
 
 void GpuProfiler::begin_frame(VkCommandBuffer cmd) {

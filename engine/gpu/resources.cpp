@@ -15,7 +15,7 @@ Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, 
   info.size = size > 0 ? size : 4;
   info.usage = usage;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  VK_CHECK(vkCreateBuffer(ctx.device(), &info, nullptr, &buffer_));
+  VK_CHECK(vkCreateBuffer(ctx.device(), &info, ctx.allocator(), &buffer_));
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(ctx.device(), buffer_, &req);
   VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
@@ -32,7 +32,7 @@ Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, 
   try {
     memory_ = ctx.allocate_memory(alloc, "buffer '" + name + "'");
   } catch (...) {
-    vkDestroyBuffer(ctx.device(), buffer_, nullptr);
+    vkDestroyBuffer(ctx.device(), buffer_, ctx.allocator());
     throw;
   }
   VK_CHECK(vkBindBufferMemory(ctx.device(), buffer_, memory_, 0));
@@ -61,7 +61,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
 
 void Buffer::reset() {
   if (!ctx_) return;
-  if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
+  if (buffer_) vkDestroyBuffer(ctx_->device(), buffer_, ctx_->allocator());
   if (memory_) {
     ctx_->untrack_allocation(memory_);
     ctx_->free_memory(memory_);
@@ -124,7 +124,7 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
   info.tiling = VK_IMAGE_TILING_OPTIMAL;
   info.usage = usage;
   info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  VK_CHECK(vkCreateImage(ctx.device(), &info, nullptr, &image_));
+  VK_CHECK(vkCreateImage(ctx.device(), &info, ctx.allocator(), &image_));
   VkMemoryRequirements req;
   vkGetImageMemoryRequirements(ctx.device(), image_, &req);
   VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
@@ -133,7 +133,7 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
   try {
     memory_ = ctx.allocate_memory(alloc, "image '" + name + "'");
   } catch (...) {
-    vkDestroyImage(ctx.device(), image_, nullptr);
+    vkDestroyImage(ctx.device(), image_, ctx.allocator());
     throw;
   }
   VK_CHECK(vkBindImageMemory(ctx.device(), image_, memory_, 0));
@@ -146,7 +146,7 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
     v.format = format;
     v.subresourceRange = {aspect_, base_mip, mips, base_layer, layer_count};
     VkImageView view;
-    VK_CHECK(vkCreateImageView(ctx.device(), &v, nullptr, &view));
+    VK_CHECK(vkCreateImageView(ctx.device(), &v, ctx.allocator(), &view));
     return view;
   };
   const VkImageUsageFlags viewable = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
@@ -166,7 +166,7 @@ Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsag
       v.format = format;
       v.subresourceRange = {aspect_, 0, 1, l, 1};
       VkImageView view;
-      VK_CHECK(vkCreateImageView(ctx.device(), &v, nullptr, &view));
+      VK_CHECK(vkCreateImageView(ctx.device(), &v, ctx.allocator(), &view));
       layer_views_.push_back(view);
     }
   ctx.set_name(image_, VK_OBJECT_TYPE_IMAGE, name);
@@ -195,12 +195,12 @@ Image& Image::operator=(Image&& o) noexcept {
 void Image::reset() {
   if (!ctx_) return;
   VkDevice d = ctx_->device();
-  for (VkImageView v : mip_views_) vkDestroyImageView(d, v, nullptr);
-  for (VkImageView v : layer_views_) vkDestroyImageView(d, v, nullptr);
+  for (VkImageView v : mip_views_) vkDestroyImageView(d, v, ctx_->allocator());
+  for (VkImageView v : layer_views_) vkDestroyImageView(d, v, ctx_->allocator());
   mip_views_.clear();
   layer_views_.clear();
-  if (view_) vkDestroyImageView(d, view_, nullptr);
-  if (image_) vkDestroyImage(d, image_, nullptr);
+  if (view_) vkDestroyImageView(d, view_, ctx_->allocator());
+  if (image_) vkDestroyImage(d, image_, ctx_->allocator());
   if (memory_) {
     ctx_->untrack_allocation(memory_);
     ctx_->free_memory(memory_);
@@ -243,7 +243,7 @@ Sampler::Sampler(const Context& ctx, VkFilter filter, VkSamplerAddressMode addre
   info.borderColor = VK_BORDER_COLOR_FLOAT_OPAQUE_WHITE;
   info.compareEnable = depth_compare;
   info.compareOp = VK_COMPARE_OP_GREATER_OR_EQUAL;
-  VK_CHECK(vkCreateSampler(ctx.device(), &info, nullptr, &sampler_));
+  VK_CHECK(vkCreateSampler(ctx.device(), &info, ctx.allocator(), &sampler_));
   ctx.set_name(sampler_, VK_OBJECT_TYPE_SAMPLER, name);
 }
 
@@ -257,7 +257,7 @@ Sampler& Sampler::operator=(Sampler&& o) noexcept {
 }
 
 void Sampler::reset() {
-  if (ctx_ && sampler_) vkDestroySampler(ctx_->device(), sampler_, nullptr);
+  if (ctx_ && sampler_) vkDestroySampler(ctx_->device(), sampler_, ctx_->allocator());
   sampler_ = VK_NULL_HANDLE;
 }
 

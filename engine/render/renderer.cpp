@@ -110,14 +110,14 @@ Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(ex
   alloc.commandBufferCount = 1;
   VK_CHECK(vkAllocateCommandBuffers(ctx.device(), &alloc, &frame_cmd_));
   VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  VK_CHECK(vkCreateFence(ctx.device(), &fence_info, nullptr, &frame_fence_));
+  VK_CHECK(vkCreateFence(ctx.device(), &fence_info, ctx.allocator(), &frame_fence_));
   create_targets();
 }
 
 Renderer::~Renderer() {
   vkDeviceWaitIdle(ctx_.device());
   features_.clear();
-  if (frame_fence_) vkDestroyFence(ctx_.device(), frame_fence_, nullptr);
+  if (frame_fence_) vkDestroyFence(ctx_.device(), frame_fence_, ctx_.allocator());
   if (frame_cmd_) vkFreeCommandBuffers(ctx_.device(), ctx_.command_pool(), 1, &frame_cmd_);
 }
 

@@ -30,7 +30,7 @@ struct Structure {
     info.buffer = storage.handle();
     info.size = size;
     info.type = type;
-    VK_CHECK(c.rt.create_acceleration_structure(c.device(), &info, nullptr, &handle));
+    VK_CHECK(c.rt.create_acceleration_structure(c.device(), &info, c.allocator(), &handle));
     VkAccelerationStructureDeviceAddressInfoKHR a{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_DEVICE_ADDRESS_INFO_KHR};
     a.accelerationStructure = handle;
     address = c.rt.get_acceleration_structure_address(c.device(), &a);
@@ -49,7 +49,7 @@ struct Structure {
     return *this;
   }
   void reset() {
-    if (ctx && handle) ctx->rt.destroy_acceleration_structure(ctx->device(), handle, nullptr);
+    if (ctx && handle) ctx->rt.destroy_acceleration_structure(ctx->device(), handle, ctx->allocator());
     handle = VK_NULL_HANDLE;
     address = 0;
     storage.reset();

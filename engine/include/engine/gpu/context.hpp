@@ -1,9 +1,11 @@
 #pragma once
 // The Vulkan instance, the chosen physical device, one universal queue, and the record of which
 // optional features the device offers. Every other part of the engine asks `features()` rather than
-// querying Vulkan itself.
+// querying Vulkan itself. A Context either creates its own instance and device (ContextOptions) or
+// adopts a device that a host application created (AdoptedDevice).
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -44,6 +46,8 @@ struct DeviceFeatures {
   // Subgroup basic + arithmetic operations in compute and fragment shaders (the shadow passes reduce
   // their counters per subgroup).
   bool subgroup_arithmetic_compute_fragment = false;
+
+  bool operator==(const DeviceFeatures&) const = default;
 };
 
 struct ContextOptions {
@@ -67,9 +71,73 @@ struct ContextOptions {
 // The names ContextOptions::masked_features accepts.
 const std::vector<std::string>& maskable_feature_names();
 
+// A device created by a host application, for the engine to run on. The host keeps ownership: the
+// context never destroys the instance, the device or the queue. Every handle must stay valid for the
+// context's lifetime; the lists and the features chain are read only during construction.
+struct AdoptedDevice {
+  VkInstance instance = VK_NULL_HANDLE;
+  VkPhysicalDevice physical_device = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+  // A family with graphics and compute; `queue` is a queue of it. The engine submits on `queue` from
+  // the thread that calls into it, so the host must not use that queue concurrently (Vulkan's
+  // external synchronization rule for queues).
+  uint32_t queue_family = 0;
+  VkQueue queue = VK_NULL_HANDLE;
+  PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;  // required
+  PFN_vkGetDeviceProcAddr get_device_proc_addr = nullptr;      // required
+  // What the host enabled when it created the instance and the device: the context uses exactly these
+  // (a feature the physical device has but the host did not enable counts as absent).
+  std::vector<std::string> enabled_instance_extensions;
+  std::vector<std::string> enabled_device_extensions;
+  // The pNext chain given to vkCreateDevice (may be null: core features none). Its root must be a
+  // VkPhysicalDeviceFeatures2 (a host that used pEnabledFeatures wraps them in one). Recognized in the
+  // chain: VkPhysicalDeviceVulkan11/12/13Features, the promoted single-feature structures
+  // (synchronization2, dynamic rendering, maintenance4, buffer device address, scalar block layout,
+  // host query reset, float16/int8, 8-bit storage), fragment shader barycentric, acceleration
+  // structure, ray tracing pipeline and ray query; other structures are skipped.
+  const VkPhysicalDeviceFeatures2* enabled_features = nullptr;
+  uint32_t api_version = VK_API_VERSION_1_3;  // the instance's apiVersion; at least 1.3
+  const VkAllocationCallbacks* allocator = nullptr;  // used for every object the context and resources create
+  VkPipelineCache pipeline_cache = VK_NULL_HANDLE;   // used for every pipeline created
+  // Count validation messages through a debug messenger created on the host's instance (only when the
+  // host enabled VK_EXT_debug_utils on it); tests turn this on.
+  bool count_validation_messages = false;
+  std::vector<std::string> masked_features;  // as ContextOptions::masked_features
+};
+
+// What a host enables on its device for the engine to run on it (AdoptedDevice), for one physical
+// device. The owning Context enables from the same table, so the two never disagree.
+struct DeviceRequirements {
+  std::vector<std::string> required_device_extensions;  // must be enabled (VK_KHR_push_descriptor)
+  // Enable when present: each unlocks a faster or extra path (conservative rasterization, fragment
+  // shader barycentric, acceleration structure + deferred host operations + ray tracing pipeline /
+  // ray query). Lists only what this physical device supports.
+  std::vector<std::string> optional_device_extensions;
+  // Feature bits by their Vulkan member name ("synchronization2", "dynamicRendering", "geometryShader",
+  // "fragmentStoresAndAtomics", "shaderInt64", "bufferDeviceAddress", ...), in
+  // VkPhysicalDeviceFeatures, VkPhysicalDeviceVulkan12/13Features or the extension's features
+  // structure. The optional list holds only bits this physical device supports.
+  std::vector<std::string> required_features, optional_features;
+};
+DeviceRequirements device_requirements(VkPhysicalDevice physical_device);
+
+struct FeatureChain;   // the feature structures a context reads and enables (context.cpp)
+struct DeviceSupport;  // what a physical device offers (context.cpp)
+
 class Context {
  public:
+  // Creates an instance and a device of its own, enabling every optional feature the device has.
   explicit Context(const ContextOptions& options);
+  // Runs on the host's device. Throws VulkanError (a std::runtime_error) with one line naming the bad
+  // field or what the device lacks: a null handle or entry point, an api_version under 1.3, a queue
+  // family without graphics and compute, VK_KHR_push_descriptor not enabled, synchronization2 or
+  // dynamicRendering not enabled. Creates only a command pool on `queue_family` (and a debug
+  // messenger when asked); features() is what the device has AND the host enabled, less
+  // masked_features.
+  explicit Context(const AdoptedDevice& host);
+  // Waits for the device to be idle, then destroys what the context created: its command pool and
+  // messenger, and when it owns them, the device and the instance. Objects made from the context
+  // (Buffer, Image, Pipeline, ...) must be destroyed first.
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
@@ -84,7 +152,23 @@ class Context {
   const VkPhysicalDeviceProperties& properties() const { return properties_; }
   std::string device_name() const { return properties_.deviceName; }
   std::string driver_description() const { return driver_description_; }
+  // Owning: the validation layer is on. Adopted: validation messages are counted (the messenger).
   bool validation_enabled() const { return validation_enabled_; }
+
+  // False for an adopted device: the destructor then leaves the host's device and instance alone.
+  bool owns_device() const { return owns_device_; }
+  // Passed to every vkCreate*/vkDestroy*/vkAllocateMemory/vkFreeMemory of the context and the
+  // resources made from it (null for an owning context).
+  const VkAllocationCallbacks* allocator() const { return allocator_; }
+  // Passed to every vkCreate*Pipelines (VK_NULL_HANDLE for an owning context).
+  VkPipelineCache pipeline_cache() const { return pipeline_cache_; }
+  // What the device was created with: for an owning context exactly what it gave vkCreateDevice /
+  // vkCreateInstance; for an adopted one the host's lists and the feature bits the engine reads,
+  // each set only where the device has it and the host enabled it. Enough to adopt the same device.
+  const std::vector<std::string>& enabled_instance_extensions() const { return enabled_instance_extensions_; }
+  const std::vector<std::string>& enabled_device_extensions() const { return enabled_device_extensions_; }
+  const VkPhysicalDeviceFeatures2* enabled_features() const;
+  uint32_t api_version() const { return api_version_; }
 
   // Count of validation/debug messages of warning or error severity since creation (or the last reset).
   uint32_t validation_message_count() const { return validation_messages_.load(); }
@@ -146,6 +230,14 @@ class Context {
   void create_instance(const ContextOptions& options);
   void pick_physical_device(const ContextOptions& options);
   void create_device(const ContextOptions& options);
+  // Shared by both constructors.
+  void set_masked_features(const std::vector<std::string>& masked);
+  void detect_features(const DeviceSupport& device, const FeatureChain& enabled,
+                       const std::vector<std::string>& device_extensions);
+  void load_instance_functions(PFN_vkGetInstanceProcAddr get_instance_proc_addr);
+  void create_messenger();
+  void load_device_functions(PFN_vkGetDeviceProcAddr get_device_proc_addr);
+  void create_command_pool();
 
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
@@ -163,6 +255,14 @@ class Context {
   std::vector<std::string> masked_features_;
   VkDeviceSize max_allocation_size_ = 0;
   bool debug_utils_ = false;
+  bool owns_device_ = true;
+  const VkAllocationCallbacks* allocator_ = nullptr;
+  VkPipelineCache pipeline_cache_ = VK_NULL_HANDLE;
+  uint32_t api_version_ = VK_API_VERSION_1_3;
+  PFN_vkGetInstanceProcAddr get_instance_proc_addr_ = nullptr;
+  std::vector<std::string> enabled_instance_extensions_;
+  std::vector<std::string> enabled_device_extensions_;
+  std::unique_ptr<FeatureChain> enabled_chain_;
   std::atomic<uint32_t> validation_messages_{0};
   mutable std::vector<std::string> message_log_;
   mutable std::unordered_map<VkDeviceMemory, Allocation> allocations_;
