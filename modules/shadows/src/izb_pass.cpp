@@ -99,6 +99,7 @@ struct IzbPass::Impl {
   Buffer hybrid_list;
   VkExtent2D hybrid_extent{};
   Pipeline hybrid_blend;
+  Pipeline gather;  // caster triangles of GPU-only meshes (izb_gather.comp)
   Image trace_depth;
   Buffer params, frame_data, counters, counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
@@ -347,9 +348,14 @@ struct IzbPass::Impl {
     // its alpha test needs.
     std::vector<gpu_shared::IzbCasterTriangle> data;
     uint32_t ordinal = 0;
+    bool gathered = false;  // some draws' triangles come from the GPU geometry (a host's meshes)
     for (const auto& d : frame.draws) {
       if (!d.shadow.casts_shadow) continue;
-      if (d.cpu_mesh) {
+      if (!d.cpu_mesh) {
+        // Placeholders, written on the GPU below.
+        data.resize(data.size() + frame.geometry.mesh(d.mesh).index_count / 3);
+        gathered = true;
+      } else {
         const auto& m = *d.cpu_mesh;
         for (size_t i = 0; i + 2 < m.indices.size(); i += 3) {
           const engine::Vertex* v[3] = {&m.vertices[m.indices[i]], &m.vertices[m.indices[i + 1]],
@@ -384,11 +390,47 @@ struct IzbPass::Impl {
     }
     // One frame in flight: the previous frame, the last reader of both buffers, has completed.
     const VkDeviceSize bytes = data.size() * sizeof(data[0]);
-    triangle_staging.write(data.data(), bytes);
-    const VkBufferCopy copy{0, 0, bytes};
-    vkCmdCopyBuffer(frame.cmd, triangle_staging.handle(), triangles.handle(), 1, &copy);
-    memory_barrier(frame.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    // The shader stages of the passes that read the triangles (compute and raster traces, CSM).
+    constexpr VkPipelineStageFlags2 kTriangleReaders =
+        VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
+        VK_PIPELINE_STAGE_2_GEOMETRY_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
+    if (gathered) {
+      // Every caster gathered on the GPU (all meshes live in the geometry buffers), so nothing the CPU
+      // writes is read by frames still in flight. Earlier frames' reads finish before the rewrite.
+      memory_barrier(frame.cmd, kTriangleReaders, 0, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0);
+      if (!gather.valid())
+        gather = factory.compute({.shader = "izb_gather.comp",
+                                  .bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                                               {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+                                  .push_constant_size = 96});
+      gather.bind(frame.cmd);
+      DescriptorWriter()
+          .storage_buffer(0, frame.geometry.vertices().handle())
+          .storage_buffer(1, frame.geometry.indices().handle())
+          .storage_buffer(2, triangles.handle())
+          .push(ctx, frame.cmd, gather);
+      uint32_t draw_ordinal = 0, first = 0;
+      for (const auto& d : frame.draws) {
+        if (!d.shadow.casts_shadow) continue;
+        const MeshRange& range = frame.geometry.mesh(d.mesh);
+        struct {
+          glm::mat4 world;
+          glm::uvec4 range, material;
+        } push{d.world, {range.first_index, uint32_t(range.vertex_offset), range.index_count / 3, first},
+               {draw_ordinal++, d.alpha_threshold, d.base_color_texture, 0u}};
+        first += range.index_count / 3;
+        gather.push_constants(frame.cmd, push);
+        vkCmdDispatch(frame.cmd, (push.range.z + 63) / 64, 1, 1);
+      }
+      memory_barrier(frame.cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     kTriangleReaders, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    } else {
+      triangle_staging.write(data.data(), bytes);
+      const VkBufferCopy copy{0, 0, bytes};
+      vkCmdCopyBuffer(frame.cmd, triangle_staging.handle(), triangles.handle(), 1, &copy);
+      memory_barrier(frame.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    }
     triangle_source_matrices = std::move(matrices);
     triangle_source_meshes = std::move(meshes);
   }
