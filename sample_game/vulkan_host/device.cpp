@@ -18,16 +18,6 @@ bool has(const std::vector<std::string>& list, const std::string& name) {
   return std::find(list.begin(), list.end(), name) != list.end();
 }
 
-std::vector<std::string> device_extension_names(VkPhysicalDevice pd) {
-  uint32_t n = 0;
-  vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr);
-  std::vector<VkExtensionProperties> props(n);
-  vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, props.data());
-  std::vector<std::string> names;
-  for (const auto& p : props) names.emplace_back(p.extensionName);
-  return names;
-}
-
 }  // namespace
 
 void FeatureChain::link(const std::vector<std::string>& extensions) {

@@ -113,7 +113,7 @@ Result run(const Options& o) {
   Device d({.device = o.device, .validation = o.validation});
   const VkDevice dev = d.device;
   auto module = shadows::Context::create(d.context_desc(F, *settings));
-  const shadows::Capability& can = module->capabilities().of(settings->technique);
+  const shadows::Capability can = module->capabilities().of(settings->technique);
   if (!can.available) throw std::runtime_error(can.reason);
 
   // ----- Meshes: one buffer per mesh (interleaved position + normal, then indices), also the module's input.

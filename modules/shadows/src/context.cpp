@@ -239,6 +239,9 @@ void ContextImpl::validate(const FrameDesc& f) const {
                   " is not a registered mesh");
   if (!(f.camera.near_plane > 0.0f) || !(f.camera.far_plane > f.camera.near_plane))
     throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
+  // A technique the device cannot run is refused here, before anything is recorded.
+  if (settings_.technique == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline)
+    throw Error("shadows: Settings.technique rt: " + gpu_->features().ray_tracing_missing);
 }
 
 void ContextImpl::ensure_targets(VkExtent2D extent, uint64_t frame) {
@@ -547,6 +550,22 @@ CascadesPass& ContextImpl::cascades() {
 
 std::unique_ptr<Context> Context::create(const ContextDesc& desc) { return std::make_unique<detail::ContextImpl>(desc); }
 
+namespace {
+
+// The path an optional item unlocks (the engine's requirements list names only).
+std::string what_unlocks(const std::string& name) {
+  if (name == VK_EXT_CONSERVATIVE_RASTERIZATION_EXTENSION_NAME) return "hardware conservative raster (IZB trace, CSM inner test)";
+  if (name == VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME || name == "fragmentShaderBarycentric")
+    return "CSM test bary_hw";
+  if (name == "geometryShader") return "raster IZB trace and CSM tests hertel/bary";
+  if (name.find("ray") != std::string::npos || name.find("cceleration") != std::string::npos ||
+      name == VK_KHR_DEFERRED_HOST_OPERATIONS_EXTENSION_NAME || name == "bufferDeviceAddress")
+    return "technique rt";
+  return "faster paths";
+}
+
+}  // namespace
+
 DeviceRequirements device_requirements(VkPhysicalDevice physical_device) {
   DeviceRequirements out;
   if (physical_device == VK_NULL_HANDLE) {
@@ -555,10 +574,25 @@ DeviceRequirements device_requirements(VkPhysicalDevice physical_device) {
   }
   const engine::gpu::DeviceRequirements r = engine::gpu::device_requirements(physical_device);
   for (const auto& e : r.required_device_extensions) out.required_extensions.push_back({e, "every technique"});
-  for (const auto& e : r.optional_device_extensions) out.optional_extensions.push_back({e, engine::gpu::what_unlocks(e)});
+  for (const auto& e : r.optional_device_extensions) out.optional_extensions.push_back({e, what_unlocks(e)});
   for (const auto& e : r.required_features) out.required_features.push_back({e, "every technique"});
-  for (const auto& e : r.optional_features) out.optional_features.push_back({e, engine::gpu::what_unlocks(e)});
-  out.missing = r.missing;
+  for (const auto& e : r.optional_features) out.optional_features.push_back({e, what_unlocks(e)});
+  // What the device lacks of the required items: Vulkan 1.3 (synchronization2, dynamicRendering are
+  // core there and every 1.3 device has them) and the required extensions.
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(physical_device, &props);
+  const std::string device = std::string("shadows: device ") + props.deviceName;
+  if (props.apiVersion < VK_API_VERSION_1_3) {
+    out.missing = device + " does not support Vulkan 1.3";
+    return out;
+  }
+  uint32_t count = 0;
+  vkEnumerateDeviceExtensionProperties(physical_device, nullptr, &count, nullptr);
+  std::vector<VkExtensionProperties> extensions(count);
+  vkEnumerateDeviceExtensionProperties(physical_device, nullptr, &count, extensions.data());
+  for (const auto& e : r.required_device_extensions)
+    if (std::none_of(extensions.begin(), extensions.end(), [&](const auto& p) { return e == p.extensionName; }))
+      out.missing = device + " lacks " + e;
   return out;
 }
 
