@@ -294,9 +294,10 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
 
   // The previous frame's reads of the parameters and of the module's per-pixel images finish before
   // this frame rewrites them; fresh images move from UNDEFINED to GENERAL.
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT, 0);
+  // vkCmdUpdateBuffer runs in the copy stage (the validation layer's reading too), not the clear stage.
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_COPY_BIT, 0);
   vkCmdUpdateBuffer(cmd, input_params_.handle(), 0, sizeof(p), &p);
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_UNIFORM_READ_BIT);
   for (Image* img : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_}) {
     if (targets_fresh_)

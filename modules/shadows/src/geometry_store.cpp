@@ -264,8 +264,9 @@ void GeometryStore::record_imports(VkCommandBuffer cmd, uint64_t frame, RetireQu
     vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), VkDeviceSize(1 + 4 * info.texture) * 4, sizeof(header), header);
   }
   vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), 0, 4, &texture_count_);
-  // The imports' writes, visible to every reader of the geometry later in this frame.
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+  // The imports' writes (the updates above run in the copy stage), visible to every reader of the
+  // geometry later in this frame.
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
                  kGeometryReaders | extra_reader_stages_, kGeometryReads);
   pending_.clear();
