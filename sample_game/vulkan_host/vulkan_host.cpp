@@ -110,7 +110,7 @@ Result run(const Options& o) {
   if (o.spp != 1 && o.spp != 32) throw std::runtime_error("--spp must be 1 or 32");
   settings->izb.samples_per_pixel = o.spp;
   const uint32_t F = o.frames_in_flight;
-  Device d({.device = o.device, .validation = o.validation});
+  Device d({.device = o.device, .validation = o.validation, .sync_validation = o.sync_validation});
   const VkDevice dev = d.device;
   auto module = shadows::Context::create(d.context_desc(F, *settings));
   const shadows::Capability can = module->capabilities().of(settings->technique);

@@ -19,6 +19,7 @@ struct Options {
   uint32_t view = 0;              // camera 0 or 1
   std::string device;             // "gpu", "lavapipe" or empty (a GPU if there is one)
   bool validation = false;        // also ENGINE_VALIDATION=1 / ENGINE_SYNC_VALIDATION=1
+  bool sync_validation = false;   // the layer's synchronization checks too
 };
 
 // The captured (last) frame, pixel (x, y) at index y * width + x.
