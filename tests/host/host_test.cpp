@@ -81,6 +81,7 @@ struct MatchCase {
   std::string mode;
   uint32_t view, spp;
 };
+void PrintTo(const MatchCase& c, std::ostream* os) { *os << c.mode << " view " << c.view << " " << c.spp << " spp"; }
 
 class HostMatchesEmbree : public ::testing::TestWithParam<MatchCase> {};
 
