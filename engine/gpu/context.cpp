@@ -735,15 +735,16 @@ void Context::pick_physical_device(const ContextOptions& options) {
 
 void Context::create_device(const ContextOptions& options) {
   const DeviceSupport support(physical_device_);
+  auto require = [&](const char* name) {
+    if (!support.has(name))
+      throw VulkanError(std::string("device ") + properties_.deviceName + " lacks required extension " + name);
+  };
   for (const auto& e : kDeviceExtensions) {
-    if (e.required && !support.has(e.name))
-      throw VulkanError(std::string("device ") + properties_.deviceName + " lacks required extension " + e.name);
+    if (e.required) require(e.name);
     if (support.wanted(e, masked_features_)) enabled_device_extensions_.emplace_back(e.name);
   }
   if (options.swapchain) {
-    if (!support.has(VK_KHR_SWAPCHAIN_EXTENSION_NAME))
-      throw VulkanError(std::string("device ") + properties_.deviceName + " lacks required extension " +
-                        VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+    require(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     enabled_device_extensions_.emplace_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
   }
   // Required bits always, optional ones where the device has them; a masked feature is neither
