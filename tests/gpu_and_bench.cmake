@@ -195,3 +195,18 @@ engine_target_warnings(shadow_soak)
 add_test(NAME soak_contact_10000_frames COMMAND $<TARGET_FILE:shadow_soak> --frames 10000 --size 64x48)
 set_tests_properties(soak_contact_10000_frames PROPERTIES LABELS "long;soak" TIMEOUT 14400
                      ENVIRONMENT "ENGINE_DEVICE=lavapipe")
+
+# The raw-Vulkan host (sample_game/vulkan_host): its PNG (flat-shaded: few colours, a wide spread), the module's visibility against Embree from
+# the host's own shading points, frames in flight under synchronization validation, and the module's
+# one-line refusals of bad host input.
+add_test(NAME vulkan_host_writes_png
+         COMMAND sh -c "rm -f \"$2\" && \"$0\" --device lavapipe --validation --size 160x90 --frames 3 --mode izb+csm \
+--out \"$2\" && \"$1\" \"$2\" --min-size 160x90 --min-colors 8"
+                 $<TARGET_FILE:vulkan_host> $<TARGET_FILE:png_check> ${CMAKE_CURRENT_BINARY_DIR}/vulkan_host.png)
+set_tests_properties(vulkan_host_writes_png PROPERTIES LABELS gpu FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+add_executable(host_tests host/host_test.cpp)
+target_link_libraries(host_tests PRIVATE vulkan_host_app shadow_reference GTest::gtest_main)
+engine_target_warnings(host_tests)
+gtest_discover_tests(host_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
+add_test(NAME syncval.host_frames_in_flight COMMAND host_tests --gtest_filter=HostFramesInFlight.*)
+set_tests_properties(syncval.host_frames_in_flight PROPERTIES LABELS syncval ENVIRONMENT ENGINE_SYNC_VALIDATION=1)

@@ -237,6 +237,9 @@ void ContextImpl::validate(const FrameDesc& f) const {
                   " is not a registered mesh");
   if (!(f.camera.near_plane > 0.0f) || !(f.camera.far_plane > f.camera.near_plane))
     throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
+  // A technique the device cannot run is refused here, before anything is recorded.
+  if (settings_.technique == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline)
+    throw Error("shadows: Settings.technique rt: " + gpu_->features().ray_tracing_missing);
 }
 
 void ContextImpl::ensure_targets(VkExtent2D extent) {

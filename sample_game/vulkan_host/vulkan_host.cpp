@@ -1,0 +1,458 @@
+#include "vulkan_host.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <optional>
+#include <fstream>
+#include <stdexcept>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "device.hpp"
+
+namespace vulkan_host {
+namespace {
+
+// ----- The scene: two meshes (a ground quad with 16-bit indices, a cube with 32-bit ones), five instances.
+struct Vertex {
+  glm::vec3 position, normal;
+};
+struct MeshData {
+  std::vector<Vertex> vertices;
+  std::vector<uint32_t> indices;
+  glm::vec3 min, max;
+};
+MeshData ground_quad() {
+  const glm::vec3 up(0, 1, 0);
+  return {{{{-1, 0, -1}, up}, {{1, 0, -1}, up}, {{1, 0, 1}, up}, {{-1, 0, 1}, up}}, {0, 2, 1, 0, 3, 2}, {-1, 0, -1}, {1, 0, 1}};
+}
+MeshData unit_cube() {
+  MeshData m{{}, {}, glm::vec3(-0.5f), glm::vec3(0.5f)};
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {-1.0f, 1.0f}) {
+      glm::vec3 n(0.0f), u(0.0f), v(0.0f);
+      n[axis] = sign;
+      u[(axis + 1) % 3] = 1.0f;
+      v[(axis + 2) % 3] = 1.0f;
+      const uint32_t base = uint32_t(m.vertices.size());
+      for (glm::vec2 c : {glm::vec2(-1, -1), glm::vec2(1, -1), glm::vec2(1, 1), glm::vec2(-1, 1)})
+        m.vertices.push_back({0.5f * (n + c.x * u + c.y * v), n});
+      for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.indices.push_back(base + i);
+    }
+  return m;
+}
+
+struct Object {
+  int mesh;  // 0 ground, 1 cube
+  glm::mat4 world;
+  glm::vec4 albedo;
+};
+std::vector<Object> scene_at(uint32_t frame) {
+  auto box = [](glm::vec3 at, glm::vec3 size, float yaw_degrees) {
+    return glm::scale(glm::rotate(glm::translate(glm::mat4(1.0f), at), glm::radians(yaw_degrees), {0, 1, 0}), size);
+  };
+  // The moving caster slides along x, a new place every frame.
+  const float slide = std::sin(0.7f * float(frame));
+  return {{0, glm::scale(glm::mat4(1.0f), glm::vec3(5.0f, 1.0f, 5.0f)), {0.75f, 0.72f, 0.65f, 1}},
+          {1, box({-2.0f, 2.0f, -1.5f}, {0.6f, 4.0f, 0.6f}, 0.0f), {0.8f, 0.3f, 0.25f, 1}},      // pillar
+          {1, box({1.8f, 0.6f, 0.8f}, {1.2f, 1.2f, 1.2f}, 30.0f), {0.3f, 0.5f, 0.8f, 1}},        // box
+          {1, box({0.0f, 2.2f, 2.2f}, {2.5f, 0.15f, 0.8f}, -15.0f), {0.4f, 0.7f, 0.35f, 1}},     // floating slab
+          {1, box({-0.5f + 1.5f * slide, 1.0f, -0.2f}, glm::vec3(0.7f), 45.0f), {0.9f, 0.8f, 0.3f, 1}}};
+}
+
+struct CameraSetup {
+  glm::mat4 view, projection;
+};
+CameraSetup camera_for(uint32_t index, float aspect) {
+  const glm::vec3 eye = index == 0 ? glm::vec3(5.0f, 5.0f, 6.0f) : glm::vec3(-6.0f, 3.5f, 3.0f);
+  const glm::vec3 target = index == 0 ? glm::vec3(0.0f, 0.5f, 0.0f) : glm::vec3(0.5f, 0.8f, -0.5f);
+  // Right-handed perspective into Vulkan clip space: y down, standard depth (0 near, 1 far).
+  const float n = 0.1f, f = 100.0f, t = 1.0f / std::tan(glm::radians(55.0f) * 0.5f);
+  glm::mat4 p(0.0f);
+  p[0][0] = t / aspect;
+  p[1][1] = -t;
+  p[2][2] = f / (n - f);
+  p[2][3] = -1.0f;
+  p[3][2] = n * f / (n - f);
+  return {glm::lookAt(eye, target, glm::vec3(0, 1, 0)), p};
+}
+constexpr float kNear = 0.1f, kFar = 100.0f;
+const glm::vec3 kLightDirection = glm::normalize(glm::vec3(0.45f, -1.0f, 0.3f));
+
+VkShaderModule load_shader(VkDevice device, const char* name) {
+  // The program's SPIR-V lies in vulkan_host_shaders/ next to the executable.
+  const auto path = std::filesystem::read_symlink("/proc/self/exe").parent_path() / "vulkan_host_shaders" / name;
+  std::ifstream file(path, std::ios::binary);
+  const std::vector<char> code((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  if (code.empty() || code.size() % 4) throw std::runtime_error("cannot read shader " + path.string());
+  VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  info.codeSize = code.size();
+  info.pCode = reinterpret_cast<const uint32_t*>(code.data());
+  VkShaderModule module;
+  check(vkCreateShaderModule(device, &info, nullptr, &module), "vkCreateShaderModule");
+  return module;
+}
+
+struct DrawPush {  // gbuffer.vert
+  glm::mat4 view_projection;
+  glm::vec4 world_rows[3];  // the affine object -> world transform, row by row
+  glm::vec4 albedo;
+};
+
+}  // namespace
+
+Result run(const Options& o) {
+  std::optional<shadows::Settings> settings = shadows::parse_mode(o.mode, shadows::Settings{});
+  if (!settings) throw std::runtime_error("unknown mode '" + o.mode + "'");
+  if (o.spp != 1 && o.spp != 32) throw std::runtime_error("--spp must be 1 or 32");
+  settings->izb.samples_per_pixel = o.spp;
+  const uint32_t F = o.frames_in_flight;
+  Device d({.device = o.device, .validation = o.validation, .sync_validation = o.sync_validation});
+  const VkDevice dev = d.device;
+  auto module = shadows::Context::create(d.context_desc(F, *settings));
+  const shadows::Capability can = module->capabilities().of(settings->technique);
+  if (!can.available) throw std::runtime_error(can.reason);
+
+  // ----- Meshes: one buffer per mesh (interleaved position + normal, then indices), also the module's input.
+  const VkBufferUsageFlags mesh_usage =
+      VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  const MeshData meshes[2] = {ground_quad(), unit_cube()};
+  const VkIndexType index_types[2] = {VK_INDEX_TYPE_UINT16, VK_INDEX_TYPE_UINT32};
+  Buffer mesh_buffers[2];
+  VkDeviceSize index_offsets[2];
+  shadows::MeshId mesh_ids[2];
+  for (int m = 0; m < 2; ++m) {
+    const MeshData& mesh = meshes[m];
+    const VkDeviceSize vertex_bytes = mesh.vertices.size() * sizeof(Vertex);
+    const uint32_t index_size = index_types[m] == VK_INDEX_TYPE_UINT16 ? 2 : 4;
+    index_offsets[m] = vertex_bytes;
+    mesh_buffers[m] = make_buffer(d, vertex_bytes + mesh.indices.size() * index_size, mesh_usage);
+    auto* bytes = static_cast<uint8_t*>(mesh_buffers[m].mapped);
+    std::memcpy(bytes, mesh.vertices.data(), vertex_bytes);
+    for (size_t i = 0; i < mesh.indices.size(); ++i) {
+      if (index_size == 2) reinterpret_cast<uint16_t*>(bytes + vertex_bytes)[i] = uint16_t(mesh.indices[i]);
+      else reinterpret_cast<uint32_t*>(bytes + vertex_bytes)[i] = mesh.indices[i];
+    }
+    shadows::MeshDesc desc;
+    desc.name = m == 0 ? "ground" : "cube";
+    desc.positions = {mesh_buffers[m].buffer, 0, vertex_bytes, mesh_usage};
+    desc.position_stride = sizeof(Vertex);  // positions interleaved with the normals the G-buffer reads
+    desc.vertex_count = uint32_t(mesh.vertices.size());
+    desc.indices = mesh_buffers[m].input(vertex_bytes);
+    desc.index_type = index_types[m];
+    desc.index_count = uint32_t(mesh.indices.size());
+    std::memcpy(desc.bounds_min, &mesh.min, 12);
+    std::memcpy(desc.bounds_max, &mesh.max, 12);
+    mesh_ids[m] = module->register_mesh(desc);
+  }
+
+  // ----- Targets: the host's G-buffer in its own formats, the module's output, the lit frame.
+  const VkExtent2D extent{o.width, o.height};
+  const VkImageUsageFlags read = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  Image depth = make_image(d, extent, VK_FORMAT_D24_UNORM_S8_UINT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | read);
+  Image albedo = make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
+  Image normals = make_image(d, extent, VK_FORMAT_R16G16_SNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
+  Image visibility = make_image(d, extent, VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read);
+  Image lit = make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read);
+  const size_t pixels = size_t(o.width) * o.height;
+  Buffer readback[4] = {make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT),   // depth (X8_D24)
+                        make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT),   // normals
+                        make_buffer(d, pixels, VK_BUFFER_USAGE_TRANSFER_DST_BIT),       // visibility
+                        make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT)};  // lit
+
+  // ----- Pipelines: G-buffer (dynamic rendering) and lighting (compute, push descriptors).
+  VkSampler sampler;
+  VkSamplerCreateInfo sampler_info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  check(vkCreateSampler(dev, &sampler_info, nullptr, &sampler), "vkCreateSampler");
+  VkPushConstantRange draw_push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(DrawPush)};
+  VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  layout_info.pushConstantRangeCount = 1;
+  layout_info.pPushConstantRanges = &draw_push;
+  VkPipelineLayout draw_layout, light_layout;
+  check(vkCreatePipelineLayout(dev, &layout_info, nullptr, &draw_layout), "vkCreatePipelineLayout");
+  // light.comp: albedo, normals, visibility (sampled), the lit frame (storage).
+  VkDescriptorSetLayoutBinding bindings[4];
+  for (uint32_t b = 0; b < 4; ++b)
+    bindings[b] = {b, b < 3 ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER : VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 1,
+                   VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+  VkDescriptorSetLayoutCreateInfo set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  set_info.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
+  set_info.bindingCount = 4;
+  set_info.pBindings = bindings;
+  VkDescriptorSetLayout light_set;
+  check(vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &light_set), "vkCreateDescriptorSetLayout");
+  VkPushConstantRange light_push{VK_SHADER_STAGE_COMPUTE_BIT, 0, 16};
+  layout_info.setLayoutCount = 1;
+  layout_info.pSetLayouts = &light_set;
+  layout_info.pPushConstantRanges = &light_push;
+  check(vkCreatePipelineLayout(dev, &layout_info, nullptr, &light_layout), "vkCreatePipelineLayout");
+
+  VkShaderModule vs = load_shader(dev, "gbuffer.vert.spv"), fs = load_shader(dev, "gbuffer.frag.spv");
+  VkShaderModule cs = load_shader(dev, "light.comp.spv");
+  VkPipelineShaderStageCreateInfo stages[2] = {
+      {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_VERTEX_BIT, vs, "main"},
+      {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_FRAGMENT_BIT, fs, "main"}};
+  const VkVertexInputBindingDescription vertex_binding{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
+  const VkVertexInputAttributeDescription attributes[2] = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0},
+                                                           {1, 0, VK_FORMAT_R32G32B32_SFLOAT, 12}};
+  VkPipelineVertexInputStateCreateInfo vertex_input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+  vertex_input.vertexBindingDescriptionCount = 1;
+  vertex_input.pVertexBindingDescriptions = &vertex_binding;
+  vertex_input.vertexAttributeDescriptionCount = 2;
+  vertex_input.pVertexAttributeDescriptions = attributes;
+  VkPipelineInputAssemblyStateCreateInfo assembly{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+  assembly.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+  const VkViewport viewport{0, 0, float(o.width), float(o.height), 0, 1};
+  const VkRect2D scissor{{0, 0}, extent};
+  VkPipelineViewportStateCreateInfo viewport_state{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+  viewport_state.viewportCount = viewport_state.scissorCount = 1;
+  viewport_state.pViewports = &viewport;
+  viewport_state.pScissors = &scissor;
+  VkPipelineRasterizationStateCreateInfo raster{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+  raster.cullMode = VK_CULL_MODE_NONE;
+  raster.lineWidth = 1.0f;
+  VkPipelineMultisampleStateCreateInfo multisample{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+  multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  VkPipelineDepthStencilStateCreateInfo depth_state{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  depth_state.depthTestEnable = depth_state.depthWriteEnable = VK_TRUE;
+  depth_state.depthCompareOp = VK_COMPARE_OP_LESS;  // standard Z: cleared to 1, nearer is smaller
+  VkPipelineColorBlendAttachmentState blend[2] = {};
+  blend[0].colorWriteMask = blend[1].colorWriteMask = 0xf;
+  VkPipelineColorBlendStateCreateInfo blend_state{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+  blend_state.attachmentCount = 2;
+  blend_state.pAttachments = blend;
+  const VkFormat color_formats[2] = {albedo.format, normals.format};
+  VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+  rendering.colorAttachmentCount = 2;
+  rendering.pColorAttachmentFormats = color_formats;
+  rendering.depthAttachmentFormat = rendering.stencilAttachmentFormat = depth.format;
+  VkGraphicsPipelineCreateInfo gp{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, &rendering};
+  gp.stageCount = 2;
+  gp.pStages = stages;
+  gp.pVertexInputState = &vertex_input;
+  gp.pInputAssemblyState = &assembly;
+  gp.pViewportState = &viewport_state;
+  gp.pRasterizationState = &raster;
+  gp.pMultisampleState = &multisample;
+  gp.pDepthStencilState = &depth_state;
+  gp.pColorBlendState = &blend_state;
+  gp.layout = draw_layout;
+  VkPipeline draw_pipeline, light_pipeline;
+  check(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &gp, nullptr, &draw_pipeline), "vkCreateGraphicsPipelines");
+  VkComputePipelineCreateInfo cp{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+  cp.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_COMPUTE_BIT, cs, "main"};
+  cp.layout = light_layout;
+  check(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cp, nullptr, &light_pipeline), "vkCreateComputePipelines");
+  for (VkShaderModule m : {vs, fs, cs}) vkDestroyShaderModule(dev, m, nullptr);
+  auto push_descriptors = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(dev, "vkCmdPushDescriptorSetKHR"));
+
+  // ----- Frames in flight: a command buffer and a fence per slot.
+  VkCommandPool pool;
+  VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pool_info.queueFamilyIndex = d.family;
+  check(vkCreateCommandPool(dev, &pool_info, nullptr, &pool), "vkCreateCommandPool");
+  std::vector<VkCommandBuffer> cmds(F);
+  VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO, nullptr, pool,
+                                    VK_COMMAND_BUFFER_LEVEL_PRIMARY, F};
+  check(vkAllocateCommandBuffers(dev, &alloc, cmds.data()), "vkAllocateCommandBuffers");
+  std::vector<VkFence> fences(F);
+  VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, nullptr, VK_FENCE_CREATE_SIGNALED_BIT};
+  for (VkFence& f : fences) check(vkCreateFence(dev, &fence_info, nullptr, &f), "vkCreateFence");
+
+  const CameraSetup camera = camera_for(o.view, float(o.width) / float(o.height));
+  const glm::mat4 view_projection = camera.projection * camera.view;
+  const shadows::Light sun{.direction = {kLightDirection.x, kLightDirection.y, kLightDirection.z}};
+  std::vector<Object> objects;
+  const auto C = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+  const auto FRAGMENT_TESTS = VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+  for (uint32_t frame = 0; frame < o.frames; ++frame) {
+    // The slot's previous frame (frame - F) has completed: the module's frames-in-flight promise.
+    const uint32_t slot = frame % F;
+    check(vkWaitForFences(dev, 1, &fences[slot], VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    check(vkResetFences(dev, 1, &fences[slot]), "vkResetFences");
+    VkCommandBuffer cmd = cmds[slot];
+    check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+
+    // G-buffer. Earlier frames read it in compute (module, lighting); their contents are discarded.
+    image_barrier(cmd, depth, C, 0, FRAGMENT_TESTS, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
+                  VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                  VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
+    for (const Image* target : {&albedo, &normals})
+      image_barrier(cmd, *target, C, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                    VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+    VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
+                                           {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
+    for (int i = 0; i < 2; ++i) {
+      colors[i].imageView = i == 0 ? albedo.view : normals.view;
+      colors[i].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+      colors[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+      colors[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    }
+    VkRenderingAttachmentInfo depth_attachment{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth_attachment.imageView = depth.view;
+    depth_attachment.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    depth_attachment.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    depth_attachment.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    depth_attachment.clearValue.depthStencil = {1.0f, 0};  // standard Z: far
+    VkRenderingInfo rendering_info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    rendering_info.renderArea = scissor;
+    rendering_info.layerCount = 1;
+    rendering_info.colorAttachmentCount = 2;
+    rendering_info.pColorAttachments = colors;
+    rendering_info.pDepthAttachment = &depth_attachment;
+    vkCmdBeginRendering(cmd, &rendering_info);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, draw_pipeline);
+    objects = scene_at(frame);
+    std::vector<shadows::Instance> instances(objects.size());
+    for (size_t i = 0; i < objects.size(); ++i) {
+      const Object& obj = objects[i];
+      const glm::mat4 rows = glm::transpose(obj.world);
+      const DrawPush push{view_projection, {rows[0], rows[1], rows[2]}, obj.albedo};
+      vkCmdPushConstants(cmd, draw_layout, draw_push.stageFlags, 0, sizeof(push), &push);
+      const VkDeviceSize zero = 0;
+      vkCmdBindVertexBuffers(cmd, 0, 1, &mesh_buffers[obj.mesh].buffer, &zero);
+      vkCmdBindIndexBuffer(cmd, mesh_buffers[obj.mesh].buffer, index_offsets[obj.mesh], index_types[obj.mesh]);
+      vkCmdDrawIndexed(cmd, uint32_t(meshes[obj.mesh].indices.size()), 1, 0, 0, 0);
+      instances[i].mesh = mesh_ids[obj.mesh];
+      std::memcpy(instances[i].world, glm::value_ptr(obj.world), 64);
+      instances[i].id = i;
+    }
+    vkCmdEndRendering(cmd);
+
+    // The module's inputs: G-buffer writes visible to its compute reads (the contract's barrier).
+    image_barrier(cmd, depth, FRAGMENT_TESTS, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, C,
+                  VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+                  VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+    for (const Image* target : {&albedo, &normals})
+      image_barrier(cmd, *target, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                    C, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    // Its output: the previous frame's lighting read finishes before the module writes (GENERAL).
+    image_barrier(cmd, visibility, C, 0, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                  frame == 0 ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
+
+    shadows::FrameDesc fd;
+    fd.frame_index = frame;
+    fd.depth = depth.input(VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+    fd.normals.image = normals.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    fd.normals.encoding = shadows::NormalEncoding::Octahedral;  // SNORM: already in [-1, 1]
+    fd.normals.space = shadows::NormalSpace::World;
+    std::memcpy(fd.camera.view, glm::value_ptr(camera.view), 64);
+    std::memcpy(fd.camera.projection, glm::value_ptr(camera.projection), 64);
+    fd.camera.reversed_z = false;
+    fd.camera.near_plane = kNear;
+    fd.camera.far_plane = kFar;
+    fd.lights = &sun;
+    fd.light_count = 1;
+    fd.instances = instances.data();
+    fd.instance_count = uint32_t(instances.size());
+    fd.output = visibility.input(VK_IMAGE_LAYOUT_GENERAL);
+    module->record(cmd, fd);
+
+    // Lighting: albedo * (ambient + sun * visibility), into the lit frame (written last frame: WAW).
+    image_barrier(cmd, visibility, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, C, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
+                  VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
+    image_barrier(cmd, lit, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                  frame == 0 ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, light_pipeline);
+    VkDescriptorImageInfo image_infos[4] = {{sampler, albedo.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
+                                            {sampler, normals.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
+                                            {sampler, visibility.view, VK_IMAGE_LAYOUT_GENERAL},
+                                            {VK_NULL_HANDLE, lit.view, VK_IMAGE_LAYOUT_GENERAL}};
+    VkWriteDescriptorSet writes[4];
+    for (uint32_t b = 0; b < 4; ++b)
+      writes[b] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, VK_NULL_HANDLE, b, 0, 1, bindings[b].descriptorType,
+                   &image_infos[b], nullptr, nullptr};
+    push_descriptors(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, light_layout, 0, 4, writes);
+    const glm::vec4 to_light(-kLightDirection, 0.0f);
+    vkCmdPushConstants(cmd, light_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, 16, &to_light);
+    vkCmdDispatch(cmd, (o.width + 7) / 8, (o.height + 7) / 8, 1);
+
+    if (frame + 1 == o.frames) {
+      // Capture: every image of the frame into the read-back buffers, then to the host.
+      image_barrier(cmd, depth, C, 0, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                    VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+      image_barrier(cmd, normals, C, 0, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+      image_barrier(cmd, visibility, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                    VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
+      image_barrier(cmd, lit, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                    VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
+      const Image* sources[4] = {&depth, &normals, &visibility, &lit};
+      for (int i = 0; i < 4; ++i) {
+        VkBufferImageCopy region{};
+        region.imageSubresource = {sources[i]->aspect, 0, 0, 1};
+        region.imageExtent = {o.width, o.height, 1};
+        const VkImageLayout layout = i < 2 ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL : VK_IMAGE_LAYOUT_GENERAL;
+        vkCmdCopyImageToBuffer(cmd, sources[i]->image, layout, readback[i].buffer, 1, &region);
+      }
+      VkMemoryBarrier2 to_host{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2, nullptr, VK_PIPELINE_STAGE_2_COPY_BIT,
+                               VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT};
+      VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+      dep.memoryBarrierCount = 1;
+      dep.pMemoryBarriers = &to_host;
+      vkCmdPipelineBarrier2(cmd, &dep);
+    }
+    check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+    VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    submit.commandBufferCount = 1;
+    submit.pCommandBuffers = &cmd;
+    check(vkQueueSubmit(d.queue, 1, &submit, fences[slot]), "vkQueueSubmit");
+  }
+  check(vkWaitForFences(dev, F, fences.data(), VK_TRUE, UINT64_MAX), "vkWaitForFences");
+
+  // ----- The captured frame, for the PNG and for tests that trace the same scene.
+  Result r;
+  r.width = o.width;
+  r.height = o.height;
+  r.device_name = d.name;
+  r.depth.resize(pixels);
+  r.normals.resize(pixels * 3);
+  r.visibility.resize(pixels);
+  r.rgba.resize(pixels * 4);
+  const auto* depth_words = static_cast<const uint32_t*>(readback[0].mapped);
+  const auto* normal_texels = static_cast<const int16_t*>(readback[1].mapped);
+  const auto* vis_bytes = static_cast<const uint8_t*>(readback[2].mapped);
+  for (size_t i = 0; i < pixels; ++i) {
+    r.depth[i] = float(depth_words[i] & 0xffffffu) / float(0xffffff);  // D24 copies as X8_D24
+    glm::vec2 e(std::max(normal_texels[2 * i] / 32767.0f, -1.0f), std::max(normal_texels[2 * i + 1] / 32767.0f, -1.0f));
+    glm::vec3 n(e, 1.0f - std::abs(e.x) - std::abs(e.y));
+    if (n.z < 0.0f) n = glm::vec3((1.0f - glm::abs(glm::vec2(n.y, n.x))) * glm::vec2(n.x >= 0 ? 1 : -1, n.y >= 0 ? 1 : -1), n.z);
+    n = glm::normalize(n);
+    std::memcpy(&r.normals[3 * i], &n, 12);
+    r.visibility[i] = vis_bytes[i] / 255.0f;
+  }
+  std::memcpy(r.rgba.data(), readback[3].mapped, pixels * 4);
+  const glm::mat4 inverse = glm::inverse(view_projection);
+  std::memcpy(r.inverse_view_projection.data(), glm::value_ptr(inverse), 64);
+  std::memcpy(r.light_direction.data(), &kLightDirection, 12);
+  for (const Object& obj : objects)
+    for (uint32_t index : meshes[obj.mesh].indices) {
+      const glm::vec3 p(obj.world * glm::vec4(meshes[obj.mesh].vertices[index].position, 1.0f));
+      r.caster_triangles.insert(r.caster_triangles.end(), {p.x, p.y, p.z});
+    }
+
+  // ----- Teardown: the module first (it holds objects of the host's device).
+  module.reset();
+  for (VkFence f : fences) vkDestroyFence(dev, f, nullptr);
+  vkDestroyCommandPool(dev, pool, nullptr);
+  for (VkPipeline p : {draw_pipeline, light_pipeline}) vkDestroyPipeline(dev, p, nullptr);
+  for (VkPipelineLayout l : {draw_layout, light_layout}) vkDestroyPipelineLayout(dev, l, nullptr);
+  vkDestroyDescriptorSetLayout(dev, light_set, nullptr);
+  vkDestroySampler(dev, sampler, nullptr);
+  for (Image* i : {&depth, &albedo, &normals, &visibility, &lit}) destroy(d, *i);
+  for (Buffer& b : readback) destroy(d, b);
+  for (Buffer& b : mesh_buffers) destroy(d, b);
+  r.validation_messages = d.validation_messages();
+  return r;
+}
+
+}  // namespace vulkan_host

@@ -1,0 +1,315 @@
+// The raw-Vulkan host (sample_game/vulkan_host) against the Embree reference from its own shading
+// points, with frames in flight, and the module's refusals of bad host input.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "device.hpp"
+#include "reference/comparator.hpp"
+#include "reference/embree_tracer.hpp"
+#include "reference/synthetic.hpp"
+#include "vulkan_host.hpp"
+
+namespace {
+
+using vulkan_host::Result;
+
+// The host's shading points, rebuilt on the CPU the way the module's inputs pass builds them
+// (shaders/shadows/host_inputs.comp): position from the standard depth, the decoded shading normal
+// turned toward the camera (no geometric normals given: it also pushes the ray origins), facing the
+// light decided from it.
+reference::ShadingPoints shading_points(const Result& r) {
+  reference::ShadingPoints sp;
+  sp.resize(r.width, r.height);
+  glm::mat4 flip(1.0f);  // z' = w - z: the module's reversed depth
+  flip[2][2] = -1.0f;
+  flip[3][2] = 1.0f;
+  sp.inv_view_proj = glm::make_mat4(r.inverse_view_projection.data()) * flip;
+  sp.facing_from_w = true;
+  const glm::vec4 eye_h = glm::make_mat4(r.inverse_view_projection.data()) * glm::vec4(0, 0, 1, 0);  // w = 0 in clip
+  const glm::vec3 eye = glm::vec3(eye_h) / eye_h.w;
+  const glm::vec3 to_light = -glm::make_vec3(r.light_direction.data());
+  for (uint32_t y = 0; y < r.height; ++y)
+    for (uint32_t x = 0; x < r.width; ++x) {
+      const size_t i = sp.index(x, y);
+      if (r.depth[i] >= 1.0f) continue;  // background
+      const glm::vec2 ndc = (glm::vec2(x, y) + 0.5f) / glm::vec2(r.width, r.height) * 2.0f - 1.0f;
+      const glm::vec4 w = sp.inv_view_proj * glm::vec4(ndc, 1.0f - r.depth[i], 1.0f);
+      const glm::vec3 p = glm::vec3(w) / w.w;
+      glm::vec3 n = glm::normalize(glm::make_vec3(&r.normals[3 * i]));
+      if (glm::dot(n, eye - p) < 0.0f) n = -n;
+      sp.position[i] = glm::vec4(p, 1.0f);
+      sp.normal[i] = glm::vec4(n, glm::dot(n, to_light) > 0.0f ? 1.0f : 0.0f);
+    }
+  return sp;
+}
+
+// The module's visibility against Embree tracing the host's casters of the captured frame.
+reference::Comparison compare_with_embree(const Result& r, uint32_t spp) {
+  auto mesh = std::make_shared<engine::MeshData>();
+  mesh->name = "host casters";
+  for (size_t i = 0; i < r.caster_triangles.size(); i += 3) {
+    mesh->vertices.push_back({glm::make_vec3(&r.caster_triangles[i]), glm::vec3(0.0f), glm::vec2(0.0f)});
+    mesh->indices.push_back(uint32_t(i / 3));
+  }
+  mesh->compute_bounds();
+  engine::Registry registry;
+  reference::add_mesh_entity(registry, mesh, glm::mat4(1.0f));
+  const reference::EmbreeTracer tracer(registry);
+  const reference::ShadingPoints sp = shading_points(r);
+  const glm::vec3 light = glm::make_vec3(r.light_direction.data());
+  const std::vector<float> expected = spp == 1 ? tracer.visibility_1spp(sp, light) : tracer.visibility_32spp(sp, light);
+  std::vector<float> actual = r.visibility;
+  for (size_t i = 0; i < actual.size(); ++i)
+    if (!sp.covered(i)) actual[i] = -1.0f;
+  return reference::compare_visibility(actual, expected);
+}
+
+vulkan_host::Options options(const std::string& mode, uint32_t view, uint32_t spp) {
+  vulkan_host::Options o;
+  o.width = o.height = 256;
+  o.mode = mode;
+  o.view = view;
+  o.spp = spp;
+  o.device = "lavapipe";
+  o.validation = true;
+  return o;
+}
+
+struct MatchCase {
+  std::string mode;
+  uint32_t view, spp;
+};
+void PrintTo(const MatchCase& c, std::ostream* os) { *os << c.mode << " view " << c.view << " " << c.spp << " spp"; }
+
+class HostMatchesEmbree : public ::testing::TestWithParam<MatchCase> {};
+
+TEST_P(HostMatchesEmbree, FromItsOwnShadingPoints) {
+  const MatchCase c = GetParam();
+  const Result r = vulkan_host::run(options(c.mode, c.view, c.spp));
+  EXPECT_EQ(r.validation_messages, 0u);
+  const reference::Comparison cmp = compare_with_embree(r, c.spp);
+  std::printf("[ measure ] %s view %u %u spp: %llu pixels, mismatch %.6f (%llu), coverage MAE %.6f\n", c.mode.c_str(),
+              c.view, c.spp, (unsigned long long)cmp.pixels, cmp.mismatch_rate, (unsigned long long)cmp.mismatched,
+              cmp.coverage_mae);
+  EXPECT_GT(cmp.pixels, 256u * 256u / 4);
+  EXPECT_EQ(cmp.coverage_disagreements, 0u);
+  if (c.spp == 1) EXPECT_LE(cmp.mismatch_rate, 0.0002);
+  else EXPECT_LE(cmp.coverage_mae, 1.0 / 64.0);
+}
+
+std::vector<MatchCase> match_cases() {
+  std::vector<MatchCase> cases;
+  for (const char* mode : {"izb", "izb+csm", "hybrid"})
+    for (uint32_t view : {0u, 1u})
+      for (uint32_t spp : {1u, 32u}) cases.push_back({mode, view, spp});
+  return cases;
+}
+INSTANTIATE_TEST_SUITE_P(Modes, HostMatchesEmbree, ::testing::ValuesIn(match_cases()), [](const auto& info) {
+  std::string mode = info.param.mode;
+  for (char& ch : mode)
+    if (ch == '+') ch = '_';
+  return mode + "_view" + std::to_string(info.param.view) + "_" + std::to_string(info.param.spp) + "spp";
+});
+
+// Three frames in flight, the caster moving every frame, synchronization validation on: no message,
+// and the captured (last) frame still matches the reference.
+TEST(HostFramesInFlight, MovingCasterUnderSyncValidation) {
+  vulkan_host::Options o = options("izb+csm", 0, 1);
+  o.frames = 7;
+  o.frames_in_flight = 3;
+  o.sync_validation = true;
+  const Result r = vulkan_host::run(o);
+  EXPECT_EQ(r.validation_messages, 0u);
+  const reference::Comparison cmp = compare_with_embree(r, 1);
+  std::printf("[ measure ] frames in flight: mismatch %.6f (%llu of %llu)\n", cmp.mismatch_rate,
+              (unsigned long long)cmp.mismatched, (unsigned long long)cmp.pixels);
+  EXPECT_LE(cmp.mismatch_rate, 0.0002);
+}
+
+// ----- Bad host input: one-line shadows::Error naming the argument, nothing recorded, no message.
+
+class HostBadInput : public ::testing::Test {
+ protected:
+  static constexpr VkExtent2D kExtent{64, 64};
+  void SetUp() override {
+    device_ = std::make_unique<vulkan_host::Device>(vulkan_host::DeviceOptions{.device = "lavapipe", .validation = true});
+    shadows::Settings settings;
+    settings.technique = shadows::Technique::Izb;
+    module_ = shadows::Context::create(device_->context_desc(2, settings));
+    const VkImageUsageFlags sampled = VK_IMAGE_USAGE_SAMPLED_BIT;
+    depth_ = make(kExtent, VK_FORMAT_D24_UNORM_S8_UINT, sampled | VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT);
+    normals_ = make(kExtent, VK_FORMAT_R16G16_SNORM, sampled | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT);
+    output_ = make(kExtent, VK_FORMAT_R8_UNORM,
+                   VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT);
+    readback_ = vulkan_host::make_buffer(*device_, kExtent.width * kExtent.height, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+    VkCommandPoolCreateInfo pool{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pool.queueFamilyIndex = device_->family;
+    vulkan_host::check(vkCreateCommandPool(device_->device, &pool, nullptr, &pool_), "vkCreateCommandPool");
+    // The output holds 0.25 (64/255) before any frame: a recorded module pass would change it.
+    submit([&](VkCommandBuffer cmd) {
+      vulkan_host::image_barrier(cmd, output_, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                                 VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+      const VkClearColorValue quarter{{0.25f, 0.0f, 0.0f, 0.0f}};
+      const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+      vkCmdClearColorImage(cmd, output_.image, VK_IMAGE_LAYOUT_GENERAL, &quarter, 1, &range);
+      vulkan_host::image_barrier(cmd, output_, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_COPY_BIT,
+                                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_READ_BIT,
+                                 VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
+    });
+    frame_.depth = depth_.input(VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+    frame_.normals.image = normals_.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    frame_.normals.encoding = shadows::NormalEncoding::Octahedral;
+    frame_.camera.reversed_z = false;
+    frame_.lights = &sun_;
+    frame_.light_count = 1;
+    frame_.output = output_.input(VK_IMAGE_LAYOUT_GENERAL);
+  }
+  void TearDown() override {
+    module_.reset();
+    for (auto* image : {&depth_, &normals_, &output_, &extra_})
+      if (image->image) vulkan_host::destroy(*device_, *image);
+    vulkan_host::destroy(*device_, readback_);
+    vkDestroyCommandPool(device_->device, pool_, nullptr);
+    EXPECT_EQ(device_->validation_messages(), 0u);
+  }
+
+  vulkan_host::Image make(VkExtent2D extent, VkFormat format, VkImageUsageFlags usage) {
+    return vulkan_host::make_image(*device_, extent, format, usage);
+  }
+  template <typename F>
+  void submit(F&& record) {
+    VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO, nullptr, pool_,
+                                      VK_COMMAND_BUFFER_LEVEL_PRIMARY, 1};
+    VkCommandBuffer cmd;
+    vulkan_host::check(vkAllocateCommandBuffers(device_->device, &alloc, &cmd), "vkAllocateCommandBuffers");
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    vkBeginCommandBuffer(cmd, &begin);
+    record(cmd);
+    vkEndCommandBuffer(cmd);
+    VkSubmitInfo info{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    info.commandBufferCount = 1;
+    info.pCommandBuffers = &cmd;
+    vulkan_host::check(vkQueueSubmit(device_->queue, 1, &info, VK_NULL_HANDLE), "vkQueueSubmit");
+    vkQueueWaitIdle(device_->queue);
+    vkFreeCommandBuffers(device_->device, pool_, 1, &cmd);
+  }
+
+  // record() refuses `frame` with one line naming `argument`; the command buffer stays empty (submitted,
+  // it leaves the output as it was).
+  void expect_refused(const shadows::FrameDesc& frame, const std::string& argument) {
+    std::string what;
+    submit([&](VkCommandBuffer cmd) {
+      try {
+        module_->record(cmd, frame);
+      } catch (const shadows::Error& e) {
+        what = e.what();
+      }
+    });
+    EXPECT_NE(what.find(argument), std::string::npos) << "message: '" << what << "'";
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    submit([&](VkCommandBuffer cmd) {
+      VkBufferImageCopy region{};
+      region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+      region.imageExtent = {kExtent.width, kExtent.height, 1};
+      vkCmdCopyImageToBuffer(cmd, output_.image, VK_IMAGE_LAYOUT_GENERAL, readback_.buffer, 1, &region);
+      const VkMemoryBarrier2 to_host{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2, nullptr, VK_PIPELINE_STAGE_2_COPY_BIT,
+                                     VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT};
+      VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+      dep.memoryBarrierCount = 1;
+      dep.pMemoryBarriers = &to_host;
+      vkCmdPipelineBarrier2(cmd, &dep);
+    });
+    const auto* texels = static_cast<const uint8_t*>(readback_.mapped);
+    size_t changed = 0;
+    for (uint32_t i = 0; i < kExtent.width * kExtent.height; ++i) changed += texels[i] != 64;
+    EXPECT_EQ(changed, 0u) << "the output changed: something was recorded";
+  }
+
+  std::unique_ptr<vulkan_host::Device> device_;
+  std::unique_ptr<shadows::Context> module_;
+  vulkan_host::Image depth_, normals_, output_, extra_;
+  vulkan_host::Buffer readback_;
+  VkCommandPool pool_ = VK_NULL_HANDLE;
+  shadows::Light sun_{.direction = {0.0f, -1.0f, 0.0f}};
+  shadows::FrameDesc frame_;
+};
+
+TEST_F(HostBadInput, NullDepthView) {
+  shadows::FrameDesc f = frame_;
+  f.depth.view = VK_NULL_HANDLE;
+  expect_refused(f, "FrameDesc.depth.view");
+}
+
+TEST_F(HostBadInput, UnsupportedOutputFormat) {
+  extra_ = make(kExtent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT);
+  shadows::FrameDesc f = frame_;
+  f.output = extra_.input(VK_IMAGE_LAYOUT_GENERAL);
+  expect_refused(f, "FrameDesc.output.format");
+}
+
+TEST_F(HostBadInput, OutputWithoutStorageUsage) {
+  extra_ = make(kExtent, VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT);
+  shadows::FrameDesc f = frame_;
+  f.output = extra_.input(VK_IMAGE_LAYOUT_GENERAL);
+  expect_refused(f, "FrameDesc.output.usage lacks VK_IMAGE_USAGE_STORAGE_BIT");
+}
+
+TEST_F(HostBadInput, NormalsExtentDiffersFromDepth) {
+  extra_ = make({32, 64}, VK_FORMAT_R16G16_SNORM, VK_IMAGE_USAGE_SAMPLED_BIT);
+  shadows::FrameDesc f = frame_;
+  f.normals.image = extra_.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  expect_refused(f, "FrameDesc.normals.image.extent");
+}
+
+TEST_F(HostBadInput, RayTracingMissingOnLavapipe) {
+  const shadows::Capability rt = module_->capabilities().of(shadows::Technique::RayTraced);
+  EXPECT_FALSE(rt.available);
+  EXPECT_NE(rt.reason.find("VK_KHR_"), std::string::npos) << rt.reason;
+  module_->settings().technique = shadows::Technique::RayTraced;
+  expect_refused(frame_, "technique rt");
+}
+
+TEST_F(HostBadInput, MeshWithZeroTriangles) {
+  vulkan_host::Buffer buffer = vulkan_host::make_buffer(*device_, 64, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  shadows::MeshDesc mesh;
+  mesh.name = "empty";
+  mesh.positions = buffer.input();
+  mesh.vertex_count = 3;
+  mesh.indices = buffer.input();
+  mesh.index_type = VK_INDEX_TYPE_UINT16;
+  mesh.index_count = 0;
+  std::string what;
+  try {
+    module_->register_mesh(mesh);
+  } catch (const shadows::Error& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find("MeshDesc 'empty'.index_count"), std::string::npos) << "message: '" << what << "'";
+  EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  // Nothing was queued: the next frame has no import to record.
+  expect_refused([&] {
+    shadows::FrameDesc f = frame_;
+    f.output.view = VK_NULL_HANDLE;
+    return f;
+  }(), "FrameDesc.output.view");
+  vulkan_host::destroy(*device_, buffer);
+}
+
+// A device created without an extension the module requires: Context::create names it.
+TEST(HostDevice, WithoutPushDescriptorCreateThrowsNamingIt) {
+  vulkan_host::Device device({.device = "lavapipe", .validation = true, .leave_out = {"VK_KHR_push_descriptor"}});
+  std::string what;
+  try {
+    shadows::Context::create(device.context_desc(2, shadows::Settings{}));
+  } catch (const shadows::Error& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find("VK_KHR_push_descriptor"), std::string::npos) << "message: '" << what << "'";
+  EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  EXPECT_EQ(device.validation_messages(), 0u);
+}
+
+}  // namespace
