@@ -16,20 +16,23 @@ size_t slot(PassBackend b) { return b == PassBackend::Compute ? 1 : 0; }
 }  // namespace
 
 PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
-                               const engine::gpu::GpuProfiler& profiler) {
+                               const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot) {
   if (key != key_ || !probe_) {
     key_ = key;
     if (probes_.size() >= kRememberedKeys && !probes_.count(key)) probes_.clear();
     probe_ = &probes_[key];
-    pending_.reset();  // timed under the previous configuration
+    pending_.clear();  // timed under the previous configuration
   }
+  if (pending_.size() <= frame_slot) pending_.resize(frame_slot + 1);
+  std::optional<PassBackend>& pending = pending_[frame_slot];
   auto& samples = probe_->samples;
   auto& decided = probe_->decided;
-  if (pending_) {
-    // Only whole frames count: the previous frame's region, if this pass recorded it.
+  if (pending) {
+    // Only whole frames count: the region of the frame that last used this slot (the profiler's last
+    // collected frame), if this pass recorded it.
     for (const auto& [name, ms] : profiler.last_frame())
-      if (name == region_) samples[slot(*pending_)].push_back(ms);
-    pending_.reset();
+      if (name == region_) samples[slot(*pending)].push_back(ms);
+    pending.reset();
   }
   choice_.raster_ms = best(samples[0]);
   choice_.compute_ms = best(samples[1]);
@@ -53,7 +56,7 @@ PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, boo
     return use(*decided, why.str());
   }
   const PassBackend next = samples[0].size() <= samples[1].size() ? PassBackend::Raster : PassBackend::Compute;
-  pending_ = next;
+  pending = next;
   return use(next, "probing");
 }
 

@@ -27,16 +27,20 @@ class BackendProbe {
   BackendProbe& operator=(const BackendProbe&) = delete;
   // This frame's backend. `key` identifies what the timing depends on (sizes, scene, mode).
   PassBackend pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
-                   const engine::gpu::GpuProfiler& profiler);
+                   const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot = 0);
   const Stats::BackendChoice& choice() const { return choice_; }
   // The frame just recorded is not representative (e.g. its work lists overflowed and grow for the
   // next frame): its time is not taken, and the probe runs that backend again.
-  void discard_pending() { pending_.reset(); }
+  void discard_pending(uint32_t frame_slot) {
+    if (frame_slot < pending_.size()) pending_[frame_slot].reset();
+  }
 
  private:
   std::string region_;
   uint64_t key_ = ~uint64_t(0);
-  std::optional<PassBackend> pending_;  // ran last frame, its time not yet read
+  // Per frame-in-flight slot: the backend the frame in that slot ran, its time not yet read. The
+  // profiler passed to pick() holds the times of the frame that last used the slot.
+  std::vector<std::optional<PassBackend>> pending_;
   struct Probe {
     std::vector<double> samples[2];  // raster, compute
     std::optional<PassBackend> decided;

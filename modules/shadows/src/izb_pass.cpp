@@ -543,7 +543,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     key = mix_key(key, v);
   const bool raster_trace_available = m.raster_trace_available();
   const bool use_compute_trace =
-      m.trace_probe.pick(settings.trace, raster_trace_available, true, key, frame.profiler) == PassBackend::Compute;
+      m.trace_probe.pick(settings.trace, raster_trace_available, true, key, frame.profiler, frame.slot) == PassBackend::Compute;
   if (!use_compute_trace && !raster_trace_available)
     throw std::runtime_error("the raster IZB trace needs conservative rasterization or geometry shaders; " +
                              m.ctx.device_name() + " has neither (use the compute trace)");
@@ -556,7 +556,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (settings.csm_backend == PassBackend::Raster && !raster_ok)
       throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " has no raster pass on " +
                                m.ctx.device_name() + " (it needs geometry shaders)");
-    use_compute_csm = m.csm_probe.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler) ==
+    use_compute_csm = m.csm_probe.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler, frame.slot) ==
                       PassBackend::Compute;
   }
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
@@ -857,8 +857,8 @@ void IzbPass::after_frame(Stats& s, uint32_t slot) {
       std::max(c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]) > m.tile_pairs.capacity ||
       c[gpu_shared::IZB_COUNTER_PAIRS] > m.pairs.capacity || requested > m.pool_size;
   if (overflowed) {  // a frame slowed by an overflow does not speak for its backend
-    m.trace_probe.discard_pending();
-    m.csm_probe.discard_pending();
+    m.trace_probe.discard_pending(slot);
+    m.csm_probe.discard_pending(slot);
   }
   grow(m.records, std::max(c[gpu_shared::IZB_COUNTER_RECORDS], c[gpu_shared::IZB_COUNTER_RECORDS + 1]));
   grow(m.tile_pairs, std::max(c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]));
