@@ -239,7 +239,7 @@ void ContextImpl::validate(const FrameDesc& f) const {
     throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
   // A technique the device cannot run is refused here, before anything is recorded.
   if (settings_.technique == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline)
-    throw Error("shadows: Settings.technique rt: " + gpu_->features().ray_tracing_missing);
+    throw Error(gpu_->features().ray_tracing_missing);  // the line capabilities() gives
 }
 
 void ContextImpl::ensure_targets(VkExtent2D extent) {
