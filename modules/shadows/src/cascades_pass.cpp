@@ -190,7 +190,7 @@ struct CascadesPass::Impl {
       copy.imageExtent = {n, n, 1};
       vkCmdCopyBufferToImage(cmd, staging.handle(), rotation.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
       memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                     VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT);
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     });
   }
 

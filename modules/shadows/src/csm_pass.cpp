@@ -427,8 +427,9 @@ void CsmPass::record(Frame& frame, const IzbSettings& settings, const Buffer& iz
   // Statistics only: the covered-texel count (from the map, which the compute pass fills by a copy).
   ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "csm_coverage");
   if (compute_fill) {
-    memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
-                   VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    // The compute CSM's depths (written by compute shaders) into the map for the coverage count.
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
     VkBufferImageCopy copy{};
     copy.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
     copy.imageExtent = {resolution, resolution, 1};

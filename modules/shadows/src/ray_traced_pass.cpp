@@ -49,7 +49,13 @@ struct Structure {
     return *this;
   }
   void reset() {
-    if (ctx && handle) ctx->rt.destroy_acceleration_structure(ctx->device(), handle, ctx->allocator());
+    if (ctx && handle) {
+      // A frame still in flight may trace it (Context::defer_releases); its storage defers alike.
+      const Context* c = ctx;
+      auto destroy = [c, h = handle] { c->rt.destroy_acceleration_structure(c->device(), h, c->allocator()); };
+      if (c->defers_releases()) c->defer_release(destroy);
+      else destroy();
+    }
     handle = VK_NULL_HANDLE;
     address = 0;
     storage.reset();
@@ -101,8 +107,11 @@ struct RayTracedPass::Impl {
   Structure top;
   uint32_t top_capacity = 0;
   Scratch top_scratch;
-  Buffer instances;  // host-visible VkAccelerationStructureInstanceKHR array
-  Buffer instance_materials;  // host-visible RayTracedInstance per instance (the any-hit alpha test)
+  // Per frame-in-flight slot, written by the host when the slot's frame is recorded:
+  std::vector<Buffer> instances;           // VkAccelerationStructureInstanceKHR array
+  std::vector<Buffer> instance_materials;  // RayTracedInstance per instance (the any-hit alpha test)
+  uint32_t instance_slot = 0;              // the slot of the frame being recorded
+  Scratch bottom_scratch;                  // kept until the next bottom-level build (frames in flight)
   Buffer counters;
   ReadbackRing counters_readback;
   uint32_t instance_count = 0;
@@ -137,7 +146,7 @@ struct RayTracedPass::Impl {
 
   // One bottom level per mesh of the scene, built together in one submission (opaque triangles
   // straight from the scene's shared vertex and index buffers).
-  void build_bottom_levels(const Geometry& geometry) {
+  void build_bottom_levels(VkCommandBuffer cmd, const Geometry& geometry) {
     bottom.clear();
     bottom.resize(geometry.mesh_count());
     bottom_triangles = 0;
@@ -182,17 +191,21 @@ struct RayTracedPass::Impl {
       bottom_triangles += triangles;
     }
     if (!infos.empty()) {
-      // Scratch lives only for the build; the structures keep their own storage.
-      Scratch scratch;
+      // The structures keep their own storage; the scratch stays until the next build.
+      Scratch& scratch = bottom_scratch;
       scratch.ensure(ctx, scratch_total, "rt bottom level build scratch");
       std::vector<const VkAccelerationStructureBuildRangeInfoKHR*> range_pointers;
       for (size_t i = 0; i < infos.size(); ++i) {
         infos[i].scratchData.deviceAddress = scratch.address + scratch_offsets[i];
         range_pointers.push_back(&ranges[i]);
       }
-      ctx.immediate_submit([&](VkCommandBuffer cmd) {
-        ctx.rt.cmd_build_acceleration_structures(cmd, uint32_t(infos.size()), infos.data(), range_pointers.data());
-      });
+      // Recorded in the frame: the geometry imports before it made the vertices visible to builds,
+      // and the top-level build's barrier orders these writes before its reads.
+      memory_barrier(cmd, VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
+                     VK_ACCESS_2_ACCELERATION_STRUCTURE_READ_BIT_KHR | VK_ACCESS_2_ACCELERATION_STRUCTURE_WRITE_BIT_KHR,
+                     VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
+                     VK_ACCESS_2_ACCELERATION_STRUCTURE_READ_BIT_KHR | VK_ACCESS_2_ACCELERATION_STRUCTURE_WRITE_BIT_KHR);
+      ctx.rt.cmd_build_acceleration_structures(cmd, uint32_t(infos.size()), infos.data(), range_pointers.data());
     }
     built_for = &geometry;
     built_vertices = geometry.vertices().handle();
@@ -235,19 +248,30 @@ struct RayTracedPass::Impl {
       ctx.rt.get_build_sizes(ctx.device(), VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR, &info, &top_capacity, &sizes);
       top = Structure(ctx, VK_ACCELERATION_STRUCTURE_TYPE_TOP_LEVEL_KHR, sizes.accelerationStructureSize, "rt top level");
       top_scratch.ensure(ctx, sizes.buildScratchSize, "rt top level build scratch");
-      instances = Buffer(ctx, VkDeviceSize(top_capacity) * sizeof(VkAccelerationStructureInstanceKHR),
-                         VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
-                             VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
-                         true, "rt instances");
-      instance_materials = Buffer(ctx, VkDeviceSize(top_capacity) * sizeof(gpu_shared::RayTracedInstance),
-                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "rt instance materials");
+      instances.clear();
+      instance_materials.clear();
     }
-    // The host writes before the submission that reads them (one frame in flight).
+    if (instances.size() != frame.slots) {
+      instances.resize(frame.slots);
+      instance_materials.resize(frame.slots);
+    }
+    instance_slot = frame.slot;
+    Buffer& slot_instances = instances[frame.slot];
+    Buffer& slot_materials = instance_materials[frame.slot];
+    if (!slot_instances.valid()) {
+      slot_instances = Buffer(ctx, VkDeviceSize(top_capacity) * sizeof(VkAccelerationStructureInstanceKHR),
+                              VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR |
+                                  VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+                              true, "rt instances");
+      slot_materials = Buffer(ctx, VkDeviceSize(top_capacity) * sizeof(gpu_shared::RayTracedInstance),
+                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "rt instance materials");
+    }
+    // This slot's frame frames_in_flight ago, the last reader of these, has completed.
     if (!list.empty()) {
-      instances.write(list.data(), list.size() * sizeof(list[0]));
-      instance_materials.write(materials.data(), materials.size() * sizeof(materials[0]));
+      slot_instances.write(list.data(), list.size() * sizeof(list[0]));
+      slot_materials.write(materials.data(), materials.size() * sizeof(materials[0]));
     }
-    g.geometry.instances.data.deviceAddress = instances.device_address();
+    g.geometry.instances.data.deviceAddress = slot_instances.device_address();
     info.dstAccelerationStructure = top.handle;
     info.scratchData.deviceAddress = top_scratch.address;
     VkAccelerationStructureBuildRangeInfoKHR range{};
@@ -282,7 +306,7 @@ void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collec
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
   if (m.built_for != &frame.geometry || m.built_vertices != frame.geometry.vertices().handle())
-    m.build_bottom_levels(frame.geometry);
+    m.build_bottom_levels(cmd, frame.geometry);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "rt_build");
     m.build_top_level(cmd, frame);
@@ -310,7 +334,7 @@ void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collec
         .storage_buffer(gpu_shared::RT_BINDING_COUNTERS, m.counters.handle())
         .storage_buffer(gpu_shared::RT_BINDING_VERTICES, frame.geometry.vertices().handle())
         .storage_buffer(gpu_shared::RT_BINDING_INDICES, frame.geometry.indices().handle())
-        .storage_buffer(gpu_shared::RT_BINDING_INSTANCES, m.instance_materials.handle())
+        .storage_buffer(gpu_shared::RT_BINDING_INSTANCES, m.instance_materials[m.instance_slot].handle())
         .storage_buffer(gpu_shared::RT_BINDING_MATERIAL_TEXTURES, frame.geometry.textures().handle())
         .push(m.ctx, cmd, m.pipeline);
     m.pipeline.push_constants(cmd, push);
