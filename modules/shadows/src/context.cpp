@@ -194,7 +194,7 @@ Capabilities ContextImpl::capabilities() const {
     cap.available = true;
     if (Technique(t) == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline) {
       cap.available = false;
-      cap.reason = gpu_->features().ray_tracing_missing;
+      cap.reason = "shadows: Settings.technique rt: " + gpu_->features().ray_tracing_missing;
     }
   }
   auto& self = const_cast<ContextImpl&>(*this);
@@ -249,7 +249,7 @@ void ContextImpl::validate(const FrameDesc& f) const {
     throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
   // A technique the device cannot run is refused here, before anything is recorded.
   if (settings_.technique == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline)
-    throw Error(gpu_->features().ray_tracing_missing);  // the line capabilities() gives
+    throw Error(capabilities().of(Technique::RayTraced).reason);  // the line capabilities() gives
 }
 
 void ContextImpl::ensure_targets(VkExtent2D extent) {
