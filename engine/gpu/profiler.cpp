@@ -9,6 +9,7 @@ GpuProfiler::GpuProfiler(const Context& ctx, uint32_t max_regions, size_t histor
       capacity_(max_regions * 2),
       frames_in_flight_(std::max(frames_in_flight, 1u)),
       history_frames_(std::max<size_t>(history_frames, 1)) {
+  last_by_segment_.resize(frames_in_flight_);
   create_pool();
 }
 
@@ -31,6 +32,7 @@ void GpuProfiler::set_frames_in_flight(uint32_t frames) {
   frames = std::max(frames, 1u);
   frames_.clear();
   next_segment_ = 0;
+  last_by_segment_.assign(frames, {});
   if (frames == frames_in_flight_) return;
   frames_in_flight_ = frames;
   create_pool();
@@ -73,6 +75,8 @@ void GpuProfiler::collect() {
   if (frames_.empty()) return;
   const Frame f = std::move(frames_.front());
   frames_.pop_front();
+  auto& by_segment = last_by_segment_[capacity_ ? f.first_query / capacity_ : 0];
+  by_segment.clear();
   if (!pool_ || f.used == 0) return;
   std::vector<uint64_t> stamps(f.used);
   VK_CHECK(vkGetQueryPoolResults(ctx_.device(), pool_, f.first_query, f.used, stamps.size() * sizeof(uint64_t),
@@ -88,7 +92,10 @@ void GpuProfiler::collect() {
   for (const auto& name : order_) {
     auto it = frame.find(name);
     const double ms = it == frame.end() ? 0.0 : it->second;
-    if (it != frame.end()) last_frame_.emplace_back(name, ms);
+    if (it != frame.end()) {
+      last_frame_.emplace_back(name, ms);
+      by_segment.emplace_back(name, ms);
+    }
     auto& h = history_[name];
     h.push_back(ms);
     if (h.size() > history_frames_) h.pop_front();

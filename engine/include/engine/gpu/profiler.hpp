@@ -41,6 +41,12 @@ class GpuProfiler {
 
   // Milliseconds per region in the last collected frame, in first-seen order.
   const std::vector<std::pair<std::string, double>>& last_frame() const { return last_frame_; }
+  // The same for the last collected frame that was recorded in segment `slot % frames_in_flight()`
+  // (frame N records in segment N % F): what frame N + F reads back, even after several frames were
+  // collected at once (a resize waits for all of them).
+  const std::vector<std::pair<std::string, double>>& last_frame_of_slot(uint32_t slot) const {
+    return last_by_segment_[slot % frames_in_flight_];
+  }
   double average_ms(const std::string& name, size_t last_n = 0) const;
   double median_ms(const std::string& name) const;
   std::vector<std::string> region_names() const { return order_; }
@@ -73,6 +79,7 @@ class GpuProfiler {
   std::vector<std::string> order_;
   std::map<std::string, std::deque<double>> history_;
   std::vector<std::pair<std::string, double>> last_frame_;
+  std::vector<std::vector<std::pair<std::string, double>>> last_by_segment_;
 };
 
 class ScopedGpuRegion {
