@@ -65,6 +65,7 @@ struct Options {
   bool stats = false;
   bool pass_times = false;
   std::string switch_scene;  // windowed: picked as if from the panel after the second frame
+  uint32_t frames_in_flight = 2;  // windowed; the headless paths record and wait one frame at a time
   std::string detail = "auto";  // generated content: full, low, or auto (low on a CPU device with dynamic resolution)
 };
 
@@ -74,7 +75,7 @@ const char* kUsage =
     "                   [--device gpu|lavapipe|INDEX] [--mode off|sm|cascades|izb|izb+csm|hybrid|hybrid+csm|rt]\n"
     "                   [--seconds-per-view S] [--settings FILE.json] [--save-settings FILE.json] [--fixed-size] [--target-fps F]\n"
     "                   [--time-of-day H] [--animate-sun] [--overlay NAME] [--stats] [--pass-times]\n"
-    "                   [--switch-scene FILE] [--detail full|low|auto]\n";
+    "                   [--switch-scene FILE] [--detail full|low|auto] [--frames-in-flight 1|2|3]\n";
 
 float float_value(engine::CommandLine& args, float lo, float hi) {
   const std::string flag = args.flag(), v = args.value();
@@ -120,6 +121,13 @@ Options parse(int argc, char** argv) {
     } else if (a == "--stats") o.stats = true;
     else if (a == "--pass-times") o.pass_times = true;
     else if (a == "--switch-scene") o.switch_scene = args.value();
+    else if (a == "--frames-in-flight") {
+      const uint32_t n = args.uint_value();
+      if (n < 1 || n > engine::Renderer::kMaxFramesInFlight)
+        throw std::runtime_error("--frames-in-flight " + std::to_string(n) + ": expected 1 to " +
+                                 std::to_string(engine::Renderer::kMaxFramesInFlight));
+      o.frames_in_flight = n;
+    }
     else if (a == "--detail") {
       o.detail = args.value();
       if (o.detail != "full" && o.detail != "low" && o.detail != "auto")
@@ -327,7 +335,9 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   apply_options(o, game);
   const VkExtent2D extent = window->framebuffer_extent();
   auto renderer = std::make_unique<engine::Renderer>(
-      *ctx, VkExtent2D{std::max(extent.width, 1u), std::max(extent.height, 1u)});
+      *ctx, VkExtent2D{std::max(extent.width, 1u), std::max(extent.height, 1u)}, o.frames_in_flight);
+  std::printf("windowed: %s on %s, frames in flight: %u\n", game.scene().name.c_str(), ctx->device_name().c_str(),
+              renderer->frames_in_flight());
   renderer->set_scene(game.scene());
   auto mode = *shadows::parse_mode(o.mode, {});
   if (!o.overlay.empty()) mode.debug = *shadows::parse_debug_view(o.overlay);
@@ -418,7 +428,7 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
       panel.requested_scene.reset();
       try {
         auto next = engine::load_scene(panel.scenes[size_t(pick)].source, detail);
-        vkDeviceWaitIdle(ctx->device());
+        renderer->finish_frames();  // frames in flight still draw the old scene
         game.set_scene(std::move(next));  // the old scene lives until here; the renderer switches next
         renderer->set_scene(game.scene());
         apply_options(o, game);
@@ -454,6 +464,8 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
       if (!o.record.empty()) recorded.push_back(current);  // only frames that were simulated
     }
   }
+  // The last frames are still in flight: their GPU times and statistics come in here.
+  renderer->finish_frames();
   if (game.playing) print_player(game);
   if (!frame_ms.empty()) {
     std::vector<float> sorted = frame_ms;

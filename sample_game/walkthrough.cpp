@@ -257,6 +257,8 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
   if (ImGui::CollapsingHeader("GPU time", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::Text("GPU ms, %ux%u on %s", renderer.extent().width, renderer.extent().height,
                 renderer.context().device_name().c_str());
+    // Times and statistics describe the frame that completed last, frames in flight - 1 behind.
+    ImGui::Text("frames in flight: %u", renderer.frames_in_flight());
     for (const auto& [name, ms] : renderer.profiler().last_frame()) {
       auto it = panel.pass_history.find(name);
       if (it == panel.pass_history.end() || it->second.empty()) continue;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -87,12 +88,18 @@ struct Window::Impl {
   std::vector<VkImageView> views;
   std::vector<VkFramebuffer> framebuffers;
   // Presentation may still be reading a render-finished semaphore until its image is acquired again,
-  // so there is one per swapchain image; acquisition uses one per frame in flight (here: one).
+  // so there is one per swapchain image; acquisition uses one per frame in flight.
   std::vector<VkSemaphore> render_finished;
-  VkSemaphore image_available = VK_NULL_HANDLE;
-  VkFence frame_fence = VK_NULL_HANDLE;
+  // One per frame in flight (the renderer's count): frame N records into slot N % count after
+  // waiting for the slot's fence, i.e. for frame N - count.
+  struct Slot {
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    VkFence fence = VK_NULL_HANDLE;  // created signalled: a slot never submitted does not block
+    VkSemaphore image_available = VK_NULL_HANDLE;
+  };
+  std::vector<Slot> slots;
+  uint64_t frames_submitted = 0;
   VkCommandPool command_pool = VK_NULL_HANDLE;
-  VkCommandBuffer cmd = VK_NULL_HANDLE;
   bool swapchain_dirty = false;
 
   // ImGui 1.86's Vulkan backend only knows render passes.
@@ -108,8 +115,13 @@ struct Window::Impl {
   VkExtent2D capture_extent{};
   bool capture_valid = false;
   bool capture_requested = false;
+  // The slot of the latest submitted frame that copies into `capture`, until its fence is waited for.
+  std::optional<size_t> capture_slot;
 
   VkDevice device() const { return ctx->device(); }
+  // ImGui's backend keeps one vertex/index buffer set per "image" and reuses it that many frames
+  // later, so both counts cover the most frames a renderer may have in flight.
+  uint32_t ui_min_image_count() const { return std::max(min_image_count, Renderer::kMaxFramesInFlight); }
 
   void choose_surface_format();
   bool create_swapchain();
@@ -117,8 +129,50 @@ struct Window::Impl {
   void create_ui_pass();
   void init_imgui();
   void shutdown();
-  void record_present_part(Renderer& renderer, uint32_t image_index, bool copy_to_capture);
+  void create_slots(uint32_t count);
+  void destroy_slots();
+  // Waits for the slot's last frame; the capture it made becomes readable.
+  void wait_slot(size_t index);
+  void record_present_part(VkCommandBuffer cmd, Renderer& renderer, uint32_t image_index, bool copy_to_capture);
 };
+
+void Window::Impl::create_slots(uint32_t count) {
+  destroy_slots();
+  slots.resize(count);
+  for (Slot& slot : slots) {
+    VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    alloc.commandPool = command_pool;
+    alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    alloc.commandBufferCount = 1;
+    VK_CHECK(vkAllocateCommandBuffers(device(), &alloc, &slot.cmd));
+    VkSemaphoreCreateInfo sem_info{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    VK_CHECK(vkCreateSemaphore(device(), &sem_info, nullptr, &slot.image_available));
+    VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    fence_info.flags = VK_FENCE_CREATE_SIGNALED_BIT;
+    VK_CHECK(vkCreateFence(device(), &fence_info, nullptr, &slot.fence));
+  }
+  frames_submitted = 0;
+}
+
+// Only with the device idle.
+void Window::Impl::destroy_slots() {
+  for (Slot& slot : slots) {
+    if (slot.cmd) vkFreeCommandBuffers(device(), command_pool, 1, &slot.cmd);
+    if (slot.fence) vkDestroyFence(device(), slot.fence, nullptr);
+    if (slot.image_available) vkDestroySemaphore(device(), slot.image_available, nullptr);
+  }
+  slots.clear();
+  if (capture_slot) capture_valid = true;  // the device is idle: the copy landed
+  capture_slot.reset();
+}
+
+void Window::Impl::wait_slot(size_t index) {
+  VK_CHECK(vkWaitForFences(device(), 1, &slots[index].fence, VK_TRUE, UINT64_MAX));
+  if (capture_slot == index) {
+    capture_valid = true;
+    capture_slot.reset();
+  }
+}
 
 void Window::Impl::choose_surface_format() {
   VkPhysicalDevice gpu = ctx->physical_device();
@@ -221,8 +275,9 @@ bool Window::Impl::create_swapchain() {
                         "presented frame copy");
   capture_extent = size;
   capture_valid = false;
+  capture_slot.reset();  // a copy still pending went into the buffer just replaced
   swapchain_dirty = false;
-  if (imgui_vulkan) ImGui_ImplVulkan_SetMinImageCount(min_image_count);
+  if (imgui_vulkan) ImGui_ImplVulkan_SetMinImageCount(ui_min_image_count());
   return true;
 }
 
@@ -304,8 +359,8 @@ void Window::Impl::init_imgui() {
   init.PipelineCache = VK_NULL_HANDLE;
   init.DescriptorPool = ui_descriptors;
   init.Subpass = 0;
-  init.MinImageCount = min_image_count;
-  init.ImageCount = std::max<uint32_t>(uint32_t(images.size()), min_image_count);
+  init.MinImageCount = ui_min_image_count();
+  init.ImageCount = std::max<uint32_t>(uint32_t(images.size()), ui_min_image_count());
   init.MSAASamples = VK_SAMPLE_COUNT_1_BIT;
   init.Allocator = nullptr;
   init.CheckVkResultFn = check_imgui_vk;
@@ -332,15 +387,12 @@ void Window::Impl::shutdown() {
     if (swapchain) vkDestroySwapchainKHR(device(), swapchain, nullptr);
     if (ui_descriptors) vkDestroyDescriptorPool(device(), ui_descriptors, nullptr);
     if (ui_pass) vkDestroyRenderPass(device(), ui_pass, nullptr);
-    if (image_available) vkDestroySemaphore(device(), image_available, nullptr);
-    if (frame_fence) vkDestroyFence(device(), frame_fence, nullptr);
+    destroy_slots();
     if (command_pool) vkDestroyCommandPool(device(), command_pool, nullptr);
     if (surface) vkDestroySurfaceKHR(ctx->instance(), surface, nullptr);
     swapchain = VK_NULL_HANDLE;
     ui_descriptors = VK_NULL_HANDLE;
     ui_pass = VK_NULL_HANDLE;
-    image_available = VK_NULL_HANDLE;
-    frame_fence = VK_NULL_HANDLE;
     command_pool = VK_NULL_HANDLE;
     surface = VK_NULL_HANDLE;
     ctx = nullptr;
@@ -355,7 +407,8 @@ void Window::Impl::shutdown() {
   }
 }
 
-void Window::Impl::record_present_part(Renderer& renderer, uint32_t image_index, bool copy_to_capture) {
+void Window::Impl::record_present_part(VkCommandBuffer cmd, Renderer& renderer, uint32_t image_index,
+                                       bool copy_to_capture) {
   VkImage target = images[image_index];
   // The first sync scope matches the acquire semaphore's wait stage, so the layout change waits for it.
   image_barrier(cmd, target, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
@@ -378,7 +431,8 @@ void Window::Impl::record_present_part(Renderer& renderer, uint32_t image_index,
     vkCmdBlitImage(cmd, renderer.output().handle(), VK_IMAGE_LAYOUT_GENERAL, target,
                    VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, same_size ? VK_FILTER_NEAREST : VK_FILTER_LINEAR);
   }
-  // The next frame's lighting pass overwrites the output.
+  // The next frame's lighting pass overwrites the output (and the G-buffer pass of a frame in flight
+  // behind this one runs after this point on the queue).
   gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0);
 
   {
@@ -465,15 +519,7 @@ void Window::attach(gpu::Context& ctx) {
   pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pool_info.queueFamilyIndex = ctx.queue_family();
   VK_CHECK(vkCreateCommandPool(ctx.device(), &pool_info, nullptr, &s.command_pool));
-  VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  alloc.commandPool = s.command_pool;
-  alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  alloc.commandBufferCount = 1;
-  VK_CHECK(vkAllocateCommandBuffers(ctx.device(), &alloc, &s.cmd));
-  VkSemaphoreCreateInfo sem_info{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-  VK_CHECK(vkCreateSemaphore(ctx.device(), &sem_info, nullptr, &s.image_available));
-  VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  VK_CHECK(vkCreateFence(ctx.device(), &fence_info, nullptr, &s.frame_fence));
+  s.create_slots(1);  // draw_frame follows the renderer's frames in flight
 
   s.choose_surface_format();
   s.create_ui_pass();
@@ -517,16 +563,31 @@ bool Window::draw_frame(Renderer& renderer, const std::function<void()>& build_u
     glfwWaitEventsTimeout(0.1);
     return false;
   }
+  const uint32_t in_flight = renderer.frames_in_flight();
+  if (s.slots.size() != in_flight) {
+    // Slots are replaced only with nothing in flight.
+    renderer.finish_frames();
+    s.create_slots(in_flight);
+  }
   if (s.swapchain_dirty || !s.swapchain || fb.width != s.extent.width || fb.height != s.extent.height) {
-    if (!s.create_swapchain()) {
+    const bool created = s.create_swapchain();  // waits for the device
+    renderer.finish_frames();                    // so the frames in flight have completed: say so
+    if (!created) {
       glfwWaitEventsTimeout(0.1);
       return false;
     }
   }
 
+  // Frame N reuses the slot of frame N - F: its command buffer, acquire semaphore and, in the
+  // renderer, the per-frame data update() writes. Once its fence signals, that frame is done.
+  const size_t slot_index = size_t(s.frames_submitted % in_flight);
+  Impl::Slot& slot = s.slots[slot_index];
+  s.wait_slot(slot_index);
+  while (renderer.frames_pending() >= in_flight) renderer.after_frame();
+
   uint32_t image_index = 0;
   const VkResult acquired =
-      vkAcquireNextImageKHR(s.device(), s.swapchain, UINT64_MAX, s.image_available, VK_NULL_HANDLE, &image_index);
+      vkAcquireNextImageKHR(s.device(), s.swapchain, UINT64_MAX, slot.image_available, VK_NULL_HANDLE, &image_index);
   if (acquired == VK_ERROR_OUT_OF_DATE_KHR) {
     // The semaphore was not signalled; nothing to undo.
     s.swapchain_dirty = true;
@@ -546,23 +607,23 @@ bool Window::draw_frame(Renderer& renderer, const std::function<void()>& build_u
   if (build_ui) build_ui();
   ImGui::Render();
 
-  VK_CHECK(vkResetCommandBuffer(s.cmd, 0));
+  VK_CHECK(vkResetCommandBuffer(slot.cmd, 0));
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  VK_CHECK(vkBeginCommandBuffer(s.cmd, &begin));
-  renderer.record(s.cmd);
+  VK_CHECK(vkBeginCommandBuffer(slot.cmd, &begin));
+  renderer.record(slot.cmd);
   const bool capturing = s.capture_requested;
-  s.record_present_part(renderer, image_index, capturing);
-  VK_CHECK(vkEndCommandBuffer(s.cmd));
+  s.record_present_part(slot.cmd, renderer, image_index, capturing);
+  VK_CHECK(vkEndCommandBuffer(slot.cmd));
 
   VkSemaphoreSubmitInfo wait{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO};
-  wait.semaphore = s.image_available;
+  wait.semaphore = slot.image_available;
   wait.stageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;  // the first touch of the image is the blit
   VkSemaphoreSubmitInfo signal{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO};
   signal.semaphore = s.render_finished[image_index];
   signal.stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
   VkCommandBufferSubmitInfo cmd_info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
-  cmd_info.commandBuffer = s.cmd;
+  cmd_info.commandBuffer = slot.cmd;
   VkSubmitInfo2 submit{VK_STRUCTURE_TYPE_SUBMIT_INFO_2};
   submit.waitSemaphoreInfoCount = 1;
   submit.pWaitSemaphoreInfos = &wait;
@@ -570,8 +631,14 @@ bool Window::draw_frame(Renderer& renderer, const std::function<void()>& build_u
   submit.pCommandBufferInfos = &cmd_info;
   submit.signalSemaphoreInfoCount = 1;
   submit.pSignalSemaphoreInfos = &signal;
-  VK_CHECK(vkResetFences(s.device(), 1, &s.frame_fence));
-  VK_CHECK(vkQueueSubmit2(s.ctx->queue(), 1, &submit, s.frame_fence));
+  VK_CHECK(vkResetFences(s.device(), 1, &slot.fence));
+  VK_CHECK(vkQueueSubmit2(s.ctx->queue(), 1, &submit, slot.fence));
+  ++s.frames_submitted;
+  if (capturing) {
+    // Readable once this slot's fence has been waited for (read_last_frame waits if need be).
+    s.capture_slot = slot_index;
+    s.capture_requested = false;
+  }
 
   VkPresentInfoKHR present{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
   present.waitSemaphoreCount = 1;
@@ -584,14 +651,7 @@ bool Window::draw_frame(Renderer& renderer, const std::function<void()>& build_u
     s.swapchain_dirty = true;
   else
     VK_CHECK(presented);
-
-  // One frame in flight: the renderer's per-frame resources and `capture` are reused next frame.
-  VK_CHECK(vkWaitForFences(s.device(), 1, &s.frame_fence, VK_TRUE, UINT64_MAX));
-  renderer.after_frame();
-  if (capturing) {
-    s.capture_valid = true;
-    s.capture_requested = false;
-  }
+  // No wait here: the next frame waits for its own slot, F frames back.
   return true;
 }
 
@@ -599,6 +659,8 @@ void Window::capture_next_frame() { impl_->capture_requested = true; }
 
 std::vector<uint8_t> Window::read_last_frame(uint32_t& width, uint32_t& height) {
   Impl& s = *impl_;
+  // The latest capturing frame may still be in flight.
+  if (s.capture_slot) s.wait_slot(*s.capture_slot);
   if (!s.capture_valid) {
     width = height = 0;
     return {};

@@ -65,10 +65,15 @@ SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
                            usage | VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "scene indices");
 }
 
-Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(extent), profiler_(ctx) {
+Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent, uint32_t frames_in_flight)
+    : ctx_(ctx), extent_(extent), frames_in_flight_(frames_in_flight), profiler_(ctx, 64, 4096, frames_in_flight) {
   if (extent.width == 0 || extent.height == 0) throw std::invalid_argument("render size must be non-zero");
-  frame_uniforms_ = Buffer(ctx, sizeof(gpu_shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
-                           "frame uniforms");
+  if (frames_in_flight < 1 || frames_in_flight > kMaxFramesInFlight)
+    throw std::invalid_argument("frames in flight must be 1.." + std::to_string(kMaxFramesInFlight) + ", not " +
+                                std::to_string(frames_in_flight));
+  for (uint32_t i = 0; i < frames_in_flight_; ++i)
+    frame_uniforms_.emplace_back(ctx, sizeof(gpu_shared::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true,
+                                 "frame uniforms " + std::to_string(i));
   nearest_sampler_ = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "nearest clamp");
 
   PipelineFactory factory(ctx);
@@ -115,7 +120,7 @@ Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent) : ctx_(ctx), extent_(ex
 }
 
 Renderer::~Renderer() {
-  vkDeviceWaitIdle(ctx_.device());
+  finish_frames();  // the features hear about every frame they recorded
   features_.clear();
   if (frame_fence_) vkDestroyFence(ctx_.device(), frame_fence_, ctx_.allocator());
   if (frame_cmd_) vkFreeCommandBuffers(ctx_.device(), ctx_.command_pool(), 1, &frame_cmd_);
@@ -151,7 +156,7 @@ void Renderer::create_targets() {
 void Renderer::resize(VkExtent2D extent) {
   if (extent.width == 0 || extent.height == 0) return;
   if (extent.width == extent_.width && extent.height == extent_.height) return;
-  vkDeviceWaitIdle(ctx_.device());
+  finish_frames();  // the targets are replaced; pending frames' results are read first
   extent_ = extent;
   create_targets();
   use_external_shadow_ = false;
@@ -159,7 +164,7 @@ void Renderer::resize(VkExtent2D extent) {
 }
 
 void Renderer::set_scene(Scene& scene) {
-  vkDeviceWaitIdle(ctx_.device());
+  finish_frames();
   scene_ = &scene;
   update_world_transforms(scene.registry);
   geometry_ = std::make_unique<SceneGeometry>(ctx_, scene.registry);
@@ -212,6 +217,7 @@ void Renderer::update(float dt) {
   view_.far_plane = cam.far_plane;
   view_.vertical_fov = cam.vertical_fov;
   view_.extent = extent_;
+  view_.frame_index = next_frame_;
   if (scene_->light.valid() && scene_->registry.has<DirectionalLight>(scene_->light)) {
     const auto& light = scene_->registry.get<DirectionalLight>(scene_->light);
     view_.light_direction = glm::normalize(light.direction);
@@ -229,10 +235,14 @@ void Renderer::update(float dt) {
   u.ambient = glm::vec4(0.26f, 0.31f, 0.40f, 0.0f);  // sky colour of the hemisphere ambient (lighting.comp)
   u.extent = glm::uvec4(extent_.width, extent_.height, uint32_t(view_.frame_index),
                         smooth_terminator_ ? gpu_shared::FRAME_FLAG_SMOOTH_TERMINATOR : 0u);
-  frame_uniforms_.write(&u, sizeof(u));
+  // The host waited for the frame that last used this slot (frames_in_flight frames ago).
+  frame_uniforms_[view_.frame_index % frames_in_flight_].write(&u, sizeof(u));
 }
 
 void Renderer::record(VkCommandBuffer cmd) {
+  const gpu::Buffer& frame_uniforms = frame_uniforms_[view_.frame_index % frames_in_flight_];
+  pending_.push_back(view_.frame_index);
+  next_frame_ = view_.frame_index + 1;
   profiler_.begin_frame(cmd);
   {
     ScopedGpuRegion total(ctx_, profiler_, cmd, "frame");
@@ -268,7 +278,7 @@ void Renderer::record(VkCommandBuffer cmd) {
       vkCmdSetScissor(cmd, 0, 1, &scissor);
       gbuffer_pipeline_.bind(cmd);
       DescriptorWriter()
-          .uniform_buffer(gpu_shared::GBUFFER_BINDING_FRAME, frame_uniforms_.handle())
+          .uniform_buffer(gpu_shared::GBUFFER_BINDING_FRAME, frame_uniforms.handle())
           .storage_buffer(gpu_shared::GBUFFER_BINDING_VERTICES, geometry_->vertices().handle())
           .storage_buffer(gpu_shared::GBUFFER_BINDING_INDICES, geometry_->indices().handle())
           .storage_buffer(gpu_shared::GBUFFER_BINDING_TEXTURES, geometry_->textures().handle())
@@ -299,7 +309,7 @@ void Renderer::record(VkCommandBuffer cmd) {
       ScopedGpuRegion region(ctx_, profiler_, cmd, "shading_points");
       shading_points_pipeline_.bind(cmd);
       DescriptorWriter()
-          .uniform_buffer(gpu_shared::SHADING_POINTS_BINDING_FRAME, frame_uniforms_.handle())
+          .uniform_buffer(gpu_shared::SHADING_POINTS_BINDING_FRAME, frame_uniforms.handle())
           .sampled_image(gpu_shared::SHADING_POINTS_BINDING_DEPTH, gbuffer_.depth.view(), nearest_sampler_.handle(),
                          VK_IMAGE_LAYOUT_GENERAL)
           .storage_image(gpu_shared::SHADING_POINTS_BINDING_WORLD_POSITION, gbuffer_.world_position.view())
@@ -324,7 +334,7 @@ void Renderer::record(VkCommandBuffer cmd) {
 
     if (!use_external_shadow_) {
       FrameContext frame{ctx_,      cmd,        profiler_, view_,      gbuffer_,          shadow_term_,
-                         overlay_,  frame_uniforms_, *geometry_, draws_, scene_->registry};
+                         overlay_,  frame_uniforms, *geometry_, draws_, scene_->registry};
       for (auto& f : features_) {
         f->record(frame);
         full_barrier(cmd);
@@ -335,7 +345,7 @@ void Renderer::record(VkCommandBuffer cmd) {
       ScopedGpuRegion region(ctx_, profiler_, cmd, "lighting");
       lighting_pipeline_.bind(cmd);
       DescriptorWriter()
-          .uniform_buffer(gpu_shared::LIGHTING_BINDING_FRAME, frame_uniforms_.handle())
+          .uniform_buffer(gpu_shared::LIGHTING_BINDING_FRAME, frame_uniforms.handle())
           .storage_image(gpu_shared::LIGHTING_BINDING_ALBEDO, gbuffer_.albedo.view())
           .storage_image(gpu_shared::LIGHTING_BINDING_NORMAL, gbuffer_.normal.view())
           .storage_image(gpu_shared::LIGHTING_BINDING_WORLD_POSITION, gbuffer_.world_position.view())
@@ -350,9 +360,16 @@ void Renderer::record(VkCommandBuffer cmd) {
 }
 
 void Renderer::after_frame() {
+  if (pending_.empty()) return;
+  completed_frame_ = pending_.front();
+  pending_.pop_front();
   profiler_.collect();
   for (auto& f : features_) f->after_frame(ctx_);
-  ++view_.frame_index;
+}
+
+void Renderer::finish_frames() {
+  vkDeviceWaitIdle(ctx_.device());
+  while (!pending_.empty()) after_frame();
 }
 
 void Renderer::render_frame(float dt) {
@@ -369,6 +386,8 @@ void Renderer::set_external_shadow_term(std::vector<float> term) {
   if (term.size() != size_t(extent_.width) * extent_.height)
     throw std::invalid_argument("external shadow term has the wrong size");
   for (float& v : term) v = v < 0.0f ? 1.0f : v;  // background pixels: unshadowed
+  // A frame in flight may still copy from the buffer being replaced.
+  if (!pending_.empty()) vkDeviceWaitIdle(ctx_.device());
   external_shadow_ = Buffer(ctx_, term.size() * sizeof(float), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true,
                             "external shadow term");
   external_shadow_.write(term.data(), term.size() * sizeof(float));

@@ -68,10 +68,15 @@ TEST(Window, FailsWithOneLineWithoutDisplay) {
   EXPECT_EQ(message.find('\n'), std::string::npos) << message;
 }
 
-TEST(Window, PresentsSceneAndOverlayThroughResize) {
+// Run with the renderer's frames in flight: 1, and 2 under synchronization validation.
+class WindowInFlight : public ::testing::TestWithParam<uint32_t> {};
+
+TEST_P(WindowInFlight, PresentsSceneAndOverlayThroughResize) {
+  const uint32_t in_flight = GetParam();
   engine::gpu::ContextOptions options;
   options.device = "lavapipe";
   options.validation = true;
+  options.sync_validation = in_flight > 1;
   options.instance_extensions = Window::required_instance_extensions();
   options.swapchain = true;
   engine::gpu::Context ctx(options);
@@ -80,7 +85,7 @@ TEST(Window, PresentsSceneAndOverlayThroughResize) {
   Window window(engine::platform::WindowOptions{"window test", 320, 240});
   window.attach(ctx);
   auto scene = engine::load_scene("contact");
-  engine::Renderer renderer(ctx, {320, 240});
+  engine::Renderer renderer(ctx, {320, 240}, in_flight);
   renderer.set_scene(*scene);
 
   bool show_ui = true;
@@ -164,6 +169,19 @@ TEST(Window, PresentsSceneAndOverlayThroughResize) {
   EXPECT_TRUE(window.read_last_frame(w, h).empty());
   EXPECT_EQ(w, 0u);
 
+  // Never more than the frames in flight pending; once finished, every drawn frame was timed once.
+  EXPECT_LE(renderer.frames_pending(), size_t(in_flight));
+  renderer.finish_frames();
+  EXPECT_EQ(renderer.frames_pending(), 0u);
+  if (renderer.profiler().enabled()) {
+    EXPECT_EQ(renderer.profiler().history("frame").size(), 12u);
+  }
+
   for (const auto& m : ctx.validation_messages()) ADD_FAILURE() << m;
   EXPECT_EQ(ctx.validation_message_count(), 0u);
 }
+
+INSTANTIATE_TEST_SUITE_P(FramesInFlight, WindowInFlight, ::testing::Values(1u, 2u),
+                         [](const ::testing::TestParamInfo<uint32_t>& info) {
+                           return std::to_string(info.param) + "_in_flight";
+                         });

@@ -28,9 +28,10 @@ PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, boo
   auto& samples = probe_->samples;
   auto& decided = probe_->decided;
   if (pending) {
-    // Only whole frames count: the region of the frame that last used this slot (the profiler's last
-    // collected frame), if this pass recorded it.
-    for (const auto& [name, ms] : profiler.last_frame())
+    // Only whole frames count: the region of the frame that last used this slot (collected in the
+    // profiler's segment of the same index: the host's frame N uses slot and segment N % F), if this
+    // pass recorded it.
+    for (const auto& [name, ms] : profiler.last_frame_of_slot(frame_slot))
       if (name == region_) samples[slot(*pending)].push_back(ms);
     pending.reset();
   }

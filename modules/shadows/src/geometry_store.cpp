@@ -236,6 +236,11 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
     vkCmdDispatch(cmd, groups(m.index_count, 64), 1, 1);
   }
   // Alpha textures: texels by compute, headers and the count by updates.
+  struct Header {
+    VkDeviceSize offset;
+    uint32_t words[4];
+  };
+  std::vector<Header> headers;
   texture_import_.bind(cmd);
   for (const auto& p : pending_) {
     const MeshDesc& m = p.desc;
@@ -250,10 +255,15 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
                                        m.alpha_texture.extent.height, m.alpha_texture.format == VK_FORMAT_R8_UNORM};
     texture_import_.push_constants(cmd, push);
     vkCmdDispatch(cmd, groups(push.width, 8), groups(push.height, 8), 1);
-    const uint32_t header[4] = {p.texture_first_word, push.width, push.height,
-                                uint32_t(m.wrap_u) | (uint32_t(m.wrap_v) << 8)};
-    vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), VkDeviceSize(1 + 4 * info.texture) * 4, sizeof(header), header);
+    headers.push_back({VkDeviceSize(1 + 4 * info.texture) * 4,
+                       {p.texture_first_word, push.width, push.height, uint32_t(m.wrap_u) | (uint32_t(m.wrap_v) << 8)}});
   }
+  // The texel dispatches bind the whole buffer, so the header updates are ordered after them.
+  if (!headers.empty())
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  for (const Header& h : headers)
+    vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), h.offset, sizeof(h.words), h.words);
   vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), 0, 4, &texture_count_);
   // The imports' writes, visible to every reader of the geometry later in this frame.
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,

@@ -1,7 +1,9 @@
 #include "shadows_engine/shadows_engine.hpp"
 
 #include <cstring>
+#include <deque>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 
@@ -52,8 +54,9 @@ class EngineShadowModule final : public ShadowModule {
     desc.enabled_device_extensions = ctx.enabled_device_extensions();
     desc.enabled_features = ctx.enabled_features();
     desc.masked_features = ctx.masked_features();
-    // The renderer waits for each frame and says so through after_frame().
-    desc.frames_in_flight = 1;
+    // As many as the renderer: it waits for frame N - F before recording frame N and reports each
+    // completed frame through after_frame().
+    desc.frames_in_flight = renderer.frames_in_flight();
     desc.settings = settings;
     context_ = std::make_unique<detail::ContextImpl>(desc);
     context_->use_profiler(&renderer.profiler());
@@ -105,7 +108,9 @@ class EngineShadowModule final : public ShadowModule {
 
     engine::GBuffer& g = frame.gbuffer;
     FrameDesc f;
-    f.frame_index = frame_index_++;
+    // The renderer's frame index: the module's slot (frame_index % F) is then the renderer's, and the
+    // shared profiler's last collected frame is the one that last used the slot (backend probes).
+    f.frame_index = frame.view.frame_index;
     f.depth = image_input(g.depth, kDepthTargetUsage);
     f.normals.image = image_input(g.normal, kColorTargetUsage);
     f.normals.facing_camera = true;
@@ -129,11 +134,18 @@ class EngineShadowModule final : public ShadowModule {
     f.output = image_input(frame.shadow_term, kStorageTargetUsage);
     f.overlay = image_input(frame.overlay, kStorageTargetUsage);
     context_->record(frame.cmd, f);
-    last_frame_ = f.frame_index;
+    recorded_.push_back(f.frame_index);
   }
 
   void after_frame(engine::gpu::Context&) override {
-    if (last_frame_) context_->frame_completed(*last_frame_);
+    // Frames complete in the order they were recorded; a frame the module did not record (the
+    // renderer showed an external shadow term) has nothing to report.
+    std::optional<uint64_t> done;
+    while (!recorded_.empty() && recorded_.front() <= renderer_.completed_frame()) {
+      done = recorded_.front();
+      recorded_.pop_front();
+    }
+    if (done) context_->frame_completed(*done);
   }
 
   std::vector<float> read_visibility() override {
@@ -236,8 +248,7 @@ class EngineShadowModule final : public ShadowModule {
   std::map<std::tuple<uint32_t, uint32_t, uint32_t>, MeshId> meshes_;
   std::map<uint32_t, TextureImage> textures_;
   std::vector<Instance> instances_;
-  uint64_t frame_index_ = 0;
-  std::optional<uint64_t> last_frame_;
+  std::deque<uint64_t> recorded_;  // frames recorded and not yet reported complete, oldest first
 };
 
 }  // namespace

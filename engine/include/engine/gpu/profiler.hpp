@@ -1,6 +1,10 @@
 #pragma once
 // GPU time per named pass from timestamp queries. Regions may nest; each frame's results are read
 // after its fence, and history is kept so callers can ask for averages or medians over frames.
+// With F frames in flight the query pool is split into F segments: begin_frame() takes the segment of
+// the frame being recorded, collect() reads the oldest recorded frame's, so the history stays one
+// sequence of frames in the order they ran.
+#include <cstdint>
 #include <deque>
 #include <map>
 #include <string>
@@ -14,20 +18,35 @@ class GpuProfiler {
  public:
   // The history keeps the last `history_frames` frames, so an application running for hours holds a
   // bounded amount (a benchmark's timed frames fit many times over).
-  explicit GpuProfiler(const Context& ctx, uint32_t max_regions = 64, size_t history_frames = 4096);
+  explicit GpuProfiler(const Context& ctx, uint32_t max_regions = 64, size_t history_frames = 4096,
+                       uint32_t frames_in_flight = 1);
   ~GpuProfiler();
   GpuProfiler(const GpuProfiler&) = delete;
   GpuProfiler& operator=(const GpuProfiler&) = delete;
 
   bool enabled() const { return pool_ != VK_NULL_HANDLE; }
+  uint32_t frames_in_flight() const { return frames_in_flight_; }
+  // Resizes the pool for `frames` segments; frames recorded and not yet collected are dropped, so call
+  // it while none is in flight.
+  void set_frames_in_flight(uint32_t frames);
+  // Starts a frame in the next segment. With frames_in_flight frames already recorded and not
+  // collected, the oldest is dropped uncollected (its segment is reused).
   void begin_frame(VkCommandBuffer cmd);
   void begin(VkCommandBuffer cmd, const std::string& name);
   void end(VkCommandBuffer cmd, const std::string& name);
-  // Call after the frame's commands completed; appends this frame's times to the history.
+  // Call after the oldest recorded frame's commands completed; appends its times to the history.
   void collect();
+  // Frames recorded (begin_frame) and not yet collected.
+  size_t frames_pending() const { return frames_.size(); }
 
   // Milliseconds per region in the last collected frame, in first-seen order.
   const std::vector<std::pair<std::string, double>>& last_frame() const { return last_frame_; }
+  // The same for the last collected frame that was recorded in segment `slot % frames_in_flight()`
+  // (frame N records in segment N % F): what frame N + F reads back, even after several frames were
+  // collected at once (a resize waits for all of them).
+  const std::vector<std::pair<std::string, double>>& last_frame_of_slot(uint32_t slot) const {
+    return last_by_segment_[slot % frames_in_flight_];
+  }
   double average_ms(const std::string& name, size_t last_n = 0) const;
   double median_ms(const std::string& name) const;
   std::vector<std::string> region_names() const { return order_; }
@@ -37,20 +56,30 @@ class GpuProfiler {
   void clear_history();
 
  private:
+  void create_pool();
+
   const Context& ctx_;
   VkQueryPool pool_ = VK_NULL_HANDLE;
-  uint32_t capacity_ = 0;
+  uint32_t capacity_ = 0;  // queries per segment
+  uint32_t frames_in_flight_ = 1;
   size_t history_frames_ = 0;
-  uint32_t used_ = 0;
+  uint64_t next_segment_ = 0;  // counts begin_frame calls
   struct Open {
     std::string name;
-    uint32_t begin_query;
+    uint32_t begin_query;  // absolute query index (segment base included)
     uint32_t end_query = UINT32_MAX;
   };
-  std::vector<Open> regions_;
+  // One recorded frame: its segment and regions, until collect() reads it.
+  struct Frame {
+    uint32_t first_query = 0;
+    uint32_t used = 0;
+    std::vector<Open> regions;
+  };
+  std::deque<Frame> frames_;  // oldest first; back() is the frame being recorded
   std::vector<std::string> order_;
   std::map<std::string, std::deque<double>> history_;
   std::vector<std::pair<std::string, double>> last_frame_;
+  std::vector<std::vector<std::pair<std::string, double>>> last_by_segment_;
 };
 
 class ScopedGpuRegion {

@@ -2,6 +2,7 @@
 // Frame orchestration: ECS update -> G-buffer -> shading points -> features (the shadow module) ->
 // lighting. The renderer owns the G-buffer and the per-pixel shadow term that features write and
 // lighting reads; it knows nothing about how shadows are made.
+#include <deque>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -109,7 +110,8 @@ class RenderFeature {
   virtual void on_scene(gpu::Context&, Scene&, SceneGeometry&) {}
   virtual void on_resize(gpu::Context&, VkExtent2D) {}
   virtual void record(FrameContext& frame) = 0;
-  // After the frame's fence: read back statistics, grow pools.
+  // After a frame's fence, once per frame in the order they were recorded (Renderer::completed_frame()
+  // names it): read back statistics, grow pools.
   virtual void after_frame(gpu::Context&) {}
   // Draws the feature's ImGui controls (windowed mode only).
   virtual void draw_ui() {}
@@ -117,8 +119,15 @@ class RenderFeature {
 
 class Renderer {
  public:
-  Renderer(gpu::Context& ctx, VkExtent2D extent);
+  static constexpr uint32_t kMaxFramesInFlight = 3;
+
+  // `frames_in_flight` (1..kMaxFramesInFlight): how many recorded frames the host may have on the GPU
+  // at once. Frame N uses the per-frame data of slot N % frames_in_flight; before update() for frame N
+  // the host has waited for frame N - frames_in_flight and called after_frame() for it. G-buffer and
+  // other GPU-only targets are shared: one queue runs the frames in order.
+  Renderer(gpu::Context& ctx, VkExtent2D extent, uint32_t frames_in_flight = 1);
   ~Renderer();
+  uint32_t frames_in_flight() const { return frames_in_flight_; }
 
   void set_scene(Scene& scene);
   Scene* scene() { return scene_; }
@@ -127,12 +136,21 @@ class Renderer {
   void resize(VkExtent2D extent);
   VkExtent2D extent() const { return extent_; }
 
-  // Runs the ECS systems (transforms, camera) and builds the draw list.
+  // Runs the ECS systems (transforms, camera), builds the draw list and writes the frame's uniforms
+  // (slot frame_index % frames_in_flight).
   void update(float dt);
-  // Records G-buffer, shading points, features, lighting into `cmd`. Leaves output() in GENERAL.
+  // Records G-buffer, shading points, features, lighting into `cmd`. Leaves output() in GENERAL. The
+  // frame then counts as pending until after_frame().
   void record(VkCommandBuffer cmd);
-  // After the frame's commands completed.
+  // The oldest pending frame's commands completed: collects its GPU times and calls the features'
+  // after_frame. Does nothing when no frame is pending.
   void after_frame();
+  // Waits for the device and completes every pending frame (resize, scene change, shutdown).
+  void finish_frames();
+  // Frames recorded and not yet completed by after_frame().
+  size_t frames_pending() const { return pending_.size(); }
+  // The frame the current (or last) after_frame() completed.
+  uint64_t completed_frame() const { return completed_frame_; }
   // update + record + submit + wait + after_frame, for headless use.
   void render_frame(float dt = 1.0f / 60.0f);
 
@@ -179,7 +197,11 @@ class Renderer {
   gpu::Image shadow_term_;
   gpu::Image overlay_;
   gpu::Image output_;
-  gpu::Buffer frame_uniforms_;
+  uint32_t frames_in_flight_ = 1;
+  std::vector<gpu::Buffer> frame_uniforms_;  // one per frame-in-flight slot: written by the host each frame
+  uint64_t next_frame_ = 0;                  // index of the next frame recorded
+  std::deque<uint64_t> pending_;             // recorded, not completed; oldest first
+  uint64_t completed_frame_ = 0;
   gpu::Buffer external_shadow_;
   bool use_external_shadow_ = false;
   bool smooth_terminator_ = true;
