@@ -1,21 +1,30 @@
 #!/usr/bin/env bash
-# The installed package, as a studio would adopt it. One step per CTest entry (a fixture chain):
-#   package_test.sh install BUILD_DIR WORK        cmake --install into an empty WORK/prefix; lists the
-#                                                 files and fails on anything but the library's own
-#   package_test.sh host EXAMPLE_DIR WORK PNG_CHECK  configures and builds the raw-Vulkan host out of tree
-#                                                 against the prefix only, runs it from an unrelated
-#                                                 directory with no shader folder and checks its PNG
-#   package_test.sh version WORK                  find_package(shadows 1.0 CONFIG) succeeds,
-#                                                 find_package(shadows 99 CONFIG) fails cleanly
+# The installed package, as a studio would adopt it. One step per CTest entry (a fixture chain); the
+# steps share a temporary folder outside the source and build trees, whose path STATE holds.
+#   package_test.sh install STATE BUILD_DIR     cmake --install into an empty prefix; lists the files
+#                                               and fails on anything but the library's own
+#   package_test.sh host STATE EXAMPLE_DIR PNG_CHECK  configures and builds the raw-Vulkan host out of
+#                                               tree against the prefix only, runs it from an unrelated
+#                                               directory with no shader folder and checks its PNG
+#   package_test.sh version STATE               find_package(shadows 1.0 CONFIG) succeeds,
+#                                               find_package(shadows 99 CONFIG) fails cleanly
+#   package_test.sh cleanup STATE               removes the temporary folder
 set -euo pipefail
-step=$1
-shift
+step=$1 state=$2
+shift 2
 fail() { echo "package_test: $*" >&2; exit 1; }
+if [[ $step != install ]]; then
+  [[ -f $state ]] || fail "no installed prefix (the install step did not run)"
+  work=$(cat "$state")
+  [[ $step == cleanup ]] || [[ -d $work/prefix ]] || fail "no installed prefix in $work"
+fi
 
 case $step in
 install)
-  build=$1 work=$2
-  rm -rf "$work" && mkdir -p "$work"
+  build=$1
+  [[ -f $state ]] && rm -rf "$(cat "$state")"
+  work=$(mktemp -d "${TMPDIR:-/tmp}/shadows_package.XXXXXX")
+  echo "$work" >"$state"
   prefix=$work/prefix
   cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log"; fail "cmake --install failed"; }
   echo "installed files:"
@@ -38,16 +47,16 @@ install)
   echo "pkg-config: $(PKG_CONFIG_PATH=$prefix/lib/pkgconfig pkg-config --cflags --libs shadows)"
   ;;
 host)
-  example=$1 work=$2 png_check=$(realpath "$3")
+  example=$(realpath "$1") png_check=$(realpath "$2")
   prefix=$work/prefix
-  [[ -d $prefix ]] || fail "no installed prefix (run the install step first)"
   rm -rf "$work/host" "$work/run"
   cmake -S "$example" -B "$work/host" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release >"$work/host_configure.log" 2>&1 ||
     { cat "$work/host_configure.log"; fail "configuring the host against the prefix failed"; }
   # Nothing of the source tree but the example's own folder may appear in its build.
   source_root=$(cd "$example/../.." && pwd)
-  if grep -E "$source_root/(engine|modules|shaders|build)" "$work/host/CMakeCache.txt"; then
-    fail "the out-of-tree build refers to the project's source or build tree"
+  if grep -rhF "$source_root" "$work/host/CMakeCache.txt" "$work/host/CMakeFiles" --include='*.txt' --include='*.make' \
+       --include='CMakeCache.txt' | grep -vF "$example"; then
+    fail "the out-of-tree build refers to the project's tree outside the example's folder"
   fi
   cmake --build "$work/host" -j2 >"$work/host_build.log" 2>&1 || { tail -40 "$work/host_build.log"; fail "building the host failed"; }
   [[ ! -e $work/host/shaders ]] || fail "a shaders/ folder lies beside the host"
@@ -58,9 +67,7 @@ host)
   "$png_check" host.png --min-size 160x90 --min-colors 8
   ;;
 version)
-  work=$1
   prefix=$work/prefix
-  [[ -d $prefix ]] || fail "no installed prefix (run the install step first)"
   probe() {  # probe DIR VERSION: configures a project asking for shadows VERSION
     mkdir -p "$1"
     cat >"$1/CMakeLists.txt" <<CML
@@ -84,6 +91,9 @@ CML
   if probe "$work/probe_99" 99; then fail "find_package(shadows 99 CONFIG) succeeded"; fi
   grep -q "shadows 99 not found" "$work/probe_99/log" || { cat "$work/probe_99/log"; fail "find_package(shadows 99) failed for another reason"; }
   grep -A3 "version" "$work/probe_99/log" | head -8
+  ;;
+cleanup)
+  rm -rf "$work" "$state"
   ;;
 *) fail "unknown step $step" ;;
 esac
