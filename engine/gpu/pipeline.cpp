@@ -1,6 +1,8 @@
 #include "engine/gpu/pipeline.hpp"
 
+#include <algorithm>
 #include <fstream>
+#include <mutex>
 #include <unistd.h>
 
 #include "engine/core/components.hpp"
@@ -15,7 +17,46 @@ std::filesystem::path shader_directory() {
   return exe.parent_path() / ENGINE_SHADER_DIR_NAME;
 }
 
+namespace {
+
+struct EmbeddedRegistry {
+  std::mutex mutex;
+  std::vector<std::span<const EmbeddedShader>> tables;
+};
+
+EmbeddedRegistry& embedded_registry() {
+  static EmbeddedRegistry registry;
+  return registry;
+}
+
+}  // namespace
+
+void register_embedded_shaders(std::span<const EmbeddedShader> shaders) {
+  EmbeddedRegistry& r = embedded_registry();
+  std::lock_guard lock(r.mutex);
+  const bool known = std::any_of(r.tables.begin(), r.tables.end(),
+                                 [&](std::span<const EmbeddedShader> t) { return t.data() == shaders.data(); });
+  if (!known) r.tables.push_back(shaders);
+}
+
+std::span<const uint32_t> embedded_shader(const std::string& name) {
+  EmbeddedRegistry& r = embedded_registry();
+  std::lock_guard lock(r.mutex);
+  for (std::span<const EmbeddedShader> table : r.tables)
+    for (const EmbeddedShader& s : table)
+      if (name == s.name) return s.code;
+  return {};
+}
+
 ShaderModule::ShaderModule(const Context& ctx, const std::string& name) : ctx_(ctx) {
+  if (const std::span<const uint32_t> embedded = embedded_shader(name); !embedded.empty()) {
+    VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    info.codeSize = embedded.size_bytes();
+    info.pCode = embedded.data();
+    VK_CHECK(vkCreateShaderModule(ctx.device(), &info, ctx.allocator(), &module_));
+    ctx.set_name(module_, VK_OBJECT_TYPE_SHADER_MODULE, name);
+    return;
+  }
   const auto path = shader_directory() / (name + ".spv");
   std::ifstream file(path, std::ios::binary | std::ios::ate);
   if (!file) throw VulkanError("cannot open shader " + path.string() + " (was the project built?)");

@@ -7,6 +7,7 @@
 
 #include "barriers.hpp"
 #include "context_impl.hpp"
+#include "embedded_shaders.hpp"
 #include "input_checks.hpp"
 
 namespace shadows {
@@ -103,6 +104,8 @@ void check_image(const ImageInput& image, const std::string& name, std::initiali
 // ---------------------------------------------------------------------------------------------------
 
 ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
+  // Every pipeline of the module is created after this, from the SPIR-V inside the library.
+  engine::gpu::register_embedded_shaders(embedded_shaders());
   if (desc.instance == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.instance is VK_NULL_HANDLE");
   if (desc.physical_device == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.physical_device is VK_NULL_HANDLE");
   if (desc.device == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.device is VK_NULL_HANDLE");

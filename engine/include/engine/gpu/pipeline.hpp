@@ -3,6 +3,7 @@
 // writer that pushes descriptors at record time (no pools, no set lifetime to manage).
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,9 +17,22 @@ namespace engine::gpu {
 // Where compiled SPIR-V lives: $ENGINE_SHADER_DIR if set, else "shaders/" next to the executable.
 std::filesystem::path shader_directory();
 
+// SPIR-V compiled into a library, so that a program linking it needs no shader folder. A library
+// registers its table before creating pipelines (an explicit call: a static registration object in a
+// static library would be dropped by the linker); ShaderModule looks here first, then on disk.
+struct EmbeddedShader {
+  const char* name;  // source file name, e.g. "izb_trace.comp"
+  std::span<const uint32_t> code;
+};
+// Idempotent; the table must outlive every ShaderModule (a static array).
+void register_embedded_shaders(std::span<const EmbeddedShader> shaders);
+// The embedded SPIR-V named `name`, or an empty span.
+std::span<const uint32_t> embedded_shader(const std::string& name);
+
 class ShaderModule {
  public:
-  // `name` is the source file name, e.g. "gbuffer.vert"; loads <shader_directory>/<name>.spv.
+  // `name` is the source file name, e.g. "gbuffer.vert": the embedded SPIR-V of that name if a library
+  // registered one, else <shader_directory>/<name>.spv.
   ShaderModule(const Context& ctx, const std::string& name);
   ~ShaderModule();
   ShaderModule(const ShaderModule&) = delete;

@@ -51,12 +51,14 @@
 
 #include <vulkan/vulkan.h>
 
+#include "shadows/version.hpp"
+
 #include "shadows/settings.hpp"
 
 namespace shadows {
 
 // One line naming the argument and what is wrong with it.
-class Error : public std::runtime_error {
+class SHADOWS_API Error : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
@@ -76,7 +78,7 @@ struct DeviceRequirements {
   std::vector<DeviceRequirement> optional_features;
   std::string missing;  // empty when the device can run the module; else the one-line reason
 };
-DeviceRequirements device_requirements(VkPhysicalDevice physical_device);
+SHADOWS_API DeviceRequirements device_requirements(VkPhysicalDevice physical_device);
 
 struct ContextDesc {
   VkInstance instance = VK_NULL_HANDLE;
@@ -248,7 +250,7 @@ struct Capabilities {
   const Capability& of(CsmTest t) const { return csm_test[static_cast<int>(t)]; }
 };
 
-class Context {
+class SHADOWS_API Context {
  public:
   // Throws shadows::Error (one line naming the field) on a bad description or a device that lacks a
   // required feature; see device_requirements().

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "shadows/version.hpp"
+
 namespace shadows {
 
 enum class Technique {
@@ -164,16 +166,16 @@ struct Stats {
 
 // Parsing/printing helpers for command lines and JSON ("sm", "cascades", "izb", "izb+csm", "hybrid",
 // "hybrid+csm", "rt").
-std::optional<Settings> parse_mode(const std::string& mode, Settings base);
-std::string mode_name(const Settings& settings);
-std::optional<CsmTest> parse_csm_test(const std::string& name);
-std::string csm_test_name(CsmTest test);
-std::optional<Masking> parse_masking(const std::string& name);
-std::string masking_name(Masking masking);
-std::optional<DebugView> parse_debug_view(const std::string& name);
-std::optional<PassBackend> parse_backend(const std::string& name);  // "auto", "raster", "compute"
-std::string backend_name(PassBackend backend);
-std::optional<ListLayout> parse_list_layout(const std::string& name);  // "linked", "sorted"
-std::string list_layout_name(ListLayout layout);
+SHADOWS_API std::optional<Settings> parse_mode(const std::string& mode, Settings base);
+SHADOWS_API std::string mode_name(const Settings& settings);
+SHADOWS_API std::optional<CsmTest> parse_csm_test(const std::string& name);
+SHADOWS_API std::string csm_test_name(CsmTest test);
+SHADOWS_API std::optional<Masking> parse_masking(const std::string& name);
+SHADOWS_API std::string masking_name(Masking masking);
+SHADOWS_API std::optional<DebugView> parse_debug_view(const std::string& name);
+SHADOWS_API std::optional<PassBackend> parse_backend(const std::string& name);  // "auto", "raster", "compute"
+SHADOWS_API std::string backend_name(PassBackend backend);
+SHADOWS_API std::optional<ListLayout> parse_list_layout(const std::string& name);  // "linked", "sorted"
+SHADOWS_API std::string list_layout_name(ListLayout layout);
 
 }  // namespace shadows
