@@ -351,7 +351,8 @@ struct IzbPass::Impl {
     triangle_count = caster_triangles;
     if (caster_table.size() > draw_capacity || !draw_flags.valid()) {
       draw_capacity = std::max<size_t>(caster_table.size(), 1);
-      draw_flags = Buffer(ctx, draw_capacity * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+      draw_flags = Buffer(ctx, draw_capacity * sizeof(uint32_t),
+                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false,
                           "izb caster draw flags");
     }
     // Mesh ranges are never reused (the geometry only grows), so an equal table means equal triangles.
@@ -577,12 +578,14 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (use_compute_csm) {
     // Per caster draw: whether it enters the CSM this frame.
     const auto& chosen = m.csm->chosen_draws();
-    auto* flags = static_cast<uint32_t*>(m.draw_flags.mapped());
-    uint32_t ordinal = 0;
+    std::vector<uint32_t> flags;
+    flags.reserve(m.caster_draws);
     for (size_t i = 0; i < frame.draws.size(); ++i) {
       if (!frame.draws[i].shadow.casts_shadow) continue;
-      flags[ordinal++] = i < chosen.size() && chosen[i] ? gpu_shared::IZB_DRAW_IN_CSM : 0u;
+      flags.push_back(i < chosen.size() && chosen[i] ? gpu_shared::IZB_DRAW_IN_CSM : 0u);
     }
+    // In the command stream: each frame in flight reads its own flags.
+    if (!flags.empty()) record_update(m.ctx, frame.cmd, m.draw_flags, flags.data(), flags.size() * sizeof(uint32_t));
   }
 
   // CPU side of the frustum: the light's rotation and the casters' depth range along it.
