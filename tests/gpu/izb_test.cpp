@@ -1,4 +1,5 @@
-// The frustum-traced IZB and the CSM z-prepass against the Embree reference, on lavapipe.
+// The frustum-traced IZB and the CSM z-prepass against the Embree reference, on lavapipe (CTest) or the
+// device ENGINE_DEVICE names; the hardware paths run where the device has them and skip naming what it lacks.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
