@@ -36,6 +36,8 @@ struct Options {
   int frames = 10;
   int warmup = 3;
   bool reference = false;
+  double max_mismatch = -1.0;      // --max-mismatch: a run over it fails the benchmark (negative: no bound)
+  double max_coverage_mae = -1.0;  // --max-coverage-mae, likewise
   bool faceted_terminator = false;  // the smooth-terminator offset off, to show what it removes
   std::string device;
   std::string json_path;
@@ -61,6 +63,7 @@ const char* kUsage =
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted]\n"
     "                    [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
+    "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
@@ -144,6 +147,14 @@ Options parse(int argc, char** argv) {
     else if (a == "--frames") o.frames = int(args.uint_value());
     else if (a == "--warmup") o.warmup = int(args.uint_value());
     else if (a == "--reference") o.reference = true;
+    else if (a == "--max-mismatch" || a == "--max-coverage-mae") {
+      const std::string v = args.value();
+      char* end = nullptr;
+      const double bound = std::strtod(v.c_str(), &end);
+      if (v.empty() || !end || *end || !(bound >= 0.0))
+        throw std::runtime_error(a + " '" + v + "': expected a non-negative number");
+      (a == "--max-mismatch" ? o.max_mismatch : o.max_coverage_mae) = bound;
+    }
     else if (a == "--faceted-terminator") o.faceted_terminator = true;
     else if (a == "--device") o.device = args.value();
     else if (a == "--json") o.json_path = args.value();
@@ -158,6 +169,8 @@ Options parse(int argc, char** argv) {
   for (uint32_t spp : o.spps)
     if (spp != 1 && spp != 32) throw std::runtime_error("--spp must be 1 or 32");
   if (o.frames < 1) throw std::runtime_error("--frames must be at least 1");
+  if ((o.max_mismatch >= 0.0 || o.max_coverage_mae >= 0.0) && (!o.reference || !o.suite.empty()))
+    throw std::runtime_error("--max-mismatch and --max-coverage-mae need --reference (and no --suite)");
   if (!o.suite.empty() && o.suite != "paper") throw std::runtime_error("--suite '" + o.suite + "': expected paper");
   if (o.suite.empty() && (o.instances.size() > 1 || o.spps.size() > 1))
     throw std::runtime_error("lists for --instances and --spp need --suite");
@@ -502,7 +515,26 @@ int run_single(const Options& o) {
     renderer.set_external_shadow_term({});
   }
   if (!o.json_path.empty()) write_json(o.json_path, results);
-  return 0;
+  // The bounds make a benchmark run a check: each run over one fails it, named with its figure.
+  int failed = 0;
+  for (const auto& r : results) {
+    if (!r.contains("reference")) continue;
+    const std::string what = r["mode"].get<std::string>() + " (" + r["scene"].get<std::string>() + " view " +
+                             std::to_string(r["view"].get<size_t>()) + ", " + std::to_string(r["spp"].get<uint32_t>()) +
+                             " spp)";
+    const double mismatch = r["reference"]["mismatch_rate"], mae = r["reference"]["coverage_mae"];
+    if (o.max_mismatch >= 0.0 && mismatch > o.max_mismatch) {
+      std::fprintf(stderr, "shadow_bench: %s: mismatch rate %.6f over --max-mismatch %g\n", what.c_str(), mismatch,
+                   o.max_mismatch);
+      ++failed;
+    }
+    if (o.max_coverage_mae >= 0.0 && mae > o.max_coverage_mae) {
+      std::fprintf(stderr, "shadow_bench: %s: coverage MAE %.6f over --max-coverage-mae %g\n", what.c_str(), mae,
+                   o.max_coverage_mae);
+      ++failed;
+    }
+  }
+  return failed ? 2 : 0;
 }
 
 // ---- The paper suite ----

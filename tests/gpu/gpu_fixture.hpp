@@ -1,19 +1,27 @@
 #pragma once
-// Shared set-up for GPU tests: a lavapipe context with the validation layer on, and a check that no
-// validation message was raised during the test.
+// Shared set-up for GPU tests: a context with the validation layer on, and a check that no validation
+// message was raised during the test. The device is ENGINE_DEVICE's (CTest sets lavapipe), else
+// lavapipe: `ENGINE_DEVICE=gpu build/bin/gpu_tests` runs the whole suite on a GPU.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <memory>
+#include <string>
 
 #include "engine/assets/scene.hpp"
 #include "engine/gpu/context.hpp"
 #include "engine/render/renderer.hpp"
 #include "shadows_engine/shadows_engine.hpp"
 
+inline std::string test_device() {
+  const char* d = std::getenv("ENGINE_DEVICE");
+  return d && *d ? d : "lavapipe";
+}
+
 class GpuTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    ctx_ = std::make_unique<engine::gpu::Context>(engine::gpu::ContextOptions{.device = "lavapipe", .validation = true});
+    ctx_ = std::make_unique<engine::gpu::Context>(engine::gpu::ContextOptions{.device = test_device(), .validation = true});
     ASSERT_TRUE(ctx_->validation_enabled()) << "the Khronos validation layer must be installed for GPU tests";
   }
   void TearDown() override {

@@ -1,6 +1,12 @@
-// The frustum-traced IZB and the CSM z-prepass against the Embree reference, on lavapipe.
+// The frustum-traced IZB and the CSM z-prepass against the Embree reference, on lavapipe (CTest) or the
+// device ENGINE_DEVICE names; the hardware paths run where the device has them and skip naming what it lacks.
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <tuple>
+
+#include <shared/shadow_common.h>
 
 #include "frame_capture.hpp"
 #include "gpu_fixture.hpp"
@@ -11,6 +17,9 @@ namespace {
 
 constexpr uint32_t kSize = 128;
 constexpr uint32_t kGrid = 256;
+// 32 spp coverage tests at 256^2: at 128^2 a 0.02 % bound is two pixels, and a GPU puts the odd
+// half-covered pixel on the other side of one half (the H200: 3 of 10,193 on foliage view 0).
+constexpr uint32_t kCoverageSize = 256;
 
 struct Rendered {
   std::vector<float> visibility;
@@ -60,6 +69,11 @@ class IzbTest : public GpuTest {
 struct SceneView {
   std::string scene;
   size_t view;
+  // Floors, about half of what lavapipe gives, so a path that loses most of its work fails: pixels of
+  // fractional 32 spp coverage, and candidates the CSM culls with the Hertel and with the barycentric
+  // test (each; 0 where no CSM caster shadows anything in view).
+  uint64_t min_fractional = 0;
+  uint64_t min_culled = 0;
 };
 void PrintTo(const SceneView& v, std::ostream* os) { *os << v.scene << " view " << v.view; }
 std::string name_of(const testing::TestParamInfo<SceneView>& info) {
@@ -77,39 +91,70 @@ TEST_P(IzbSceneTest, OneSampleMatchesReference) {
   EXPECT_EQ(r.stats.node_overflow, 0u);
 }
 
+// The reference takes the same μQuad samples, so the coverage is all but exact (measured: MAE and
+// mismatch <= 1.6e-4); a path collapsed to the pixel centre is over these bounds on every view, and has
+// no fractional pixels at all.
 TEST_P(IzbSceneTest, ThirtyTwoSamplesMatchReferenceCoverage) {
-  const auto r = render(GetParam().scene, GetParam().view, izb(32));
+  const auto r = render(GetParam().scene, GetParam().view, izb(32), true, 1, kCoverageSize);
   const auto cmp = reference::compare_visibility(r.visibility, r.reference);
-  EXPECT_LE(cmp.coverage_mae, 1.0 / 64.0);
-  EXPECT_LE(cmp.mismatch_rate, 0.001);
+  EXPECT_LE(cmp.coverage_mae, 1.0e-3);
+  EXPECT_LE(cmp.mismatch_rate, 0.0002) << cmp.mismatched << " of " << cmp.pixels << " pixels differ";
+  uint64_t fractional = 0, reference_fractional = 0;
+  for (size_t i = 0; i < r.visibility.size(); ++i) {
+    fractional += r.visibility[i] > 0.0f && r.visibility[i] < 1.0f;
+    reference_fractional += r.reference[i] > 0.0f && r.reference[i] < 1.0f;
+  }
+  std::printf("32 spp: coverage MAE %.2e, mismatch %.2e, %llu fractional pixels (reference %llu)\n", cmp.coverage_mae,
+              cmp.mismatch_rate, (unsigned long long)fractional, (unsigned long long)reference_fractional);
+  EXPECT_GE(fractional, GetParam().min_fractional) << "too few pixels of fractional coverage";
 }
 
-// The CSM may only cull points that are truly shadowed, so visibility is the plain IZB's exactly.
+// The CSM may only cull points that are truly shadowed, so visibility is the plain IZB's exactly; and
+// it must cull, where the scene has CSM casters in view (a CSM that writes nothing passes the rest).
 TEST_P(IzbSceneTest, CsmCullingIsConservativeForEveryAvailableTest) {
   const auto plain = render(GetParam().scene, GetParam().view, izb(1));
   double hertel_rate = -1, bary_rate = -1;
-  for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric, shadows::CsmTest::BarycentricHw,
-                    shadows::CsmTest::InnerHw}) {
-    std::string why;
-    {
-      auto& r = make_renderer(GetParam().scene, GetParam().view, kSize, kSize);
-      auto probe = shadows::install(r, izb(1));
-      if (!probe->supported(test, &why)) {
-        EXPECT_FALSE(why.empty());
-        continue;
-      }
-    }
+  uint64_t hertel_culled = 0, bary_culled = 0;
+  for (auto test : {shadows::CsmTest::Hertel, shadows::CsmTest::Barycentric}) {
     const auto culled = render(GetParam().scene, GetParam().view, izb(1, true, test), false);
     const auto cmp = reference::compare_visibility(culled.visibility, plain.reference);
     EXPECT_EQ(cmp.false_shadowed, 0u) << shadows::csm_test_name(test);
     EXPECT_EQ(culled.visibility, plain.visibility) << shadows::csm_test_name(test);
     EXPECT_LE(culled.stats.nodes_inserted, plain.stats.nodes_inserted);
-    if (test == shadows::CsmTest::Hertel) hertel_rate = culled.stats.culling_rate;
-    if (test == shadows::CsmTest::Barycentric) bary_rate = culled.stats.culling_rate;
+    EXPECT_GE(culled.stats.csm_culled, GetParam().min_culled) << shadows::csm_test_name(test) << " culled too little";
+    std::printf("%s: culled %llu, rate %.4f\n", shadows::csm_test_name(test).c_str(),
+                (unsigned long long)culled.stats.csm_culled, culled.stats.culling_rate);
+    (test == shadows::CsmTest::Hertel ? hertel_rate : bary_rate) = culled.stats.culling_rate;
+    (test == shadows::CsmTest::Hertel ? hertel_culled : bary_culled) = culled.stats.csm_culled;
   }
-  ASSERT_GE(hertel_rate, 0.0);
-  ASSERT_GE(bary_rate, 0.0);
-  EXPECT_GE(bary_rate, hertel_rate);  // four corners inside is a weaker demand than the circle test
+  // Four corners inside is a weaker demand than the circle test: an order that means something only
+  // where both culled.
+  if (hertel_culled > 0 && bary_culled > 0) {
+    EXPECT_GE(bary_rate, hertel_rate);
+  }
+}
+
+// The hardware coverage tests (fragment-shader barycentrics, inner conservative rasterization) where
+// the device has them: as conservative as the others, and culling as much as the barycentric floor.
+class IzbHardwareCsmTest : public IzbTest,
+                           public testing::WithParamInterface<std::tuple<SceneView, shadows::CsmTest>> {};
+
+TEST_P(IzbHardwareCsmTest, CullingIsConservative) {
+  const auto& [sv, test] = GetParam();
+  {
+    auto& r = make_renderer(sv.scene, sv.view, kSize, kSize);
+    auto probe = shadows::install(r, izb(1));
+    if (std::string why; !probe->supported(test, &why)) GTEST_SKIP() << shadows::csm_test_name(test) << ": " << why;
+  }
+  const auto plain = render(sv.scene, sv.view, izb(1));
+  const auto culled = render(sv.scene, sv.view, izb(1, true, test), false);
+  const auto cmp = reference::compare_visibility(culled.visibility, plain.reference);
+  EXPECT_EQ(cmp.false_shadowed, 0u);
+  EXPECT_EQ(culled.visibility, plain.visibility);
+  EXPECT_LE(culled.stats.nodes_inserted, plain.stats.nodes_inserted);
+  if (sv.min_culled > 0) {
+    EXPECT_GT(culled.stats.csm_culled, 0u) << "culled nothing";
+  }
 }
 
 // The compute trace and compute CSM against the raster ones: identical visibility, bit for bit, at 1
@@ -147,11 +192,46 @@ TEST_P(IzbSceneTest, ComputeAndRasterPassesAgreeBitForBit) {
             visibility(hybrid, PassBackend::Raster, PassBackend::Raster));
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, IzbSceneTest,
-                         testing::Values(SceneView{"contact", 0}, SceneView{"contact", 1}, SceneView{"atrium", 0},
-                                         SceneView{"atrium", 1}, SceneView{"foliage", 0}, SceneView{"foliage", 1},
-                                         SceneView{"canopy", 1}),
-                         name_of);
+std::string hardware_csm_name(const testing::TestParamInfo<IzbHardwareCsmTest::ParamType>& info) {
+  std::string name = std::get<0>(info.param).scene + "_view" + std::to_string(std::get<0>(info.param).view) + "_" +
+                     shadows::csm_test_name(std::get<1>(info.param));
+  for (char& c : name) c = c == '-' ? '_' : c;
+  return name;
+}
+// Seen on lavapipe (fractional pixels at 256^2; culled by hertel/bary at 128^2): contact 258, 221 (84/86,
+// 47/52), atrium 652, 274 (13434/13437, 1080/1081), foliage 3622, 3177, canopy 3438 (none culled on these:
+// their leaves are alpha-tested or left out of the CSM by the automatic choice, and nothing else in the
+// CSM is shadowed).
+const SceneView kSceneViews[] = {{"contact", 0, 130, 40},   {"contact", 1, 110, 20}, {"atrium", 0, 320, 6000},
+                                 {"atrium", 1, 135, 500},   {"foliage", 0, 1800, 0}, {"foliage", 1, 1600, 0},
+                                 {"canopy", 1, 1700, 0}};
+INSTANTIATE_TEST_SUITE_P(Scenes, IzbSceneTest, testing::ValuesIn(kSceneViews), name_of);
+INSTANTIATE_TEST_SUITE_P(Scenes, IzbHardwareCsmTest,
+                         testing::Combine(testing::ValuesIn(kSceneViews),
+                                          testing::Values(shadows::CsmTest::BarycentricHw, shadows::CsmTest::InnerHw)),
+                         hardware_csm_name);
+
+// The hardware conservative trace (VK_EXT_conservative_rasterization), where the device has it:
+// against Embree at 1 and 32 samples per pixel, with the bounds of the default path.
+TEST_P(IzbSceneTest, HardwareConservativeTraceMatchesReference) {
+  if (!ctx_->features().conservative_rasterization)
+    GTEST_SKIP() << ctx_->device_name() << " lacks VK_EXT_conservative_rasterization";
+  if (!ctx_->features().geometry_shader)
+    GTEST_SKIP() << ctx_->device_name() << " lacks geometry shaders (the trace reads gl_PrimitiveID)";
+  for (uint32_t spp : {1u, 32u}) {
+    auto s = izb(spp);
+    s.izb.trace = shadows::PassBackend::Raster;
+    s.izb.raster = shadows::ConservativeRaster::Hardware;
+    const auto r = render(GetParam().scene, GetParam().view, s, true, 1, spp == 32 ? kCoverageSize : kSize);
+    const auto cmp = reference::compare_visibility(r.visibility, r.reference);
+    EXPECT_TRUE(r.stats.hardware_conservative);
+    EXPECT_LE(cmp.mismatch_rate, 0.0002) << spp << " spp: " << cmp.mismatched << " of " << cmp.pixels;
+    if (spp == 32) {
+      EXPECT_LE(cmp.coverage_mae, 1.0e-3);
+    }
+    EXPECT_GT(r.stats.nodes_inserted, 0u);
+  }
+}
 
 TEST_F(IzbTest, SoftwareConservativeRasterMatchesBruteForce) {
   for (const char* scene : {"foliage", "atrium"}) {
@@ -379,6 +459,37 @@ TEST_F(IzbTest, HybridIsHardAtContactAndSoftAway) {
   EXPECT_GT(soft_pixels, 20u);  // the far ends of the pole's and plate's shadows soften
 }
 
+// The hybrid keeps the exact IZB term near contact: a shadowed point whose nearest occluder lies within
+// 0.4 of the soft distance takes under half of the cascades' term, so it stays shadowed whatever they say,
+// and a lit point inside the IZB's range takes none. Those points match Embree within the IZB's bound
+// (Embree tells which points have an occluder that near).
+TEST_F(IzbTest, HybridNearPointsMatchTheReference) {
+  shadows::Settings hybrid;
+  hybrid.technique = shadows::Technique::Hybrid;
+  hybrid.izb.resolution = 512;
+  const auto h = render("contact", 0, hybrid, true, 1, 256);
+  const auto points = support::capture_shading_points(*renderer_);
+  const glm::vec3 to_light = -renderer_->frame_view().light_direction;
+  const glm::vec3 eye = renderer_->frame_view().camera_position;
+  reference::EmbreeTracer tracer(scene_->registry);
+  size_t near_shadowed = 0, lit = 0, mismatched = 0;
+  for (size_t i = 0; i < h.visibility.size(); ++i) {
+    if (!points.covered(i) || !points.faces(i, to_light)) continue;
+    const glm::vec3 p(points.position[i]);
+    if (glm::distance(p, eye) > 0.9f * hybrid.hybrid_izb_distance) continue;  // the IZB's range, before its fade
+    const glm::vec3 origin = gpu_shared::shadow_ray_origin(p, glm::vec3(points.normal[i]));
+    const bool shadowed = h.reference[i] < 0.5f;
+    // 0.4 rather than 0.5: a margin for the trace's own measure of the distance.
+    if (shadowed && !tracer.occluded_within(origin, to_light, 0.4f * hybrid.hybrid_soft_distance)) continue;
+    ++(shadowed ? near_shadowed : lit);
+    mismatched += (h.visibility[i] < 0.5f) != shadowed;
+  }
+  std::printf("hybrid near points: %zu shadowed, %zu lit, %zu mismatched\n", near_shadowed, lit, mismatched);
+  EXPECT_GT(near_shadowed, 150u);  // 340 seen
+  EXPECT_GT(lit, 10000u);
+  EXPECT_LE(double(mismatched), 0.0002 * double(near_shadowed + lit));
+}
+
 // The hybrid's IZB lists the pixels that take some of the cascades' term, and only those are filtered.
 // Listing none (no blending by occluder distance, the range beyond the view) leaves the IZB's term
 // bit for bit; listing every facing pixel (a range shorter than the near plane) gives the cascades'.
@@ -423,12 +534,25 @@ TEST_F(IzbTest, DebugOverlaysDrawOverTheImage) {
   module_ = shadows::install(r, s);
   r.render_frame(0.0f);
   const auto plain = r.read_output_rgba8();
+  // Not just "changed": each overlay recolours a part of the image (seen: 91 %, 91 %, 2.9 %, 82 %, 2.9 %;
+  // the cascades and the expensive path cover only the pixels the hybrid lists), and no two look alike.
+  auto changed_share = [](const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+    size_t changed = 0;
+    for (size_t i = 0; i + 3 < a.size(); i += 4) changed += std::memcmp(&a[i], &b[i], 3) != 0;
+    return double(changed) / double(a.size() / 4);
+  };
+  std::vector<std::vector<uint8_t>> overlays;
   for (auto view : {shadows::DebugView::VisibilityMask, shadows::DebugView::ListLength,
                     shadows::DebugView::Cascades, shadows::DebugView::CsmCoverage,
                     shadows::DebugView::ExpensivePath}) {
     module_->settings().debug = view;
     r.render_frame(0.0f);
-    EXPECT_NE(r.read_output_rgba8(), plain) << "overlay " << int(view);
+    overlays.push_back(r.read_output_rgba8());
+    const double share = changed_share(overlays.back(), plain);
+    std::printf("overlay %d: %.3f of the pixels changed\n", int(view), share);
+    EXPECT_GT(share, 0.01) << "overlay " << int(view);
+    for (size_t k = 0; k + 1 < overlays.size(); ++k)
+      EXPECT_NE(overlays[k], overlays.back()) << "overlays " << k << " and " << overlays.size() - 1 << " look alike";
   }
 }
 

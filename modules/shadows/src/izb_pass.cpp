@@ -167,9 +167,12 @@ struct IzbPass::Impl {
                          "izb hybrid pixel list");
   }
 
-  bool raster_trace_available() const {
-    return ctx.features().geometry_shader || ctx.features().conservative_rasterization;
+  // The trace's fragment shader reads gl_PrimitiveID, which SPIR-V puts under the Geometry capability:
+  // the hardware conservative trace needs geometry shaders as much as the software one does.
+  bool hardware_trace_available() const {
+    return ctx.features().conservative_rasterization && ctx.features().geometry_shader;
   }
+  bool raster_trace_available() const { return ctx.features().geometry_shader; }
 
   // The pipelines for `samples` and `flags`, made on first use and kept.
   const Pipelines& pipelines(uint32_t samples_per_pixel, uint32_t flags) {
@@ -247,7 +250,7 @@ struct IzbPass::Impl {
       tp.software = raster("izb trace (software conservative)", 1, 0);
       tp.count_software = raster("izb fragment count (software conservative)", 1, 1);
     }
-    if (ctx.features().conservative_rasterization) {
+    if (hardware_trace_available()) {
       trace.geometry_shader.clear();
       trace.conservative = ConservativeMode::Overestimate;
       tp.hardware = raster("izb trace (hardware conservative)", 0, 0);
@@ -516,7 +519,7 @@ struct IzbPass::Impl {
 IzbPass::IzbPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
 IzbPass::~IzbPass() = default;
 
-bool IzbPass::hardware_raster_available() const { return impl_->ctx.features().conservative_rasterization; }
+bool IzbPass::hardware_raster_available() const { return impl_->hardware_trace_available(); }
 
 bool IzbPass::csm_test_supported(CsmTest test, std::string* why) const { return impl_->csm->supported(test, why); }
 
@@ -546,8 +549,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   const bool use_compute_trace =
       m.trace_probe.pick(settings.trace, raster_trace_available, true, key, frame.profiler, frame.slot) == PassBackend::Compute;
   if (!use_compute_trace && !raster_trace_available)
-    throw std::runtime_error("the raster IZB trace needs conservative rasterization or geometry shaders; " +
-                             m.ctx.device_name() + " has neither (use the compute trace)");
+    throw std::runtime_error("the raster IZB trace needs geometry shaders, which " + m.ctx.device_name() +
+                             " lacks (use the compute trace)");
   bool use_compute_csm = false;
   if (run_csm) {
     const bool raster_ok = m.csm->raster_available(settings.csm_test);
@@ -561,11 +564,14 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
                       PassBackend::Compute;
   }
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
-                            (settings.raster == ConservativeRaster::Auto && m.ctx.features().conservative_rasterization);
+                            (settings.raster == ConservativeRaster::Auto && m.hardware_trace_available());
   if (!use_compute_trace) {
     if (use_hardware && !m.ctx.features().conservative_rasterization)
       throw std::runtime_error("hardware conservative rasterization requested but " + m.ctx.device_name() +
                                " lacks VK_EXT_conservative_rasterization");
+    if (use_hardware && !m.ctx.features().geometry_shader)
+      throw std::runtime_error("the hardware conservative trace reads gl_PrimitiveID, which needs geometry shaders, "
+                               "which " + m.ctx.device_name() + " lacks");
     if (!use_hardware && !m.ctx.features().geometry_shader)
       throw std::runtime_error("software conservative rasterization needs geometry shaders, which " +
                                m.ctx.device_name() + " lacks");

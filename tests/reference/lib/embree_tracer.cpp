@@ -161,7 +161,7 @@ struct EmbreeTracer::Impl {
     for (int i = 0; i < count; ++i) hit[i] = rays.tfar[i] < 0.0f ? 1 : 0;
   }
 
-  bool occluded1(glm::vec3 origin, glm::vec3 dir) const {
+  bool occluded1(glm::vec3 origin, glm::vec3 dir, float t_far = kInf) const {
     RTCRay ray{};
     ray.org_x = origin.x;
     ray.org_y = origin.y;
@@ -171,7 +171,7 @@ struct EmbreeTracer::Impl {
     ray.dir_y = dir.y;
     ray.dir_z = dir.z;
     ray.time = 0.0f;
-    ray.tfar = kInf;
+    ray.tfar = t_far;
     ray.mask = 0xFFFFFFFFu;
     ray.id = 0;
     ray.flags = 0;
@@ -294,6 +294,10 @@ uint32_t EmbreeTracer::triangle_count() const { return impl_->triangles; }
 
 bool EmbreeTracer::occluded(glm::vec3 origin, glm::vec3 dir_to_light) const {
   return impl_->occluded1(origin, dir_to_light);
+}
+
+bool EmbreeTracer::occluded_within(glm::vec3 origin, glm::vec3 dir_to_light, float distance) const {
+  return impl_->occluded1(origin, glm::normalize(dir_to_light), distance);
 }
 
 std::vector<float> EmbreeTracer::visibility_1spp(const ShadingPoints& points,

@@ -45,6 +45,8 @@ class EmbreeTracer {
 
   // True when the ray origin + t * dir_to_light, t in [0, inf), hits either face of any triangle.
   bool occluded(glm::vec3 origin, glm::vec3 dir_to_light) const;
+  // The same for t in [0, distance] along the normalised direction: an occluder within `distance`.
+  bool occluded_within(glm::vec3 origin, glm::vec3 dir_to_light, float distance) const;
 
   // light_direction: the direction light travels (from the sun into the scene); need not be unit.
   // Throws std::invalid_argument when it is zero or the buffers do not match width * height.

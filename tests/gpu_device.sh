@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# gpu_device.sh [GPU_TESTS] [OUT_DIR]: the whole GPU test suite on the machine's GPU (ENGINE_DEVICE=gpu,
+# default build/bin/gpu_tests), once with the validation layer and once with its synchronization checks
+# too; any validation message fails a test. Writes each run's log and GoogleTest JSON under OUT_DIR
+# (default gpu_device_out) and prints a summary: tests run, passed, skipped (with the reason each gave)
+# and failed. Exits non-zero when a run failed.
+set -uo pipefail
+tests=${1:-build/bin/gpu_tests}
+out=${2:-gpu_device_out}
+mkdir -p "$out"
+export ENGINE_DEVICE=${ENGINE_DEVICE:-gpu}
+status=0
+
+summary() {  # LOG: counts and skip reasons from GoogleTest's output
+  awk '
+    /^\[ RUN      \]/ { run++; reason = ""; in_skip = 0; next }
+    /: Skipped$/ { in_skip = 1; next }
+    /^\[       OK \]/ { passed++; next }
+    /^\[  SKIPPED \] [A-Za-z].* ms\)$/ { skipped++; reasons[reason]++; in_skip = 0; next }
+    /^\[  FAILED  \] [A-Za-z].* ms\)$/ { failed++; sub(/,$/, "", $4); names = names "\n    " $4; next }
+    in_skip { reason = reason (reason == "" ? "" : " ") $0 }
+    END {
+      printf "  run %d, passed %d, skipped %d, failed %d\n", run, passed, skipped, failed
+      for (r in reasons) printf "    skipped %d: %s\n", reasons[r], r
+      if (failed) printf "  failed:%s\n", names
+    }' "$1"
+}
+
+for mode in validation syncval; do
+  if [[ $mode == syncval ]]; then env=(ENGINE_SYNC_VALIDATION=1); else env=(ENGINE_VALIDATION=1); fi
+  log=$out/gpu_tests_$mode.log
+  start=$SECONDS
+  env "${env[@]}" "$tests" --gtest_output=json:"$out/gpu_tests_$mode.json" >"$log" 2>&1
+  rc=$?
+  echo "gpu_tests, ENGINE_DEVICE=$ENGINE_DEVICE, ${env[*]}: exit $rc in $((SECONDS - start)) s"
+  summary "$log" | tee "$out/summary_$mode.txt"
+  grep -c '^\[vulkan\]' "$log" | sed 's/^/  validation messages: /'
+  ((rc == 0)) || status=1
+done
+exit $status
