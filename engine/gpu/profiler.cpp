@@ -49,6 +49,10 @@ void GpuProfiler::begin_frame(VkCommandBuffer cmd) {
   if (pool_) vkCmdResetQueryPool(cmd, pool_, frames_.back().first_query, capacity_);
 }
 
+void GpuProfiler::cancel_frame() {
+  if (!frames_.empty()) frames_.pop_back();
+}
+
 void GpuProfiler::begin(VkCommandBuffer cmd, const std::string& name) {
   if (!pool_ || frames_.empty()) return;
   Frame& f = frames_.back();

@@ -240,10 +240,20 @@ void Renderer::update(float dt) {
 }
 
 void Renderer::record(VkCommandBuffer cmd) {
-  const gpu::Buffer& frame_uniforms = frame_uniforms_[view_.frame_index % frames_in_flight_];
+  profiler_.begin_frame(cmd);
+  try {
+    record_frame(cmd);
+  } catch (...) {
+    // Nothing of this frame will be submitted: it must not be waited for as pending.
+    profiler_.cancel_frame();
+    throw;
+  }
   pending_.push_back(view_.frame_index);
   next_frame_ = view_.frame_index + 1;
-  profiler_.begin_frame(cmd);
+}
+
+void Renderer::record_frame(VkCommandBuffer cmd) {
+  const gpu::Buffer& frame_uniforms = frame_uniforms_[view_.frame_index % frames_in_flight_];
   {
     ScopedGpuRegion total(ctx_, profiler_, cmd, "frame");
     // G-buffer.

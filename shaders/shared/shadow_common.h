@@ -11,7 +11,8 @@ SHARED_BEGIN
 SHARED_CONST float kShadowNormalOffset = 2.0e-3f;
 
 SHARED_INLINE vec3 shadow_ray_origin(SHARED_IN(vec3) position, SHARED_IN(vec3) geometric_normal) {
-  return position + geometric_normal * kShadowNormalOffset;
+  SHARED_PRECISE vec3 origin = position + geometric_normal * kShadowNormalOffset;
+  return origin;
 }
 
 // Whether a shading point faces the light; a point turned away is shadowed without a ray. The
@@ -52,21 +53,27 @@ const vec2 kSamplePattern[32] = vec2[32](
 SHARED_INLINE vec3 micro_quad_corner(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
                                      SHARED_IN(mat4) inv_view_proj, SHARED_IN(vec3) plane_point,
                                      SHARED_IN(vec3) plane_normal) {
-  vec2 ndc = (pixel_corner / viewport) * 2.0f - 1.0f;
-  vec4 near_h = inv_view_proj * vec4(ndc.x, ndc.y, 1.0f, 1.0f);  // reversed depth: 1 is near
-  vec4 far_h = inv_view_proj * vec4(ndc.x, ndc.y, 0.5f, 1.0f);
-  vec3 ray_origin = vec3(near_h) / near_h.w;
-  vec3 ray_dir = vec3(far_h) / far_h.w - ray_origin;
-  float denom = dot(plane_normal, ray_dir);
+  SHARED_PRECISE vec2 ndc = (pixel_corner / viewport) * 2.0f - 1.0f;
+  SHARED_PRECISE vec4 near_h = inv_view_proj * vec4(ndc.x, ndc.y, 1.0f, 1.0f);  // reversed depth: 1 is near
+  SHARED_PRECISE vec4 far_h = inv_view_proj * vec4(ndc.x, ndc.y, 0.5f, 1.0f);
+  SHARED_PRECISE vec3 ray_origin = vec3(near_h) / near_h.w;
+  SHARED_PRECISE vec3 ray_dir = vec3(far_h) / far_h.w - ray_origin;
+  SHARED_PRECISE float denom = dot(plane_normal, ray_dir);
   // A plane seen edge-on: keep the shading point rather than shoot to infinity.
   if (abs(denom) < 1.0e-12f) return plane_point;
-  float t = dot(plane_normal, plane_point - ray_origin) / denom;
-  return ray_origin + ray_dir * t;
+  SHARED_PRECISE float t = dot(plane_normal, plane_point - ray_origin) / denom;
+  SHARED_PRECISE vec3 corner = ray_origin + ray_dir * t;
+  return corner;
 }
 
 SHARED_INLINE vec3 micro_quad_blend(SHARED_IN(vec3) c00, SHARED_IN(vec3) c10, SHARED_IN(vec3) c01,
                                     SHARED_IN(vec3) c11, SHARED_IN(vec2) offset) {
-  return mix(mix(c00, c10, offset.x), mix(c01, c11, offset.x), offset.y);
+  // mix() written out (x (1 - a) + y a, as GLSL defines it and GLM computes it), so no compiler may
+  // evaluate it another way.
+  SHARED_PRECISE vec3 top = c00 * (1.0f - offset.x) + c10 * offset.x;
+  SHARED_PRECISE vec3 bottom = c01 * (1.0f - offset.x) + c11 * offset.x;
+  SHARED_PRECISE vec3 sample_point = top * (1.0f - offset.y) + bottom * offset.y;
+  return sample_point;
 }
 
 SHARED_INLINE vec3 micro_quad_sample(SHARED_IN(vec2) pixel, SHARED_IN(vec2) sample_offset,

@@ -13,11 +13,15 @@
 #define SHARED_INLINE inline
 #define SHARED_CONST inline constexpr
 #define SHARED_IN(T) const T&
+#define SHARED_PRECISE
 #else
 #define SHARED_BEGIN
 #define SHARED_END
 #define SHARED_INLINE
 #define SHARED_CONST const
 #define SHARED_IN(T) T
+// No fused multiply-adds in what it qualifies: a GPU's compiler may fuse where the CPU (the Embree
+// reference, built without FMA) rounds twice, and the shared formulas must round alike on both.
+#define SHARED_PRECISE precise
 #endif
 #endif

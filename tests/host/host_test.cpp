@@ -1,5 +1,6 @@
 // The raw-Vulkan host (sample_game/vulkan_host) against the Embree reference from its own shading
 // points, with frames in flight, and the module's refusals of bad host input.
+#include <cstdlib>
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -12,6 +13,12 @@
 #include "vulkan_host.hpp"
 
 namespace {
+
+// The device the host tests run on: ENGINE_DEVICE (the lent GPU: gpu), else lavapipe as in CTest.
+std::string test_device() {
+  const char* device = std::getenv("ENGINE_DEVICE");
+  return device && *device ? device : "lavapipe";
+}
 
 using vulkan_host::Result;
 
@@ -72,7 +79,7 @@ vulkan_host::Options options(const std::string& mode, uint32_t view, uint32_t sp
   o.mode = mode;
   o.view = view;
   o.spp = spp;
-  o.device = "lavapipe";
+  o.device = test_device();
   o.validation = true;
   return o;
 }
@@ -134,7 +141,7 @@ class HostBadInput : public ::testing::Test {
  protected:
   static constexpr VkExtent2D kExtent{64, 64};
   void SetUp() override {
-    device_ = std::make_unique<vulkan_host::Device>(vulkan_host::DeviceOptions{.device = "lavapipe", .validation = true});
+    device_ = std::make_unique<vulkan_host::Device>(vulkan_host::DeviceOptions{.device = test_device(), .validation = true});
     shadows::Settings settings;
     settings.technique = shadows::Technique::Izb;
     module_ = shadows::Context::create(device_->context_desc(2, settings));
@@ -266,6 +273,7 @@ TEST_F(HostBadInput, NormalsExtentDiffersFromDepth) {
 
 TEST_F(HostBadInput, RayTracingMissingOnLavapipe) {
   const shadows::Capability rt = module_->capabilities().of(shadows::Technique::RayTraced);
+  if (rt.available) GTEST_SKIP() << "the device traces rays";
   EXPECT_FALSE(rt.available);
   EXPECT_NE(rt.reason.find("VK_KHR_"), std::string::npos) << rt.reason;
   module_->settings().technique = shadows::Technique::RayTraced;

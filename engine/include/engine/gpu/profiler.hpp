@@ -32,6 +32,9 @@ class GpuProfiler {
   // Starts a frame in the next segment. With frames_in_flight frames already recorded and not
   // collected, the oldest is dropped uncollected (its segment is reused).
   void begin_frame(VkCommandBuffer cmd);
+  // Forgets the frame begun last: its commands will not be submitted (recording failed), so its
+  // queries never complete and collect() must not wait for them.
+  void cancel_frame();
   void begin(VkCommandBuffer cmd, const std::string& name);
   void end(VkCommandBuffer cmd, const std::string& name);
   // Call after the oldest recorded frame's commands completed; appends its times to the history.

@@ -183,6 +183,7 @@ class Renderer {
 
  private:
   void create_targets();
+  void record_frame(VkCommandBuffer cmd);
   void build_draw_list();
 
   gpu::Context& ctx_;
