@@ -19,21 +19,23 @@ void main() {
   if (t < push.triangle_count && triangle_wanted(t, mode)) {
     load_grid_triangle(t, a, b, c);
     area = edge_fn(c.xy, a.xy, b.xy);
-    bool useful = mode == IZB_WORK_TRACE || triangle_can_cover_a_texel(a, b, c, area);
-    if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c);
+    bool useful = !is_csm_work(mode) || triangle_can_cover_a_texel(a, b, c, area);
+    // (Edge-on to the light, |area| <= 1e-10: no trace tests it, so the lit map needs it neither.)
+    if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c, walk_slack(a, b, c, mode));
   }
+  float slack = walk_slack(a, b, c, mode);
   uint count = 0u;
   for (int r = rows.x; r <= rows.y; ++r) {
-    ivec2 span = triangle_tile_span(a, b, c, r);
+    ivec2 span = triangle_tile_span(a, b, c, r, slack);
     if (span.x <= span.y) count += (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
   }
   uint offset = subgroupExclusiveAdd(count);
   uint total = subgroupAdd(count);
   uint base = 0u;
-  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_RECORDS + work_slot(mode)], total);
+  if (subgroupElect() && total > 0u) base = atomicAdd(counters[record_counter(mode)], total);
   uint slot = subgroupBroadcastFirst(base) + offset;
   for (int r = rows.x; r <= rows.y && count > 0u; ++r) {
-    ivec2 span = triangle_tile_span(a, b, c, r);
+    ivec2 span = triangle_tile_span(a, b, c, r, slack);
     for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {
       int last = min(x + int(kIzbRecordTiles) - 1, span.y);
       if (slot < params.limits.z) {
