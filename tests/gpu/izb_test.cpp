@@ -149,8 +149,8 @@ TEST_P(IzbSceneTest, ComputeAndRasterPassesAgreeBitForBit) {
             visibility(hybrid, PassBackend::Raster, PassBackend::Raster));
 }
 
-// Known-lit culling is exact: with it on, izb, izb+csm and the hybrid give today's visibility bit for
-// bit at 1 and 32 spp, and no point Embree sees shadowed comes out lit. Prints the culled share.
+// Known-lit culling is exact: with it on, izb, izb+csm and the hybrid give the same visibility bit for
+// bit at 1 and 32 spp, and it turns no point Embree sees shadowed lit. Prints the culled share.
 TEST_P(IzbSceneTest, LitCullingIsExact) {
   for (uint32_t spp : {1u, 32u}) {
     auto plain_izb = izb(spp);
@@ -176,10 +176,13 @@ TEST_P(IzbSceneTest, LitCullingIsExact) {
       } else {
         EXPECT_LE(b.stats.nodes_inserted + b.stats.lit_culled, a.stats.nodes_inserted) << name;
       }
+      // No false lit point at 1 spp. At 32 spp a pixel is compared by its coverage at 0.5, where the
+      // IZB already differs from Embree by a sample on rare edge pixels (canopy view 1: one pixel), and
+      // the hybrid's soft term may rightly be lit under a far occluder: there, exactly as without.
       const auto cmp = reference::compare_visibility(b.visibility, reference);
       const auto today = reference::compare_visibility(a.visibility, reference);
-      // The hybrid's soft term may rightly be lit where a far occluder's hard shadow is: as today.
-      EXPECT_EQ(cmp.false_lit, base.technique == shadows::Technique::Izb ? 0u : today.false_lit)
+      const bool exact_binary = spp == 1 && base.technique == shadows::Technique::Izb;
+      EXPECT_EQ(cmp.false_lit, exact_binary ? 0u : today.false_lit)
           << name << " " << spp << " spp (without lit culling: " << today.false_lit << ")";
       std::printf("%s v%zu %u²/%u² %s %u spp: %.1f%% of lit candidates culled (%llu of %llu), nodes %llu -> %llu\n",
                   GetParam().scene.c_str(), GetParam().view, kSize, kGrid, name, spp,

@@ -73,7 +73,9 @@ struct IzbSettings {
   // Known-lit culling, the CSM's dual: a compute pass keeps per grid texel the nearest light depth of
   // every caster touching it (alpha-tested ones included); a point no farther from the light than
   // that over its texel (at 32 spp: every sample over its own texel) is lit for certain and enters
-  // no list. Exact: the answer is the same with it off.
+  // no list. Exact: the answer is the same with it off. Off by default: a receiver's own surface
+  // bounds its texel, so few points are proved lit, and on lavapipe the map costs far more than the
+  // trace saves (tests/bench/BENCHMARKS.md, "Known-lit culling").
   bool lit_culling = false;
   CsmTest csm_test = CsmTest::Barycentric;
   ConservativeRaster raster = ConservativeRaster::Auto;  // for the raster trace
