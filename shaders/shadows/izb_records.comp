@@ -22,6 +22,19 @@ void main() {
     bool useful = !is_csm_work(mode) || triangle_can_cover_a_texel(a, b, c, area);
     // (Edge-on to the light, |area| <= 1e-10: no trace tests it, so the lit map needs it neither.)
     if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c, walk_slack(a, b, c, mode));
+    if (mode == IZB_WORK_LIT && rows.x <= rows.y) {
+      // A small triangle's texels, here: a tile's workgroup would leave most of its lanes idle (a CPU
+      // device pays for them all). The same per-texel work, so the same map.
+      float slack = walk_slack(a, b, c, mode);
+      float last = float(izb_resolution()) - 1.0;
+      vec2 lo = clamp(floor(min(min(a.xy, b.xy), c.xy) - slack), vec2(0.0), vec2(last + 1.0));
+      vec2 hi = clamp(floor(max(max(a.xy, b.xy), c.xy) + slack), vec2(-1.0), vec2(last));
+      if ((hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) <= float(kIzbLitDirectTexels)) {
+        for (int y = int(lo.y); y <= int(hi.y); ++y)
+          for (int x = int(lo.x); x <= int(hi.x); ++x) lit_texel(ivec2(x, y), a, b, c, area);
+        rows = ivec2(0, -1);
+      }
+    }
   }
   float slack = walk_slack(a, b, c, mode);
   uint count = 0u;

@@ -79,14 +79,15 @@ SHARED_CONST uint kIzbCounterShards = 64u;
 SHARED_CONST uint IZB_COUNTER_SHARDS = 40u;
 SHARED_CONST uint IZB_COUNTER_COUNT = 40u + 18u * 64u;  // shard rows up to IZB_COUNTER_LIT_CULLED
 
-// Compute trace and compute CSM, hierarchically over light-space tiles of kIzbTile² texels (each
-// tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
+// Compute trace, compute CSM and lit map, hierarchically over light-space tiles of kIzbTile² texels
+// (each tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
 //  1. a thread per caster triangle walks its rows of tiles and cuts each row's exact span into
 //     records (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles;
 //  2. a thread per (record, tile) keeps the (triangle, tile) pairs the triangle touches (and, for the
 //     trace, does not lie behind every node of);
 //  3. a workgroup per (triangle, tile), a thread per texel: the CSM writes fully covered texels, the
-//     trace keeps the (triangle, texel) pairs that touch and survive the texel's farthest-node cull;
+//     lit map touched texels (a small triangle's already in step 1), the trace keeps the (triangle,
+//     texel) pairs that touch and survive the texel's farthest-node cull;
 //  4. trace only: a thread per (triangle, texel) walks the texel's list.
 // Each step's output is appended densely (one atomic per subgroup), so a large triangle spreads over
 // many workgroups instead of serializing a thread. Step 2's workgroup shape is a specialization
@@ -213,6 +214,8 @@ SHARED_CONST uint kIzbLitEmpty = 0xff800000u;
 // A 32 spp point is lit-culled only when its μQuad spans at most this many texels per axis: the
 // rounding bounds of the lit map (izb_common.glsl) assume it.
 SHARED_CONST float kIzbLitQuadReach = 16.0f;
+// Lit map: a triangle whose widened bounds hold at most this many texels writes them in step 1.
+SHARED_CONST uint kIzbLitDirectTexels = 256u;
 // push.debug of the dispatch-argument pass: which step's work to dispatch.
 SHARED_CONST uint IZB_ARGS_RECORDS = 0u;
 SHARED_CONST uint IZB_ARGS_TILE_PAIRS = 1u;
