@@ -26,7 +26,7 @@ bool csm_proves_shadowed(vec3 g) {
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
-  uint covered = 0u, candidate = 0u, culled = 0u;
+  uint covered = 0u, candidate = 0u, culled = 0u, lit_culled = 0u;
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
   uint state = 0u;
   uint mask = 0u;  // samples the CSM settled (shadowed)
@@ -62,12 +62,32 @@ void main() {
         state |= IZB_PIXEL_CSM_CULLED;
         culled = 1u;
       }
+      // Lit culling (izb_common.glsl): every sample no farther than its texel's nearest caster is lit,
+      // so the pixel needs no node; its mask stays 0 and its occluder distance unset, as the trace
+      // would leave them. Only pixels the CSM settled nothing of: a partly shadowed pixel keeps its
+      // nodes, through which the trace also finds its occluder distance.
+      bool lit = false;
+      if (izb_flag(IZB_FLAG_LIT) && mask == 0u) {
+        if (izb_samples() == 1u) {
+          lit = lit_map_proves_lit(g[0]);
+        } else {
+          vec2 qmin = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy));
+          vec2 qmax = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy));
+          lit = all(lessThanEqual(qmax - qmin, vec2(kIzbLitQuadReach)));
+          for (uint s = 0u; s < 32u && lit; ++s)
+            lit = lit_map_proves_lit(micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]));
+        }
+        if (lit) {
+          state |= IZB_PIXEL_LIT_CULLED;
+          lit_culled = 1u;
+        }
+      }
       // 1 spp keeps its one texel in a register (texels[] is local memory, used at 32 spp).
       if (izb_samples() == 1u) {
-        count = mask == 0u ? 1u : 0u;
+        count = mask == 0u && !lit ? 1u : 0u;
         texel0 = texel_index(grid_texel(g[0]));
       } else {
-        count = node_texels(g, mask, texels);
+        count = lit ? 0u : node_texels(g, mask, texels);
       }
     }
   }
@@ -136,6 +156,7 @@ void main() {
   uint covered_sum = subgroupAdd(covered);
   uint candidate_sum = subgroupAdd(candidate);
   uint culled_sum = subgroupAdd(culled);
+  uint lit_sum = izb_flag(IZB_FLAG_LIT) ? subgroupAdd(lit_culled) : 0u;
   if (subgroupElect()) {
     uint shard = (gl_WorkGroupID.x * 7u + gl_WorkGroupID.y * 13u + gl_SubgroupID) % kIzbCounterShards;
     if (covered_sum > 0u)
@@ -144,5 +165,7 @@ void main() {
       atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_CANDIDATES * kIzbCounterShards + shard], candidate_sum);
     if (culled_sum > 0u)
       atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_CSM_CULLED * kIzbCounterShards + shard], culled_sum);
+    if (lit_sum > 0u)
+      atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_LIT_CULLED * kIzbCounterShards + shard], lit_sum);
   }
 }

@@ -192,14 +192,18 @@ float rect_depth_inside(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientat
   return least;
 }
 
-// Separating-axis test of the rectangle [lo, hi] against the triangle (inclusive, with a little slack
-// so a sample exactly on a texel border is never lost).
-bool rect_touches_triangle(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientation) {
-  const float slack = 1.0e-3;
+// Separating-axis test of the rectangle [lo, hi] against the triangle, inclusive, widened by `slack`
+// texels.
+bool rect_touches_triangle_within(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientation, float slack) {
   vec2 tmin = min(min(a.xy, b.xy), c.xy);
   vec2 tmax = max(max(a.xy, b.xy), c.xy);
   if (any(lessThan(tmax, lo - slack)) || any(greaterThan(tmin, hi + slack))) return false;
   return rect_depth_inside(lo, hi, a, b, c, orientation) >= -slack;
+}
+
+// The traces' touch test: a little slack so a sample exactly on a texel border is never lost.
+bool rect_touches_triangle(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orientation) {
+  return rect_touches_triangle_within(lo, hi, a, b, c, orientation, 1.0e-3);
 }
 
 // A lower bound of the triangle's light depth over the rectangle [lo, hi]: its plane's minimum over
@@ -212,6 +216,57 @@ float triangle_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float are
   float plane = a.z + dzdx * (corner.x - a.x) + dzdy * (corner.y - a.y);
   float nearest = max(plane, min(min(a.z, b.z), c.z));
   return clamp(nearest - 1.0e-6 - 1.0e-6 * abs(nearest), 0.0, 1.0);
+}
+
+// The lit map, the dual of the CSM: per texel a depth no farther from the light than any caster
+// triangle (alpha-tested ones too: a hole only lets more light through) over any point of the texel
+// where the node test could find the triangle. A point in the texel no farther than that is shadowed
+// by nothing (the node test shadows only where the triangle is strictly nearer): lit, without a node.
+// It must hold for the node test's float arithmetic, not only for exact geometry, so each triangle
+//  - widens its footprint by lit_slack() texels: the node test's barycentrics are off by about 8 units
+//    of rounding times the distance to a vertex (a triangle's extent, plus a μQuad's at 32 spp), and
+//    a 32 spp sample's texel comes from a float blend of its corners (rounding ~ resolution);
+//  - takes its plane's minimum over the widened texel, never below its nearest vertex, less the depth
+//    those barycentric errors can move the node test's depth: error / least height * sum |depth|,
+//    plus a relative margin for the interpolation's own rounding.
+// Depths are stored as ordered bits (negative depths too: unlike the CSM, clamping to [0,1] would not
+// be on the safe side) so atomicMin takes the nearest.
+uint lit_map_index(uint texel) { return izb_resolution() * izb_resolution() + texel; }
+uint ordered_depth_bits(float d) {
+  uint b = floatBitsToUint(d);
+  return (b & 0x80000000u) != 0u ? ~b : (b | 0x80000000u);
+}
+float ordered_depth(uint bits) {
+  return uintBitsToFloat((bits & 0x80000000u) != 0u ? (bits & 0x7fffffffu) : ~bits);
+}
+float lit_quad_reach() { return izb_samples() == 32u ? kIzbLitQuadReach : 0.0; }
+// A bound of the triangle's extent (sum of its bounds' sides: at least any edge, at least the distance
+// between any two of its points).
+float triangle_extent(vec3 a, vec3 b, vec3 c) {
+  vec2 e = max(max(a.xy, b.xy), c.xy) - min(min(a.xy, b.xy), c.xy);
+  return e.x + e.y;
+}
+float lit_slack(vec3 a, vec3 b, vec3 c) {
+  return 1.0e-3 + 2.0e-6 * (triangle_extent(a, b, c) + lit_quad_reach() + 2.0) + 5.0e-7 * float(izb_resolution());
+}
+float lit_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float area, float slack) {
+  float dzdx = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
+  float dzdy = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
+  vec2 corner = vec2(dzdx >= 0.0 ? lo.x - slack : hi.x + slack, dzdy >= 0.0 ? lo.y - slack : hi.y + slack);
+  float plane = a.z + dzdx * (corner.x - a.x) + dzdy * (corner.y - a.y);
+  float nearest = max(plane, min(min(a.z, b.z), c.z));
+  float extent = triangle_extent(a, b, c);
+  // |area| / extent is at most the triangle's least height.
+  float barycentric_error = 2.0e-6 * (extent + lit_quad_reach() + 2.0) * extent / abs(area);
+  float bound = nearest - 1.0e-6 - 1.0e-6 * abs(nearest) - barycentric_error * (abs(a.z) + abs(b.z) + abs(c.z));
+  // A near-degenerate triangle's arithmetic may overflow (inf, or NaN from inf * 0): then no bound.
+  return abs(bound) < 3.0e38 ? bound : -3.0e38;
+}
+// Whether grid point `g` is proved lit: inside the grid (outside it the texel clamp would compare it
+// with a texel that is not its own) and no farther than its texel's bound.
+bool lit_map_proves_lit(vec3 g) {
+  if (!(all(greaterThanEqual(g.xy, vec2(0.0))) && all(lessThan(g.xy, vec2(float(izb_resolution())))))) return false;
+  return g.z <= ordered_depth(csm_texels[lit_map_index(texel_index(grid_texel(g)))]);
 }
 
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its

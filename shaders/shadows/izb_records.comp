@@ -19,21 +19,36 @@ void main() {
   if (t < push.triangle_count && triangle_wanted(t, mode)) {
     load_grid_triangle(t, a, b, c);
     area = edge_fn(c.xy, a.xy, b.xy);
-    bool useful = mode == IZB_WORK_TRACE || triangle_can_cover_a_texel(a, b, c, area);
-    if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c);
+    bool useful = !is_csm_work(mode) || triangle_can_cover_a_texel(a, b, c, area);
+    // (Edge-on to the light, |area| <= 1e-10: no trace tests it, so the lit map needs it neither.)
+    if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c, walk_slack(a, b, c, mode));
+    if (mode == IZB_WORK_LIT && rows.x <= rows.y) {
+      // A small triangle's texels, here: a tile's workgroup would leave most of its lanes idle (a CPU
+      // device pays for them all). The same per-texel work, so the same map.
+      float slack = walk_slack(a, b, c, mode);
+      float last = float(izb_resolution()) - 1.0;
+      vec2 lo = clamp(floor(min(min(a.xy, b.xy), c.xy) - slack), vec2(0.0), vec2(last + 1.0));
+      vec2 hi = clamp(floor(max(max(a.xy, b.xy), c.xy) + slack), vec2(-1.0), vec2(last));
+      if ((hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) <= float(kIzbLitDirectTexels)) {
+        for (int y = int(lo.y); y <= int(hi.y); ++y)
+          for (int x = int(lo.x); x <= int(hi.x); ++x) lit_texel(ivec2(x, y), a, b, c, area);
+        rows = ivec2(0, -1);
+      }
+    }
   }
+  float slack = walk_slack(a, b, c, mode);
   uint count = 0u;
   for (int r = rows.x; r <= rows.y; ++r) {
-    ivec2 span = triangle_tile_span(a, b, c, r);
+    ivec2 span = triangle_tile_span(a, b, c, r, slack);
     if (span.x <= span.y) count += (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
   }
   uint offset = subgroupExclusiveAdd(count);
   uint total = subgroupAdd(count);
   uint base = 0u;
-  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_RECORDS + work_slot(mode)], total);
+  if (subgroupElect() && total > 0u) base = atomicAdd(counters[record_counter(mode)], total);
   uint slot = subgroupBroadcastFirst(base) + offset;
   for (int r = rows.x; r <= rows.y && count > 0u; ++r) {
-    ivec2 span = triangle_tile_span(a, b, c, r);
+    ivec2 span = triangle_tile_span(a, b, c, r, slack);
     for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {
       int last = min(x + int(kIzbRecordTiles) - 1, span.y);
       if (slot < params.limits.z) {

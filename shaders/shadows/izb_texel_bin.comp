@@ -7,7 +7,8 @@ layout(local_size_x = kIzbTile, local_size_y = kIzbTile) in;
 layout(push_constant) uniform Push { IzbComputePush push; };
 
 // Compute trace / compute CSM, step 3 (see izb.h): a thread per texel of kIzbTilePairsPerGroup
-// (triangle, tile) pairs. The CSM writes fully covered texels' depth bounds; the trace keeps the
+// (triangle, tile) pairs. The CSM writes fully covered texels' depth bounds, the lit map touched
+// texels' nearest-depth bounds; the trace keeps the
 // (triangle, texel) pairs that touch and survive the texel's farthest-node cull, appended densely so
 // the list walks of step 4 fill every lane. A pair that does not fit the buffer is traced here.
 void main() {
@@ -25,6 +26,10 @@ void main() {
     uvec2 tile = uvec2(pair.y % tiles_per_side(), pair.y / tiles_per_side());
     ivec2 texel = ivec2(tile * kIzbTile + gl_LocalInvocationID.xy);
     bool inside = all(lessThan(uvec2(texel), uvec2(izb_resolution())));
+    if (mode == IZB_WORK_LIT) {
+      if (inside) lit_texel(texel, a, b, c, area);
+      continue;
+    }
     if (mode != IZB_WORK_TRACE) {
       if (inside) csm_texel(texel, a, b, c, area, mode);
       continue;

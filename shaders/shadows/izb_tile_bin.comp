@@ -7,13 +7,13 @@ layout(local_size_x_id = 0) in;  // kIzbTileStepLanes
 layout(push_constant) uniform Push { IzbComputePush push; };
 
 // Compute trace / compute CSM, step 2 (see izb.h): a thread per tile of kIzbRecordsPerGroup records
-// keeps the (triangle, tile) pairs the triangle touches and, for the trace, is not behind every node
-// of. A pair that does not fit the buffer is worked here.
+// keeps the (triangle, tile) pairs the triangle touches (the lit map: within its widened footprint)
+// and, for the trace, is not behind every node of. A pair that does not fit the buffer is worked here.
 void main() {
   uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
   uint mode = push.mode;
   uint count = record_count(mode);
-  uint slot_counter = IZB_COUNTER_TILE_PAIRS + work_slot(mode);
+  uint slot_counter = tile_pair_counter(mode);
   for (uint k = 0u; k < kIzbRecordsPerGroup; ++k) {
     uint record = group * kIzbRecordsPerGroup + k;
     if (record >= count) break;  // uniform over the workgroup

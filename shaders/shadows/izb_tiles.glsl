@@ -13,15 +13,28 @@ layout(constant_id = 1) const uint kIzbRecordsPerGroup = kIzbRecordsPerGroupGpu;
 layout(constant_id = 2) const uint kIzbTilePairsPerGroup = kIzbTilePairsPerGroupGpu;
 
 uint tiles_per_side() { return params.capacities.y; }
-// Counter slot of the work: [0] trace, [1] CSM.
-uint work_slot(uint mode) { return mode == IZB_WORK_TRACE ? 0u : 1u; }
-uint record_count(uint mode) { return min(counters[IZB_COUNTER_RECORDS + work_slot(mode)], params.limits.z); }
-uint tile_pair_count(uint mode) {
-  return min(counters[IZB_COUNTER_TILE_PAIRS + work_slot(mode)], params.capacities.x);
+bool is_csm_work(uint mode) { return mode == IZB_WORK_CSM_HERTEL || mode == IZB_WORK_CSM_BARYCENTRIC; }
+// Each work's own request counters.
+uint record_counter(uint mode) {
+  return mode == IZB_WORK_TRACE ? IZB_COUNTER_RECORDS
+                                : (mode == IZB_WORK_LIT ? IZB_COUNTER_LIT_RECORDS : IZB_COUNTER_RECORDS + 1u);
+}
+uint tile_pair_counter(uint mode) {
+  return mode == IZB_WORK_TRACE ? IZB_COUNTER_TILE_PAIRS
+                                : (mode == IZB_WORK_LIT ? IZB_COUNTER_LIT_TILE_PAIRS : IZB_COUNTER_TILE_PAIRS + 1u);
+}
+uint record_count(uint mode) { return min(counters[record_counter(mode)], params.limits.z); }
+uint tile_pair_count(uint mode) { return min(counters[tile_pair_counter(mode)], params.capacities.x); }
+
+// The lit map takes every caster; the CSM those chosen for it this frame.
+bool triangle_wanted(uint t, uint mode) {
+  return !is_csm_work(mode) || (draw_flags[caster_draw(t)] & IZB_DRAW_IN_CSM) != 0u;
 }
 
-bool triangle_wanted(uint t, uint mode) {
-  return mode == IZB_WORK_TRACE || (draw_flags[caster_draw(t)] & IZB_DRAW_IN_CSM) != 0u;
+// How far (texels) the tile walk widens a triangle: more than the trace's and CSM's touch tests'
+// slack and rounding, or the lit map's widened footprint.
+float walk_slack(vec3 a, vec3 b, vec3 c, uint mode) {
+  return mode == IZB_WORK_LIT ? lit_slack(a, b, c) + 1.0e-3 : 2.0e-3;
 }
 
 // CSM: a triangle that fully covers a texel contains the texel's inscribed circle (radius 1/2), so
@@ -32,18 +45,17 @@ bool triangle_can_cover_a_texel(vec3 a, vec3 b, vec3 c, float area) {
 }
 
 // The rows of tiles [first, last] a triangle's bounds touch (empty when first > last).
-ivec2 triangle_tile_rows(vec3 a, vec3 b, vec3 c) {
+ivec2 triangle_tile_rows(vec3 a, vec3 b, vec3 c, float slack) {
   float tile = float(kIzbTile);
-  float lo = floor((min(min(a.y, b.y), c.y) - 2.0e-3) / tile);
-  float hi = floor((max(max(a.y, b.y), c.y) + 2.0e-3) / tile);
+  float lo = floor((min(min(a.y, b.y), c.y) - slack) / tile);
+  float hi = floor((max(max(a.y, b.y), c.y) + slack) / tile);
   return ivec2(clamp(lo, 0.0, float(tiles_per_side())), clamp(hi, -1.0, float(tiles_per_side()) - 1.0));
 }
 
 // The tiles [first, last] of tile row `row` the triangle may touch: its exact x-extent over the row's
-// band (vertices inside it, edges crossing its two lines), widened by more than the touch test's
-// slack and rounding. Empty when first > last.
-ivec2 triangle_tile_span(vec3 a, vec3 b, vec3 c, int row) {
-  const float slack = 2.0e-3;
+// band (vertices inside it, edges crossing its two lines), widened by `slack` (walk_slack()) and
+// rounding. Empty when first > last.
+ivec2 triangle_tile_span(vec3 a, vec3 b, vec3 c, int row, float slack) {
   float tile = float(kIzbTile);
   float y0 = float(row) * tile - slack, y1 = float(row + 1) * tile + slack;
   vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
@@ -87,6 +99,7 @@ bool rect_may_hold_covered_texel(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float
 bool tile_survives(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
   vec2 lo, hi;
   tile_rect(tile, lo, hi);
+  if (mode == IZB_WORK_LIT) return rect_touches_triangle_within(lo, hi, a, b, c, sign(area), lit_slack(a, b, c));
   if (mode != IZB_WORK_TRACE) return rect_may_hold_covered_texel(lo, hi, a, b, c, sign(area));
   if (!izb_flag(IZB_FLAG_NO_DEPTH_CULL)) {
     float farthest_node = uintBitsToFloat(tile_farthest[tile.y * tiles_per_side() + tile.x]);
@@ -145,10 +158,21 @@ void csm_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint test) {
   if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
 }
 
+// Lit map: where the triangle touches the widened texel, lowers the texel's bound to the triangle's.
+void lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
+  vec2 lo = vec2(texel);
+  float slack = lit_slack(a, b, c);
+  if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) return;
+  uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
+  uint index = lit_map_index(texel_index(texel));
+  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+}
+
 // Step 3 for one texel of a kept tile, done serially where a buffer overflowed.
 void work_texel_here(ivec2 texel, uint t, vec3 a, vec3 b, vec3 c, float area, uint mode) {
   if (any(greaterThanEqual(uvec2(texel), uvec2(izb_resolution())))) return;
-  if (mode != IZB_WORK_TRACE) csm_texel(texel, a, b, c, area, mode);
+  if (mode == IZB_WORK_LIT) lit_texel(texel, a, b, c, area);
+  else if (mode != IZB_WORK_TRACE) csm_texel(texel, a, b, c, area, mode);
   else if (trace_pair_outcome(texel, a, b, c, area) == IZB_PAIR_KEPT)
     trace_texel_list(texel_index(texel), t, a, b, c, 1.0 / area);
 }

@@ -35,6 +35,7 @@ SHARED_CONST uint IZB_FLAG_SORTED_LISTS = 128u;  // lists are contiguous node ra
 SHARED_CONST uint IZB_FLAG_ALPHA = 256u;         // some caster is alpha-tested (else the node test skips that code)
 SHARED_CONST uint IZB_FLAG_GAPS = 512u;          // keep each pixel's nearest occluder distance (hybrid blending)
 SHARED_CONST uint IZB_FLAG_DIRECT_NODES = 1024u; // 1 spp, linked lists, pool >= pixels: a pixel's node is its own index
+SHARED_CONST uint IZB_FLAG_LIT = 2048u;          // the build culls points the lit map proves lit
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x. Sorted lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous
@@ -61,6 +62,9 @@ SHARED_CONST uint IZB_COUNTER_NONEMPTY = 11u;
 SHARED_CONST uint IZB_COUNTER_RECORDS = 12u;       // 2 uints: tile-row records requested
 SHARED_CONST uint IZB_COUNTER_TILE_PAIRS = 14u;    // 2 uints: (triangle, tile) pairs requested
 SHARED_CONST uint IZB_COUNTER_PAIRS = 16u;         // trace: (triangle, texel) pairs requested
+SHARED_CONST uint IZB_COUNTER_LIT_CULLED = 17u;    // candidates the lit map proved lit: sharded
+SHARED_CONST uint IZB_COUNTER_LIT_RECORDS = 18u;   // lit map: tile-row records requested
+SHARED_CONST uint IZB_COUNTER_LIT_TILE_PAIRS = 19u;// lit map: (triangle, tile) pairs requested
 SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
 SHARED_CONST uint IZB_COUNTER_RECORD_DISPATCH = 24u;    // 3 uints: over records
 SHARED_CONST uint IZB_COUNTER_TILE_PAIR_DISPATCH = 28u; // 3 uints: over tile pairs
@@ -73,16 +77,17 @@ SHARED_CONST uint IZB_COUNTER_HYBRID = 36u;
 // the CPU sums the shards. Counter k (a sharded IZB_COUNTER_*) lives at IZB_COUNTER_SHARDS + k * shards.
 SHARED_CONST uint kIzbCounterShards = 64u;
 SHARED_CONST uint IZB_COUNTER_SHARDS = 40u;
-SHARED_CONST uint IZB_COUNTER_COUNT = 40u + 8u * 64u;
+SHARED_CONST uint IZB_COUNTER_COUNT = 40u + 18u * 64u;  // shard rows up to IZB_COUNTER_LIT_CULLED
 
-// Compute trace and compute CSM, hierarchically over light-space tiles of kIzbTile² texels (each
-// tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
+// Compute trace, compute CSM and lit map, hierarchically over light-space tiles of kIzbTile² texels
+// (each tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
 //  1. a thread per caster triangle walks its rows of tiles and cuts each row's exact span into
 //     records (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles;
 //  2. a thread per (record, tile) keeps the (triangle, tile) pairs the triangle touches (and, for the
 //     trace, does not lie behind every node of);
 //  3. a workgroup per (triangle, tile), a thread per texel: the CSM writes fully covered texels, the
-//     trace keeps the (triangle, texel) pairs that touch and survive the texel's farthest-node cull;
+//     lit map touched texels (a small triangle's already in step 1), the trace keeps the (triangle,
+//     texel) pairs that touch and survive the texel's farthest-node cull;
 //  4. trace only: a thread per (triangle, texel) walks the texel's list.
 // Each step's output is appended densely (one atomic per subgroup), so a large triangle spreads over
 // many workgroups instead of serializing a thread. Step 2's workgroup shape is a specialization
@@ -103,6 +108,7 @@ SHARED_CONST uint kIzbPairGroup = 64u;             // pairs per workgroup of the
 SHARED_CONST uint IZB_PIXEL_CANDIDATE = 1u;
 SHARED_CONST uint IZB_PIXEL_OVERFLOW = 2u;
 SHARED_CONST uint IZB_PIXEL_CSM_CULLED = 4u;
+SHARED_CONST uint IZB_PIXEL_LIT_CULLED = 8u;
 
 // Bindings (one layout shared by all IZB passes, so every pass sees the same buffers).
 SHARED_CONST uint IZB_BINDING_PARAMS = 0u;
@@ -133,7 +139,10 @@ SHARED_CONST uint IZB_BINDING_PAIRS = 22u;              // uvec2 {triangle, texe
 SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;    // per fit workgroup: vec4 (min x, min y, max x, max y)
 SHARED_CONST uint IZB_BINDING_MATERIAL_TEXTURES = 24u;  // the scene's material textures (shared/material.h)
 SHARED_CONST uint IZB_BINDING_DRAW_FLAGS = 25u;         // per caster draw: IZB_DRAW_* bits for this frame
-SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;         // compute CSM: ordered depth bits per texel
+// Compute CSM: depth bits per texel in [0, res^2); then the lit map in [res^2, 2 res^2): per texel the
+// nearest depth (ordered bits, izb_common.glsl) of every caster touching it. One binding for both,
+// since push descriptors allow no more than 32.
+SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;
 SHARED_CONST uint IZB_BINDING_TILE_PAIRS = 27u;         // uvec2 {triangle, tile}
 SHARED_CONST uint IZB_BINDING_TILE_FARTHEST = 28u;      // per tile: its farthest node depth (float bits)
 // Sorted lists (counting sort): per texel its node count, and a fill cursor; per scan block a sum.
@@ -198,6 +207,15 @@ struct IzbComputePush {
 SHARED_CONST uint IZB_WORK_TRACE = 0u;
 SHARED_CONST uint IZB_WORK_CSM_HERTEL = 1u;
 SHARED_CONST uint IZB_WORK_CSM_BARYCENTRIC = 2u;
+SHARED_CONST uint IZB_WORK_LIT = 3u;  // the lit map (nearest caster depth per texel, see izb_common.glsl)
+
+// Lit map: an empty texel (no caster touches it) holds the ordered bits of +infinity.
+SHARED_CONST uint kIzbLitEmpty = 0xff800000u;
+// A 32 spp point is lit-culled only when its μQuad spans at most this many texels per axis: the
+// rounding bounds of the lit map (izb_common.glsl) assume it.
+SHARED_CONST float kIzbLitQuadReach = 16.0f;
+// Lit map: a triangle whose widened bounds hold at most this many texels writes them in step 1.
+SHARED_CONST uint kIzbLitDirectTexels = 256u;
 // push.debug of the dispatch-argument pass: which step's work to dispatch.
 SHARED_CONST uint IZB_ARGS_RECORDS = 0u;
 SHARED_CONST uint IZB_ARGS_TILE_PAIRS = 1u;

@@ -49,6 +49,7 @@ struct Options {
   std::vector<std::string> traces = {"auto"};        // frustum trace backends to run
   std::vector<std::string> csm_backends = {"auto"};  // CSM backends to run
   std::string lists;  // empty: the default list layout
+  std::vector<std::string> lit_culling;  // on/off per run, in order (repeats alternate); empty: the default
   std::vector<uint32_t> instances = {1};  // copies of the scene on a grid (a list in the suite)
   std::string suite;   // "paper": the paper's tables, every technique, every view, two sizes
   bool quick = false;  // suite at small sizes (lavapipe, the tests)
@@ -61,7 +62,7 @@ const char* kUsage =
     "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--cascade-size N] [--mode LIST]\n"
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent|auto]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
-    "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted]\n"
+    "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted] [--lit-culling LIST]\n"
     "                    [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
@@ -69,7 +70,8 @@ const char* kUsage =
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
     "  csm tests: hertel, bary, bary-hw, inner-hw; trace and CSM backends: auto, raster, compute\n"
-    "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up).\n"
+    "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up);\n"
+    "  lit culling: on, off (repeat to alternate: on,off,on,off).\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
     "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
@@ -144,6 +146,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--csm-backend") o.csm_backends = split(args.value());
     else if (a == "--lists") o.lists = args.value();
     else if (a == "--node-pool") o.node_pool = args.uint_value();
+    else if (a == "--lit-culling") o.lit_culling = split(args.value());
     else if (a == "--frames") o.frames = int(args.uint_value());
     else if (a == "--warmup") o.warmup = int(args.uint_value());
     else if (a == "--reference") o.reference = true;
@@ -251,7 +254,24 @@ std::vector<RunConfig> expand_runs(const Options& o) {
       }
     }
   }
-  return runs;
+  if (o.lit_culling.empty()) return runs;
+  // Each IZB run once per --lit-culling value, in the order given.
+  std::vector<RunConfig> lit_runs;
+  for (const auto& run : runs) {
+    const bool uses_izb =
+        run.settings.technique == shadows::Technique::Izb || run.settings.technique == shadows::Technique::Hybrid;
+    if (!uses_izb) {
+      lit_runs.push_back(run);
+      continue;
+    }
+    for (const auto& value : o.lit_culling) {
+      if (value != "on" && value != "off") throw std::runtime_error("--lit-culling '" + value + "': expected on or off");
+      RunConfig r = run;
+      r.settings.izb.lit_culling = value == "on";
+      lit_runs.push_back(r);
+    }
+  }
+  return lit_runs;
 }
 
 void apply_csm_choice(engine::Scene& scene, const std::string& choice) {
@@ -270,6 +290,7 @@ json stats_json(const shadows::Stats& s) {
   c["lit_candidates"] = s.lit_candidates;
   c["nodes_inserted"] = s.nodes_inserted;
   c["csm_culled"] = s.csm_culled;
+  c["lit_culled"] = s.lit_culled;
   c["csm_texels_covered"] = s.csm_texels_covered;
   c["node_pool_size"] = s.node_pool_size;
   c["node_overflow"] = s.node_overflow;
@@ -341,6 +362,7 @@ struct Bench {
     entry["trace"] = run.trace;
     entry["csm_backend"] = run.csm_backend;
     entry["csm_everything"] = run.csm_everything;
+    entry["lit_culling"] = run.settings.izb.lit_culling;
     std::string why;
     if (!module->supported(run.settings.technique, &why) ||
         (run.csm_test != "none" && !module->supported(run.settings.izb.csm_test, &why))) {
@@ -455,6 +477,10 @@ struct Bench {
       const auto ran = [](const shadows::Stats::BackendChoice& c, const std::string& asked) {
         return asked == "none" || c.backend.empty() ? asked : c.backend;
       };
+      if (!o.lit_culling.empty())
+        std::printf("lit culling %s: %llu of %llu candidates culled, %llu nodes\n", run.settings.izb.lit_culling ? "on" : "off",
+                    (unsigned long long)st.lit_culled, (unsigned long long)st.lit_candidates,
+                    (unsigned long long)st.nodes_inserted);
       std::printf("%-12s %-9s %-8s %-8s %4u %10.3f %10.3f %12.6f %12llu %10.5f %9.1f\n", run.mode.c_str(),
                   run.csm_test.c_str(), ran(st.trace_choice, run.trace).c_str(),
                   ran(st.csm_choice, run.csm_backend).c_str(), spp, gpu_ms["total"].get<double>(), frame_ms,

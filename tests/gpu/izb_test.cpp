@@ -234,6 +234,50 @@ TEST_P(IzbSceneTest, HardwareConservativeTraceMatchesReference) {
   }
 }
 
+// Known-lit culling is exact: with it on, izb, izb+csm and the hybrid give the same visibility bit for
+// bit at 1 and 32 spp, and it turns no point Embree sees shadowed lit. Prints the culled share.
+TEST_P(IzbSceneTest, LitCullingIsExact) {
+  for (uint32_t spp : {1u, 32u}) {
+    auto plain_izb = izb(spp);
+    auto with_csm = izb(spp, true);
+    auto hybrid = izb(spp, true);
+    hybrid.technique = shadows::Technique::Hybrid;
+    hybrid.izb.resolution = kGrid;
+    std::vector<float> reference;
+    for (const auto& [name, base] : {std::pair<const char*, shadows::Settings>{"izb", plain_izb}, {"izb+csm", with_csm},
+                                     {"hybrid+csm", hybrid}}) {
+      auto off = base;
+      off.izb.lit_culling = false;
+      auto on = base;
+      on.izb.lit_culling = true;
+      const auto a = render(GetParam().scene, GetParam().view, off, reference.empty());
+      if (reference.empty()) reference = a.reference;
+      const auto b = render(GetParam().scene, GetParam().view, on, false);
+      EXPECT_EQ(b.visibility, a.visibility) << name << " " << spp << " spp";
+      EXPECT_EQ(a.stats.lit_culled, 0u);
+      // A culled pixel is one node fewer at 1 spp (the CSM culls only other pixels); at 32 spp one or more.
+      if (spp == 1) {
+        EXPECT_EQ(b.stats.nodes_inserted + b.stats.lit_culled, a.stats.nodes_inserted) << name;
+      } else {
+        EXPECT_LE(b.stats.nodes_inserted + b.stats.lit_culled, a.stats.nodes_inserted) << name;
+      }
+      // No false lit point at 1 spp. At 32 spp a pixel is compared by its coverage at 0.5, where the
+      // IZB already differs from Embree by a sample on rare edge pixels (canopy view 1: one pixel), and
+      // the hybrid's soft term may rightly be lit under a far occluder: there, exactly as without.
+      const auto cmp = reference::compare_visibility(b.visibility, reference);
+      const auto today = reference::compare_visibility(a.visibility, reference);
+      const bool exact_binary = spp == 1 && base.technique == shadows::Technique::Izb;
+      EXPECT_EQ(cmp.false_lit, exact_binary ? 0u : today.false_lit)
+          << name << " " << spp << " spp (without lit culling: " << today.false_lit << ")";
+      std::printf("%s v%zu %u²/%u² %s %u spp: %.1f%% of lit candidates culled (%llu of %llu), nodes %llu -> %llu\n",
+                  GetParam().scene.c_str(), GetParam().view, kSize, kGrid, name, spp,
+                  b.stats.lit_candidates ? 100.0 * double(b.stats.lit_culled) / double(b.stats.lit_candidates) : 0.0,
+                  (unsigned long long)b.stats.lit_culled, (unsigned long long)b.stats.lit_candidates,
+                  (unsigned long long)a.stats.nodes_inserted, (unsigned long long)b.stats.nodes_inserted);
+    }
+  }
+}
+
 TEST_F(IzbTest, SoftwareConservativeRasterMatchesBruteForce) {
   for (const char* scene : {"foliage", "atrium"}) {
     for (uint32_t spp : {1u, 32u}) {
@@ -338,6 +382,102 @@ TEST_F(IzbTest, CsmDepthIsAtLeastTheCoveringTrianglesFarthestDepth) {
     }
     EXPECT_GT(checked, 200u) << shadows::csm_test_name(test);
   }
+}
+
+// The lit map against exact geometry (double precision, grid space): for every caster triangle and
+// every texel its footprint touches, even at a corner, the map holds a depth no farther than the
+// triangle's nearest point over the texel. The only tolerance is the GPU's float transform into grid
+// space (izb_triangles.comp): it moves a vertex's depth by a few units of float rounding, far below
+// 1e-6, while the map's own margins (izb_common.glsl) are at least 1e-6; a touch within rounding of a
+// texel's border is covered by the map's widened footprint.
+TEST_F(IzbTest, LitMapHoldsNoFartherThanEveryTouchingTriangle) {
+  for (const auto& [scene, view, spp] : {std::tuple<const char*, size_t, uint32_t>{"atrium", 0, 1}, {"contact", 0, 32},
+                                         {"foliage", 0, 1}}) {
+    auto s = izb(spp);
+    s.izb.lit_culling = true;
+    auto& r = make_renderer(scene, view, kSize, kSize);
+    module_ = shadows::install(r, s);
+    r.render_frame(0.0f);
+    const auto map = module_->read_lit_map();
+    ASSERT_EQ(map.resolution, kGrid);
+    ASSERT_EQ(map.depth.size(), size_t(kGrid) * kGrid);
+    size_t triangles = 0, texels = 0;
+    std::vector<uint8_t> touched(map.depth.size(), 0);
+    for (const auto& d : r.draws()) {
+      if (!d.shadow.casts_shadow) continue;
+      const auto& mesh = *scene_->registry.get<engine::Mesh>(d.entity).data;
+      for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+        glm::dvec3 v[3];
+        glm::vec2 vf[3];
+        for (int k = 0; k < 3; ++k) {
+          const glm::dvec4 clip = glm::dmat4(map.light_view_projection) * glm::dmat4(d.world) *
+                                  glm::dvec4(glm::dvec3(mesh.vertices[mesh.indices[i + k]].position), 1.0);
+          v[k] = {(clip.x * 0.5 + 0.5) * kGrid, (clip.y * 0.5 + 0.5) * kGrid, clip.z};
+          vf[k] = glm::vec2(v[k]);
+        }
+        // Edge-on to the light (the traces' own float test, |area| <= 1e-10): shadows no ray, skipped by
+        // every trace.
+        const float area_f = (vf[2].x - vf[0].x) * (vf[1].y - vf[0].y) - (vf[2].y - vf[0].y) * (vf[1].x - vf[0].x);
+        if (std::abs(area_f) <= 1e-10f) continue;
+        ++triangles;
+        const int x0 = std::max(0, int(std::floor(std::min({v[0].x, v[1].x, v[2].x}))));
+        const int x1 = std::min(int(kGrid) - 1, int(std::floor(std::max({v[0].x, v[1].x, v[2].x}))));
+        const int y0 = std::max(0, int(std::floor(std::min({v[0].y, v[1].y, v[2].y}))));
+        const int y1 = std::min(int(kGrid) - 1, int(std::floor(std::max({v[0].y, v[1].y, v[2].y}))));
+        for (int y = y0; y <= y1; ++y) {
+          for (int x = x0; x <= x1; ++x) {
+            // The triangle clipped to the closed texel (Sutherland-Hodgman); the depth is affine, so
+            // its minimum over the intersection lies at a vertex of the clipped polygon.
+            std::vector<glm::dvec3> poly(v, v + 3);
+            for (int edge = 0; edge < 4 && !poly.empty(); ++edge) {
+              const int axis = edge & 1;
+              const double bound = (edge < 2) ? (axis ? y : x) : (axis ? y + 1 : x + 1);
+              const double sign = edge < 2 ? 1.0 : -1.0;  // keep sign * (p - bound) >= 0
+              std::vector<glm::dvec3> out;
+              for (size_t k = 0; k < poly.size(); ++k) {
+                const glm::dvec3 &p = poly[k], &q = poly[(k + 1) % poly.size()];
+                const double dp = sign * (p[axis] - bound), dq = sign * (q[axis] - bound);
+                if (dp >= 0) out.push_back(p);
+                if ((dp >= 0) != (dq >= 0)) out.push_back(p + (q - p) * (dp / (dp - dq)));
+              }
+              poly = std::move(out);
+            }
+            if (poly.empty()) continue;
+            double nearest = 1e30;
+            for (const auto& p : poly) nearest = std::min(nearest, p.z);
+            const size_t t = size_t(y) * kGrid + size_t(x);
+            touched[t] = 1;
+            ++texels;
+            ASSERT_LE(double(map.depth[t]), nearest + 1e-6) << scene << " texel " << x << "," << y;
+          }
+        }
+      }
+    }
+    EXPECT_GT(triangles, 10u) << scene;
+    EXPECT_GT(texels, size_t(kGrid)) << scene;
+    size_t empty = 0;  // +infinity: no caster touches the texel (so none was checked there)
+    for (size_t t = 0; t < map.depth.size(); ++t) {
+      empty += std::isinf(map.depth[t]) ? 1 : 0;
+      if (std::isinf(map.depth[t])) {
+        EXPECT_FALSE(touched[t]) << scene << " texel " << t;
+      }
+    }
+    std::printf("%s v%zu: %zu caster triangles, %zu (triangle, texel) checks, %zu empty texels\n", scene, view,
+                triangles, texels, empty);
+  }
+}
+
+// The culling culls: on contact view 0 a share of the lit candidates needs no node.
+TEST_F(IzbTest, LitCullingCullsOnContact) {
+  auto on = izb(1);
+  on.izb.lit_culling = true;
+  const auto r = render("contact", 0, on, false);
+  const auto off = render("contact", 0, izb(1), false);
+  EXPECT_GT(r.stats.lit_culled, 0u);
+  EXPECT_EQ(r.stats.nodes_inserted + r.stats.lit_culled, off.stats.nodes_inserted);
+  EXPECT_EQ(r.visibility, off.visibility);
+  EXPECT_LT(r.stats.trace_fragments_after_cull + r.stats.triangle_tests,
+            off.stats.trace_fragments_after_cull + off.stats.triangle_tests);
 }
 
 TEST_F(IzbTest, AutomaticCsmChoiceTakesArchitectureAndLeavesFoliage) {

@@ -78,6 +78,14 @@ struct CsmSnapshot {
   glm::mat4 light_view_projection{1.0f};
 };
 
+// The last lit map (IzbSettings::lit_culling), for tests and tools: per texel a depth no farther from
+// the light than any caster touching it (+infinity where none does).
+struct LitMapSnapshot {
+  uint32_t resolution = 0;
+  std::vector<float> depth;  // row-major, resolution^2
+  glm::mat4 light_view_projection{1.0f};
+};
+
 struct Frame {
   engine::gpu::Context& ctx;
   VkCommandBuffer cmd;

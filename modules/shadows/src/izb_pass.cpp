@@ -120,6 +120,7 @@ struct IzbPass::Impl {
   BackendProbe csm_probe{"csm"};
   bool used_compute_trace = false;
   bool used_compute_csm = false;
+  bool last_used_lit = false;
   Sampler nearest;
   std::unique_ptr<CsmPass> csm;
   uint32_t resolution = 0;
@@ -270,7 +271,9 @@ struct IzbPass::Impl {
       list_cursor = Buffer(ctx, texels * 4, usage, false, "izb sorted list fill cursors");
       const VkDeviceSize blocks = (texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock;
       scan_blocks = Buffer(ctx, blocks * 4, usage, false, "izb prefix-sum blocks");
-      csm_texels = Buffer(ctx, texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "csm compute depths");
+      // The compute CSM's depths, then the lit map's (izb.h: one binding for both).
+      csm_texels = Buffer(ctx, 2 * texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
+                          "csm compute depths and lit map");
       tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
       tile_farthest = Buffer(ctx, VkDeviceSize(tiles_per_side) * tiles_per_side * 4, usage, false,
                              "izb farthest node depth per tile");
@@ -543,7 +546,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   uint64_t key = mix_key(0, m.resolution);
   for (uint64_t v : {uint64_t(std::lround(2.0 * std::log2(std::max(pixels, 1.0)))), uint64_t(m.samples),
                      uint64_t(m.triangle_count), uint64_t(settings.csm), uint64_t(settings.csm_test),
-                     uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid)})
+                     uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid),
+                     uint64_t(settings.lit_culling)})
     key = mix_key(key, v);
   const bool raster_trace_available = m.raster_trace_available();
   const bool use_compute_trace =
@@ -580,7 +584,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   m.used_compute_trace = use_compute_trace;
   m.used_compute_csm = use_compute_csm;
   m.last_used_csm = run_csm;
-  m.ensure_work_lists(use_compute_trace || use_compute_csm);
+  m.last_used_lit = settings.lit_culling;
+  m.ensure_work_lists(use_compute_trace || use_compute_csm || settings.lit_culling);
   if (use_compute_csm) {
     // Per caster draw: whether it enters the CSM this frame.
     const auto& chosen = m.csm->chosen_draws();
@@ -619,6 +624,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
+  if (settings.lit_culling) flags |= gpu_shared::IZB_FLAG_LIT;
   if (std::any_of(frame.draws.begin(), frame.draws.end(),
                   [](const DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
     flags |= gpu_shared::IZB_FLAG_ALPHA;
@@ -655,6 +661,17 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (m.triangle_count > 0) m.dispatch(cmd, frame, m.p->grid_setup, push, (m.triangle_count + 63) / 64);
   }
   pass_barrier(frame.ctx, cmd);
+  const VkDeviceSize grid_bytes = VkDeviceSize(m.resolution) * m.resolution * 4;
+  if (settings.lit_culling) {
+    // The lit map: every caster triangle's nearest depth over the texels it touches, binned over
+    // light-space tiles like the compute CSM (it shares the CSM's work lists; the barrier below
+    // orders the two). The build reads it.
+    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "lit_map");
+    vkCmdFillBuffer(cmd, m.csm_texels.handle(), grid_bytes, grid_bytes, gpu_shared::kIzbLitEmpty);
+    pass_barrier(frame.ctx, cmd);
+    m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_LIT, "lit");
+    pass_barrier(frame.ctx, cmd);
+  }
   if (run_csm) {
     if (use_compute_csm) {
       const uint32_t mode = settings.csm_test == CsmTest::Hertel ? gpu_shared::IZB_WORK_CSM_HERTEL
@@ -662,7 +679,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
       m.csm->record(
           frame, settings, m.frame_data, m.resolution, collect_stats,
           [&](VkCommandBuffer c) {
-            vkCmdFillBuffer(c, m.csm_texels.handle(), 0, VK_WHOLE_SIZE, 0x3f800000u);  // 1.0: nothing stored
+            vkCmdFillBuffer(c, m.csm_texels.handle(), 0, grid_bytes, 0x3f800000u);  // 1.0: nothing stored
             pass_barrier(frame.ctx, c);
             m.record_tile_work(c, frame, push, mode, "csm");
           },
@@ -821,6 +838,27 @@ CsmSnapshot IzbPass::read_csm() {
   return snapshot;
 }
 
+LitMapSnapshot IzbPass::read_lit_map() {
+  Impl& m = *impl_;
+  LitMapSnapshot snapshot;
+  if (!m.last_used_lit) return snapshot;
+  snapshot.resolution = m.resolution;
+  const auto bytes = read_buffer(m.ctx, m.csm_texels);
+  const size_t texels = size_t(m.resolution) * m.resolution;
+  snapshot.depth.resize(texels);
+  for (size_t i = 0; i < texels; ++i) {
+    uint32_t bits;
+    std::memcpy(&bits, bytes.data() + (texels + i) * 4, 4);
+    bits = (bits & 0x80000000u) ? (bits & 0x7fffffffu) : ~bits;  // ordered bits -> float (izb_common.glsl)
+    std::memcpy(&snapshot.depth[i], &bits, 4);
+  }
+  const auto frame_bytes = read_buffer(m.ctx, m.frame_data);
+  gpu_shared::IzbFrame frame;
+  std::memcpy(&frame, frame_bytes.data(), sizeof(frame));
+  snapshot.light_view_projection = frame.light_view_projection;
+  return snapshot;
+}
+
 void IzbPass::after_frame(Stats& s, uint32_t slot) {
   Impl& m = *impl_;
   m.csm->frame_completed(slot);
@@ -842,6 +880,7 @@ void IzbPass::after_frame(Stats& s, uint32_t slot) {
   s.overflow_pixels = c[gpu_shared::IZB_COUNTER_OVERFLOW_PIXELS];
   s.csm_culled = sharded(gpu_shared::IZB_COUNTER_CSM_CULLED);
   s.culling_rate = s.lit_candidates ? double(s.csm_culled) / double(s.lit_candidates) : 0.0;
+  s.lit_culled = sharded(gpu_shared::IZB_COUNTER_LIT_CULLED);
   s.trace_fragments_before_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS];
   s.trace_fragments_after_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS_KEPT];
   s.triangle_tests = c[gpu_shared::IZB_COUNTER_TRIANGLE_TESTS];
@@ -857,20 +896,24 @@ void IzbPass::after_frame(Stats& s, uint32_t slot) {
     s.trace_tile_pairs = c[gpu_shared::IZB_COUNTER_TILE_PAIRS];
     s.trace_pairs = c[gpu_shared::IZB_COUNTER_PAIRS];
   }
-  // Grow the compute passes' work lists to what this frame asked for (trace or CSM, whichever more).
+  // Grow the compute passes' work lists to what this frame asked for (trace, CSM or lit map, whichever
+  // more).
   auto grow = [](Impl::WorkList& list, uint64_t asked) {
     if (asked > list.capacity) list.demand = uint64_t(double(asked) * 1.25);
   };
-  const bool overflowed =
-      std::max(c[gpu_shared::IZB_COUNTER_RECORDS], c[gpu_shared::IZB_COUNTER_RECORDS + 1]) > m.records.capacity ||
-      std::max(c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]) > m.tile_pairs.capacity ||
-      c[gpu_shared::IZB_COUNTER_PAIRS] > m.pairs.capacity || requested > m.pool_size;
+  const uint64_t records_asked = std::max({c[gpu_shared::IZB_COUNTER_RECORDS], c[gpu_shared::IZB_COUNTER_RECORDS + 1],
+                                           c[gpu_shared::IZB_COUNTER_LIT_RECORDS]});
+  const uint64_t tile_pairs_asked =
+      std::max({c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1],
+                c[gpu_shared::IZB_COUNTER_LIT_TILE_PAIRS]});
+  const bool overflowed = records_asked > m.records.capacity || tile_pairs_asked > m.tile_pairs.capacity ||
+                          c[gpu_shared::IZB_COUNTER_PAIRS] > m.pairs.capacity || requested > m.pool_size;
   if (overflowed) {  // a frame slowed by an overflow does not speak for its backend
     m.trace_probe.discard_pending(slot);
     m.csm_probe.discard_pending(slot);
   }
-  grow(m.records, std::max(c[gpu_shared::IZB_COUNTER_RECORDS], c[gpu_shared::IZB_COUNTER_RECORDS + 1]));
-  grow(m.tile_pairs, std::max(c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]));
+  grow(m.records, records_asked);
+  grow(m.tile_pairs, tile_pairs_asked);
   grow(m.pairs, c[gpu_shared::IZB_COUNTER_PAIRS]);
   m.csm->note_yield(s.culling_rate);
   m.csm->after_frame(s, slot);

@@ -31,6 +31,7 @@ class IzbPass {
   bool hardware_raster_available() const;
   bool csm_test_supported(CsmTest test, std::string* why) const;
   CsmSnapshot read_csm();
+  LitMapSnapshot read_lit_map();
 
  private:
   struct Impl;

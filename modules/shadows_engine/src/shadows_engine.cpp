@@ -161,6 +161,11 @@ class EngineShadowModule final : public ShadowModule {
     return {s.resolution, std::move(s.depth), s.light_view_projection};
   }
 
+  CsmSnapshot read_lit_map() override {
+    detail::LitMapSnapshot s = context_->read_lit_map();
+    return {s.resolution, std::move(s.depth), s.light_view_projection};
+  }
+
  private:
   // One host mesh per (mesh, texture, alpha threshold): the module keeps alpha tests per mesh, the
   // engine per draw.

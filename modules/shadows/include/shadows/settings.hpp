@@ -72,6 +72,13 @@ struct IzbSettings {
   uint32_t samples_per_pixel = 1;     // 1 (ray per pixel) or 32 (frustum per pixel footprint)
   float max_distance = 0.0f;          // 0: every visible point; else only points nearer the camera
   bool csm = false;                   // conservative shadow map z-prepass culls certainly shadowed points
+  // Known-lit culling, the CSM's dual: a compute pass keeps per grid texel the nearest light depth of
+  // every caster touching it (alpha-tested ones included); a point no farther from the light than
+  // that over its texel (at 32 spp: every sample over its own texel) is lit for certain and enters
+  // no list. Exact: the answer is the same with it off. Off by default: a receiver's own surface
+  // bounds its texel, so few points are proved lit, and on lavapipe the map costs far more than the
+  // trace saves (tests/bench/BENCHMARKS.md, "Known-lit culling").
+  bool lit_culling = false;
   CsmTest csm_test = CsmTest::Barycentric;
   ConservativeRaster raster = ConservativeRaster::Auto;  // for the raster trace
   PassBackend trace = PassBackend::Auto;     // frustum trace: conservative raster or compute binning
@@ -115,9 +122,10 @@ struct Stats {
   // IZB
   uint64_t shading_points = 0;        // covered pixels
   uint64_t lit_candidates = 0;        // covered, receiving, facing the light, inside the IZB range
-  uint64_t nodes_inserted = 0;
+  uint64_t nodes_inserted = 0;        // for the candidates neither culling settled
   uint64_t csm_culled = 0;            // candidates the CSM proved shadowed
   double culling_rate = 0.0;          // csm_culled / lit_candidates
+  uint64_t lit_culled = 0;            // candidates the lit map proved lit (IzbSettings::lit_culling)
   uint64_t csm_texels_covered = 0;
   uint64_t node_pool_size = 0;
   uint64_t node_overflow = 0;         // insertions that found the pool full

@@ -37,6 +37,9 @@ class ShadowModule : public engine::RenderFeature {
     glm::mat4 light_view_projection{1.0f};
   };
   virtual CsmSnapshot read_csm() = 0;
+  // The last frame's lit map (IzbSettings::lit_culling; row-major, resolution^2 depths, +infinity
+  // where no caster touches the texel) and the transform it was built with. Empty when it did not run.
+  virtual CsmSnapshot read_lit_map() = 0;
   // The host-API context the adapter drives.
   virtual Context& context() = 0;
 };
