@@ -92,15 +92,31 @@ bool caster_solid_at(CasterAlpha ca, vec3 w) {
 // Shadowed-sample bits that a grid-space triangle (a, b, c) casts on `pixel`. A sample is shadowed
 // when its projection along the light lies inside the triangle (edges inclusive) and the triangle is
 // nearer the light there: exactly the reference ray's hit with t > 0.
-float edge_fn(vec2 p, vec2 a, vec2 b) { return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x); }
+// `precise` throughout the node test: a GPU compiler may fuse the products and differences into
+// fused multiply-adds, which moves samples on a triangle's edge to the other side of it than the
+// unfused arithmetic of the CPU device and the Embree reference.
+float edge_fn(vec2 p, vec2 a, vec2 b) {
+  precise float e = (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+  return e;
+}
+
+// mix() written out, so that `precise` covers its arithmetic.
+vec3 blend3(vec3 x, vec3 y, float t) {
+  precise vec3 r = x * (1.0 - t) + y * t;
+  return r;
+}
+float blend1(float x, float y, float t) {
+  precise float r = x * (1.0 - t) + y * t;
+  return r;
+}
 
 // `gap` keeps the smallest light-depth distance from an occluded sample up to the triangle.
 bool shadows_point(vec3 s, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
-  float w0 = edge_fn(s.xy, b.xy, c.xy) * inv_area;
-  float w1 = edge_fn(s.xy, c.xy, a.xy) * inv_area;
-  float w2 = edge_fn(s.xy, a.xy, b.xy) * inv_area;
+  precise float w0 = edge_fn(s.xy, b.xy, c.xy) * inv_area;
+  precise float w1 = edge_fn(s.xy, c.xy, a.xy) * inv_area;
+  precise float w2 = edge_fn(s.xy, a.xy, b.xy) * inv_area;
   if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) return false;
-  float depth = w0 * a.z + w1 * b.z + w2 * c.z;
+  precise float depth = w0 * a.z + w1 * b.z + w2 * c.z;
   if (depth >= s.z) return false;
   if (!caster_solid_at(ca, vec3(w0, w1, w2))) return false;
   gap = min(gap, s.z - depth);
@@ -124,8 +140,8 @@ uint occluded_samples(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float 
   // outside one edge -> no sample shadowed; all inside and behind -> every sample shadowed (unless
   // the caster is alpha-tested: then each sample's texel decides).
   vec3 corner[4] = vec3[4](c00, c10, c01, c11);
-  vec3 w[4];
-  float corner_gap[4];
+  precise vec3 w[4];
+  precise float corner_gap[4];
   vec3 inside_all = vec3(1.0), outside_all = vec3(1.0);
   float nearest_gap = 1.0e30;
   bool all_behind = true;
@@ -147,8 +163,8 @@ uint occluded_samples(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float 
   uint bits = 0u;
   for (uint i = 0u; i < 32u; ++i) {
     vec2 o = kSamplePattern[i];
-    vec3 ws = mix(mix(w[0], w[1], o.x), mix(w[2], w[3], o.x), o.y);
-    float gs = mix(mix(corner_gap[0], corner_gap[1], o.x), mix(corner_gap[2], corner_gap[3], o.x), o.y);
+    vec3 ws = blend3(blend3(w[0], w[1], o.x), blend3(w[2], w[3], o.x), o.y);
+    float gs = blend1(blend1(corner_gap[0], corner_gap[1], o.x), blend1(corner_gap[2], corner_gap[3], o.x), o.y);
     if (all(greaterThanEqual(ws, vec3(0.0))) && gs > 0.0 && caster_solid_at(ca, ws)) {
       bits |= 1u << i;
       gap = min(gap, gs);

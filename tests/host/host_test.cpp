@@ -308,7 +308,7 @@ TEST_F(HostBadInput, MeshWithZeroTriangles) {
 
 // A device created without an extension the module requires: Context::create names it.
 TEST(HostDevice, WithoutPushDescriptorCreateThrowsNamingIt) {
-  vulkan_host::Device device({.device = "lavapipe", .validation = true, .leave_out = {"VK_KHR_push_descriptor"}});
+  vulkan_host::Device device({.device = test_device(), .validation = true, .leave_out = {"VK_KHR_push_descriptor"}});
   std::string what;
   try {
     shadows::Context::create(device.context_desc(2, shadows::Settings{}));
