@@ -49,9 +49,12 @@ bool alpha_tested(const Material& m) { return m.alpha_mode != AlphaMode::Opaque;
 
 uint32_t alpha_threshold(const Material& m) {
   if (!alpha_tested(m)) return 0;
-  const float cutoff = m.alpha_mode == AlphaMode::Blend ? 0.5f : m.alpha_cutoff;
+  return alpha_threshold(m.alpha_mode == AlphaMode::Blend ? 0.5f : m.alpha_cutoff, m.base_color.a);
+}
+
+uint32_t alpha_threshold(float cutoff, float scale) {
   for (uint32_t byte = 0; byte < 256; ++byte)
-    if (m.base_color.a * float(byte) / 255.0f >= cutoff) return byte;
+    if (scale * float(byte) / 255.0f >= cutoff) return byte;
   return 256;
 }
 

@@ -114,7 +114,7 @@ bool is_depth_format(VkFormat format) {
 
 Image::Image(const Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage, const std::string& name,
              uint32_t mip_levels, uint32_t layers)
-    : ctx_(&ctx), format_(format), extent_(extent), mip_levels_(mip_levels), layers_(layers) {
+    : ctx_(&ctx), format_(format), usage_(usage), extent_(extent), mip_levels_(mip_levels), layers_(layers) {
   aspect_ = is_depth_format(format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
   const uint32_t max_side = ctx.properties().limits.maxImageDimension2D;
   if (extent.width > max_side || extent.height > max_side)
@@ -189,6 +189,7 @@ Image& Image::operator=(Image&& o) noexcept {
     mip_views_ = std::move(o.mip_views_);
     layer_views_ = std::move(o.layer_views_);
     format_ = o.format_;
+    usage_ = o.usage_;
     extent_ = o.extent_;
     aspect_ = o.aspect_;
     mip_levels_ = o.mip_levels_;

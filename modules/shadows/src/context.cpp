@@ -457,7 +457,6 @@ void ContextImpl::record_technique(Frame& frame) {
       break;
     }
     case Technique::RayTraced:
-      if (!gpu_->features().ray_tracing_pipeline) throw Error(gpu_->features().ray_tracing_missing);  // as capabilities() says
       if (!ray_traced_) ray_traced_ = std::make_unique<RayTracedPass>(*gpu_);
       ray_traced_->record(frame, settings_.izb.samples_per_pixel, collect_stats_);
       break;

@@ -28,12 +28,6 @@ uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
 
 }  // namespace
 
-uint32_t alpha_threshold(float cutoff, float scale) {
-  for (uint32_t byte = 0; byte < 256; ++byte)
-    if (scale * float(byte) / 255.0f >= cutoff) return byte;
-  return 256;
-}
-
 // Every stage that reads the module's geometry on this device: vertex fetch and shader storage reads
 // of the raster and compute passes, and acceleration-structure builds where ray tracing is on.
 VkPipelineStageFlags2 GeometryStore::geometry_readers() const {
@@ -99,7 +93,7 @@ MeshId GeometryStore::add(const MeshDesc& m) {
                 VK_IMAGE_USAGE_SAMPLED_BIT, kReadLayouts, std::nullopt);
     if (texture_count_ >= kMaxTextures)
       throw Error("shadows: " + what + ".alpha_texture: more than " + std::to_string(kMaxTextures) + " alpha textures");
-    info.alpha_threshold = alpha_threshold(m.alpha_cutoff, m.alpha_scale);
+    info.alpha_threshold = engine::alpha_threshold(m.alpha_cutoff, m.alpha_scale);
     info.texture = texture_count_++;
   }
   if (!(m.bounds_min[0] <= m.bounds_max[0] && m.bounds_min[1] <= m.bounds_max[1] && m.bounds_min[2] <= m.bounds_max[2]))

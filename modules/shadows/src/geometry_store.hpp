@@ -54,8 +54,4 @@ class GeometryStore {
   engine::gpu::Sampler nearest_;
 };
 
-// The least alpha byte an alpha test keeps: `scale * byte / 255 >= cutoff` (engine::alpha_threshold's
-// rule, so host and engine materials test alike); 256 keeps nothing.
-uint32_t alpha_threshold(float cutoff, float scale);
-
 }  // namespace shadows::detail

@@ -17,23 +17,16 @@ namespace shadows {
 
 namespace {
 
-// The usage flags Renderer::create_targets gives its images (gpu::Image does not record them).
-constexpr VkImageUsageFlags kColorTargetUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
-                                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-constexpr VkImageUsageFlags kStorageTargetUsage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
-                                                  VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-constexpr VkImageUsageFlags kDepthTargetUsage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT |
-                                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 // SceneGeometry's buffers are storage buffers (and more); the module only needs that.
 constexpr VkBufferUsageFlags kGeometryUsage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
 
-ImageInput image_input(engine::gpu::Image& image, VkImageUsageFlags usage) {
+ImageInput image_input(engine::gpu::Image& image) {
   ImageInput in;
   in.image = image.handle();
   in.view = image.view();
   in.format = image.format();
   in.extent = image.extent();
-  in.usage = usage;
+  in.usage = image.usage();
   in.layout = VK_IMAGE_LAYOUT_GENERAL;  // the renderer keeps every target in GENERAL
   return in;
 }
@@ -111,14 +104,14 @@ class EngineShadowModule final : public ShadowModule {
     // The renderer's frame index: the module's slot (frame_index % F) is then the renderer's, and the
     // shared profiler's last collected frame is the one that last used the slot (backend probes).
     f.frame_index = frame.view.frame_index;
-    f.depth = image_input(g.depth, kDepthTargetUsage);
-    f.normals.image = image_input(g.normal, kColorTargetUsage);
+    f.depth = image_input(g.depth);
+    f.normals.image = image_input(g.normal);
     f.normals.facing_camera = true;
-    f.geometric_normals.image = image_input(g.geometric_normal, kColorTargetUsage);
+    f.geometric_normals.image = image_input(g.geometric_normal);
     f.geometric_normals.facing_camera = true;
     f.facing_in_alpha = true;  // gbuffer.frag's light-facing decision
-    if (renderer_.smooth_terminator()) f.terminator_offset = image_input(g.terminator_offset, kColorTargetUsage);
-    f.receiver_mask = image_input(g.albedo, kColorTargetUsage);
+    if (renderer_.smooth_terminator()) f.terminator_offset = image_input(g.terminator_offset);
+    f.receiver_mask = image_input(g.albedo);
     f.receiver_channel = 3;
     std::memcpy(f.camera.view, glm::value_ptr(frame.view.view), sizeof(f.camera.view));
     std::memcpy(f.camera.projection, glm::value_ptr(frame.view.projection), sizeof(f.camera.projection));
@@ -131,8 +124,8 @@ class EngineShadowModule final : public ShadowModule {
     f.light_count = 1;
     f.instances = instances_.data();
     f.instance_count = uint32_t(instances_.size());
-    f.output = image_input(frame.shadow_term, kStorageTargetUsage);
-    f.overlay = image_input(frame.overlay, kStorageTargetUsage);
+    f.output = image_input(frame.shadow_term);
+    f.overlay = image_input(frame.overlay);
     context_->record(frame.cmd, f);
     recorded_.push_back(f.frame_index);
   }
@@ -201,7 +194,7 @@ class EngineShadowModule final : public ShadowModule {
       m.wrap_v = tex.wrap_v;
       m.alpha_cutoff = d.alpha_mode == engine::AlphaMode::Blend ? 0.5f : d.alpha_cutoff;
       m.alpha_scale = d.base_color.a;
-      if (detail::alpha_threshold(m.alpha_cutoff, m.alpha_scale) != d.alpha_threshold)
+      if (engine::alpha_threshold(m.alpha_cutoff, m.alpha_scale) != d.alpha_threshold)
         throw std::logic_error("shadows: the module's alpha threshold differs from the engine's for '" + m.name + "'");
     }
     const MeshId id = context_->register_mesh(m);
@@ -240,7 +233,7 @@ class EngineShadowModule final : public ShadowModule {
                          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
     });
-    t.input = image_input(t.image, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT);
+    t.input = image_input(t.image);
     t.input.layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
     t.wrap_u = AlphaWrap(header[3] & 0xffu);
     t.wrap_v = AlphaWrap((header[3] >> 8) & 0xffu);

@@ -107,6 +107,8 @@ bool alpha_tested(const Material& m);
 // base_color.a * byte / 255 >= cutoff. 256: nothing is kept; 0: everything. Computed once here so
 // every shader and the reference compare integers and agree exactly.
 uint32_t alpha_threshold(const Material& m);
+// The same rule for a texture alpha scaled by `scale` (the base colour's alpha) against `cutoff`.
+uint32_t alpha_threshold(float cutoff, float scale);
 
 struct Camera {
   float vertical_fov = glm::radians(60.0f);

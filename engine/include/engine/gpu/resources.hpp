@@ -69,6 +69,7 @@ class Image {
   VkImageView mip_view(uint32_t level) const { return mip_views_.empty() ? view_ : mip_views_[level]; }
   VkImageView layer_view(uint32_t layer) const { return layer_views_.empty() ? view_ : layer_views_[layer]; }
   VkFormat format() const { return format_; }
+  VkImageUsageFlags usage() const { return usage_; }  // as created
   VkExtent2D extent() const { return extent_; }
   uint32_t mip_levels() const { return mip_levels_; }
   uint32_t layers() const { return layers_; }
@@ -88,6 +89,7 @@ class Image {
   std::vector<VkImageView> mip_views_;
   std::vector<VkImageView> layer_views_;
   VkFormat format_ = VK_FORMAT_UNDEFINED;
+  VkImageUsageFlags usage_ = 0;
   VkExtent2D extent_{};
   VkImageAspectFlags aspect_ = VK_IMAGE_ASPECT_COLOR_BIT;
   uint32_t mip_levels_ = 1;
