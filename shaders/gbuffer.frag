@@ -3,6 +3,7 @@
 #include "frame.h"
 #define MATERIAL_TEXTURES_BINDING GBUFFER_BINDING_TEXTURES
 #include "material_textures.glsl"
+#include "shadows/terminator_offset.glsl"
 
 layout(set = 0, binding = GBUFFER_BINDING_FRAME) uniform Frame { FrameUniforms frame; };
 layout(push_constant) uniform Push { DrawPush draw; };
@@ -35,31 +36,10 @@ void main() {
   float facing = dot(shading, geometric) < 0.0 ? -1.0 : 1.0;
   shading *= facing;
 
-  // Smooth terminator (Hanika 2021, "Hacking the shadow terminator"): the shading point moves to the
-  // barycentric blend of its projections onto the tangent planes of the three vertex normals, where
-  // it lies below them. On a tessellated curved surface this lifts it from the flat facet toward the
-  // smooth surface the normals describe, so neighbouring facets no longer shadow it and the shadow
-  // boundary follows the shading. Flat-shaded meshes (vertex normals = face normal) do not move.
-  // The offset is applied to the reconstructed shading point (shading_points.comp), which every
-  // technique and the reference read.
-  vec3 offset = vec3(0.0);
-  if (len > 0.0) {
-    vec3 e0 = p[1] - p[0], e1 = p[2] - p[0], d = in_world_position - p[0];
-    float d00 = dot(e0, e0), d01 = dot(e0, e1), d11 = dot(e1, e1), d20 = dot(d, e0), d21 = dot(d, e1);
-    float denom = d00 * d11 - d01 * d01;
-    if (denom > 0.0) {
-      float b1 = clamp((d11 * d20 - d01 * d21) / denom, 0.0, 1.0);
-      float b2 = clamp((d00 * d21 - d01 * d20) / denom, 0.0, 1.0 - b1);
-      float bary[3] = float[3](1.0 - b1 - b2, b1, b2);
-      for (int k = 0; k < 3; ++k) {
-        vec3 n = in_corner_normals[k];
-        float n_len = length(n);
-        if (n_len == 0.0) continue;
-        n = facing * n / n_len;
-        offset -= bary[k] * min(0.0, dot(in_world_position - p[k], n)) * n;
-      }
-    }
-  }
+  // Smooth terminator (shadows/terminator_offset.glsl, the include the module gives every host): the
+  // offset is applied to the reconstructed shading point (shading_points.comp), which every technique
+  // and the reference read.
+  vec3 offset = len > 0.0 ? shadows_terminator_offset(in_world_position, p, in_corner_normals, facing) : vec3(0.0);
 
   vec4 color = draw.base_color;
   if (draw.base_color_texture != kNoTexture) color.rgb *= srgb_to_linear(unpackUnorm4x8(texel).rgb);

@@ -29,7 +29,7 @@ install)
   cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log"; fail "cmake --install failed"; }
   echo "installed files:"
   (cd "$prefix" && find . \( -type f -o -type l \) | sed 's|^\./||' | sort) | tee "$work/installed.txt"
-  unexpected=$(grep -Ev '^(include/shadows/[a-z_]+\.hpp|lib/libshadows\.(a|so(\.[0-9.]+)?)|lib/cmake/shadows/[A-Za-z_-]+\.cmake|lib/pkgconfig/shadows\.pc)$' \
+  unexpected=$(grep -Ev '^(include/shadows/[a-z_]+\.(hpp|glsl)|lib/libshadows\.(a|so(\.[0-9.]+)?)|lib/cmake/shadows/[A-Za-z_-]+\.cmake|lib/pkgconfig/shadows\.pc)$' \
                "$work/installed.txt" || true)
   [[ -z $unexpected ]] || fail "installed files outside the package: $unexpected"
   for f in include/shadows/shadows.hpp include/shadows/context.hpp include/shadows/settings.hpp include/shadows/version.hpp \

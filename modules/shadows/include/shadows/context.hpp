@@ -218,8 +218,9 @@ struct FrameDesc {
   // module decides from the shading normal.
   NormalInput geometric_normals;
   bool facing_in_alpha = false;
-  // Optional smooth-terminator offset (world-space xyz added to the shading point; the GLSL in
-  // shaders/shadows_host/terminator_offset.glsl computes it in a G-buffer shader). Float format.
+  // Optional smooth-terminator offset (world-space xyz added to the shading point; the GLSL function in
+  // shadows/terminator_offset.glsl, installed beside this header, computes it in a G-buffer shader).
+  // Float format.
   ImageInput terminator_offset;
   // Optional receiver mask: channel `receiver_channel` > 0.5 receives shadows; others stay lit.
   ImageInput receiver_mask;
