@@ -419,11 +419,17 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   }
 
   ensure_targets(f.depth.extent);
-  record_inputs(cmd, f, view);
+  {
+    engine::gpu::ScopedGpuRegion inputs_region(*gpu_, profiler, cmd, "host_inputs");
+    record_inputs(cmd, f, view);
+  }
   Frame frame{*gpu_, cmd, profiler, view, inputs_, shadow_term_, overlay_, geometry_.geometry(), draws_,
               uint32_t(f.frame_index % frames_in_flight_), frames_in_flight_};
   record_technique(frame);
-  record_output(cmd, f);
+  {
+    engine::gpu::ScopedGpuRegion output_region(*gpu_, profiler, cmd, "host_output");
+    record_output(cmd, f);
+  }
   slot.frame = f.frame_index;
   slot.technique = settings_.technique;
   slot.csm = settings_.izb.csm;
