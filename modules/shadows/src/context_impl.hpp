@@ -39,7 +39,6 @@ class ContextImpl final : public Context {
   void use_profiler(engine::gpu::GpuProfiler* profiler) { external_profiler_ = profiler; }
   CsmSnapshot read_csm() { return izb_ ? izb_->read_csm() : CsmSnapshot{}; }
   LitMapSnapshot read_lit_map() { return izb_ ? izb_->read_lit_map() : LitMapSnapshot{}; }
-  engine::gpu::Image& shadow_term() { return shadow_term_; }
   const View& last_view() const { return view_; }
 
  private:

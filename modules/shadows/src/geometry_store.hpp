@@ -29,7 +29,6 @@ class GeometryStore {
   // Records the queued imports into `cmd`.
   void record_imports(VkCommandBuffer cmd);
   Geometry& geometry() { return geometry_; }
-  bool has_pending() const { return !pending_.empty(); }
 
  private:
   struct Pending {
