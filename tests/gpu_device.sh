@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# gpu_device.sh [GPU_TESTS] [OUT_DIR]: the whole GPU test suite on the machine's GPU (ENGINE_DEVICE=gpu,
+# gpu_device.sh [GPU_TESTS] [OUT_DIR] [MODES]: the whole GPU test suite on the machine's GPU (ENGINE_DEVICE=gpu,
 # default build/bin/gpu_tests), once with the validation layer and once with its synchronization checks
 # too; any validation message fails a test. Writes each run's log and GoogleTest JSON under OUT_DIR
 # (default gpu_device_out) and prints a summary: tests run, passed, skipped (with the reason each gave)
-# and failed. Exits non-zero when a run failed.
+# and failed. MODES (default "validation syncval") picks the runs, so the two can run side by side.
+# Exits non-zero when a run failed.
 set -uo pipefail
 tests=${1:-build/bin/gpu_tests}
 out=${2:-gpu_device_out}
+modes=${3:-validation syncval}
 mkdir -p "$out"
 export ENGINE_DEVICE=${ENGINE_DEVICE:-gpu}
 status=0
@@ -26,7 +28,7 @@ summary() {  # LOG: counts and skip reasons from GoogleTest's output
     }' "$1"
 }
 
-for mode in validation syncval; do
+for mode in $modes; do
   if [[ $mode == syncval ]]; then env=(ENGINE_SYNC_VALIDATION=1); else env=(ENGINE_VALIDATION=1); fi
   log=$out/gpu_tests_$mode.log
   start=$SECONDS
@@ -34,7 +36,9 @@ for mode in validation syncval; do
   rc=$?
   echo "gpu_tests, ENGINE_DEVICE=$ENGINE_DEVICE, ${env[*]}: exit $rc in $((SECONDS - start)) s"
   summary "$log" | tee "$out/summary_$mode.txt"
-  grep -c '^\[vulkan\]' "$log" | sed 's/^/  validation messages: /'
+  # The synchronization canary (RobustnessTest.SyncValidationReportsAMissingBarrier) provokes one
+  # hazard on a buffer named "hazard target" and passes only when it is reported: not counted here.
+  echo "  validation messages: $(grep '^\[vulkan\]' "$log" | grep -vc 'name = hazard target') (besides the canary's deliberate hazard)"
   ((rc == 0)) || status=1
 done
 exit $status

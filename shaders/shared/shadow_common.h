@@ -53,15 +53,15 @@ const vec2 kSamplePattern[32] = vec2[32](
 SHARED_INLINE vec3 micro_quad_corner(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
                                      SHARED_IN(mat4) inv_view_proj, SHARED_IN(vec3) plane_point,
                                      SHARED_IN(vec3) plane_normal) {
-  SHARED_PRECISE vec2 ndc = (pixel_corner / viewport) * 2.0f - 1.0f;
-  SHARED_PRECISE vec4 near_h = inv_view_proj * vec4(ndc.x, ndc.y, 1.0f, 1.0f);  // reversed depth: 1 is near
-  SHARED_PRECISE vec4 far_h = inv_view_proj * vec4(ndc.x, ndc.y, 0.5f, 1.0f);
-  SHARED_PRECISE vec3 ray_origin = vec3(near_h) / near_h.w;
-  SHARED_PRECISE vec3 ray_dir = vec3(far_h) / far_h.w - ray_origin;
-  SHARED_PRECISE float denom = dot(plane_normal, ray_dir);
+  SHARED_PRECISE vec2 ndc = shared_divide(pixel_corner, viewport) * 2.0f - 1.0f;
+  SHARED_PRECISE vec4 near_h = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 1.0f, 1.0f));  // reversed depth: 1 is near
+  SHARED_PRECISE vec4 far_h = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 0.5f, 1.0f));
+  SHARED_PRECISE vec3 ray_origin = shared_divide(vec3(near_h), near_h.w);
+  SHARED_PRECISE vec3 ray_dir = shared_divide(vec3(far_h), far_h.w) - ray_origin;
+  SHARED_PRECISE float denom = shared_dot(plane_normal, ray_dir);
   // A plane seen edge-on: keep the shading point rather than shoot to infinity.
   if (abs(denom) < 1.0e-12f) return plane_point;
-  SHARED_PRECISE float t = dot(plane_normal, plane_point - ray_origin) / denom;
+  SHARED_PRECISE float t = shared_divide(shared_dot(plane_normal, plane_point - ray_origin), denom);
   SHARED_PRECISE vec3 corner = ray_origin + ray_dir * t;
   return corner;
 }

@@ -17,8 +17,7 @@ namespace {
 
 constexpr uint32_t kSize = 128;
 constexpr uint32_t kGrid = 256;
-// 32 spp coverage tests at 256^2: at 128^2 a 0.02 % bound is two pixels, and a GPU puts the odd
-// half-covered pixel on the other side of one half (the H200: 3 of 10,193 on foliage view 0).
+// 32 spp coverage tests at 256^2: at 128^2 a 0.02 % bound is two pixels, one sample's rounding apart.
 constexpr uint32_t kCoverageSize = 256;
 
 struct Rendered {
