@@ -37,7 +37,8 @@ void main() {
   if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
   uint flags = params.extent.z;
   imageStore(term_out, pixel, vec4(1.0));
-  imageStore(overlay_out, pixel, vec4(0.0));
+  // Only a debug view draws into the overlay; without one the output pass writes the host's zeros.
+  if ((flags & HOST_CLEAR_OVERLAY) != 0u) imageStore(overlay_out, pixel, vec4(0.0));
   float host_depth = texelFetch(depth_image, pixel, 0).r;
   bool reversed = (flags & HOST_REVERSED_Z) != 0u;
   // The module works in reversed Z; background is the host's clear depth.

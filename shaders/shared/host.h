@@ -12,6 +12,7 @@ SHARED_CONST uint HOST_HAS_GEOMETRIC = 2u;        // a geometric-normal image is
 SHARED_CONST uint HOST_FACING_IN_ALPHA = 4u;      // its alpha holds the light-facing decision
 SHARED_CONST uint HOST_HAS_OFFSET = 8u;           // a terminator-offset image is bound
 SHARED_CONST uint HOST_HAS_RECEIVER_MASK = 16u;   // a receiver-mask image is bound
+SHARED_CONST uint HOST_CLEAR_OVERLAY = 32u;       // a debug view draws this frame: clear the overlay first
 // Per normal image (shifted by HOST_NORMAL_SHIFT for the shading normal, HOST_GEOMETRIC_SHIFT for the
 // geometric one): encoding and space bits.
 SHARED_CONST uint HOST_NORMAL_OCTAHEDRAL = 1u;
@@ -39,12 +40,16 @@ SHARED_CONST uint HOST_INPUTS_BINDING_WORLD_POSITION = 6u;
 SHARED_CONST uint HOST_INPUTS_BINDING_GEOMETRIC_OUT = 7u;
 SHARED_CONST uint HOST_INPUTS_BINDING_ALBEDO_OUT = 8u;
 SHARED_CONST uint HOST_INPUTS_BINDING_TERM_OUT = 9u;     // cleared to 1 (lit)
-SHARED_CONST uint HOST_INPUTS_BINDING_OVERLAY_OUT = 10u; // cleared to 0
+SHARED_CONST uint HOST_INPUTS_BINDING_OVERLAY_OUT = 10u; // cleared to 0 with HOST_CLEAR_OVERLAY
 
 SHARED_CONST uint HOST_OUTPUT_BINDING_TERM = 0u;
 SHARED_CONST uint HOST_OUTPUT_BINDING_OVERLAY = 1u;
 SHARED_CONST uint HOST_OUTPUT_BINDING_OUT = 2u;
 SHARED_CONST uint HOST_OUTPUT_BINDING_OVERLAY_OUT = 3u;
+// The output pass's push constant z: what it writes besides nothing.
+SHARED_CONST uint HOST_OUTPUT_COPY_OVERLAY = 1u;   // the host's overlay from the module's
+SHARED_CONST uint HOST_OUTPUT_ZERO_OVERLAY = 2u;   // the host's overlay as 0 (no debug view drew)
+SHARED_CONST uint HOST_OUTPUT_ALL_LIT = 4u;        // the host's output as 1 (no technique ran)
 
 // Mesh import: one thread per vertex (positions, uvs) or per index.
 struct MeshImportPush {

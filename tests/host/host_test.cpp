@@ -272,6 +272,22 @@ TEST_F(HostBadInput, NormalsExtentDiffersFromDepth) {
   expect_refused(f, "FrameDesc.normals.image.extent");
 }
 
+// Native inputs come as a set: one alone (here the world positions, in the right format) is refused
+// naming the first one missing.
+TEST_F(HostBadInput, NativeInputsComeTogether) {
+  extra_ = make(kExtent, VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+  shadows::FrameDesc f = frame_;
+  f.native.world_position = extra_.input(VK_IMAGE_LAYOUT_GENERAL);
+  expect_refused(f, "FrameDesc.native.geometric_normal");
+}
+
+TEST_F(HostBadInput, NativeWorldPositionInAnotherFormat) {
+  extra_ = make(kExtent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+  shadows::FrameDesc f = frame_;
+  f.native.world_position = extra_.input(VK_IMAGE_LAYOUT_GENERAL);
+  expect_refused(f, "FrameDesc.native.world_position.format");
+}
+
 TEST_F(HostBadInput, RayTracingMissingOnLavapipe) {
   const shadows::Capability rt = module_->capabilities().of(shadows::Technique::RayTraced);
   if (rt.available) GTEST_SKIP() << "the device traces rays";

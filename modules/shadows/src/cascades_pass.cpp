@@ -432,8 +432,8 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
       pipeline.bind(cmd);
       DescriptorWriter()
           .uniform_buffer(gs::CASCADE_FILTER_BINDING_PARAMS, m.params.handle())
-          .storage_image(gs::CASCADE_FILTER_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
-          .storage_image(gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+          .storage_image(gs::CASCADE_FILTER_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
+          .storage_image(gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
           .sampled_image(gs::CASCADE_FILTER_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
           .storage_buffer(gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, m.neighbourhoods.handle())
           .sampled_image(gs::CASCADE_FILTER_BINDING_ROTATION, m.rotation.view(), m.nearest.handle(),
@@ -476,8 +476,8 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
       const Pipeline& pipeline = m.blur_pipeline[apply];
       pipeline.bind(cmd);
       DescriptorWriter()
-          .storage_image(gs::CASCADE_BLUR_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
-          .storage_image(gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+          .storage_image(gs::CASCADE_BLUR_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
+          .storage_image(gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
           .storage_image(gs::CASCADE_BLUR_BINDING_SHADOW_TERM, out.view())
           .storage_buffer(gs::CASCADE_BLUR_BINDING_COUNTERS, m.counters.handle())
           .storage_buffer(gs::CASCADE_BLUR_BINDING_BLUR_LIST, m.blur_list.handle())

@@ -230,6 +230,14 @@ void ContextImpl::validate(const FrameDesc& f) const {
     check_image(f.receiver_mask, "FrameDesc.receiver_mask", {}, VK_IMAGE_USAGE_SAMPLED_BIT, kReadLayouts, extent);
     if (f.receiver_channel > 3) throw Error("shadows: FrameDesc.receiver_channel is " + std::to_string(f.receiver_channel) + " (0..3)");
   }
+  if (f.native.present()) {
+    check_image(f.native.world_position, "FrameDesc.native.world_position", {VK_FORMAT_R32G32B32A32_SFLOAT},
+                VK_IMAGE_USAGE_STORAGE_BIT, {VK_IMAGE_LAYOUT_GENERAL}, extent);
+    check_image(f.native.geometric_normal, "FrameDesc.native.geometric_normal", {VK_FORMAT_R16G16B16A16_SFLOAT},
+                VK_IMAGE_USAGE_STORAGE_BIT, {VK_IMAGE_LAYOUT_GENERAL}, extent);
+    check_image(f.native.receives, "FrameDesc.native.receives", {VK_FORMAT_R8G8B8A8_UNORM}, VK_IMAGE_USAGE_STORAGE_BIT,
+                {VK_IMAGE_LAYOUT_GENERAL}, extent);
+  }
   check_image(f.output, "FrameDesc.output", {VK_FORMAT_R8_UNORM, VK_FORMAT_R16_SFLOAT, VK_FORMAT_R32_SFLOAT},
               VK_IMAGE_USAGE_STORAGE_BIT, {VK_IMAGE_LAYOUT_GENERAL}, extent);
   if (f.overlay.present())
@@ -270,6 +278,32 @@ void ContextImpl::ensure_targets(VkExtent2D extent) {
   // The passes size their own per-pixel resources from the extent they see in the frame.
 }
 
+// The previous frame's reads of the module's per-pixel images finish before this frame rewrites them;
+// fresh images move from UNDEFINED to GENERAL.
+void ContextImpl::prepare_targets(VkCommandBuffer cmd, bool clear) {
+  for (Image* img : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_}) {
+    if (targets_fresh_)
+      img->transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                      VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  }
+  if (!targets_fresh_)
+    memory_barrier(cmd, pass_shader_stages(*gpu_) | VK_PIPELINE_STAGE_2_COPY_BIT, kStorageReadWrite | VK_ACCESS_2_TRANSFER_READ_BIT,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  targets_fresh_ = false;
+  if (!clear) return;
+  // Without the input pass (native inputs), the term starts lit and the overlay, when a debug view
+  // draws, empty: cleared here, visible to every pass.
+  const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}}, zero{{0.0f, 0.0f, 0.0f, 0.0f}};
+  vkCmdClearColorImage(cmd, shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, &one, 1, &range);
+  if (settings_.debug != DebugView::None)
+    vkCmdClearColorImage(cmd, overlay_.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, pass_shader_stages(*gpu_),
+                 kStorageReadWrite);
+}
+
 void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const View& view) {
   namespace gs = gpu_shared;
   gs::HostInputs p{};
@@ -293,6 +327,7 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
   };
   uint32_t flags = 0;
   if (f.camera.reversed_z) flags |= gs::HOST_REVERSED_Z;
+  if (settings_.debug != DebugView::None) flags |= gs::HOST_CLEAR_OVERLAY;
   if (f.geometric_normals.image.present()) flags |= gs::HOST_HAS_GEOMETRIC;
   if (f.facing_in_alpha) flags |= gs::HOST_FACING_IN_ALPHA;
   if (f.terminator_offset.present()) flags |= gs::HOST_HAS_OFFSET;
@@ -301,21 +336,11 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
   flags |= normal_bits(f.geometric_normals, as_given(f.geometric_normals)) << gs::HOST_GEOMETRIC_SHIFT;
   p.extent = glm::uvec4(extent_.width, extent_.height, flags, f.receiver_channel);
 
-  // The previous frame's reads of the parameters and of the module's per-pixel images finish before
-  // this frame rewrites them; fresh images move from UNDEFINED to GENERAL.
+  // The previous frame's reads of the parameters finish before this frame rewrites them.
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, 0, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
   vkCmdUpdateBuffer(cmd, input_params_.handle(), 0, sizeof(p), &p);
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_UNIFORM_READ_BIT);
-  for (Image* img : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_}) {
-    if (targets_fresh_)
-      img->transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
-                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  }
-  if (!targets_fresh_)
-    memory_barrier(cmd, pass_shader_stages(*gpu_) | VK_PIPELINE_STAGE_2_COPY_BIT, kStorageReadWrite | VK_ACCESS_2_TRANSFER_READ_BIT,
-                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-  targets_fresh_ = false;
 
   auto input_view = [&](const ImageInput& in) { return in.present() ? in.view : dummy_input_.view(); };
   auto input_layout = [&](const ImageInput& in) { return in.present() ? in.layout : VK_IMAGE_LAYOUT_GENERAL; };
@@ -356,7 +381,10 @@ void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f) {
       .storage_image(gs::HOST_OUTPUT_BINDING_OUT, f.output.view)
       .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT, f.overlay.present() ? f.overlay.view : overlay_.view())
       .push(*gpu_, cmd, p);
-  const glm::uvec4 push(extent_.width, extent_.height, f.overlay.present() ? 1u : 0u, 0u);
+  uint32_t what = settings_.technique == Technique::Off ? gs::HOST_OUTPUT_ALL_LIT : 0u;
+  if (f.overlay.present())
+    what |= settings_.debug != DebugView::None ? gs::HOST_OUTPUT_COPY_OVERLAY : gs::HOST_OUTPUT_ZERO_OVERLAY;
+  const glm::uvec4 push(extent_.width, extent_.height, what, 0u);
   p.push_constants(cmd, push);
   vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
 }
@@ -419,11 +447,20 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   }
 
   ensure_targets(f.depth.extent);
-  {
+  // With shadows off nothing reads the inputs: the output pass writes the host's image lit. Native
+  // inputs are read in place.
+  const bool off = settings_.technique == Technique::Off;
+  prepare_targets(cmd, !off && f.native.present());
+  if (!off && !f.native.present()) {
     engine::gpu::ScopedGpuRegion inputs_region(*gpu_, profiler, cmd, "host_inputs");
     record_inputs(cmd, f, view);
   }
-  Frame frame{*gpu_, cmd, profiler, view, inputs_, shadow_term_, overlay_, geometry_.geometry(), draws_,
+  const ShadingInputs inputs = f.native.present()
+                                   ? ShadingInputs{f.native.world_position.view, f.native.geometric_normal.view,
+                                                   f.native.receives.view}
+                                   : ShadingInputs{inputs_.world_position.view(), inputs_.geometric_normal.view(),
+                                                   inputs_.albedo.view()};
+  Frame frame{*gpu_, cmd, profiler, view, inputs, shadow_term_, overlay_, geometry_.geometry(), draws_,
               uint32_t(f.frame_index % frames_in_flight_), frames_in_flight_};
   record_technique(frame);
   {

@@ -51,6 +51,8 @@ class ContextImpl final : public Context {
 
   void validate(const FrameDesc& frame) const;
   void ensure_targets(VkExtent2D extent);
+  // `clear`: the term to 1 and (with a debug view) the overlay to 0, where no input pass does.
+  void prepare_targets(VkCommandBuffer cmd, bool clear);
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
   void record_output(VkCommandBuffer cmd, const FrameDesc& frame);
@@ -71,7 +73,9 @@ class ContextImpl final : public Context {
   GeometryStore geometry_;
   View view_;
   std::vector<DrawItem> draws_;
-  ShadingInputs inputs_;
+  struct OwnedInputs {  // written by the input pass when the host gives no native inputs
+    engine::gpu::Image world_position, geometric_normal, albedo;
+  } inputs_;
   engine::gpu::Image shadow_term_;
   engine::gpu::Image overlay_;
   VkExtent2D extent_{};

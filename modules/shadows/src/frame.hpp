@@ -26,10 +26,12 @@ struct View {
 };
 
 // Per-pixel inputs in the module's layout, written from the host's images each frame.
+// The per-pixel inputs every pass reads as storage images in GENERAL layout: the module's own, written
+// by its input pass, or the host's native ones (FrameDesc::native) read in place.
 struct ShadingInputs {
-  engine::gpu::Image world_position;    // RGBA32F: shading point; w = 1 covered, 0 background
-  engine::gpu::Image geometric_normal;  // RGBA16F: unit normal facing the camera; w = faces the light
-  engine::gpu::Image albedo;            // RGBA8: a = receives shadows (rgb unused)
+  VkImageView world_position = VK_NULL_HANDLE;    // RGBA32F: shading point; w = 1 covered, 0 background
+  VkImageView geometric_normal = VK_NULL_HANDLE;  // RGBA16F: unit normal facing the camera; w = faces the light
+  VkImageView albedo = VK_NULL_HANDLE;            // RGBA8: a = receives shadows (rgb unused)
 };
 
 // One caster mesh in the module's vertex and index buffers.
@@ -91,9 +93,9 @@ struct Frame {
   VkCommandBuffer cmd;
   engine::gpu::GpuProfiler& profiler;
   const View& view;
-  ShadingInputs& gbuffer;
+  const ShadingInputs& gbuffer;
   engine::gpu::Image& shadow_term;  // R32F storage, GENERAL, 1 (lit) where no technique writes
-  engine::gpu::Image& overlay;      // RGBA8 storage, GENERAL, 0 where no overlay
+  engine::gpu::Image& overlay;      // RGBA8 storage, GENERAL; cleared to 0 only when a debug view is on
   Geometry& geometry;
   const std::vector<DrawItem>& draws;
   uint32_t slot = 0;   // frame-in-flight slot of this frame

@@ -327,9 +327,9 @@ void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collec
     m.pipeline.bind(cmd);
     DescriptorWriter()
         .acceleration_structure(gpu_shared::RT_BINDING_SCENE, m.top.handle)
-        .storage_image(gpu_shared::RT_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
-        .storage_image(gpu_shared::RT_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
-        .storage_image(gpu_shared::RT_BINDING_ALBEDO, frame.gbuffer.albedo.view())
+        .storage_image(gpu_shared::RT_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
+        .storage_image(gpu_shared::RT_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
+        .storage_image(gpu_shared::RT_BINDING_ALBEDO, frame.gbuffer.albedo)
         .storage_image(gpu_shared::RT_BINDING_SHADOW_TERM, frame.shadow_term.view())
         .storage_buffer(gpu_shared::RT_BINDING_COUNTERS, m.counters.handle())
         .storage_buffer(gpu_shared::RT_BINDING_VERTICES, frame.geometry.vertices().handle())

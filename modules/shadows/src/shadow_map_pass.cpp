@@ -76,8 +76,8 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
     resolve_pipeline_.bind(cmd);
     DescriptorWriter()
         .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
-        .storage_image(gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, frame.gbuffer.world_position.view())
-        .storage_image(gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal.view())
+        .storage_image(gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
+        .storage_image(gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
         .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, frame.shadow_term.view())
         .push(ctx_, cmd, resolve_pipeline_);

@@ -113,6 +113,11 @@ class EngineShadowModule final : public ShadowModule {
     if (renderer_.smooth_terminator()) f.terminator_offset = image_input(g.terminator_offset);
     f.receiver_mask = image_input(g.albedo);
     f.receiver_channel = 3;
+    // The renderer's own shading points, normals and receiver flags are in the module's formats: read
+    // in place, no input pass (the depth and normals above are then only checked).
+    f.native.world_position = image_input(g.world_position);
+    f.native.geometric_normal = image_input(g.geometric_normal);
+    f.native.receives = image_input(g.albedo);
     std::memcpy(f.camera.view, glm::value_ptr(frame.view.view), sizeof(f.camera.view));
     std::memcpy(f.camera.projection, glm::value_ptr(frame.view.projection), sizeof(f.camera.projection));
     f.camera.reversed_z = true;

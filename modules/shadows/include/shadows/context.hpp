@@ -20,7 +20,8 @@
 //     DEPTH_STENCIL_READ_ONLY_OPTIMAL or GENERAL) when the command buffer executes, and the host's
 //     writes to them must be made visible to VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT /
 //     VK_ACCESS_2_SHADER_SAMPLED_READ_BIT by a barrier the host records before record(). The module
-//     never changes their layout.
+//     never changes their layout. Native inputs (FrameDesc::native) are read as storage images
+//     instead: see NativeInputs.
 //   - The output (and the optional overlay) must be in VK_IMAGE_LAYOUT_GENERAL, with every earlier
 //     access by the host finished before VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT (a barrier whose
 //     second scope is COMPUTE_SHADER / SHADER_STORAGE_WRITE). The module writes them with compute
@@ -196,6 +197,22 @@ struct NormalInput {
   bool facing_camera = false;
 };
 
+// The module's own per-pixel inputs, given directly. Each: STORAGE usage, GENERAL layout, extent equal
+// to depth's; read (never written) as storage images by the module's passes, which run in
+// COMPUTE_SHADER, FRAGMENT_SHADER and (with rt) RAY_TRACING_SHADER stages: the host's writes must be
+// visible to those stages / SHADER_STORAGE_READ before the command buffer reaches record()'s commands.
+struct NativeInputs {
+  // R32G32B32A32_SFLOAT: the shading point in world space (any terminator offset already added);
+  // w = 1 covered, 0 background.
+  ImageInput world_position;
+  // R16G16B16A16_SFLOAT: the unit geometric (triangle) normal facing the camera; w > 0.5 where the point
+  // faces the light (the host's decision, as FrameDesc::facing_in_alpha).
+  ImageInput geometric_normal;
+  // R8G8B8A8_UNORM: a > 0.5 receives shadows (rgb not read).
+  ImageInput receives;
+  bool present() const { return world_position.present() || geometric_normal.present() || receives.present(); }
+};
+
 struct Camera {
   float view[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};        // world -> view
   float projection[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  // view -> Vulkan clip
@@ -225,6 +242,10 @@ struct FrameDesc {
   // Optional receiver mask: channel `receiver_channel` > 0.5 receives shadows; others stay lit.
   ImageInput receiver_mask;
   uint32_t receiver_channel = 3;
+  // Optional, for a host whose G-buffer already holds the shading points in the module's own formats
+  // (all three, or none): the module then reads them in place and skips its input pass, and depth,
+  // normals, geometric normals, terminator offset and receiver mask are checked but not read.
+  NativeInputs native;
   Camera camera;
   const Light* lights = nullptr;  // this version shadows exactly one directional light
   uint32_t light_count = 0;
