@@ -25,7 +25,6 @@ struct View {
   uint64_t frame_index = 0;
 };
 
-// Per-pixel inputs in the module's layout, written from the host's images each frame.
 // The per-pixel inputs every pass reads as storage images in GENERAL layout: the module's own, written
 // by its input pass, or the host's native ones (FrameDesc::native) read in place.
 struct ShadingInputs {
