@@ -7,7 +7,9 @@ SHARED_BEGIN
 
 struct RayTracedPush {
   mat4 inverse_view_projection;  // NDC -> world, for the μQuad corners (32 samples per pixel)
-  vec4 light_direction;          // xyz: the direction light travels (unit)
+  vec4 light_direction;          // xyz: the direction light travels (unit; a point light: unused)
+  vec4 light_position;           // xyz: a spot or point light's position; w: its range (0: the sun)
+  vec4 light_cone;               // x: cosine of a spot light's outer cone (a point light: -1)
   uvec4 extent;                  // xy: render size; z: samples per pixel (1 or 32); w: 1 = count rays
 };
 
@@ -41,7 +43,7 @@ SHARED_CONST uint RT_COUNTER_COUNT = 4u;
 SHARED_END
 
 #ifdef __cplusplus
-static_assert(sizeof(gpu_shared::RayTracedPush) == 96);
+static_assert(sizeof(gpu_shared::RayTracedPush) == 128);  // Vulkan's least push-constant limit
 static_assert(sizeof(gpu_shared::RayTracedInstance) == 16);
 #endif
 #endif

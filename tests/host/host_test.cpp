@@ -288,6 +288,23 @@ TEST_F(HostBadInput, NativeWorldPositionInAnotherFormat) {
   expect_refused(f, "FrameDesc.native.world_position.format");
 }
 
+// Local lights are shadowed by rt only in this version: the default technique refuses one in a line.
+TEST_F(HostBadInput, SpotLightRefusedOutsideRayTracing) {
+  shadows::FrameDesc f = frame_;
+  const shadows::Light spot{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
+                            .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f, .inner_cone = 0.2f, .outer_cone = 0.5f};
+  f.lights = &spot;
+  expect_refused(f, "FrameDesc.lights[0] is a spot light");
+}
+
+TEST_F(HostBadInput, PointLightWithoutRange) {
+  module_->settings().technique = shadows::Technique::RayTraced;
+  shadows::FrameDesc f = frame_;
+  const shadows::Light point{.type = shadows::LightType::Point, .position = {0.0f, 3.0f, 0.0f}, .range = 0.0f};
+  f.lights = &point;
+  expect_refused(f, "FrameDesc.lights[0].range");
+}
+
 TEST_F(HostBadInput, RayTracingMissingOnLavapipe) {
   const shadows::Capability rt = module_->capabilities().of(shadows::Technique::RayTraced);
   if (rt.available) GTEST_SKIP() << "the device traces rays";

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstring>
 
 #include <glm/gtc/type_ptr.hpp>
@@ -246,11 +247,25 @@ void ContextImpl::validate(const FrameDesc& f) const {
   if (f.light_count != 1 || !f.lights)
     throw Error("shadows: FrameDesc.light_count is " + std::to_string(f.light_count) +
                 " (this version shadows exactly one light)");
-  if (f.lights[0].type != LightType::Directional)
-    throw Error("shadows: FrameDesc.lights[0].type: only LightType::Directional is shadowed in this version");
-  const glm::vec3 dir = glm::make_vec3(f.lights[0].direction);
-  if (!(glm::length(dir) > 0.5f && glm::length(dir) < 1.5f))
+  const Light& light = f.lights[0];
+  if (light.type != LightType::Directional && light.type != LightType::Spot && light.type != LightType::Point)
+    throw Error("shadows: FrameDesc.lights[0].type " + std::to_string(uint32_t(light.type)) + " is not a LightType");
+  const glm::vec3 dir = glm::make_vec3(light.direction);
+  if (light.type != LightType::Point && !(glm::length(dir) > 0.5f && glm::length(dir) < 1.5f))
     throw Error("shadows: FrameDesc.lights[0].direction must be a unit vector");
+  if (light.type != LightType::Directional) {
+    const char* kind = light.type == LightType::Spot ? "spot" : "point";
+    if (settings_.technique != Technique::RayTraced)
+      throw Error(std::string("shadows: FrameDesc.lights[0] is a ") + kind +
+                  " light: this version shadows local lights with Settings.technique rt only");
+    if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))
+      throw Error("shadows: FrameDesc.lights[0].position must be finite");
+    if (!(light.range > 0.0f) || !std::isfinite(light.range))
+      throw Error("shadows: FrameDesc.lights[0].range must be finite and > 0");
+    if (light.type == LightType::Spot &&
+        !(light.inner_cone >= 0.0f && light.inner_cone < light.outer_cone && light.outer_cone <= 1.5707964f))
+      throw Error("shadows: FrameDesc.lights[0] cones must satisfy 0 <= inner_cone < outer_cone <= pi/2");
+  }
   if (f.instance_count > 0 && !f.instances) throw Error("shadows: FrameDesc.instances is null with instance_count > 0");
   for (uint32_t i = 0; i < f.instance_count; ++i)
     if (!geometry_.find(f.instances[i].mesh))
@@ -418,7 +433,12 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   view.view_projection = projection * view.view;
   view.inverse_view_projection = glm::inverse(view.view_projection);
   view.camera_position = glm::vec3(glm::inverse(view.view)[3]);
-  view.light_direction = glm::normalize(glm::make_vec3(f.lights[0].direction));
+  const Light& light = f.lights[0];
+  view.local_light = light.type != LightType::Directional;
+  if (light.type != LightType::Point) view.light_direction = glm::normalize(glm::make_vec3(light.direction));
+  view.light_position = glm::make_vec3(light.position);
+  view.light_range = light.range;
+  view.light_cos_outer = light.type == LightType::Spot ? std::cos(light.outer_cone) : -1.0f;
   // A perspective projection scales x and y by the cotangent of the half field of view.
   view.tan_half_fov = glm::vec2(1.0f / std::max(std::abs(projection[0][0]), 1e-6f),
                                 1.0f / std::max(std::abs(projection[1][1]), 1e-6f));

@@ -17,7 +17,11 @@ struct View {
   glm::mat4 view_projection{1.0f};
   glm::mat4 inverse_view_projection{1.0f};  // NDC (y down, reversed depth) -> world
   glm::vec3 camera_position{0.0f};
-  glm::vec3 light_direction{0.0f, -1.0f, 0.0f};  // travel direction, unit
+  glm::vec3 light_direction{0.0f, -1.0f, 0.0f};  // travel direction, unit (directional and spot)
+  bool local_light = false;        // a spot or point light (else the sun)
+  glm::vec3 light_position{0.0f};  // spot and point
+  float light_range = 0.0f;        // spot and point
+  float light_cos_outer = -1.0f;   // spot: cosine of the outer cone; point: -1 (every direction)
   float near_plane = 0.05f;
   float far_plane = 200.0f;
   glm::vec2 tan_half_fov{1.0f};  // x, y: tangent of the half field of view (from the projection)

@@ -61,6 +61,7 @@ class EngineShadowModule final : public ShadowModule {
   void set_collect_stats(bool enabled) override { context_->set_collect_stats(enabled); }
   std::vector<std::string> pass_names() const override { return context_->pass_names(); }
   Context& context() override { return *context_; }
+  void set_light(std::optional<Light> light) override { light_ = light; }
 
   bool supported(CsmTest test, std::string* why) const override {
     const Capability c = context_->capabilities().of(test);
@@ -125,7 +126,7 @@ class EngineShadowModule final : public ShadowModule {
     f.camera.far_plane = frame.view.far_plane;
     Light sun;
     std::memcpy(sun.direction, glm::value_ptr(frame.view.light_direction), sizeof(sun.direction));
-    f.lights = &sun;
+    f.lights = light_ ? &*light_ : &sun;
     f.light_count = 1;
     f.instances = instances_.data();
     f.instance_count = uint32_t(instances_.size());
@@ -247,6 +248,7 @@ class EngineShadowModule final : public ShadowModule {
 
   engine::Renderer& renderer_;
   std::unique_ptr<detail::ContextImpl> context_;
+  std::optional<Light> light_;  // set_light(): shadowed instead of the renderer's sun
   const engine::SceneGeometry* geometry_ = nullptr;
   std::map<std::tuple<uint32_t, uint32_t, uint32_t>, MeshId> meshes_;
   std::map<uint32_t, TextureImage> textures_;

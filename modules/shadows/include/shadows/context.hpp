@@ -173,12 +173,18 @@ struct Instance {
 
 enum class LightType : uint32_t { Directional, Spot, Point };
 
+// A directional light is shadowed by every technique. A spot or point light (this version: with
+// Technique::RayTraced only; the others refuse it in one line) shadows the points it reaches: within
+// `range` of `position` and, for a spot light, inside its outer cone; every other point, and every
+// point whose geometric normal turns away from the light, is written 0. Shadow rays run from the
+// point (pushed off its surface as for the sun) toward `position`, and occluders closer than 0.01
+// world units to the light (its bulb and housing) do not count (shaders/shared/local_light.h).
 struct Light {
   LightType type = LightType::Directional;
   float direction[3] = {0.0f, -1.0f, 0.0f};  // directional and spot: the direction light travels, unit
   float position[3] = {0.0f, 0.0f, 0.0f};    // spot and point (world)
-  float range = 0.0f;                        // spot and point
-  float inner_cone = 0.0f, outer_cone = 0.0f;  // spot: half angles in radians
+  float range = 0.0f;                        // spot and point: > 0, world units
+  float inner_cone = 0.0f, outer_cone = 0.0f;  // spot: half angles in radians, 0 <= inner < outer <= pi/2
 };
 
 enum class NormalSpace : uint32_t { World, View };
@@ -247,7 +253,7 @@ struct FrameDesc {
   // normals, geometric normals, terminator offset and receiver mask are checked but not read.
   NativeInputs native;
   Camera camera;
-  const Light* lights = nullptr;  // this version shadows exactly one directional light
+  const Light* lights = nullptr;  // this version shadows exactly one light (see Light)
   uint32_t light_count = 0;
   const Instance* instances = nullptr;  // every caster this frame
   uint32_t instance_count = 0;

@@ -7,6 +7,7 @@
 //   shadows->settings().technique = shadows::Technique::Izb;
 //   ... after a frame: shadows->stats().nodes_inserted
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,9 @@ class ShadowModule : public engine::RenderFeature {
   virtual CsmSnapshot read_lit_map() = 0;
   // The host-API context the adapter drives.
   virtual Context& context() = 0;
+  // The light the module shadows from the next frame on, instead of the renderer's sun (nullopt: the
+  // sun again). The renderer's lighting is not told: for tests and tools that read the visibility.
+  virtual void set_light(std::optional<Light> light) = 0;
 };
 
 // Creates the module on the renderer's device, adds it to the renderer, and returns it.
