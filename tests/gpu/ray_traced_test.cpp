@@ -4,6 +4,7 @@
 // and the one test that runs checks that reason; run `build/bin/gpu_tests --gtest_filter='*RayTraced*'`
 // on a ray tracing GPU for the comparisons. The validation layer is on either way.
 #include <cmath>
+#include <glm/gtc/type_ptr.hpp>
 
 #include "engine/core/animation.hpp"
 #include "frame_capture.hpp"
@@ -105,6 +106,74 @@ INSTANTIATE_TEST_SUITE_P(Scenes, RayTracedSceneTest,
                          [](const testing::TestParamInfo<SceneView>& info) {
                            return info.param.scene + "_view" + std::to_string(info.param.view);
                          });
+
+// Spot and point lights (shared/local_light.h): rays toward the light's position, points outside its
+// range or cone and points turned away from it unlit, against Embree's rays from the same points. The
+// contact scene's box, pole, sphere and plate stand under both lights, and both reach past some of the
+// ground and not all of it.
+struct LocalLightCase {
+  std::string name;
+  shadows::Light light;
+};
+class RayTracedLocalLightTest : public RayTracedTest, public testing::WithParamInterface<LocalLightCase> {
+ protected:
+  struct Result {
+    reference::Comparison cmp;
+    size_t lit = 0, shadowed = 0;
+  };
+  Result compare(uint32_t spp) {
+    auto& r = make_renderer("contact", 0, kSize, kSize);
+    module_ = shadows::install(r, rt(spp));
+    module_->set_light(GetParam().light);
+    r.render_frame(0.0f);
+    const auto visibility = module_->read_visibility();
+    const shadows::Light& l = GetParam().light;
+    reference::LocalLight light{.position = glm::make_vec3(l.position), .range = l.range};
+    if (l.type == shadows::LightType::Spot) {
+      light.spot = true;
+      light.spot_direction = glm::normalize(glm::make_vec3(l.direction));  // as the module takes it
+      light.cos_outer = std::cos(l.outer_cone);
+    }
+    reference::EmbreeTracer tracer(scene_->registry);
+    const auto points = support::capture_shading_points(r);
+    const auto truth = spp == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
+    Result out;
+    out.cmp = reference::compare_visibility(visibility, truth);
+    for (float v : truth) {
+      out.lit += v == 1.0f;
+      out.shadowed += v == 0.0f;
+    }
+    return out;
+  }
+};
+
+TEST_P(RayTracedLocalLightTest, OneSampleMatchesReference) {
+  if (std::string why; !can_trace(&why)) GTEST_SKIP() << why;
+  const Result r = compare(1);
+  EXPECT_GT(r.lit, kSize * kSize / 20);
+  EXPECT_GT(r.shadowed, kSize * kSize / 20);
+  EXPECT_LE(r.cmp.mismatch_rate, 0.0002) << r.cmp.mismatched << " of " << r.cmp.pixels << " pixels differ";
+}
+
+TEST_P(RayTracedLocalLightTest, ThirtyTwoSamplesMatchReferenceCoverage) {
+  if (std::string why; !can_trace(&why)) GTEST_SKIP() << why;
+  const Result r = compare(32);
+  EXPECT_LE(r.cmp.coverage_mae, 1.0e-3);
+  EXPECT_LE(r.cmp.mismatch_rate, 0.0002) << r.cmp.mismatched << " of " << r.cmp.pixels << " pixels differ";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Lights, RayTracedLocalLightTest,
+    testing::Values(LocalLightCase{"spot", {.type = shadows::LightType::Spot,
+                                            .direction = {0.08f, -0.9936f, 0.08f},
+                                            .position = {-0.5f, 4.0f, 0.5f},
+                                            .range = 12.0f,
+                                            .inner_cone = 0.4f,
+                                            .outer_cone = 0.7f}},
+                    LocalLightCase{"point", {.type = shadows::LightType::Point,
+                                             .position = {0.5f, 3.0f, 1.5f},
+                                             .range = 6.0f}}),
+    [](const testing::TestParamInfo<LocalLightCase>& info) { return info.param.name; });
 
 // Moving casters: the top level is rebuilt every frame, so each frame matches Embree traced against
 // that frame's geometry, and the shadows move.

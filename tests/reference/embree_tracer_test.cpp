@@ -94,6 +94,56 @@ TEST(EmbreeTracer, OneSampleGroundShadowBackgroundAndBackFacing) {
   EXPECT_EQ(tracer.visibility_32spp(sp, glm::vec3(0.0f, -2.0f, 0.0f)), vis);
 }
 
+// A light 3 above the ground at the origin and the occluder at height 1: a ground point (x, 0, z) is
+// shadowed when its ray crosses y = 1 inside [-1, 1]^2, i.e. |x|, |z| <= 1.5: pixels 5..10. A quad
+// 0.002 under the light (within kLocalLightRadius along every ray here: at most 0.0041) and one above
+// the light shadow nothing.
+TEST(EmbreeTracer, PointLightShadowsWhatItsRaysCross) {
+  engine::Registry reg;
+  add_ground_and_occluder(reg);
+  reference::add_mesh_entity(reg, reference::make_quad_y(2.998f, glm::vec2(-0.5f), glm::vec2(0.5f)));
+  reference::add_mesh_entity(reg, reference::make_quad_y(4.0f, glm::vec2(-4.0f), glm::vec2(4.0f)));
+  const EmbreeTracer tracer(reg);
+  ShadingPoints sp = reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0.0f), kUp);
+  sp.normal[sp.index(2, 3)] = glm::vec4(kDown, 0.0f);  // faces away from the light
+  const reference::LocalLight light{.position = glm::vec3(0.0f, 3.0f, 0.0f), .range = 10.0f};
+  const std::vector<float> vis = tracer.visibility_1spp(sp, light);
+  for (uint32_t y = 0; y < kSize; ++y)
+    for (uint32_t x = 0; x < kSize; ++x) {
+      SCOPED_TRACE(testing::Message() << "pixel " << x << "," << y);
+      const bool under = x >= 5 && x <= 10 && y >= 5 && y <= 10;
+      EXPECT_EQ(at(vis, x, y), under || (x == 2 && y == 3) ? 0.0f : 1.0f);
+    }
+  // The shadow's edges (|x| = 1.5) fall on pixel boundaries, so all 32 samples of a pixel agree.
+  EXPECT_EQ(tracer.visibility_32spp(sp, light), vis);
+}
+
+// Range and cone: a point light of range 4 reaches ground points within sqrt(7) of the origin; a spot
+// light pointing down with a 45 degree outer cone, those within 3.
+TEST(EmbreeTracer, LocalLightsReachOnlyTheirRangeAndCone) {
+  engine::Registry reg;
+  reference::add_mesh_entity(reg, reference::make_quad_y(0.0f, glm::vec2(-4.0f), glm::vec2(4.0f)));
+  const EmbreeTracer tracer(reg);
+  const ShadingPoints sp = reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0.0f), kUp);
+  const reference::LocalLight point{.position = glm::vec3(0.0f, 3.0f, 0.0f), .range = 4.0f};
+  const reference::LocalLight spot{.position = glm::vec3(0.0f, 3.0f, 0.0f), .range = 10.0f, .spot = true,
+                                   .spot_direction = kDown, .cos_outer = std::cos(glm::radians(45.0f))};
+  const std::vector<float> by_point = tracer.visibility_1spp(sp, point);
+  const std::vector<float> by_spot = tracer.visibility_1spp(sp, spot);
+  size_t reached_by_point = 0, reached_by_spot = 0;
+  for (uint32_t y = 0; y < kSize; ++y)
+    for (uint32_t x = 0; x < kSize; ++x) {
+      SCOPED_TRACE(testing::Message() << "pixel " << x << "," << y);
+      const float r = glm::length(glm::vec2(-3.75f + 0.5f * float(x), -3.75f + 0.5f * float(y)));
+      EXPECT_EQ(at(by_point, x, y), r * r + 9.0f <= 16.0f ? 1.0f : 0.0f);
+      EXPECT_EQ(at(by_spot, x, y), r <= 3.0f ? 1.0f : 0.0f);
+      reached_by_point += at(by_point, x, y) == 1.0f;
+      reached_by_spot += at(by_spot, x, y) == 1.0f;
+    }
+  EXPECT_GT(reached_by_point, 0u);
+  EXPECT_LT(reached_by_point, reached_by_spot);
+}
+
 TEST(EmbreeTracer, RayStartsAtSharedNormalOffset) {
   engine::Registry reg;
   reference::add_mesh_entity(reg, reference::make_quad_y(1.0f, glm::vec2(-1.0f), glm::vec2(1.0f)));

@@ -1,6 +1,7 @@
 #include "reference/embree_tracer.hpp"
 
 #include <embree3/rtcore.h>
+#include <shared/local_light.h>
 #include <shared/shadow_common.h>
 
 #include <algorithm>
@@ -373,6 +374,58 @@ std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points,
     }
   });
   return out;
+}
+
+namespace {
+// The pixels' shared rule for a local light: -1 background, 0 unreached or turned away, else the lit
+// fraction of `samples` rays (the μQuad's, or the shading point's alone).
+template <typename Occluded>
+std::vector<float> local_visibility(const ShadingPoints& points, const LocalLight& light, uint32_t samples,
+                                    Occluded occluded) {
+  std::vector<float> out(points.pixel_count(), -1.0f);
+  const glm::vec2 viewport{float(points.width), float(points.height)};
+  for_each_row(points.height, [&](uint32_t y) {
+    for (uint32_t x = 0; x < points.width; ++x) {
+      const size_t i = points.index(x, y);
+      if (!points.covered(i)) continue;
+      const glm::vec3 p(points.position[i]);
+      const glm::vec3 n(points.normal[i]);
+      if (!gpu_shared::local_light_reaches(light.position, light.range, light.spot_direction, light.cos_outer,
+                                           light.spot, p) ||
+          !gpu_shared::faces_local_light(n, p, light.position)) {
+        out[i] = 0.0f;
+        continue;
+      }
+      glm::vec3 corner[4];
+      if (samples == 32)
+        for (int k = 0; k < 4; ++k)
+          corner[k] = gpu_shared::micro_quad_corner(glm::vec2(float(x + (k & 1)), float(y + (k >> 1))), viewport,
+                                                    points.inv_view_proj, p, n);
+      uint32_t lit = 0;
+      for (uint32_t s = 0; s < samples; ++s) {
+        const glm::vec3 q = samples == 32 ? gpu_shared::micro_quad_blend(corner[0], corner[1], corner[2], corner[3],
+                                                                         gpu_shared::kSamplePattern[s])
+                                          : p;
+        const glm::vec3 origin = gpu_shared::shadow_ray_origin(q, n);
+        const float length = gpu_shared::local_shadow_ray_length(origin, light.position);
+        lit += length <= 0.0f || !occluded(origin, light.position - origin, length) ? 1u : 0u;
+      }
+      out[i] = float(lit) / float(samples);
+    }
+  });
+  return out;
+}
+}  // namespace
+
+std::vector<float> EmbreeTracer::visibility_1spp(const ShadingPoints& points, const LocalLight& light) const {
+  check_points(points);
+  return local_visibility(points, light, 1, [&](glm::vec3 o, glm::vec3 d, float t) { return occluded_within(o, d, t); });
+}
+
+std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points, const LocalLight& light) const {
+  check_points(points);
+  return local_visibility(points, light, gpu_shared::kSamplesPerPixel,
+                          [&](glm::vec3 o, glm::vec3 d, float t) { return occluded_within(o, d, t); });
 }
 
 }  // namespace reference

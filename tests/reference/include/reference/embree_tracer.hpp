@@ -28,6 +28,15 @@
 
 namespace reference {
 
+// A spot or point light, by the conventions of shared/local_light.h.
+struct LocalLight {
+  glm::vec3 position{0.0f};
+  float range = 1.0f;                           // > 0
+  bool spot = false;                            // else a point light
+  glm::vec3 spot_direction{0.0f, -1.0f, 0.0f};  // unit, the direction the light travels
+  float cos_outer = -1.0f;                      // cosine of the spot's outer cone
+};
+
 class EmbreeTracer {
  public:
   // Takes every entity with Mesh + Transform, skipping those whose ShadowCaster says
@@ -52,6 +61,13 @@ class EmbreeTracer {
   // Throws std::invalid_argument when it is zero or the buffers do not match width * height.
   std::vector<float> visibility_1spp(const ShadingPoints& points, glm::vec3 light_direction) const;
   std::vector<float> visibility_32spp(const ShadingPoints& points, glm::vec3 light_direction) const;
+
+  // The same for a spot or point light (shared/local_light.h): a covered pixel the light does not
+  // reach (range, cone), or whose geometric normal turns away from it, is 0 (tested at its shading
+  // point); otherwise each ray runs from shadow_ray_origin(sample, n) toward the light's position and
+  // is occluded by a hit within local_shadow_ray_length. The G-buffer's sun-facing decision is not used.
+  std::vector<float> visibility_1spp(const ShadingPoints& points, const LocalLight& light) const;
+  std::vector<float> visibility_32spp(const ShadingPoints& points, const LocalLight& light) const;
 
  private:
   struct Impl;
