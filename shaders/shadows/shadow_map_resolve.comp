@@ -2,6 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shadows.h"
 #include "shadow_common.h"
+#include "local_light.h"
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = SM_RESOLVE_BINDING_PARAMS) uniform Params { ShadowMapResolveParams params; };
@@ -10,7 +11,8 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_MAP) uniform sampler2D shadow_map;
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
 
-// One tap, no filtering: the baseline whose aliasing the other techniques remove.
+// One tap, no filtering: the baseline whose aliasing the other techniques remove. A spot light's map
+// is a perspective one from the light; points it does not reach or that turn away from it are 0.
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
@@ -19,8 +21,14 @@ void main() {
   vec4 normal = imageLoad(geometric_normal, pixel);
   vec3 n = normal.xyz;
   float visibility = 0.0;
-  if (faces_light(normal)) {
+  bool spot = params.light_position.w > 0.0;
+  bool facing = spot ? local_light_reaches(params.light_position.xyz, params.light_position.w, params.light_direction.xyz,
+                                           params.light_cone.x, true, p.xyz) &&
+                           faces_local_light(n, p.xyz, params.light_position.xyz)
+                     : faces_light(normal);
+  if (facing) {
     vec4 light = params.light_view_projection * vec4(shadow_ray_origin(p.xyz, n), 1.0);
+    light.xyz /= light.w;  // 1 for the sun's orthographic map
     vec2 uv = light.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) {
       visibility = 1.0;

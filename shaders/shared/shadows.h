@@ -13,6 +13,8 @@ struct ShadowMapPush {
 struct ShadowMapResolveParams {
   mat4 light_view_projection;
   vec4 light_direction;  // xyz travel direction
+  vec4 light_position;   // xyz: a spot light's position; w: its range (0: the sun)
+  vec4 light_cone;       // x: cosine of the spot light's outer cone
   vec4 bias;             // x: constant depth bias
   uvec4 extent;          // xy render size, zw map size
 };
@@ -36,6 +38,6 @@ SHARED_END
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::ShadowMapPush) == 128);
 static_assert(sizeof(gpu_shared::AlphaDepthPush) == 80);
-static_assert(sizeof(gpu_shared::ShadowMapResolveParams) == 64 + 48);
+static_assert(sizeof(gpu_shared::ShadowMapResolveParams) == 64 + 80);
 #endif
 #endif

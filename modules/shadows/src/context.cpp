@@ -255,9 +255,13 @@ void ContextImpl::validate(const FrameDesc& f) const {
     throw Error("shadows: FrameDesc.lights[0].direction must be a unit vector");
   if (light.type != LightType::Directional) {
     const char* kind = light.type == LightType::Spot ? "spot" : "point";
-    if (settings_.technique != Technique::RayTraced)
-      throw Error(std::string("shadows: FrameDesc.lights[0] is a ") + kind +
-                  " light: this version shadows local lights with Settings.technique rt only");
+    const bool shadowed = settings_.technique == Technique::RayTraced ||
+                          (settings_.technique == Technique::ShadowMap && light.type == LightType::Spot);
+    if (!shadowed)
+      throw Error(std::string("shadows: FrameDesc.lights[0] is a ") + kind + " light: this version shadows " +
+                  (light.type == LightType::Spot ? "spot lights with Settings.technique rt or sm"
+                                                 : "point lights with Settings.technique rt") +
+                  " only");
     if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))
       throw Error("shadows: FrameDesc.lights[0].position must be finite");
     if (!(light.range > 0.0f) || !std::isfinite(light.range))

@@ -1,7 +1,11 @@
 #include "light_space.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "shared/local_light.h"
 #include "shared/shadows.h"
 
 namespace shadows::detail {
@@ -11,6 +15,15 @@ glm::mat4 light_view_matrix(const glm::vec3& light_direction) {
   // Any up vector not parallel to the light works; the choice only rotates the grid about the light.
   const glm::vec3 up = std::abs(forward.y) > 0.99f ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
   return glm::lookAtRH(glm::vec3(0.0f), forward, up);
+}
+
+glm::mat4 spot_view_projection(const View& view) {
+  const glm::mat4 rotation = light_view_matrix(view.light_direction);
+  const glm::mat4 light_view = rotation * glm::translate(glm::mat4(1.0f), -view.light_position);
+  // The cone's half angle from its cosine, widened a little so its rim is inside the map.
+  const float half_angle = std::acos(std::clamp(view.light_cos_outer, -1.0f, 1.0f)) * 1.02f;
+  const float near_plane = std::max(gpu_shared::kLocalLightRadius, 1.0e-3f * view.light_range);
+  return glm::perspectiveRH_ZO(2.0f * std::min(half_angle, 1.55f), 1.0f, near_plane, view.light_range) * light_view;
 }
 
 glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box, float margin) {

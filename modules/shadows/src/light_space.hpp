@@ -18,6 +18,10 @@ glm::mat4 light_view_matrix(const glm::vec3& light_direction);
 // Orthographic projection (Vulkan depth 0..1, 0 nearest the light) enclosing `box` seen through
 // `light_view`, with `margin` world units of slack on every side.
 glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box, float margin = 0.0f);
+// A spot light's world -> Vulkan clip transform (depth 0 near .. 1 at its range): a square perspective
+// frustum from its position along its direction that holds its outer cone. Casters nearer than the
+// near plane (a thousandth of the range, at least the light's radius) are clipped.
+glm::mat4 spot_view_projection(const View& view);
 
 // World bounds of every shadow-casting draw.
 engine::Aabb caster_bounds(const Frame& frame);

@@ -47,10 +47,11 @@ void ShadowMapPass::ensure_map(VkCommandBuffer cmd, uint32_t size) {
 void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
   ensure_map(frame.cmd, settings.size);
   VkCommandBuffer cmd = frame.cmd;
-  const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
-  const engine::Aabb bounds = caster_bounds(frame);
-  const glm::mat4 light_vp =
-      fit_orthographic(light_view, bounds, 0.01f * glm::length(bounds.extent())) * light_view;
+  const glm::mat4 light_vp = frame.view.local_light ? spot_view_projection(frame.view) : [&] {
+    const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
+    const engine::Aabb bounds = caster_bounds(frame);
+    return fit_orthographic(light_view, bounds, 0.01f * glm::length(bounds.extent())) * light_view;
+  }();
 
   {
     ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_depth");
@@ -70,6 +71,10 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
     gpu_shared::ShadowMapResolveParams p{};
     p.light_view_projection = light_vp;
     p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
+    if (frame.view.local_light) {
+      p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
+      p.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, 0.0f, 0.0f);
+    }
     p.bias = glm::vec4(settings.constant_bias, 0.0f, 0.0f, 0.0f);
     p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
     record_update(ctx_, cmd, params_, &p, sizeof(p));
