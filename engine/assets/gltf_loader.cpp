@@ -111,6 +111,7 @@ class Loader {
   Material material_for(int material_index, const std::string& what);
   std::shared_ptr<const Texture> texture_for(int texture_index, int material_index);
   void add_nodes(Scene& scene);
+  void add_light(Registry& r, Entity node_entity, int node_index, const tinygltf::Value& extension);
   void add_views(Scene& scene);
 
   std::filesystem::path path_;
@@ -120,6 +121,7 @@ class Loader {
   tinygltf::Model model_;
   std::map<std::pair<int, int>, std::shared_ptr<const MeshData>> primitive_cache_;
   std::vector<std::pair<Entity, int>> camera_nodes_;  // node entity, camera index
+  std::vector<Entity> sun_nodes_;                     // nodes holding a directional light
   size_t skipped_primitives_ = 0;
   size_t skipped_cameras_ = 0;
   std::map<int, std::shared_ptr<const Texture>> texture_cache_;  // by glTF texture index (null: unusable)
@@ -611,7 +613,51 @@ void Loader::add_nodes(Scene& scene) {
         ++skipped_cameras_;
       }
     }
+    if (const auto light = node.extensions.find("KHR_lights_punctual"); light != node.extensions.end())
+      add_light(r, e, node_index, light->second);
     for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.push_back({*c, e});
+  }
+}
+
+// A glTF light without a range reaches infinitely; shadows need a finite one: the distance where its
+// intensity over distance squared falls to 1/256 (an 8-bit step), at least 1.
+float default_light_range(float intensity) { return std::max(1.0f, std::sqrt(256.0f * intensity)); }
+
+// KHR_lights_punctual: the node's light becomes a SpotLight or PointLight on the node's entity (its
+// Transform places and aims it); a directional light sets the scene's sun (add_views).
+void Loader::add_light(Registry& r, Entity node_entity, int node_index, const tinygltf::Value& extension) {
+  const std::string where = "node " + std::to_string(node_index) + " KHR_lights_punctual";
+  if (!extension.IsObject() || !extension.Has("light") || !extension.Get("light").IsNumber())
+    fail(where + ": \"light\" must be a light index");
+  const int index = extension.Get("light").GetNumberAsInt();
+  if (index < 0 || size_t(index) >= model_.lights.size())
+    fail(where + ": light " + std::to_string(index) + " out of range (" + std::to_string(model_.lights.size()) +
+         " lights)");
+  const tinygltf::Light& l = model_.lights[size_t(index)];
+  const std::string label = "light " + std::to_string(index);
+  glm::vec3 color(1.0f);
+  if (!l.color.empty()) {
+    if (l.color.size() != 3 || !std::all_of(l.color.begin(), l.color.end(), [](double c) { return std::isfinite(c); }))
+      fail(label + " color must be 3 finite numbers");
+    color = glm::vec3(float(l.color[0]), float(l.color[1]), float(l.color[2]));
+    if (glm::any(glm::lessThan(color, glm::vec3(0.0f)))) fail(label + " color must not be negative");
+  }
+  if (!std::isfinite(l.intensity) || l.intensity < 0.0) fail(label + " intensity must be finite and >= 0");
+  if (!std::isfinite(l.range) || l.range < 0.0) fail(label + " range must be finite and >= 0");
+  const float intensity = float(l.intensity);
+  const float range = l.range > 0.0 ? float(l.range) : default_light_range(intensity);
+  if (l.type == "directional") {
+    sun_nodes_.push_back(node_entity);
+  } else if (l.type == "point") {
+    r.emplace<PointLight>(node_entity, PointLight{color, intensity, range});
+  } else if (l.type == "spot") {
+    const double inner = l.spot.innerConeAngle, outer = l.spot.outerConeAngle;
+    if (!(inner >= 0.0 && inner < outer && outer <= glm::half_pi<double>() + 1e-6))
+      fail(label + " cones must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2 (got " + std::to_string(inner) +
+           ", " + std::to_string(outer) + ")");
+    r.emplace<SpotLight>(node_entity, SpotLight{color, intensity, range, float(inner), float(outer)});
+  } else {
+    fail(label + " has type \"" + l.type + "\" (directional, point or spot)");
   }
 }
 
@@ -644,7 +690,15 @@ void Loader::add_views(Scene& scene) {
   r.emplace<Camera>(scene.camera, cam);
   scene.light = r.create();
   r.emplace<Name>(scene.light, Name{"sun"});
-  r.emplace<DirectionalLight>(scene.light);
+  DirectionalLight sun;
+  // A directional light in the file is the sun (the first, if several): it travels down its node's -Z.
+  glm::vec3 sun_direction = kDefaultSun;
+  if (!sun_nodes_.empty()) {
+    const glm::vec3 forward = -glm::vec3(r.get<Transform>(sun_nodes_.front()).world[2]);
+    if (glm::length(forward) > 1e-6f) sun_direction = glm::normalize(forward);
+    sun.direction = sun_direction;
+  }
+  r.emplace<DirectionalLight>(scene.light, sun);
 
   for (const auto& [node_entity, camera_index] : camera_nodes_) {
     const tinygltf::Camera& c = model_.cameras[size_t(camera_index)];
@@ -657,7 +711,7 @@ void Loader::add_views(Scene& scene) {
     view.name = !c.name.empty() ? c.name : r.get<Name>(node_entity).value;
     view.eye = eye;
     view.target = eye + forward * (0.5f * diag);  // camera roll is not kept: views are eye + target
-    view.light_direction = kDefaultSun;
+    view.light_direction = sun_direction;
     const double yfov = c.perspective.yfov;
     view.vertical_fov = (std::isfinite(yfov) && yfov > 1e-3 && yfov < glm::pi<double>()) ? float(yfov) : kDefaultFov;
     scene.views.push_back(view);
@@ -667,13 +721,13 @@ void Loader::add_views(Scene& scene) {
     const float radius = 0.5f * diag;
     const float distance = 1.05f * radius / std::sin(0.5f * kDefaultFov);
     const glm::vec3 direction = glm::normalize(glm::vec3(0.6f, 0.75f, 0.8f));
-    scene.views.push_back({"overview", center + direction * distance, center, kDefaultSun, kDefaultFov});
+    scene.views.push_back({"overview", center + direction * distance, center, sun_direction, kDefaultFov});
 
     const glm::vec3 axis = ext.x >= ext.z ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 0.0f, 1.0f);
     const float along = std::max(ext.x, ext.z);
     glm::vec3 eye{center.x, bounds.min.y + 0.12f * ext.y, center.z};
     eye -= axis * (0.25f * along);
-    scene.views.push_back({"inside", eye, eye + axis * (0.5f * along), kDefaultSun, kDefaultFov});
+    scene.views.push_back({"inside", eye, eye + axis * (0.5f * along), sun_direction, kDefaultFov});
   }
 }
 

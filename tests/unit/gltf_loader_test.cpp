@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <nlohmann/json.hpp>
+
 #include "engine/assets/scene.hpp"
 #include "engine/core/transform_system.hpp"
 
@@ -341,3 +343,95 @@ TEST(SceneLoading, Sponza) {
 }
 
 }  // namespace
+
+namespace {
+// triangle.gltf with KHR_lights_punctual lights on new root nodes: `lights` is the extension's light
+// array, `nodes` the nodes that hold them (each {"light": index, plus any node fields}).
+fs::path write_with_lights(const TempDir& dir, const nlohmann::json& lights, const nlohmann::json& nodes) {
+  std::ifstream in(test_file("triangle.gltf"));
+  nlohmann::json doc = nlohmann::json::parse(in);
+  doc["extensionsUsed"] = {"KHR_lights_punctual"};
+  doc["extensions"]["KHR_lights_punctual"]["lights"] = lights;
+  for (const auto& node : nodes) {
+    nlohmann::json n = node;
+    n["extensions"]["KHR_lights_punctual"] = {{"light", n["light"]}};
+    n.erase("light");
+    doc["scenes"][0]["nodes"].push_back(doc["nodes"].size());
+    doc["nodes"].push_back(n);
+  }
+  const fs::path file = dir.path() / "lights.gltf";
+  std::ofstream(file) << doc.dump(1);
+  return file;
+}
+}  // namespace
+
+// A spot and a point light placed by their nodes (the spot shines down its node's -Z, here turned to
+// point straight down), a directional light as the sun, and a light without a range given one.
+TEST(GltfLoader, LoadsPunctualLights) {
+  TempDir dir;
+  const nlohmann::json lights = {
+      {{"type", "spot"}, {"color", {1.0, 0.5, 0.25}}, {"intensity", 40.0}, {"range", 12.0},
+       {"spot", {{"innerConeAngle", 0.3}, {"outerConeAngle", 0.6}}}},
+      {{"type", "point"}, {"intensity", 4.0}},
+      {{"type", "directional"}, {"intensity", 2.0}}};
+  // -90 degrees about x turns local -Z into world -Y.
+  const double s = std::sqrt(0.5);
+  const nlohmann::json nodes = {
+      {{"name", "lamp"}, {"light", 0}, {"translation", {1.0, 4.0, 2.0}}, {"rotation", {-s, 0.0, 0.0, s}}},
+      {{"name", "bulb"}, {"light", 1}, {"translation", {-3.0, 2.0, 0.0}}},
+      {{"name", "sun"}, {"light", 2}, {"rotation", {-s, 0.0, 0.0, s}}}};
+  auto scene = load_gltf_scene(write_with_lights(dir, lights, nodes));
+  Registry& r = scene->registry;
+  ASSERT_EQ(r.count<SpotLight>(), 1u);
+  ASSERT_EQ(r.count<PointLight>(), 1u);
+  r.each<SpotLight, Transform>([&](Entity, SpotLight& spot, Transform& t) {
+    EXPECT_NEAR(glm::distance(glm::vec3(t.world[3]), glm::vec3(1.0f, 4.0f, 2.0f)), 0.0f, 1e-5f);
+    EXPECT_NEAR(glm::distance(-glm::vec3(t.world[2]), glm::vec3(0.0f, -1.0f, 0.0f)), 0.0f, 1e-5f);
+    EXPECT_EQ(spot.color, glm::vec3(1.0f, 0.5f, 0.25f));
+    EXPECT_FLOAT_EQ(spot.intensity, 40.0f);
+    EXPECT_FLOAT_EQ(spot.range, 12.0f);
+    EXPECT_FLOAT_EQ(spot.inner_cone, 0.3f);
+    EXPECT_FLOAT_EQ(spot.outer_cone, 0.6f);
+  });
+  r.each<PointLight, Transform>([&](Entity, PointLight& point, Transform& t) {
+    EXPECT_NEAR(glm::distance(glm::vec3(t.world[3]), glm::vec3(-3.0f, 2.0f, 0.0f)), 0.0f, 1e-5f);
+    EXPECT_FLOAT_EQ(point.range, 32.0f);  // sqrt(256 * 4): no range in the file
+  });
+  const glm::vec3 sun = r.get<DirectionalLight>(scene->light).direction;
+  EXPECT_NEAR(glm::distance(sun, glm::vec3(0.0f, -1.0f, 0.0f)), 0.0f, 1e-5f);
+  for (const SceneView& v : scene->views) EXPECT_NEAR(glm::distance(v.light_direction, sun), 0.0f, 1e-5f);
+}
+
+// Each malformed light is refused with one line naming the file, the light and the problem.
+TEST(GltfLoader, MalformedLightsAreRefusedInOneLine) {
+  const nlohmann::json spot = {{"type", "spot"}, {"spot", {{"innerConeAngle", 0.3}, {"outerConeAngle", 0.6}}}};
+  struct Case {
+    nlohmann::json light;
+    nlohmann::json light_index;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {{{"type", "area"}}, 0, "light 0 has type \"area\""},
+      {{{"type", "point"}, {"range", -1.0}}, 0, "light 0 range must be finite and >= 0"},
+      {{{"type", "point"}, {"intensity", -2.0}}, 0, "light 0 intensity must be finite and >= 0"},
+      {{{"type", "point"}, {"color", {1.0, 1.0}}}, 0, "light 0 color must be 3 finite numbers"},
+      {{{"type", "spot"}, {"spot", {{"innerConeAngle", 0.6}, {"outerConeAngle", 0.3}}}}, 0, "light 0 cones"},
+      {{{"type", "spot"}, {"spot", {{"innerConeAngle", 0.1}, {"outerConeAngle", 2.0}}}}, 0, "light 0 cones"},
+      {spot, 3, "light 3 out of range (1 lights)"},
+      {spot, "first", "\"light\" must be a light index"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.expected);
+    TempDir dir;
+    try {
+      load_gltf_scene(write_with_lights(dir, nlohmann::json::array({c.light}),
+                                        nlohmann::json::array({{{"name", "lamp"}, {"light", c.light_index}}})));
+      ADD_FAILURE() << "loaded";
+    } catch (const SceneError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("lights.gltf"), std::string::npos) << what;
+      EXPECT_NE(what.find(c.expected), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+}

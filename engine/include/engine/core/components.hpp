@@ -126,6 +126,24 @@ struct DirectionalLight {
   float intensity = 3.0f;
 };
 
+// A spot light at the entity's world position, shining down its local -Z axis (glTF's
+// KHR_lights_punctual convention). Intensity in candela as glTF; range in world units (> 0: shadows
+// need a finite reach); cone half-angles in radians, 0 <= inner_cone < outer_cone <= pi/2.
+struct SpotLight {
+  glm::vec3 color{1.0f};
+  float intensity = 10.0f;
+  float range = 10.0f;
+  float inner_cone = 0.0f;
+  float outer_cone = 0.7853982f;
+};
+
+// A point light at the entity's world position; units as SpotLight.
+struct PointLight {
+  glm::vec3 color{1.0f};
+  float intensity = 10.0f;
+  float range = 10.0f;
+};
+
 // Whether this mesh enters the conservative shadow map z-prepass.
 enum class CsmChoice : uint32_t { Off = 0, On = 1, Auto = 2 };
 
