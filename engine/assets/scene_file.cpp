@@ -9,6 +9,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtx/matrix_decompose.hpp>
+#include <glm/gtx/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
 #include "engine/assets/procedural_scenes.hpp"
@@ -369,6 +370,40 @@ SceneView read_view(const Reader& rd, const json& v, const std::string& f, const
 
 }  // namespace
 
+// A spot or point light of a scene file: {"type": "spot"|"point", "position", "direction" (spot: the
+// way it shines), "range", "inner_cone_deg"/"outer_cone_deg" (spot: half angles), "color",
+// "intensity", "name"}, an entity placed (and, for a spot, aimed down its local -Z) by its Transform.
+void add_light(Scene& scene, const Reader& rd, const json& j, const std::string& field) {
+  rd.only_keys(j, {"type", "name", "position", "direction", "range", "inner_cone_deg", "outer_cone_deg", "color",
+                   "intensity"},
+               field);
+  const std::string type = rd.string(rd.required(j, "type", field), field + ".type");
+  if (type != "spot" && type != "point") rd.fail(field + ".type", "expected \"spot\" or \"point\"");
+  Registry& r = scene.registry;
+  const Entity e = r.create();
+  r.emplace<Name>(e, Name{j.contains("name") ? rd.string(j.at("name"), field + ".name") : type + " light"});
+  Transform t;
+  t.translation = rd.vec3(rd.required(j, "position", field), field + ".position");
+  const glm::vec3 color = j.contains("color") ? rd.vec3(j.at("color"), field + ".color") : glm::vec3(1.0f);
+  if (glm::any(glm::lessThan(color, glm::vec3(0.0f)))) rd.fail(field + ".color", "must not be negative");
+  const float intensity = rd.number_or(j, "intensity", field, 10.0f, 0.0f, 1e6f);
+  const float range = rd.number(rd.required(j, "range", field), field + ".range", 1e-3f, 1e5f);
+  if (type == "point") {
+    r.emplace<PointLight>(e, PointLight{color, intensity, range});
+  } else {
+    glm::vec3 direction = rd.vec3(rd.required(j, "direction", field), field + ".direction");
+    if (glm::length(direction) < 1e-6f) rd.fail(field + ".direction", "must not be zero");
+    direction = glm::normalize(direction);
+    // The rotation taking local -Z onto the direction.
+    t.rotation = glm::rotation(glm::vec3(0.0f, 0.0f, -1.0f), direction);
+    const float inner = rd.number_or(j, "inner_cone_deg", field, 0.0f, 0.0f, 90.0f);
+    const float outer = rd.number_or(j, "outer_cone_deg", field, 45.0f, 0.0f, 90.0f);
+    if (!(inner < outer)) rd.fail(field + ".inner_cone_deg", "must be less than outer_cone_deg");
+    r.emplace<SpotLight>(e, SpotLight{color, intensity, range, glm::radians(inner), glm::radians(outer)});
+  }
+  r.emplace<Transform>(e, t);
+}
+
 std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path, Detail detail) {
   const Reader rd(path);
   std::ifstream in(path);
@@ -382,7 +417,7 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path, Detail
       if (c == '\n') c = ' ';
     throw SceneError(path.string() + ": not valid JSON (" + what + ")");
   }
-  rd.only_keys(doc, {"name", "description", "sun", "camera", "player", "views", "objects"}, "(top level)");
+  rd.only_keys(doc, {"name", "description", "sun", "camera", "player", "views", "objects", "lights"}, "(top level)");
   auto scene = std::make_unique<Scene>();
   scene->name = doc.contains("name") ? rd.string(doc.at("name"), "name") : path.stem().string();
 
@@ -423,6 +458,11 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path, Detail
   scene->light = r.create();
   r.emplace<Name>(scene->light, Name{"sun"});
   r.emplace<DirectionalLight>(scene->light, light);
+  if (doc.contains("lights")) {
+    const json& lights = doc.at("lights");
+    if (!lights.is_array()) rd.fail("lights", "expected an array");
+    for (size_t i = 0; i < lights.size(); ++i) add_light(*scene, rd, lights[i], "lights[" + std::to_string(i) + "]");
+  }
   update_world_transforms(r);
   scene->apply_view(0);
   update_world_transforms(r);

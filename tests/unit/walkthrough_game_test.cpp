@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "collision.hpp"
 #include "dynamic_resolution.hpp"
@@ -225,3 +226,50 @@ TEST(DynamicResolution, ShrinksWhenSlowGrowsWhenFastOffWhenDisabled) {
 }
 
 }  // namespace
+
+// A level's "lights": a spot light aimed by its direction (its entity's local -Z) and a point light;
+// a malformed light is refused in one line naming its field.
+TEST(SceneFile, LoadsSpotAndPointLightsAndRefusesBadOnes) {
+  const std::string path = (std::filesystem::temp_directory_path() / "scene_file_lights_test.json").string();
+  std::ifstream in(kContent + "test_levels/wall.json");
+  nlohmann::json level = nlohmann::json::parse(in);
+  level["lights"] = {{{"type", "spot"}, {"name", "lamp"}, {"position", {0, 4, 0}}, {"direction", {0, -1, 0}},
+                      {"range", 12}, {"inner_cone_deg", 20}, {"outer_cone_deg", 35}, {"intensity", 50}},
+                     {{"type", "point"}, {"position", {3, 2, -1}}, {"range", 8}, {"color", {1, 0.8, 0.6}}}};
+  std::ofstream(path) << level.dump();
+  auto scene = engine::load_scene_file(path);
+  ASSERT_EQ(scene->registry.count<engine::SpotLight>(), 1u);
+  ASSERT_EQ(scene->registry.count<engine::PointLight>(), 1u);
+  scene->registry.each<engine::SpotLight, engine::Transform>([](engine::Entity, engine::SpotLight& s, engine::Transform& t) {
+    EXPECT_NEAR(glm::distance(glm::vec3(t.world[3]), glm::vec3(0, 4, 0)), 0.0f, 1e-5f);
+    EXPECT_NEAR(glm::distance(-glm::vec3(t.world[2]), glm::vec3(0, -1, 0)), 0.0f, 1e-5f);
+    EXPECT_FLOAT_EQ(s.range, 12.0f);
+    EXPECT_NEAR(s.outer_cone, glm::radians(35.0f), 1e-6f);
+  });
+  scene->registry.each<engine::PointLight, engine::Transform>([](engine::Entity, engine::PointLight& p, engine::Transform& t) {
+    EXPECT_NEAR(glm::distance(glm::vec3(t.world[3]), glm::vec3(3, 2, -1)), 0.0f, 1e-5f);
+    EXPECT_FLOAT_EQ(p.range, 8.0f);
+  });
+  const std::vector<std::pair<nlohmann::json, std::string>> bad = {
+      {{{"type", "area"}, {"position", {0, 1, 0}}, {"range", 4}}, "lights[0].type"},
+      {{{"type", "point"}, {"position", {0, 1, 0}}}, "lights[0].range: missing"},
+      {{{"type", "spot"}, {"position", {0, 1, 0}}, {"range", 4}, {"direction", {0, 0, 0}}}, "lights[0].direction"},
+      {{{"type", "spot"}, {"position", {0, 1, 0}}, {"range", 4}, {"direction", {0, -1, 0}}, {"inner_cone_deg", 50},
+        {"outer_cone_deg", 40}},
+       "lights[0].inner_cone_deg"},
+      {{{"type", "point"}, {"position", {0, 1, 0}}, {"range", 4}, {"colour", {1, 1, 1}}}, "lights[0].colour: unknown field"},
+  };
+  for (const auto& [light, expected] : bad) {
+    SCOPED_TRACE(expected);
+    level["lights"] = nlohmann::json::array({light});
+    std::ofstream(path) << level.dump();
+    try {
+      engine::load_scene_file(path);
+      ADD_FAILURE() << "loaded";
+    } catch (const engine::SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove(path);
+}
