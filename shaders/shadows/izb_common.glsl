@@ -32,9 +32,16 @@ uint izb_resolution() { return params.extent.z; }
 uint izb_samples() { return kIzbSamples; }
 bool izb_flag(uint flag) { return (kIzbFlags & flag) != 0u; }
 
-// World position -> (grid x, grid y, light depth): grid in texels of the IZB, depth in [0,1].
+// A spot light (else the sun): its grid is a perspective one from its position (izb_setup.comp), in
+// which rays toward the light run along the depth axis as the sun's do in its orthographic grid.
+bool spot_light() { return params.light_position.w > 0.0; }
+
+// World position -> (grid x, grid y, light depth): grid in texels of the IZB, depth in [0,1]. A spot
+// light's points lie in front of it (w > 0: the build takes only points it reaches, and caster
+// triangles reaching behind its near plane are traced apart, izb_triangles.comp).
 vec3 to_grid(vec3 world) {
   vec4 clip = izb.light_view_projection * vec4(world, 1.0);
+  if (spot_light()) clip.xyz /= clip.w;
   float res = float(izb_resolution());
   return vec3((clip.xy * 0.5 + 0.5) * res, clip.z);
 }
@@ -64,6 +71,7 @@ struct CasterAlpha {
   uint threshold;
   uint texture;
   vec2 uv0, uv1, uv2;
+  vec3 inv_w;  // a spot light: 1 / light-view depth of each vertex (perspective-correct barycentrics)
 };
 
 uint caster_draw(uint t) { return floatBitsToUint(casters[t].p0.w); }
@@ -72,10 +80,12 @@ CasterAlpha load_caster_alpha(uint t) {
   CasterAlpha ca;
   ca.threshold = izb_flag(IZB_FLAG_ALPHA) ? floatBitsToUint(casters[t].p1.w) : 0u;
   ca.texture = izb_flag(IZB_FLAG_ALPHA) ? floatBitsToUint(casters[t].p2.w) : 0u;
+  ca.inv_w = vec3(1.0);
   if (ca.threshold != 0u) {
     ca.uv0 = casters[t].uv01.xy;
     ca.uv1 = casters[t].uv01.zw;
     ca.uv2 = casters[t].uv2.xy;
+    if (spot_light()) ca.inv_w = vec3(grid_triangles[3u * t].w, grid_triangles[3u * t + 1u].w, grid_triangles[3u * t + 2u].w);
   }
   return ca;
 }
@@ -84,8 +94,11 @@ CasterAlpha load_caster_alpha(uint t) {
 // projection along the light in the grid-space triangle, which (the projection being parallel) are
 // those of the ray's hit on the world triangle, hence its texture coordinate there.
 // (Without IZB_FLAG_ALPHA the test compiles away: a CPU device would run it for every node otherwise.)
+// A spot light's grid is a perspective projection: the world barycentrics are the grid ones weighted
+// by each vertex's 1 / depth.
 bool caster_solid_at(CasterAlpha ca, vec3 w) {
   if (!izb_flag(IZB_FLAG_ALPHA) || ca.threshold == 0u) return true;
+  if (spot_light()) w = w * ca.inv_w / dot(w, ca.inv_w);
   return material_alpha_kept(ca.texture, ca.threshold, w.x * ca.uv0 + w.y * ca.uv1 + w.z * ca.uv2);
 }
 

@@ -19,7 +19,12 @@ PixelPoint load_surface(ivec2 pixel) {
   p.position = pos.xyz;
   vec4 normal = imageLoad(geometric_normal_image, pixel);
   p.normal = normal.xyz;
-  p.facing = faces_light(normal);
+  // A spot light: lit only where it reaches and the geometric normal faces it (local_light.h).
+  p.facing = spot_light() ? p.covered &&
+                                local_light_reaches(params.light_position.xyz, params.light_position.w,
+                                                    params.light_direction.xyz, params.light_cone.x, true, p.position) &&
+                                faces_local_light(p.normal, p.position, params.light_position.xyz)
+                          : faces_light(normal);
   p.candidate = false;
   return p;
 }

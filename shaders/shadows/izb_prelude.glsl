@@ -1,4 +1,5 @@
 #include "frame.h"
 #include "izb.h"
 #include "shadow_common.h"
+#include "local_light.h"
 #include "shadows/izb_common.glsl"

@@ -18,6 +18,56 @@ vec3 heat(float t) {
   return clamp(vec3(1.5 - abs(4.0 * t - 3.0), 1.5 - abs(4.0 * t - 2.0), 1.5 - abs(4.0 * t - 1.0)), 0.0, 1.0);
 }
 
+// A ray (t in [0, t_max] along the unit `dir`) against a world triangle, either face (Moller-Trumbore);
+// `uv` the hit's barycentrics of vertices 1 and 2.
+bool ray_hits_triangle(vec3 o, vec3 dir, float t_max, vec3 v0, vec3 v1, vec3 v2, out vec2 uv) {
+  vec3 e1 = v1 - v0, e2 = v2 - v0;
+  vec3 pv = cross(dir, e2);
+  float det = dot(e1, pv);
+  uv = vec2(0.0);
+  if (abs(det) < 1.0e-30) return false;
+  float inv = 1.0 / det;
+  vec3 tv = o - v0;
+  float u = dot(tv, pv) * inv;
+  if (u < 0.0 || u > 1.0) return false;
+  vec3 qv = cross(tv, e1);
+  float v = dot(dir, qv) * inv;
+  if (v < 0.0 || u + v > 1.0) return false;
+  float t = dot(e2, qv) * inv;
+  uv = vec2(u, v);
+  return t >= 0.0 && t <= t_max;
+}
+
+// A spot light's caster triangles that reach behind its near plane (izb_triangles.comp lists them):
+// the samples of candidate `p` they shadow, by rays toward the light in world space, as rt and the
+// reference trace them.
+uint straddler_samples(ivec2 pixel, PixelPoint p) {
+  uint count = counters[IZB_COUNTER_STRADDLERS];
+  if (count == 0u) return 0u;
+  vec3 c[4];
+  if (izb_samples() == 32u) micro_quad_corners(pixel, p, c);
+  uint bits = 0u;
+  for (uint s = 0u; s < izb_samples(); ++s) {
+    vec3 o = izb_samples() == 32u ? micro_quad_blend(c[0], c[1], c[2], c[3], kSamplePattern[s])
+                                  : shadow_ray_origin(p.position, p.normal);
+    float t_max = local_shadow_ray_length(o, params.light_position.xyz);
+    if (t_max <= 0.0) continue;
+    vec3 dir = normalize(params.light_position.xyz - o);
+    for (uint k = 0u; k < count; ++k) {
+      uint t = floatBitsToUint(grid_triangles[3u * push.triangle_count + k].x);
+      vec2 uv;
+      if (!ray_hits_triangle(o, dir, t_max, casters[t].p0.xyz, casters[t].p1.xyz, casters[t].p2.xyz, uv)) continue;
+      CasterAlpha ca = load_caster_alpha(t);
+      if (izb_flag(IZB_FLAG_ALPHA) && ca.threshold != 0u &&
+          !material_alpha_kept(ca.texture, ca.threshold, (1.0 - uv.x - uv.y) * ca.uv0 + uv.x * ca.uv1 + uv.y * ca.uv2))
+        continue;
+      bits |= 1u << s;
+      break;
+    }
+  }
+  return bits;
+}
+
 // Specialized per debug view and hybrid (a CPU driver would otherwise run every branch).
 layout(constant_id = 12) const uint kDebug = 0u;
 layout(constant_id = 13) const uint kHybrid = 0u;
@@ -41,6 +91,7 @@ void main() {
   float dist = distance(p.position, params.camera_position.xyz);
   bool beyond = false;  // past the IZB's range: the cascades' term alone
   if ((state & IZB_PIXEL_CANDIDATE) != 0u) {
+    if (spot_light() && mask != full_mask()) mask |= straddler_samples(pixel, p);
     visibility = 1.0 - float(bitCount(mask)) / float(izb_samples());
   } else if (!facing) {
     visibility = 0.0;

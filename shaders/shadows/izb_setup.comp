@@ -49,6 +49,20 @@ void main() {
   ortho[3][2] = -near_d / (far_d - near_d);
   izb.light_view_projection = ortho * params.light_view;
   izb.grid = vec4(res, 1.0 / res, size / res, empty ? 0.0 : 1.0);
+  if (spot_light()) {
+    // A spot light: a square perspective grid over its cone (x, y / depth within the tangent in
+    // params.light_cone.y); depth 0 at the near plane, 1 at its range, and w the light-view depth, so
+    // to_grid's divide leaves rays toward the light along the depth axis.
+    float t = params.light_cone.y;
+    mat4 perspective = mat4(0.0);
+    perspective[0][0] = 1.0 / t;
+    perspective[1][1] = 1.0 / t;
+    perspective[2][2] = -far_d / (far_d - near_d);
+    perspective[2][3] = -1.0;
+    perspective[3][2] = -far_d * near_d / (far_d - near_d);
+    izb.light_view_projection = perspective * params.light_view;
+    izb.grid = vec4(res, 1.0 / res, 2.0 * t / res, empty ? 0.0 : 1.0);
+  }
   // The overflow fallback's indirect dispatch: the build pass raises x as pixels overflow.
   counters[IZB_COUNTER_DISPATCH + 1u] = 1u;
   counters[IZB_COUNTER_DISPATCH + 2u] = 1u;

@@ -7,10 +7,28 @@ layout(push_constant) uniform Push { IzbComputePush push; };
 
 // Every caster triangle into grid space (texels, light depth) once per frame, after the light
 // frustum is fitted; the CSM, both traces and the fallback read these.
+// A spot light: a triangle reaching behind its near plane (where the projection folds over) or within
+// twice the light's radius of it is left out of the grid (degenerate, far outside it: every pass skips
+// it) and listed after the grid triangles, from 3 * triangle_count on; the resolve ray-tests it in
+// world space. w: 1 / light-view depth per vertex, for perspective-correct texture coordinates.
 void main() {
   uint t = gl_GlobalInvocationID.x;
   if (t >= push.triangle_count) return;
-  grid_triangles[3u * t] = vec4(to_grid(casters[t].p0.xyz), 0.0);
-  grid_triangles[3u * t + 1u] = vec4(to_grid(casters[t].p1.xyz), 0.0);
-  grid_triangles[3u * t + 2u] = vec4(to_grid(casters[t].p2.xyz), 0.0);
+  vec3 v[3] = vec3[3](casters[t].p0.xyz, casters[t].p1.xyz, casters[t].p2.xyz);
+  vec3 inv_w = vec3(1.0);
+  if (spot_light()) {
+    bool apart = false;
+    for (int i = 0; i < 3; ++i) {
+      float d = -(params.light_view * vec4(v[i], 1.0)).z;
+      apart = apart || d < params.depth_range.x || distance(v[i], params.light_position.xyz) < 2.0 * kLocalLightRadius;
+      inv_w[i] = 1.0 / max(d, 1.0e-30);
+    }
+    if (apart) {
+      for (uint i = 0u; i < 3u; ++i) grid_triangles[3u * t + i] = vec4(-1.0e9, -1.0e9, 2.0, 1.0);
+      uint k = atomicAdd(counters[IZB_COUNTER_STRADDLERS], 1u);
+      grid_triangles[3u * push.triangle_count + k] = vec4(uintBitsToFloat(t), 0.0, 0.0, 0.0);
+      return;
+    }
+  }
+  for (uint i = 0u; i < 3u; ++i) grid_triangles[3u * t + i] = vec4(to_grid(v[i]), inv_w[i]);
 }

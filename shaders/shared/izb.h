@@ -15,7 +15,7 @@ struct IzbFrame {
 
 // Per-frame constants from the CPU.
 struct IzbParams {
-  mat4 light_view;           // rotation only, looking along the light
+  mat4 light_view;           // world -> light view, looking along the light (a spot light: from its position)
   mat4 inverse_view_projection;
   vec4 light_direction;      // xyz: travel direction
   vec4 camera_position;      // xyz; w: max IZB distance from the camera (0: unlimited)
@@ -23,6 +23,8 @@ struct IzbParams {
   uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (also a specialization constant)
   uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*, also a specialization constant); z: record capacity; w: pair capacity
   uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z, w: unused
+  vec4 light_position;       // a spot light: xyz its position, w its range (0: the sun)
+  vec4 light_cone;           // a spot light: x cosine of its outer cone, y tangent of its grid's half angle
 };
 
 // (For the raster trace, depth culling and the rasterizer choice are pipeline state.)
@@ -66,6 +68,7 @@ SHARED_CONST uint IZB_COUNTER_LIT_CULLED = 17u;    // candidates the lit map pro
 SHARED_CONST uint IZB_COUNTER_LIT_RECORDS = 18u;   // lit map: tile-row records requested
 SHARED_CONST uint IZB_COUNTER_LIT_TILE_PAIRS = 19u;// lit map: (triangle, tile) pairs requested
 SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
+SHARED_CONST uint IZB_COUNTER_STRADDLERS = 23u;     // spot light: caster triangles across the near plane
 SHARED_CONST uint IZB_COUNTER_RECORD_DISPATCH = 24u;    // 3 uints: over records
 SHARED_CONST uint IZB_COUNTER_TILE_PAIR_DISPATCH = 28u; // 3 uints: over tile pairs
 SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel pairs
@@ -225,7 +228,7 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::IzbFrame) == 80);
-static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16);
+static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 2 * 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterTriangle) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterDraw) == 96);

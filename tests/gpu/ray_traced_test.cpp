@@ -4,6 +4,7 @@
 // and the one test that runs checks that reason; run `build/bin/gpu_tests --gtest_filter='*RayTraced*'`
 // on a ray tracing GPU for the comparisons. The validation layer is on either way.
 #include <cmath>
+#include <cstring>
 #include <glm/gtc/type_ptr.hpp>
 #include <shared/local_light.h>
 #include <shared/shadow_common.h>
@@ -124,13 +125,15 @@ class LocalLightTest : public RayTracedTest, public testing::WithParamInterface<
     reference::Comparison cmp;
     size_t lit = 0, shadowed = 0, occluded = 0;
   };
-  Result compare(uint32_t spp, shadows::Technique technique = shadows::Technique::RayTraced) {
+  Result compare(uint32_t spp, shadows::Technique technique = shadows::Technique::RayTraced, bool csm = false) {
     auto& r = make_renderer("contact", 0, kSize, kSize);
     shadows::Settings settings = rt(spp);
     settings.technique = technique;
+    settings.izb.csm = csm;
     module_ = shadows::install(r, settings);
     module_->set_light(GetParam().light);
-    r.render_frame(0.0f);
+    // The automatic CSM choice measures on the first frame and counts from the next.
+    for (int frame = 0; frame < (csm ? 2 : 1); ++frame) r.render_frame(0.0f);
     const auto visibility = module_->read_visibility();
     const shadows::Light& l = GetParam().light;
     reference::LocalLight light{.position = glm::make_vec3(l.position), .range = l.range};
@@ -199,6 +202,88 @@ TEST_P(LocalLightTest, ShadowMapOfASpotLightOrRefusal) {
   // Measured 0 at 128² (a map texel is smaller than a pixel's footprint here); a map that drew no
   // caster leaves 232 of 11,776 pixels lit (2 %).
   EXPECT_LE(r.cmp.mismatch_rate, 0.01) << "far more than a shadow map's aliasing";
+}
+
+// The IZB shadows a spot light in a perspective grid from it: against Embree within the sun's bounds,
+// the CSM prepass adding no false shadow; a point light it refuses in one line (rt shadows those).
+TEST_P(LocalLightTest, IzbMatchesReferenceOrRefuses) {
+  if (GetParam().light.type == shadows::LightType::Point) {
+    auto& r = make_renderer("contact", 0, 64, 64);
+    module_ = shadows::install(r, shadows::Settings{});
+    module_->set_light(GetParam().light);
+    try {
+      r.render_frame(0.0f);
+      ADD_FAILURE() << "izb drew a point light";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("point lights with Settings.technique rt"), std::string::npos) << e.what();
+    }
+    return;
+  }
+  const Result one = compare(1, shadows::Technique::Izb);
+  EXPECT_GT(one.occluded, kSize * kSize / 100);
+  EXPECT_LE(one.cmp.mismatch_rate, 0.0002) << one.cmp.mismatched << " of " << one.cmp.pixels << " pixels differ";
+  const Result thirty_two = compare(32, shadows::Technique::Izb);
+  EXPECT_LE(thirty_two.cmp.coverage_mae, 1.0 / 64.0);
+  // With every caster in the CSM prepass: no point it culls is lit in the reference.
+  const Result with_csm = compare(1, shadows::Technique::Izb, true);
+  EXPECT_EQ(with_csm.cmp.false_shadowed, 0u);
+  EXPECT_LE(with_csm.cmp.mismatch_rate, 0.0002);
+  const shadows::Stats stats = module_->stats();
+  std::printf("izb, spot light, contact view 0, %ux%u: 1 spp mismatch %.6f, 32 spp coverage MAE %.6f; izb+csm mismatch "
+              "%.6f, %llu points culled by the CSM\n",
+              kSize, kSize, one.cmp.mismatch_rate, thirty_two.cmp.coverage_mae, with_csm.cmp.mismatch_rate,
+              (unsigned long long)stats.csm_culled);
+  EXPECT_GT(stats.csm_culled, 0u);
+}
+
+// A board beside a spot light reaches behind its near plane: those triangles leave the perspective
+// grid and the resolve ray-tests them (izb_triangles.comp); the board's shadow still matches Embree.
+TEST_F(RayTracedTest, IzbSpotLightTracesTrianglesAcrossTheNearPlane) {
+  const std::string level = std::string(ENGINE_SOURCE_DIR) + "/content/test_levels/spot_board.json";
+  for (uint32_t spp : {1u, 32u}) {
+    SCOPED_TRACE(spp);
+    auto& r = make_renderer(level, 0, kSize, kSize);
+    shadows::Settings settings;
+    settings.technique = shadows::Technique::Izb;
+    settings.izb.samples_per_pixel = spp;
+    module_ = shadows::install(r, settings);
+    shadows::Light spot{.type = shadows::LightType::Spot};
+    bool found = false;
+    scene_->registry.each<engine::SpotLight, engine::Transform>([&](engine::Entity, engine::SpotLight& s, engine::Transform& t) {
+      const glm::vec3 position(t.world[3]), direction = glm::normalize(-glm::vec3(t.world[2]));
+      std::memcpy(spot.position, &position, sizeof(spot.position));
+      std::memcpy(spot.direction, &direction, sizeof(spot.direction));
+      spot.range = s.range;
+      spot.inner_cone = s.inner_cone;
+      spot.outer_cone = s.outer_cone;
+      found = true;
+    });
+    ASSERT_TRUE(found);
+    module_->set_light(spot);
+    r.render_frame(0.0f);
+    const auto visibility = module_->read_visibility();
+    reference::LocalLight light{.position = glm::make_vec3(spot.position), .range = spot.range, .spot = true,
+                                .spot_direction = glm::make_vec3(spot.direction), .cos_outer = std::cos(spot.outer_cone)};
+    reference::EmbreeTracer tracer(scene_->registry);
+    const auto points = support::capture_shading_points(r);
+    const auto truth = spp == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
+    const auto cmp = reference::compare_visibility(visibility, truth);
+    size_t occluded = 0;
+    for (size_t i = 0; i < truth.size(); ++i) {
+      const glm::vec3 p(points.position[i]), n(points.normal[i]);
+      occluded += truth[i] == 0.0f &&
+                  gpu_shared::local_light_reaches(light.position, light.range, light.spot_direction, light.cos_outer,
+                                                  true, p) &&
+                  gpu_shared::faces_local_light(n, p, light.position);
+    }
+    std::printf("izb, spot light by a board, %u spp: mismatch %.6f, coverage MAE %.6f, %zu caster-shadowed pixels\n",
+                spp, cmp.mismatch_rate, cmp.coverage_mae, occluded);
+    EXPECT_GT(occluded, kSize * kSize / 100);
+    EXPECT_LE(cmp.mismatch_rate, 0.0002) << cmp.mismatched << " of " << cmp.pixels << " pixels differ";
+    if (spp == 32) {
+      EXPECT_LE(cmp.coverage_mae, 1.0 / 64.0);
+    }
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(

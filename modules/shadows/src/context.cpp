@@ -256,10 +256,11 @@ void ContextImpl::validate(const FrameDesc& f) const {
   if (light.type != LightType::Directional) {
     const char* kind = light.type == LightType::Spot ? "spot" : "point";
     const bool shadowed = settings_.technique == Technique::RayTraced ||
-                          (settings_.technique == Technique::ShadowMap && light.type == LightType::Spot);
+                          (light.type == LightType::Spot && (settings_.technique == Technique::ShadowMap ||
+                                                              settings_.technique == Technique::Izb));
     if (!shadowed)
       throw Error(std::string("shadows: FrameDesc.lights[0] is a ") + kind + " light: this version shadows " +
-                  (light.type == LightType::Spot ? "spot lights with Settings.technique rt or sm"
+                  (light.type == LightType::Spot ? "spot lights with Settings.technique izb, rt or sm"
                                                  : "point lights with Settings.technique rt") +
                   " only");
     if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))

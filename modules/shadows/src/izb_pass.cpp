@@ -5,12 +5,15 @@
 #include <cmath>
 #include <cstring>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "backend_probe.hpp"
 #include "csm_pass.hpp"
 #include "engine/gpu/profiler.hpp"
 #include "light_space.hpp"
 #include "shared/frame.h"
 #include "shared/izb.h"
+#include "shared/local_light.h"
 
 namespace shadows::detail {
 
@@ -370,7 +373,8 @@ struct IzbPass::Impl {
       triangle_capacity = std::max<size_t>(triangle_count, 1);
       triangles = Buffer(ctx, triangle_capacity * sizeof(gpu_shared::IzbCasterTriangle),
                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb caster triangles");
-      grid_triangles = Buffer(ctx, triangle_capacity * 3 * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+      // 3 vec4 per triangle, then (spot lights) a list of the triangles traced apart.
+      grid_triangles = Buffer(ctx, triangle_capacity * 4 * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
                               "izb grid-space caster triangles");
     }
     built_table = caster_table;
@@ -550,8 +554,17 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
                      uint64_t(settings.lit_culling)})
     key = mix_key(key, v);
   const bool raster_trace_available = m.raster_trace_available();
+  // A spot light's perspective grid is traced and culled by the compute passes, which read the
+  // grid-space triangles (the raster passes' geometry stage assumes the sun's orthographic one).
+  const bool spot = frame.view.local_light;
+  if (spot && (settings.trace == PassBackend::Raster || (run_csm && settings.csm_backend == PassBackend::Raster)))
+    throw std::runtime_error("spot lights take the compute IZB trace and CSM (IzbSettings trace/csm_backend raster)");
+  if (spot && run_csm && !CsmPass::compute_available(settings.csm_test))
+    throw std::runtime_error("spot lights take the compute CSM, which CSM test " + csm_test_name(settings.csm_test) +
+                             " does not have");
   const bool use_compute_trace =
-      m.trace_probe.pick(settings.trace, raster_trace_available, true, key, frame.profiler, frame.slot) == PassBackend::Compute;
+      spot || m.trace_probe.pick(settings.trace, raster_trace_available, true, key, frame.profiler, frame.slot) ==
+                  PassBackend::Compute;
   if (!use_compute_trace && !raster_trace_available)
     throw std::runtime_error("the raster IZB trace needs geometry shaders, which " + m.ctx.device_name() +
                              " lacks (use the compute trace)");
@@ -564,8 +577,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (settings.csm_backend == PassBackend::Raster && !raster_ok)
       throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " has no raster pass on " +
                                m.ctx.device_name() + " (it needs geometry shaders)");
-    use_compute_csm = m.csm_probe.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler, frame.slot) ==
-                      PassBackend::Compute;
+    use_compute_csm = spot || m.csm_probe.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler,
+                                               frame.slot) == PassBackend::Compute;
   }
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
                             (settings.raster == ConservativeRaster::Auto && m.hardware_trace_available());
@@ -599,11 +612,21 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (!flags.empty()) record_update(m.ctx, frame.cmd, m.draw_flags, flags.data(), flags.size() * sizeof(uint32_t));
   }
 
-  // CPU side of the frustum: the light's rotation and the casters' depth range along it.
-  const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
+  // CPU side of the frustum: the light's rotation and the casters' depth range along it. A spot
+  // light: its view from its position, near where a ray inside its cone is within the light's radius
+  // (so what lies nearer never counts, local_light.h), far at its range (no point it reaches is
+  // farther, nor anything between such a point and the light).
+  glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
   const engine::Aabb depth_box = scene_bounds(frame);  // casters and receivers
   float near_d = 0.0f, far_d = 1.0f;
-  if (depth_box.valid()) {
+  float tan_half = 0.0f;
+  if (spot) {
+    light_view = light_view * glm::translate(glm::mat4(1.0f), -frame.view.light_position);
+    const float cos_outer = std::clamp(frame.view.light_cos_outer, 0.05f, 1.0f);
+    near_d = gpu_shared::kLocalLightRadius * cos_outer;
+    far_d = frame.view.light_range;
+    tan_half = std::tan(std::acos(cos_outer)) * 1.02f;  // the cone's rim inside the grid
+  } else if (depth_box.valid()) {
     float lo = std::numeric_limits<float>::max(), hi = -lo;
     for (int i = 0; i < 8; ++i) {
       glm::vec3 corner((i & 1) ? depth_box.max.x : depth_box.min.x, (i & 2) ? depth_box.max.y : depth_box.min.y,
@@ -624,7 +647,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
-  if (settings.lit_culling) flags |= gpu_shared::IZB_FLAG_LIT;
+  if (settings.lit_culling && !spot) flags |= gpu_shared::IZB_FLAG_LIT;  // the lit map is the sun's alone
   if (std::any_of(frame.draws.begin(), frame.draws.end(),
                   [](const DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
     flags |= gpu_shared::IZB_FLAG_ALPHA;
@@ -643,6 +666,10 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
                         uint32_t(std::min<uint64_t>(m.records.capacity, UINT32_MAX)),
                         uint32_t(std::min<uint64_t>(m.pairs.capacity, UINT32_MAX)));
   p.capacities = glm::uvec4(uint32_t(std::min<uint64_t>(m.tile_pairs.capacity, UINT32_MAX)), m.tiles_per_side, 0u, 0u);
+  if (spot) {
+    p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
+    p.light_cone = glm::vec4(frame.view.light_cos_outer, tan_half, 0.0f, 0.0f);
+  }
   record_update(m.ctx, cmd, m.params, &p, sizeof(p));
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, soft_distance};
 
