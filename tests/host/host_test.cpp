@@ -288,8 +288,9 @@ TEST_F(HostBadInput, NativeWorldPositionInAnotherFormat) {
   expect_refused(f, "FrameDesc.native.world_position.format");
 }
 
-// The hybrid (the default technique) does not shadow local lights in this version: refused in a line.
+// The hybrid does not shadow local lights in this version: refused in a line.
 TEST_F(HostBadInput, SpotLightRefusedByTheHybrid) {
+  module_->settings().technique = shadows::Technique::Hybrid;
   shadows::FrameDesc f = frame_;
   const shadows::Light spot{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
                             .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f, .inner_cone = 0.2f, .outer_cone = 0.5f};
