@@ -298,6 +298,16 @@ TEST_F(HostBadInput, SpotLightRefusedByTheHybrid) {
   expect_refused(f, "FrameDesc.lights[0] is a spot light");
 }
 
+TEST_F(HostBadInput, SpotLightWithTheRasterTrace) {
+  module_->settings().technique = shadows::Technique::Izb;
+  module_->settings().izb.trace = shadows::PassBackend::Raster;
+  shadows::FrameDesc f = frame_;
+  const shadows::Light spot{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
+                            .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f, .inner_cone = 0.2f, .outer_cone = 0.5f};
+  f.lights = &spot;
+  expect_refused(f, "a spot light takes the IZB's compute trace");
+}
+
 TEST_F(HostBadInput, PointLightWithoutRange) {
   module_->settings().technique = shadows::Technique::RayTraced;
   shadows::FrameDesc f = frame_;

@@ -270,6 +270,14 @@ void ContextImpl::validate(const FrameDesc& f) const {
     if (light.type == LightType::Spot &&
         !(light.inner_cone >= 0.0f && light.inner_cone < light.outer_cone && light.outer_cone <= 1.5707964f))
       throw Error("shadows: FrameDesc.lights[0] cones must satisfy 0 <= inner_cone < outer_cone <= pi/2");
+    // The IZB's perspective grid is traced and culled by its compute passes only.
+    const IzbSettings& izb = settings_.izb;
+    if (settings_.technique == Technique::Izb &&
+        (izb.trace == PassBackend::Raster ||
+         (izb.csm && (izb.csm_backend == PassBackend::Raster || izb.csm_test == CsmTest::BarycentricHw ||
+                      izb.csm_test == CsmTest::InnerHw))))
+      throw Error("shadows: a spot light takes the IZB's compute trace and compute CSM (hertel or bary): "
+                  "Settings.izb.trace/csm_backend/csm_test ask for a raster pass");
   }
   if (f.instance_count > 0 && !f.instances) throw Error("shadows: FrameDesc.instances is null with instance_count > 0");
   for (uint32_t i = 0; i < f.instance_count; ++i)
