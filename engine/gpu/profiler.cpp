@@ -56,7 +56,10 @@ void GpuProfiler::cancel_frame() {
 void GpuProfiler::begin(VkCommandBuffer cmd, const std::string& name) {
   if (!pool_ || frames_.empty()) return;
   Frame& f = frames_.back();
-  if (f.used + 2 > capacity_) return;
+  // Room for this region's two queries and the end query of every region still open around it: a
+  // region past the pool is left untimed, never written outside its segment.
+  const auto open = std::count_if(f.regions.begin(), f.regions.end(), [](const Open& r) { return r.end_query == UINT32_MAX; });
+  if (f.used + 2 + uint32_t(open) > capacity_) return;
   f.regions.push_back({name, f.first_query + f.used++});
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, f.regions.back().begin_query);
   if (std::find(order_.begin(), order_.end(), name) == order_.end()) order_.push_back(name);

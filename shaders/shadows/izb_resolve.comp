@@ -128,6 +128,11 @@ void main() {
   }
   if (!p.covered) return;
   if (beyond && kHybrid == 0u) return;  // beyond the IZB: the term already there stays
+  // One face of a point light (six overlapping cones that cover every direction): only the points in
+  // its cone are this pass's; the others keep what the other faces write.
+  if (params.light_cone.z > 0.0 && dot(p.position - params.light_position.xyz, params.light_direction.xyz) <
+                                       params.light_cone.x * length(p.position - params.light_position.xyz))
+    return;
   imageStore(shadow_term, pixel, vec4(visibility));
 
   if (kDebug == kDebugVisibility && (state & IZB_PIXEL_CANDIDATE) != 0u) {

@@ -24,7 +24,7 @@ struct IzbParams {
   uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*, also a specialization constant); z: record capacity; w: pair capacity
   uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z, w: unused
   vec4 light_position;       // a spot light: xyz its position, w its range (0: the sun)
-  vec4 light_cone;           // a spot light: x cosine of its outer cone, y tangent of its grid's half angle
+  vec4 light_cone;           // a spot light: x cosine of its outer cone, y tangent of its grid's half angle; z 1: a face of a point light
 };
 
 // (For the raster trace, depth culling and the rasterizer choice are pipeline state.)

@@ -119,6 +119,26 @@ TEST_F(GpuTest, HeadlessImageShowsLitGeometry) {
 }
 
 // The profiler's history is bounded: a game left running keeps the last frames, not every frame.
+// More nested regions than the pool holds: the ones past it go untimed, and no query is written outside
+// the frame's segment (the validation layer would report it) nor left without its end.
+TEST_F(GpuTest, ProfilerLeavesRegionsPastItsPoolUntimed) {
+  engine::gpu::GpuProfiler profiler(*ctx_, 2, 8);
+  ASSERT_TRUE(profiler.enabled());
+  ctx_->immediate_submit([&](VkCommandBuffer cmd) {
+    profiler.begin_frame(cmd);
+    profiler.begin(cmd, "outer");
+    profiler.begin(cmd, "middle");
+    profiler.begin(cmd, "inner");
+    profiler.end(cmd, "inner");
+    profiler.end(cmd, "middle");
+    profiler.end(cmd, "outer");
+  });
+  profiler.collect();
+  EXPECT_EQ(profiler.history("outer").size(), 1u);
+  EXPECT_EQ(profiler.history("middle").size(), 1u);  // two queries each: the pool of 4 holds outer's and middle's
+  EXPECT_EQ(profiler.history("inner").size(), 0u);
+}
+
 TEST_F(GpuTest, ProfilerHistoryKeepsOnlyTheLastFrames) {
   engine::gpu::GpuProfiler profiler(*ctx_, 4, 3);
   ASSERT_TRUE(profiler.enabled());

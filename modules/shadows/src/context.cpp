@@ -255,13 +255,12 @@ void ContextImpl::validate(const FrameDesc& f) const {
     throw Error("shadows: FrameDesc.lights[0].direction must be a unit vector");
   if (light.type != LightType::Directional) {
     const char* kind = light.type == LightType::Spot ? "spot" : "point";
-    const bool shadowed = settings_.technique == Technique::RayTraced ||
-                          (light.type == LightType::Spot && (settings_.technique == Technique::ShadowMap ||
-                                                              settings_.technique == Technique::Izb));
+    const bool shadowed = settings_.technique == Technique::RayTraced || settings_.technique == Technique::Izb ||
+                          (light.type == LightType::Spot && settings_.technique == Technique::ShadowMap);
     if (!shadowed)
       throw Error(std::string("shadows: FrameDesc.lights[0] is a ") + kind + " light: this version shadows " +
                   (light.type == LightType::Spot ? "spot lights with Settings.technique izb, rt or sm"
-                                                 : "point lights with Settings.technique rt") +
+                                                 : "point lights with Settings.technique izb or rt") +
                   " only");
     if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))
       throw Error("shadows: FrameDesc.lights[0].position must be finite");
@@ -270,13 +269,13 @@ void ContextImpl::validate(const FrameDesc& f) const {
     if (light.type == LightType::Spot &&
         !(light.inner_cone >= 0.0f && light.inner_cone < light.outer_cone && light.outer_cone <= 1.5707964f))
       throw Error("shadows: FrameDesc.lights[0] cones must satisfy 0 <= inner_cone < outer_cone <= pi/2");
-    // The IZB's perspective grid is traced and culled by its compute passes only.
+    // The IZB's perspective grids are traced and culled by its compute passes only.
     const IzbSettings& izb = settings_.izb;
     if (settings_.technique == Technique::Izb &&
         (izb.trace == PassBackend::Raster ||
          (izb.csm && (izb.csm_backend == PassBackend::Raster || izb.csm_test == CsmTest::BarycentricHw ||
                       izb.csm_test == CsmTest::InnerHw))))
-      throw Error("shadows: a spot light takes the IZB's compute trace and compute CSM (hertel or bary): "
+      throw Error(std::string("shadows: a ") + kind + " light takes the IZB's compute trace and compute CSM (hertel or bary): "
                   "Settings.izb.trace/csm_backend/csm_test ask for a raster pass");
   }
   if (f.instance_count > 0 && !f.instances) throw Error("shadows: FrameDesc.instances is null with instance_count > 0");
@@ -505,6 +504,24 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   slot.csm = settings_.izb.csm;
 }
 
+// A point light in the IZB: six spot-light passes along the axes, each a cone just wider than a cube
+// face's (half angle acos(1/sqrt 3) = 54.7 degrees, plus half a degree), so together they cover every
+// direction; each resolve writes only the points in its own cone, and where cones overlap both faces
+// compute the same exact answer.
+void ContextImpl::record_point_light_faces(Frame& frame) {
+  View face_view = frame.view;
+  face_view.light_face = true;
+  face_view.light_cos_outer = std::cos(std::acos(1.0f / std::sqrt(3.0f)) + glm::radians(0.5f));
+  const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (const glm::vec3& axis : axes) {
+    face_view.light_direction = axis;
+    Frame f{frame.ctx, frame.cmd, frame.profiler, face_view, frame.gbuffer, frame.shadow_term, frame.overlay,
+            frame.geometry, frame.draws, frame.slot, frame.slots};
+    izb().record(f, settings_.izb, settings_.debug, false, collect_stats_);
+    pass_barrier(*gpu_, frame.cmd);
+  }
+}
+
 void ContextImpl::record_technique(Frame& frame) {
   switch (settings_.technique) {
     case Technique::Off:
@@ -517,6 +534,10 @@ void ContextImpl::record_technique(Frame& frame) {
       cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
       break;
     case Technique::Izb:
+      if (frame.view.local_light && frame.view.light_cos_outer <= -1.0f) {
+        record_point_light_faces(frame);
+        break;
+      }
       izb().record(frame, settings_.izb, settings_.debug, false, collect_stats_);
       break;
     case Technique::Hybrid: {

@@ -53,6 +53,7 @@ class ContextImpl final : public Context {
   void ensure_targets(VkExtent2D extent);
   // `clear`: the term to 1 and (with a debug view) the overlay to 0, where no input pass does.
   void prepare_targets(VkCommandBuffer cmd, bool clear);
+  void record_point_light_faces(Frame& frame);
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
   void record_output(VkCommandBuffer cmd, const FrameDesc& frame);

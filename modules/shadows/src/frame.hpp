@@ -22,6 +22,7 @@ struct View {
   glm::vec3 light_position{0.0f};  // spot and point
   float light_range = 0.0f;        // spot and point
   float light_cos_outer = -1.0f;   // spot: cosine of the outer cone; point: -1 (every direction)
+  bool light_face = false;         // one of a point light's six cones, shadowed as a spot light (IZB)
   float near_plane = 0.05f;
   float far_plane = 200.0f;
   glm::vec2 tan_half_fov{1.0f};  // x, y: tangent of the half field of view (from the projection)

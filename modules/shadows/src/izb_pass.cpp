@@ -668,7 +668,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   p.capacities = glm::uvec4(uint32_t(std::min<uint64_t>(m.tile_pairs.capacity, UINT32_MAX)), m.tiles_per_side, 0u, 0u);
   if (spot) {
     p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
-    p.light_cone = glm::vec4(frame.view.light_cos_outer, tan_half, 0.0f, 0.0f);
+    p.light_cone = glm::vec4(frame.view.light_cos_outer, tan_half, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
   }
   record_update(m.ctx, cmd, m.params, &p, sizeof(p));
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, soft_distance};
