@@ -10,9 +10,11 @@
 
 #include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtx/quaternion.hpp>
 
 #include "engine/assets/procedural_textures.hpp"
 #include "engine/assets/scene.hpp"
+#include "engine/core/animation.hpp"
 #include "engine/core/transform_system.hpp"
 
 namespace engine::procedural {
@@ -445,20 +447,77 @@ std::unique_ptr<Scene> build_canopy() {
   return scene;
 }
 
+std::unique_ptr<Scene> build_lamps() {
+  using namespace lamps;
+  auto scene = std::make_unique<Scene>();
+  scene->name = "lamps";
+  const glm::vec4 plaster{0.78f, 0.76f, 0.72f, 1.0f};
+  add_mesh(*scene, "floor", make_ground(8.0f, 8.0f, 0.0f, 4), {0.55f, 0.5f, 0.45f, 1.0f});
+  add_mesh(*scene, "wall_back", make_box({6.0f, 2.0f, 0.15f}), plaster, {0.0f, 2.0f, -6.15f});
+  add_mesh(*scene, "wall_left", make_box({0.15f, 2.0f, 6.0f}), plaster, {-6.15f, 2.0f, 0.0f});
+  add_mesh(*scene, "box", make_box(glm::vec3(0.5f)), {0.8f, 0.35f, 0.3f, 1.0f}, {0.6f, 0.5f, 0.5f});
+  add_mesh(*scene, "pole", make_cylinder(glm::vec3(0.0f), {0.0f, 1.8f, 0.0f}, 0.08f, 16, true), plaster,
+           {2.9f, 0.0f, -2.3f});
+  add_mesh(*scene, "table", make_box({0.8f, 0.05f, 0.5f}), {0.45f, 0.3f, 0.2f, 1.0f}, {2.6f, 1.0f, -0.8f});
+  add_mesh(*scene, "sphere", make_uv_sphere(glm::vec3(0.0f), 0.8f, 32, 16), {0.3f, 0.45f, 0.8f, 1.0f},
+           {-2.6f, 0.8f, 2.2f});
+  // The grate, 1.2 under the spot light: its bars cast a lattice onto the box and the floor.
+  const Entity grate = add_mesh(*scene, "grate",
+                                make_double_sided_quad(glm::vec3(0.0f), {0.7f, 0.0f, 0.0f}, {0.0f, 0.0f, -0.7f}),
+                                glm::vec4(1.0f), {-0.2f, 2.4f, 0.0f});
+  Material& metal = scene->registry.get<Material>(grate);
+  metal.alpha_mode = AlphaMode::Mask;
+  metal.alpha_cutoff = 0.5f;
+  metal.base_color_texture = make_grate_texture(64, 6, 0.3f);
+  // The moving caster: a bar spinning about the vertical between the lights.
+  const Entity bar = add_mesh(*scene, "spinning_bar", make_box({0.6f, 0.06f, 0.06f}), {0.7f, 0.7f, 0.2f, 1.0f},
+                              {1.6f, 1.7f, -1.6f});
+  Animated spin;
+  spin.kind = Animated::Kind::Spin;
+  spin.speed = 1.2f;
+  scene->registry.emplace<Animated>(bar, spin);
+
+  Registry& r = scene->registry;
+  const Entity spot = r.create();
+  r.emplace<Name>(spot, Name{"spot_light"});
+  Transform spot_transform;
+  spot_transform.translation = kSpotPosition;
+  spot_transform.rotation = glm::rotation(glm::vec3(0.0f, 0.0f, -1.0f), glm::normalize(kSpotDirection));
+  r.emplace<Transform>(spot, spot_transform);
+  r.emplace<SpotLight>(spot, SpotLight{{1.0f, 0.85f, 0.6f}, 60.0f, kSpotRange, kSpotInnerCone, kSpotOuterCone});
+  const Entity point = r.create();
+  r.emplace<Name>(point, Name{"point_light"});
+  Transform point_transform;
+  point_transform.translation = kPointPosition;
+  r.emplace<Transform>(point, point_transform);
+  r.emplace<PointLight>(point, PointLight{{0.7f, 0.8f, 1.0f}, 25.0f, kPointRange});
+
+  add_camera_and_light(*scene, 0.03f, 100.0f);
+  DirectionalLight& moon = r.get<DirectionalLight>(scene->light);
+  moon.direction = glm::normalize(kMoonDirection);
+  moon.color = {0.6f, 0.7f, 1.0f};
+  moon.intensity = 0.15f;
+  scene->views.push_back({"overview", {6.0f, 6.5f, 7.0f}, {0.0f, 0.5f, -1.0f}, kMoonDirection, glm::radians(60.0f)});
+  scene->views.push_back({"by_the_lamps", {4.8f, 1.7f, 3.2f}, {0.6f, 0.7f, -1.2f}, kMoonDirection, glm::radians(65.0f)});
+  finish(*scene);
+  return scene;
+}
+
 }  // namespace
 
 }  // namespace engine::procedural
 
 namespace engine {
 
-std::vector<std::string> procedural_scene_names() { return {"contact", "atrium", "foliage", "canopy"}; }
+std::vector<std::string> procedural_scene_names() { return {"contact", "atrium", "foliage", "canopy", "lamps"}; }
 
 std::unique_ptr<Scene> build_procedural_scene(const std::string& name) {
   if (name == "contact") return procedural::build_contact();
   if (name == "atrium") return procedural::build_atrium();
   if (name == "foliage") return procedural::build_foliage();
   if (name == "canopy") return procedural::build_canopy();
-  throw SceneError("unknown procedural scene '" + name + "': expected one of contact, atrium, foliage, canopy");
+  if (name == "lamps") return procedural::build_lamps();
+  throw SceneError("unknown procedural scene '" + name + "': expected one of contact, atrium, foliage, canopy, lamps");
 }
 
 }  // namespace engine

@@ -56,6 +56,20 @@ inline constexpr uint32_t kLeafTextureSize = 128;
 inline constexpr glm::vec3 kLightDirection{-0.3f, -1.0f, -0.25f};
 }  // namespace canopy
 
+// `lamps`: a walled corner at night under a dim moon, lit by a spot light shining down onto a box,
+// through an alpha-tested grate, and a point light beside a pole and a table; a sphere stands farther
+// off and a bar spins between the lights. No caster comes within 0.5 of either light.
+namespace lamps {
+inline constexpr glm::vec3 kSpotPosition{0.0f, 3.6f, 0.0f};
+inline constexpr glm::vec3 kSpotDirection{0.15f, -1.0f, 0.1f};  // normalised on use
+inline constexpr float kSpotRange = 12.0f;
+inline constexpr float kSpotInnerCone = 0.5f;  // radians, half angles
+inline constexpr float kSpotOuterCone = 0.72f;
+inline constexpr glm::vec3 kPointPosition{3.5f, 2.2f, -3.0f};
+inline constexpr float kPointRange = 8.0f;
+inline constexpr glm::vec3 kMoonDirection{-0.3f, -1.0f, -0.4f};
+}  // namespace lamps
+
 // Mesh builders. All produce outward normals and counter-clockwise front faces seen from outside
 // (right-handed, +Y up), so back-face culling and shadow biasing behave the same for every shape.
 
