@@ -66,7 +66,8 @@ SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
 }
 
 Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent, uint32_t frames_in_flight)
-    : ctx_(ctx), extent_(extent), frames_in_flight_(frames_in_flight), profiler_(ctx, 64, 4096, frames_in_flight) {
+    // 256 regions: a point light runs the IZB once per cube face, six times the passes of the sun.
+    : ctx_(ctx), extent_(extent), frames_in_flight_(frames_in_flight), profiler_(ctx, 256, 4096, frames_in_flight) {
   if (extent.width == 0 || extent.height == 0) throw std::invalid_argument("render size must be non-zero");
   if (frames_in_flight < 1 || frames_in_flight > kMaxFramesInFlight)
     throw std::invalid_argument("frames in flight must be 1.." + std::to_string(kMaxFramesInFlight) + ", not " +

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -24,6 +25,7 @@ using nlohmann::json;
 struct Options {
   std::string scene = "contact";
   size_t view = 0;
+  std::string light = "sun";  // sun, spot or point: the scene's first light of that kind
   uint32_t width = 512, height = 512;
   uint32_t izb = 1024;
   uint32_t cascade_size = 0;  // 0: the module's default
@@ -66,6 +68,7 @@ const char* kUsage =
     "                    [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
+    "                    [--light sun|spot|point]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
@@ -162,6 +165,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--device") o.device = args.value();
     else if (a == "--json") o.json_path = args.value();
     else if (a == "--diff") o.diff_dir = args.value();
+    else if (a == "--light") o.light = args.value();
     else if (a == "--screenshot") o.screenshot_dir = args.value();
     else if (a == "--dump") o.dump_dir = args.value();
     else if (a == "--help" || a == "-h") {
@@ -179,6 +183,9 @@ Options parse(int argc, char** argv) {
     throw std::runtime_error("lists for --instances and --spp need --suite");
   for (uint32_t n : o.instances)
     if (n == 0) throw std::runtime_error("--instances must be at least 1");
+  if (o.light != "sun" && o.light != "spot" && o.light != "point")
+    throw std::runtime_error("--light '" + o.light + "': expected sun, spot or point");
+  if (o.light != "sun" && !o.suite.empty()) throw std::runtime_error("--light spot|point is for single runs, not --suite");
   return o;
 }
 
@@ -342,6 +349,7 @@ struct Bench {
   std::vector<float> reference_vis;  // for the current view, size and spp
   size_t view = 0;
   uint32_t instances = 1;
+  std::optional<reference::LocalLight> local_light = std::nullopt;  // --light spot|point
 
   json measure(const RunConfig& run, bool print) {
     module->settings() = run.settings;
@@ -351,6 +359,7 @@ struct Bench {
     entry["device"] = ctx.device_name();
     entry["driver"] = ctx.driver_description();
     entry["scene"] = scene.name;
+    entry["light"] = o.light;
     entry["view"] = view;
     entry["instances"] = instances;
     entry["triangles"] = scene.triangle_count();
@@ -441,7 +450,9 @@ struct Bench {
     const std::string tag = scene.name + "_v" + std::to_string(view) + "_" + run.mode + "_" + run.csm_test + "_spp" +
                             std::to_string(spp);
     if (tracer) {
-      if (reference_vis.empty()) reference_vis = support::reference_visibility(renderer, *tracer, spp);
+      if (reference_vis.empty())
+        reference_vis = local_light ? support::reference_visibility(renderer, *tracer, spp, *local_light)
+                                    : support::reference_visibility(renderer, *tracer, spp);
       const auto vis = module->read_visibility();
       const auto cmp = reference::compare_visibility(vis, reference_vis);
       entry["reference"] = {{"pixels", cmp.pixels},
@@ -524,6 +535,12 @@ int run_single(const Options& o) {
   renderer.set_smooth_terminator(!o.faceted_terminator);
   Bench bench{o, ctx, *scene, renderer, shadows::install(renderer, runs.front().settings), nullptr, {}, o.view,
               o.instances.front()};
+  if (o.light != "sun") {
+    const auto light = support::scene_local_light(
+        scene->registry, o.light == "spot" ? shadows::LightType::Spot : shadows::LightType::Point);
+    bench.module->set_light(light.module);
+    bench.local_light = light.reference;
+  }
   // A technique the device cannot run at all is an error here (one line naming what it lacks).
   for (const auto& run : runs)
     if (std::string why; !bench.module->supported(run.settings.technique, &why))

@@ -292,38 +292,6 @@ INSTANTIATE_TEST_SUITE_P(
                                              .range = 6.0f}}),
     [](const testing::TestParamInfo<LocalLightCase>& info) { return info.param.name; });
 
-// The `lamps` scene's own lights (engine components), as the module and the reference take them.
-struct SceneLight {
-  shadows::Light module;
-  reference::LocalLight reference;
-};
-SceneLight scene_light(engine::Registry& registry, shadows::LightType type) {
-  SceneLight out;
-  out.module.type = type;
-  auto place = [&](const engine::Transform& t, float range) {
-    const glm::vec3 position(t.world[3]), direction = glm::normalize(-glm::vec3(t.world[2]));
-    std::memcpy(out.module.position, &position, sizeof(out.module.position));
-    std::memcpy(out.module.direction, &direction, sizeof(out.module.direction));
-    out.module.range = range;
-    out.reference.position = position;
-    out.reference.range = range;
-    out.reference.spot_direction = direction;
-  };
-  if (type == shadows::LightType::Spot) {
-    registry.each<engine::SpotLight, engine::Transform>([&](engine::Entity, engine::SpotLight& s, engine::Transform& t) {
-      place(t, s.range);
-      out.module.inner_cone = s.inner_cone;
-      out.module.outer_cone = s.outer_cone;
-      out.reference.spot = true;
-      out.reference.cos_outer = std::cos(s.outer_cone);
-    });
-  } else {
-    registry.each<engine::PointLight, engine::Transform>(
-        [&](engine::Entity, engine::PointLight& p, engine::Transform& t) { place(t, p.range); });
-  }
-  return out;
-}
-
 // `lamps` (a spot and a point light at night, casters near and far, an alpha-tested grate, a moving
 // bar) at both views and two sizes: `izb` at 1 spp within the sun's bound, at 32 spp within a coverage
 // MAE of 1/64, `izb+csm` adding no false shadow; `sm`'s mismatch (spot light) printed beside them.
@@ -343,7 +311,7 @@ class LampsTest : public RayTracedTest, public testing::WithParamInterface<Lamps
     settings.izb.csm = csm;
     settings.izb.resolution = 512;
     module_ = shadows::install(r, settings);
-    const SceneLight light = scene_light(scene_->registry, c.light);
+    const support::SceneLight light = support::scene_local_light(scene_->registry, c.light);
     module_->set_light(light.module);
     for (int frame = 0; frame < (csm ? 2 : 1); ++frame) r.render_frame(0.0f);
     const auto visibility = module_->read_visibility();

@@ -1,5 +1,8 @@
 #include "frame_capture.hpp"
 
+#include <cmath>
+#include <stdexcept>
+
 namespace support {
 
 reference::ShadingPoints capture_shading_points(engine::Renderer& renderer) {
@@ -18,6 +21,47 @@ std::vector<float> reference_visibility(engine::Renderer& renderer, const refere
   const auto points = capture_shading_points(renderer);
   const glm::vec3 light = renderer.frame_view().light_direction;
   return samples_per_pixel == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
+}
+
+std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
+                                        uint32_t samples_per_pixel, const reference::LocalLight& light) {
+  const auto points = capture_shading_points(renderer);
+  return samples_per_pixel == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
+}
+
+SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type) {
+  SceneLight out;
+  out.module.type = type;
+  bool found = false;
+  auto place = [&](const engine::Transform& t, float range) {
+    const glm::vec3 position(t.world[3]), direction = glm::normalize(-glm::vec3(t.world[2]));
+    for (int k = 0; k < 3; ++k) {
+      out.module.position[k] = position[k];
+      out.module.direction[k] = direction[k];
+    }
+    out.module.range = range;
+    out.reference.position = position;
+    out.reference.range = range;
+    out.reference.spot_direction = direction;
+    found = true;
+  };
+  if (type == shadows::LightType::Spot) {
+    registry.each<engine::SpotLight, engine::Transform>([&](engine::Entity, engine::SpotLight& s, engine::Transform& t) {
+      if (found) return;
+      place(t, s.range);
+      out.module.inner_cone = s.inner_cone;
+      out.module.outer_cone = s.outer_cone;
+      out.reference.spot = true;
+      out.reference.cos_outer = std::cos(s.outer_cone);
+    });
+  } else if (type == shadows::LightType::Point) {
+    registry.each<engine::PointLight, engine::Transform>([&](engine::Entity, engine::PointLight& p, engine::Transform& t) {
+      if (!found) place(t, p.range);
+    });
+  }
+  if (!found) throw std::runtime_error(std::string("the scene has no ") +
+                                       (type == shadows::LightType::Spot ? "spot" : "point") + " light");
+  return out;
 }
 
 }  // namespace support

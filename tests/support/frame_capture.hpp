@@ -5,6 +5,7 @@
 #include "reference/comparator.hpp"
 #include "reference/embree_tracer.hpp"
 #include "reference/shading_points.hpp"
+#include "shadows/context.hpp"
 
 namespace support {
 
@@ -14,5 +15,17 @@ reference::ShadingPoints capture_shading_points(engine::Renderer& renderer);
 // Reference visibility (1 lit, 0 shadowed, fraction at 32 spp, -1 background) for the last frame.
 std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
                                         uint32_t samples_per_pixel);
+// The same toward a spot or point light.
+std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
+                                        uint32_t samples_per_pixel, const reference::LocalLight& light);
+
+// A scene's spot or point light (its first engine::SpotLight or PointLight, placed and aimed by its
+// Transform's world matrix) as the module and the reference take it; throws std::runtime_error when
+// the scene has none.
+struct SceneLight {
+  shadows::Light module;
+  reference::LocalLight reference;
+};
+SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type);
 
 }  // namespace support
