@@ -4,6 +4,9 @@
 // and the one test that runs checks that reason; run `build/bin/gpu_tests --gtest_filter='*RayTraced*'`
 // on a ray tracing GPU for the comparisons. The validation layer is on either way.
 #include <cmath>
+#include <nlohmann/json.hpp>
+#include <fstream>
+#include <filesystem>
 #include <cstring>
 #include <glm/gtc/type_ptr.hpp>
 #include <shared/local_light.h>
@@ -349,6 +352,89 @@ INSTANTIATE_TEST_SUITE_P(Lamps, LampsTest,
                            return std::string(info.param.light == shadows::LightType::Spot ? "spot" : "point") + "_view" +
                                   std::to_string(info.param.view) + "_" + std::to_string(info.param.size);
                          });
+
+// A glTF file with KHR_lights_punctual lights, written here: a ground, a plate floating over it (both
+// faces), a spot and a point light above. Loaded like any file, its lights shadow the ground as
+// Embree's rays toward them say.
+std::string base64(const std::vector<uint8_t>& bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    const uint32_t n = (uint32_t(bytes[i]) << 16) | (i + 1 < bytes.size() ? uint32_t(bytes[i + 1]) << 8 : 0u) |
+                       (i + 2 < bytes.size() ? uint32_t(bytes[i + 2]) : 0u);
+    out += kAlphabet[(n >> 18) & 63];
+    out += kAlphabet[(n >> 12) & 63];
+    out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
+  }
+  return out;
+}
+
+std::string write_lights_gltf() {
+  // Ground y = 0 over [-6, 6]^2 (up), plate y = 1.5 over [-1, 1]^2 (up, then down).
+  const std::vector<glm::vec3> positions = {{-6, 0, -6}, {-6, 0, 6}, {6, 0, 6},  {6, 0, -6}, {-1, 1.5f, -1}, {-1, 1.5f, 1},
+                                            {1, 1.5f, 1}, {1, 1.5f, -1}, {-1, 1.5f, -1}, {-1, 1.5f, 1}, {1, 1.5f, 1}, {1, 1.5f, -1}};
+  std::vector<glm::vec3> normals(positions.size(), glm::vec3(0, 1, 0));
+  for (size_t i = 8; i < 12; ++i) normals[i] = glm::vec3(0, -1, 0);
+  const std::vector<uint32_t> indices = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7, 8, 10, 9, 8, 11, 10};
+  std::vector<uint8_t> bytes(positions.size() * 24 + indices.size() * 4);
+  std::memcpy(bytes.data(), positions.data(), positions.size() * 12);
+  std::memcpy(bytes.data() + positions.size() * 12, normals.data(), normals.size() * 12);
+  std::memcpy(bytes.data() + positions.size() * 24, indices.data(), indices.size() * 4);
+  const size_t n = positions.size();
+  const double s = std::sqrt(0.5);  // -90 degrees about x: the spot's local -Z points down
+  const nlohmann::json doc = {
+      {"asset", {{"version", "2.0"}}},
+      {"extensionsUsed", {"KHR_lights_punctual"}},
+      {"extensions",
+       {{"KHR_lights_punctual",
+         {{"lights",
+           {{{"type", "spot"}, {"intensity", 40.0}, {"range", 10.0}, {"spot", {{"innerConeAngle", 0.4}, {"outerConeAngle", 0.7}}}},
+            {{"type", "point"}, {"intensity", 20.0}, {"range", 8.0}}}}}}}},
+      {"scene", 0},
+      {"scenes", {{{"nodes", {0, 1, 2}}}}},
+      {"nodes",
+       {{{"name", "geometry"}, {"mesh", 0}},
+        {{"name", "spot"}, {"translation", {0.3, 3.5, 0.2}}, {"rotation", {-s, 0.0, 0.0, s}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}},
+        {{"name", "bulb"}, {"translation", {2.5, 2.5, -1.0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}}}},
+      {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}, {"NORMAL", 1}}}, {"indices", 2}}}}}}},
+      {"buffers", {{{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes)}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", n * 12}},
+        {{"buffer", 0}, {"byteOffset", n * 12}, {"byteLength", n * 12}},
+        {{"buffer", 0}, {"byteOffset", n * 24}, {"byteLength", indices.size() * 4}}}},
+      {"accessors",
+       {{{"bufferView", 0}, {"componentType", 5126}, {"count", n}, {"type", "VEC3"}, {"min", {-6, 0, -6}}, {"max", {6, 1.5, 6}}},
+        {{"bufferView", 1}, {"componentType", 5126}, {"count", n}, {"type", "VEC3"}},
+        {{"bufferView", 2}, {"componentType", 5125}, {"count", indices.size()}, {"type", "SCALAR"}}}}};
+  const std::string path = (std::filesystem::temp_directory_path() / "shadow_lights_test.gltf").string();
+  std::ofstream(path) << doc.dump();
+  return path;
+}
+
+TEST_F(RayTracedTest, GltfLightsShadowAsTheReferenceSays) {
+  const std::string path = write_lights_gltf();
+  for (shadows::LightType type : {shadows::LightType::Spot, shadows::LightType::Point}) {
+    SCOPED_TRACE(type == shadows::LightType::Spot ? "spot" : "point");
+    auto& r = make_renderer(path, 0, kSize, kSize);
+    shadows::Settings settings;
+    settings.technique = shadows::Technique::Izb;
+    module_ = shadows::install(r, settings);
+    const support::SceneLight light = support::scene_local_light(scene_->registry, type);
+    module_->set_light(light.module);
+    r.render_frame(0.0f);
+    const auto visibility = module_->read_visibility();
+    reference::EmbreeTracer tracer(scene_->registry);
+    const auto truth = support::reference_visibility(r, tracer, 1, light.reference);
+    const auto cmp = reference::compare_visibility(visibility, truth);
+    size_t shadowed = 0;
+    for (float v : truth) shadowed += v == 0.0f;
+    EXPECT_GT(shadowed, kSize * kSize / 50);
+    EXPECT_GT(cmp.pixels, kSize * kSize / 8);
+    EXPECT_LE(cmp.mismatch_rate, 0.0002) << cmp.mismatched << " of " << cmp.pixels << " pixels differ";
+  }
+  std::filesystem::remove(path);
+}
 
 // Moving casters: the top level is rebuilt every frame, so each frame matches Embree traced against
 // that frame's geometry, and the shadows move.
