@@ -36,6 +36,18 @@ void main() {
       ivec2 texel = clamp(ivec2(uv * vec2(params.extent.zw)), ivec2(0), ivec2(params.extent.zw) - 1);
       float stored = texelFetch(shadow_map, texel, 0).r;
       visibility = light.z <= stored + params.bias.x ? 1.0 : 0.0;
+      if (params.bias.y > 0.0) {
+        // Percentage-closer filtering: 16 taps on a disk of bias.y texels (a fixed golden-angle spiral).
+        float lit = 0.0;
+        for (int k = 0; k < 16; ++k) {
+          float r = params.bias.y * sqrt((float(k) + 0.5) / 16.0);
+          float a = float(k) * 2.39996323;
+          ivec2 tap = clamp(ivec2(uv * vec2(params.extent.zw) + r * vec2(cos(a), sin(a))), ivec2(0),
+                            ivec2(params.extent.zw) - 1);
+          lit += light.z <= texelFetch(shadow_map, tap, 0).r + params.bias.x ? 1.0 : 0.0;
+        }
+        visibility = lit / 16.0;
+      }
     }
   }
   imageStore(shadow_term, pixel, vec4(visibility));

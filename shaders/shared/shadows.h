@@ -15,7 +15,7 @@ struct ShadowMapResolveParams {
   vec4 light_direction;  // xyz travel direction
   vec4 light_position;   // xyz: a spot light's position; w: its range (0: the sun)
   vec4 light_cone;       // x: cosine of the spot light's outer cone
-  vec4 bias;             // x: constant depth bias
+  vec4 bias;             // x: constant depth bias; y: PCF radius in map texels (0: one tap)
   uvec4 extent;          // xy render size, zw map size
 };
 SHARED_CONST uint SM_RESOLVE_BINDING_PARAMS = 0u;

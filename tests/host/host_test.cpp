@@ -288,13 +288,15 @@ TEST_F(HostBadInput, NativeWorldPositionInAnotherFormat) {
   expect_refused(f, "FrameDesc.native.world_position.format");
 }
 
+// A spot light 3 above the host's scene, shining down.
+constexpr shadows::Light kSpotLight{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
+                                    .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f, .inner_cone = 0.2f, .outer_cone = 0.5f};
+
 // The hybrid does not shadow local lights in this version: refused in a line.
 TEST_F(HostBadInput, SpotLightRefusedByTheHybrid) {
   module_->settings().technique = shadows::Technique::Hybrid;
   shadows::FrameDesc f = frame_;
-  const shadows::Light spot{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
-                            .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f, .inner_cone = 0.2f, .outer_cone = 0.5f};
-  f.lights = &spot;
+  f.lights = &kSpotLight;
   expect_refused(f, "FrameDesc.lights[0] is a spot light");
 }
 
@@ -302,9 +304,7 @@ TEST_F(HostBadInput, SpotLightWithTheRasterTrace) {
   module_->settings().technique = shadows::Technique::Izb;
   module_->settings().izb.trace = shadows::PassBackend::Raster;
   shadows::FrameDesc f = frame_;
-  const shadows::Light spot{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
-                            .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f, .inner_cone = 0.2f, .outer_cone = 0.5f};
-  f.lights = &spot;
+  f.lights = &kSpotLight;
   expect_refused(f, "a spot light takes the IZB's compute trace");
 }
 

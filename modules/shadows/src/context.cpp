@@ -256,10 +256,11 @@ void ContextImpl::validate(const FrameDesc& f) const {
   if (light.type != LightType::Directional) {
     const char* kind = light.type == LightType::Spot ? "spot" : "point";
     const bool shadowed = settings_.technique == Technique::RayTraced || settings_.technique == Technique::Izb ||
-                          (light.type == LightType::Spot && settings_.technique == Technique::ShadowMap);
+                          (light.type == LightType::Spot && (settings_.technique == Technique::ShadowMap ||
+                                                              settings_.technique == Technique::Cascades));
     if (!shadowed)
       throw Error(std::string("shadows: FrameDesc.lights[0] is a ") + kind + " light: this version shadows " +
-                  (light.type == LightType::Spot ? "spot lights with Settings.technique izb, rt or sm"
+                  (light.type == LightType::Spot ? "spot lights with Settings.technique izb, rt, sm or cascades"
                                                  : "point lights with Settings.technique izb or rt") +
                   " only");
     if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))
@@ -508,6 +509,9 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
 // face's (half angle acos(1/sqrt 3) = 54.7 degrees, plus half a degree), so together they cover every
 // direction; each resolve writes only the points in its own cone, and where cones overlap both faces
 // compute the same exact answer.
+// The PCF radius of a spot light's filtered map (Technique::Cascades), in map texels.
+constexpr float kSpotFilterTexels = 2.5f;
+
 void ContextImpl::record_point_light_faces(Frame& frame) {
   View face_view = frame.view;
   face_view.light_face = true;
@@ -531,6 +535,12 @@ void ContextImpl::record_technique(Frame& frame) {
       shadow_map_->record(frame, settings_.shadow_map);
       break;
     case Technique::Cascades:
+      // A spot light's counterpart: one filtered perspective map.
+      if (frame.view.local_light) {
+        if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
+        shadow_map_->record(frame, settings_.shadow_map, kSpotFilterTexels);
+        break;
+      }
       cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
       break;
     case Technique::Izb:

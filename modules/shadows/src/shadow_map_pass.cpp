@@ -44,7 +44,7 @@ void ShadowMapPass::ensure_map(VkCommandBuffer cmd, uint32_t size) {
   to_general(ctx_, cmd, map_);
 }
 
-void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
+void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, float filter_texels) {
   ensure_map(frame.cmd, settings.size);
   VkCommandBuffer cmd = frame.cmd;
   const glm::mat4 light_vp = frame.view.local_light ? spot_view_projection(frame.view) : [&] {
@@ -75,7 +75,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings) {
       p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
       p.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, 0.0f, 0.0f);
     }
-    p.bias = glm::vec4(settings.constant_bias, 0.0f, 0.0f, 0.0f);
+    p.bias = glm::vec4(settings.constant_bias, filter_texels, 0.0f, 0.0f);
     p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
     record_update(ctx_, cmd, params_, &p, sizeof(p));
     resolve_pipeline_.bind(cmd);

@@ -9,7 +9,9 @@ namespace shadows::detail {
 class ShadowMapPass {
  public:
   explicit ShadowMapPass(engine::gpu::Context& ctx);
-  void record(Frame& frame, const ShadowMapSettings& settings);
+  // `filter_texels` > 0: percentage-closer filtering over a disk of that radius in map texels (a spot
+  // light's counterpart of the cascades' filtered term); 0: one tap.
+  void record(Frame& frame, const ShadowMapSettings& settings, float filter_texels = 0.0f);
 
  private:
   void ensure_map(VkCommandBuffer cmd, uint32_t size);

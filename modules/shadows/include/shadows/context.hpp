@@ -175,7 +175,7 @@ enum class LightType : uint32_t { Directional, Spot, Point };
 
 // A directional light is shadowed by every technique. A spot or point light (this version: a spot
 // light with Technique::Izb (CSM prepass included; compute trace and CSM, no lit culling),
-// RayTraced or ShadowMap, a point light with Izb (six cones around the axes; its IZB statistics are
+// RayTraced, ShadowMap or Cascades (one filtered perspective map), a point light with Izb (six cones around the axes; its IZB statistics are
 // the last cone's) or RayTraced; the others refuse it in one line) shadows the points it reaches: within
 // `range` of `position` and, for a spot light, inside its outer cone; every other point, and every
 // point whose geometric normal turns away from the light, is written 0. Shadow rays run from the
