@@ -10,6 +10,29 @@ layout(set = 0, binding = LIGHTING_BINDING_WORLD_POSITION, rgba32f) readonly uni
 layout(set = 0, binding = LIGHTING_BINDING_SHADOW, r32f) readonly uniform image2D shadow_image;
 layout(set = 0, binding = LIGHTING_BINDING_OVERLAY, rgba8) readonly uniform image2D overlay_image;
 layout(set = 0, binding = LIGHTING_BINDING_OUTPUT, rgba8) writeonly uniform image2D output_image;
+layout(set = 0, binding = LIGHTING_BINDING_LOCAL_SHADOW + 0, r32f) readonly uniform image2D local_shadow0;
+layout(set = 0, binding = LIGHTING_BINDING_LOCAL_SHADOW + 1, r32f) readonly uniform image2D local_shadow1;
+layout(set = 0, binding = LIGHTING_BINDING_LOCAL_SHADOW + 2, r32f) readonly uniform image2D local_shadow2;
+
+float local_shadow(uint i, ivec2 pixel) {
+  if (i == 0u) return imageLoad(local_shadow0, pixel).r;
+  if (i == 1u) return imageLoad(local_shadow1, pixel).r;
+  return imageLoad(local_shadow2, pixel).r;
+}
+
+// A spot or point light at a surface point: inverse-square falloff windowed to zero at its range (the
+// glTF KHR_lights_punctual recommendation) and, for a spot light, a smooth edge between its cones.
+vec3 local_light(LocalLightUniforms light, vec3 p, vec3 n) {
+  vec3 to_light = light.position_range.xyz - p;
+  float d2 = max(dot(to_light, to_light), 1e-4);
+  vec3 l = to_light * inversesqrt(d2);
+  float ratio = d2 / (light.position_range.w * light.position_range.w);
+  float window = clamp(1.0 - ratio * ratio, 0.0, 1.0);
+  float attenuation = window * window / d2;
+  if (light.direction_kind.w < 0.5)
+    attenuation *= smoothstep(light.cone.x, light.cone.y, dot(-l, light.direction_kind.xyz));
+  return light.radiance.rgb * attenuation * max(dot(n, l), 0.0);
+}
 
 vec3 linear_to_srgb(vec3 c) {
   c = clamp(c, 0.0, 1.0);
@@ -42,14 +65,20 @@ void main() {
     vec2 ndc = (vec2(pixel) + 0.5) / vec2(frame.extent.xy) * 2.0 - 1.0;
     vec4 far_point = frame.inverse_view_projection * vec4(ndc, 0.0001, 1.0);
     vec3 dir = normalize(far_point.xyz / far_point.w - frame.camera_position.xyz);
-    color = mix(vec3(0.60, 0.68, 0.78), vec3(0.25, 0.42, 0.70), clamp(dir.y, 0.0, 1.0));
+    color = mix(vec3(0.60, 0.68, 0.78), vec3(0.25, 0.42, 0.70), clamp(dir.y, 0.0, 1.0)) * frame.ambient.w;
   } else {
     vec4 albedo = imageLoad(albedo_image, pixel);
     vec3 n = normalize(imageLoad(normal_image, pixel).xyz);
     vec3 l = -frame.light_direction.xyz;
     float shadow = albedo.a > 0.5 ? imageLoad(shadow_image, pixel).r : 1.0;
     float n_dot_l = max(dot(n, l), 0.0);
-    color = albedo.rgb * (frame.light_radiance.rgb * n_dot_l * shadow + ambient_light(n, l));
+    vec3 light = frame.light_radiance.rgb * n_dot_l * shadow + ambient_light(n, l);
+    // Each local light with its own shadow term (receivers only; others are lit by it unshadowed).
+    for (uint i = 0u; i < frame.local_light_count.x; ++i) {
+      float term = albedo.a > 0.5 ? local_shadow(i, pixel) : 1.0;
+      light += local_light(frame.local_lights[i], position.xyz, n) * term;
+    }
+    color = albedo.rgb * light;
     color = color / (1.0 + color);  // Reinhard: bright sunlit surfaces keep their gradation
   }
   vec4 overlay = imageLoad(overlay_image, pixel);

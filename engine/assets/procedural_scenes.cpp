@@ -497,6 +497,8 @@ std::unique_ptr<Scene> build_lamps() {
   moon.direction = glm::normalize(kMoonDirection);
   moon.color = {0.6f, 0.7f, 1.0f};
   moon.intensity = 0.15f;
+  scene->sky_color = kNightSky;
+  scene->sky_brightness = kNightSkyBrightness;
   scene->views.push_back({"overview", {6.0f, 6.5f, 7.0f}, {0.0f, 0.5f, -1.0f}, kMoonDirection, glm::radians(60.0f)});
   scene->views.push_back({"by_the_lamps", {4.8f, 1.7f, 3.2f}, {0.6f, 0.7f, -1.2f}, kMoonDirection, glm::radians(65.0f)});
   finish(*scene);

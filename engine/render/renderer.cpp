@@ -1,5 +1,6 @@
 #include "engine/render/renderer.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 #include <unordered_map>
@@ -107,8 +108,12 @@ Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent, uint32_t frames_in_flig
                                          {gpu_shared::LIGHTING_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                                          {gpu_shared::LIGHTING_BINDING_SHADOW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                                          {gpu_shared::LIGHTING_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_OUTPUT, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                                         {gpu_shared::LIGHTING_BINDING_OUTPUT, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                         {gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                         {gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                         {gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
                                         0});
+  static_assert(kMaxLocalLights == gpu_shared::kMaxLocalLights && kMaxLocalLights == 3);
 
   VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
   alloc.commandPool = ctx.command_pool();
@@ -144,6 +149,9 @@ void Renderer::create_targets() {
   gbuffer_.terminator_offset = Image(ctx_, e, kNormalFormat, color, "gbuffer terminator offset");
   gbuffer_.world_position = Image(ctx_, e, kWorldPositionFormat, storage, "world position");
   shadow_term_ = Image(ctx_, e, kShadowFormat, storage, "shadow term");
+  local_shadow_terms_.clear();
+  for (uint32_t i = 0; i < kMaxLocalLights; ++i)
+    local_shadow_terms_.emplace_back(ctx_, e, kShadowFormat, storage, "local light shadow term");
   overlay_ = Image(ctx_, e, kOutputFormat, storage, "debug overlay");
   output_ = Image(ctx_, e, kOutputFormat, storage | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, "lit output");
   ctx_.immediate_submit([&](VkCommandBuffer cmd) {
@@ -151,6 +159,8 @@ void Renderer::create_targets() {
                        &gbuffer_.terminator_offset,
                        &gbuffer_.world_position, &shadow_term_, &overlay_, &output_})
       img->transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAllStages, kAllAccess);
+    for (Image& img : local_shadow_terms_)
+      img.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, kAllStages, kAllAccess);
   });
 }
 
@@ -199,6 +209,45 @@ void Renderer::build_draw_list() {
   });
 }
 
+void Renderer::gather_local_lights() {
+  view_.local_lights.clear();
+  Registry& r = scene_->registry;
+  auto add = [&](Entity e, LocalLightKind kind, const glm::vec3& color, float intensity, float range) {
+    const auto* t = r.try_get<Transform>(e);
+    if (!t || !(intensity > 0.0f) || !(range > 0.0f)) return;
+    FrameLight l;
+    l.entity = e;
+    l.kind = kind;
+    l.position = glm::vec3(t->world[3]);
+    l.direction = glm::normalize(-glm::vec3(t->world[2]));  // glTF: a spot light shines down local -Z
+    l.radiance = color * intensity;
+    l.range = range;
+    // A light whose sphere of reach lies outside the view lights no pixel: no pass runs for it.
+    Aabb reach;
+    reach.extend(l.position - glm::vec3(range));
+    reach.extend(l.position + glm::vec3(range));
+    if (reach.outside_clip(view_.view_projection)) return;
+    view_.local_lights.push_back(l);
+  };
+  r.each<SpotLight>([&](Entity e, SpotLight& s) {
+    if (!s.enabled) return;
+    add(e, LocalLightKind::Spot, s.color, s.intensity, s.range);
+    if (!view_.local_lights.empty() && view_.local_lights.back().entity == e) {
+      view_.local_lights.back().inner_cone = s.inner_cone;
+      view_.local_lights.back().outer_cone = s.outer_cone;
+    }
+  });
+  r.each<PointLight>([&](Entity e, PointLight& p) {
+    if (p.enabled) add(e, LocalLightKind::Point, p.color, p.intensity, p.range);
+  });
+  // The nearest lights (by the distance to their sphere of reach) when there are more than the pass takes.
+  std::stable_sort(view_.local_lights.begin(), view_.local_lights.end(), [&](const FrameLight& a, const FrameLight& b) {
+    return glm::distance(a.position, view_.camera_position) - a.range <
+           glm::distance(b.position, view_.camera_position) - b.range;
+  });
+  if (view_.local_lights.size() > kMaxLocalLights) view_.local_lights.resize(kMaxLocalLights);
+}
+
 void Renderer::update(float dt) {
   if (!scene_) throw std::logic_error("Renderer::update before set_scene");
   systems_.run(scene_->registry, dt);
@@ -224,6 +273,7 @@ void Renderer::update(float dt) {
     view_.light_direction = glm::normalize(light.direction);
     view_.light_radiance = light.color * light.intensity;
   }
+  gather_local_lights();
 
   gpu_shared::FrameUniforms u{};
   u.view = view_.view;
@@ -233,7 +283,16 @@ void Renderer::update(float dt) {
   u.camera_position = glm::vec4(view_.camera_position, 1.0f);
   u.light_direction = glm::vec4(view_.light_direction, 0.0f);
   u.light_radiance = glm::vec4(view_.light_radiance, 0.0f);
-  u.ambient = glm::vec4(0.26f, 0.31f, 0.40f, 0.0f);  // sky colour of the hemisphere ambient (lighting.comp)
+  u.ambient = glm::vec4(scene_->sky_color, scene_->sky_brightness);
+  for (size_t i = 0; i < view_.local_lights.size(); ++i) {
+    const FrameLight& l = view_.local_lights[i];
+    gpu_shared::LocalLightUniforms& out = u.local_lights[i];
+    out.position_range = glm::vec4(l.position, l.range);
+    out.direction_kind = glm::vec4(l.direction, l.kind == LocalLightKind::Point ? 1.0f : 0.0f);
+    out.radiance = glm::vec4(l.radiance, 0.0f);
+    out.cone = glm::vec4(std::cos(l.outer_cone), std::cos(l.inner_cone), 0.0f, 0.0f);
+  }
+  u.local_light_count = glm::uvec4(uint32_t(view_.local_lights.size()), 0u, 0u, 0u);
   u.extent = glm::uvec4(extent_.width, extent_.height, uint32_t(view_.frame_index),
                         smooth_terminator_ ? gpu_shared::FRAME_FLAG_SMOOTH_TERMINATOR : 0u);
   // The host waited for the frame that last used this slot (frames_in_flight frames ago).
@@ -341,11 +400,13 @@ void Renderer::record_frame(VkCommandBuffer cmd) {
     } else {
       vkCmdClearColorImage(cmd, shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, &one, 1, &range);
     }
+    for (size_t i = 0; i < view_.local_lights.size(); ++i)
+      vkCmdClearColorImage(cmd, local_shadow_terms_[i].handle(), VK_IMAGE_LAYOUT_GENERAL, &one, 1, &range);
     full_barrier(cmd);
 
     if (!use_external_shadow_) {
-      FrameContext frame{ctx_,      cmd,        profiler_, view_,      gbuffer_,          shadow_term_,
-                         overlay_,  frame_uniforms, *geometry_, draws_, scene_->registry};
+      FrameContext frame{ctx_,     cmd,           profiler_,      view_,      gbuffer_, shadow_term_,
+                         local_shadow_terms_.data(), overlay_, frame_uniforms, *geometry_, draws_, scene_->registry};
       for (auto& f : features_) {
         f->record(frame);
         full_barrier(cmd);
@@ -363,6 +424,9 @@ void Renderer::record_frame(VkCommandBuffer cmd) {
           .storage_image(gpu_shared::LIGHTING_BINDING_SHADOW, shadow_term_.view())
           .storage_image(gpu_shared::LIGHTING_BINDING_OVERLAY, overlay_.view())
           .storage_image(gpu_shared::LIGHTING_BINDING_OUTPUT, output_.view())
+          .storage_image(gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 0, local_shadow_terms_[0].view())
+          .storage_image(gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 1, local_shadow_terms_[1].view())
+          .storage_image(gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 2, local_shadow_terms_[2].view())
           .push(ctx_, cmd, lighting_pipeline_);
       vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
     }
@@ -433,6 +497,9 @@ std::vector<glm::vec4> Renderer::read_geometric_normals() {
 std::vector<float> Renderer::read_depth() { return read_image_as<float>(ctx_, gbuffer_.depth); }
 
 std::vector<float> Renderer::read_shadow_term() { return read_image_as<float>(ctx_, shadow_term_); }
+std::vector<float> Renderer::read_local_shadow_term(uint32_t i) {
+  return read_image_as<float>(ctx_, local_shadow_terms_.at(i));
+}
 
 void write_rgba8_png(const std::filesystem::path& path, uint32_t width, uint32_t height, const uint8_t* rgba) {
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());

@@ -12,12 +12,17 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_MAP) uniform sampler2D shado
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
 
 // One tap, no filtering: the baseline whose aliasing the other techniques remove. A spot light's map
-// is a perspective one from the light; points it does not reach or that turn away from it are 0.
+// is a perspective one from the light (a point light's, one per cube-face cone); points it does not
+// reach or that turn away from it are 0.
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
   vec4 p = imageLoad(world_position, pixel);
   if (p.w == 0.0) return;
+  // One of a point light's cube-face cones: the points outside it belong to another face's map.
+  if (params.light_cone.z > 0.0 && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
+                                       params.light_cone.x * length(p.xyz - params.light_position.xyz))
+    return;
   vec4 normal = imageLoad(geometric_normal, pixel);
   vec3 n = normal.xyz;
   float visibility = 0.0;

@@ -5,6 +5,16 @@
 
 SHARED_BEGIN
 
+// A spot or point light of the lighting pass (engine::FrameLight).
+struct LocalLightUniforms {
+  vec4 position_range;   // xyz world position, w range
+  vec4 direction_kind;   // xyz spot direction (travel), w: 0 spot, 1 point
+  vec4 radiance;         // rgb colour * intensity
+  vec4 cone;             // x cos(outer), y cos(inner)
+};
+
+SHARED_CONST uint kMaxLocalLights = 3u;
+
 struct FrameUniforms {
   mat4 view;
   mat4 projection;
@@ -13,8 +23,10 @@ struct FrameUniforms {
   vec4 camera_position;          // xyz
   vec4 light_direction;          // xyz: direction the light travels, unit
   vec4 light_radiance;           // rgb: colour * intensity
-  vec4 ambient;                  // rgb: sky fill light
+  vec4 ambient;                  // rgb: sky fill light; w: sky background brightness (1 day)
   uvec4 extent;                  // x, y: render size in pixels; z: frame index; w: FRAME_FLAG_*
+  LocalLightUniforms local_lights[kMaxLocalLights];
+  uvec4 local_light_count;       // x
 };
 
 // Push constants of one mesh draw in the G-buffer pass.
@@ -54,13 +66,14 @@ SHARED_CONST uint LIGHTING_BINDING_WORLD_POSITION = 3u;
 SHARED_CONST uint LIGHTING_BINDING_SHADOW = 4u;
 SHARED_CONST uint LIGHTING_BINDING_OVERLAY = 5u;
 SHARED_CONST uint LIGHTING_BINDING_OUTPUT = 6u;
+SHARED_CONST uint LIGHTING_BINDING_LOCAL_SHADOW = 7u;  // kMaxLocalLights bindings from here
 
 SHARED_CONST uint kVertexFloats = 8u;  // engine::Vertex: position(3) normal(3) uv(2)
 
 SHARED_END
 
 #ifdef __cplusplus
-static_assert(sizeof(gpu_shared::FrameUniforms) == 4 * 64 + 5 * 16);
+static_assert(sizeof(gpu_shared::FrameUniforms) == 4 * 64 + 5 * 16 + 3 * 64 + 16);
 static_assert(sizeof(gpu_shared::DrawPush) == 112);
 #endif
 #endif

@@ -292,12 +292,54 @@ TEST_F(HostBadInput, NativeWorldPositionInAnotherFormat) {
 constexpr shadows::Light kSpotLight{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
                                     .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f, .inner_cone = 0.2f, .outer_cone = 0.5f};
 
-// The hybrid does not shadow local lights in this version: refused in a line.
-TEST_F(HostBadInput, SpotLightRefusedByTheHybrid) {
+// The hybrid shadows a local light with the IZB alone, which takes the compute trace.
+TEST_F(HostBadInput, SpotLightWithTheHybridsRasterTrace) {
   module_->settings().technique = shadows::Technique::Hybrid;
+  module_->settings().izb.trace = shadows::PassBackend::Raster;
   shadows::FrameDesc f = frame_;
   f.lights = &kSpotLight;
-  expect_refused(f, "FrameDesc.lights[0] is a spot light");
+  expect_refused(f, "a spot light takes the IZB's compute trace");
+}
+
+TEST_F(HostBadInput, SecondLightWithoutItsOutput) {
+  const shadows::Light lights[2] = {sun_, kSpotLight};
+  shadows::FrameDesc f = frame_;
+  f.lights = lights;
+  f.light_count = 2;
+  expect_refused(f, "FrameDesc.light_outputs is null");
+}
+
+TEST_F(HostBadInput, TooManyLights) {
+  std::vector<shadows::Light> lights(shadows::kMaxLightsPerRecord + 1, sun_);
+  std::vector<shadows::ImageInput> outputs(lights.size() - 1, frame_.output);
+  shadows::FrameDesc f = frame_;
+  f.lights = lights.data();
+  f.light_count = uint32_t(lights.size());
+  f.light_outputs = outputs.data();
+  expect_refused(f, "FrameDesc.light_count is 9 (1..8");
+}
+
+TEST_F(HostBadInput, SecondLightMalformed) {
+  shadows::Light bad = kSpotLight;
+  bad.outer_cone = 2.0f;
+  const shadows::Light lights[2] = {sun_, bad};
+  const shadows::ImageInput outputs[1] = {frame_.output};
+  shadows::FrameDesc f = frame_;
+  f.lights = lights;
+  f.light_count = 2;
+  f.light_outputs = outputs;
+  expect_refused(f, "FrameDesc.lights[1] cones");
+}
+
+TEST_F(HostBadInput, SecondLightsOutputInAnotherFormat) {
+  extra_ = make(kExtent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT);
+  const shadows::Light lights[2] = {sun_, kSpotLight};
+  const shadows::ImageInput outputs[1] = {extra_.input(VK_IMAGE_LAYOUT_GENERAL)};
+  shadows::FrameDesc f = frame_;
+  f.lights = lights;
+  f.light_count = 2;
+  f.light_outputs = outputs;
+  expect_refused(f, "FrameDesc.light_outputs[0]");
 }
 
 TEST_F(HostBadInput, SpotLightWithTheRasterTrace) {

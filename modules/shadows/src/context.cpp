@@ -214,6 +214,32 @@ Capabilities ContextImpl::capabilities() const {
 MeshId ContextImpl::register_mesh(const MeshDesc& mesh) { return geometry_.add(mesh); }
 void ContextImpl::unregister_mesh(MeshId mesh) { geometry_.remove(mesh); }
 
+void ContextImpl::validate_light(const Light& light, const std::string& name) const {
+  if (light.type != LightType::Directional && light.type != LightType::Spot && light.type != LightType::Point)
+    throw Error("shadows: " + name + ".type " + std::to_string(uint32_t(light.type)) + " is not a LightType");
+  const glm::vec3 dir = glm::make_vec3(light.direction);
+  if (light.type != LightType::Point && !(glm::length(dir) > 0.5f && glm::length(dir) < 1.5f))
+    throw Error("shadows: " + name + ".direction must be a unit vector");
+  if (light.type != LightType::Directional) {
+    const char* kind = light.type == LightType::Spot ? "spot" : "point";
+    if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))
+      throw Error("shadows: " + name + ".position must be finite");
+    if (!(light.range > 0.0f) || !std::isfinite(light.range))
+      throw Error("shadows: " + name + ".range must be finite and > 0");
+    if (light.type == LightType::Spot &&
+        !(light.inner_cone >= 0.0f && light.inner_cone < light.outer_cone && light.outer_cone <= 1.5707964f))
+      throw Error("shadows: " + name + " cones must satisfy 0 <= inner_cone < outer_cone <= pi/2");
+    // The IZB's perspective grids are traced and culled by its compute passes only.
+    const IzbSettings& izb = settings_.izb;
+    if ((settings_.technique == Technique::Izb || settings_.technique == Technique::Hybrid) &&
+        (izb.trace == PassBackend::Raster ||
+         (izb.csm && (izb.csm_backend == PassBackend::Raster || izb.csm_test == CsmTest::BarycentricHw ||
+                      izb.csm_test == CsmTest::InnerHw))))
+      throw Error(std::string("shadows: a ") + kind + " light takes the IZB's compute trace and compute CSM (hertel or bary): "
+                  "Settings.izb.trace/csm_backend/csm_test ask for a raster pass");
+  }
+}
+
 void ContextImpl::validate(const FrameDesc& f) const {
   check_image(f.depth, "FrameDesc.depth",
               {VK_FORMAT_D32_SFLOAT, VK_FORMAT_D24_UNORM_S8_UINT, VK_FORMAT_D32_SFLOAT_S8_UINT, VK_FORMAT_D16_UNORM},
@@ -244,41 +270,17 @@ void ContextImpl::validate(const FrameDesc& f) const {
   if (f.overlay.present())
     check_image(f.overlay, "FrameDesc.overlay", {VK_FORMAT_R8G8B8A8_UNORM}, VK_IMAGE_USAGE_STORAGE_BIT,
                 {VK_IMAGE_LAYOUT_GENERAL}, extent);
-  if (f.light_count != 1 || !f.lights)
+  if (f.light_count < 1 || f.light_count > kMaxLightsPerRecord || !f.lights)
+    throw Error("shadows: FrameDesc.light_count is " + std::to_string(f.light_count) + " (1.." +
+                std::to_string(kMaxLightsPerRecord) + ", with FrameDesc.lights pointing at that many)");
+  if (f.light_count > 1 && !f.light_outputs)
     throw Error("shadows: FrameDesc.light_count is " + std::to_string(f.light_count) +
-                " (this version shadows exactly one light)");
-  const Light& light = f.lights[0];
-  if (light.type != LightType::Directional && light.type != LightType::Spot && light.type != LightType::Point)
-    throw Error("shadows: FrameDesc.lights[0].type " + std::to_string(uint32_t(light.type)) + " is not a LightType");
-  const glm::vec3 dir = glm::make_vec3(light.direction);
-  if (light.type != LightType::Point && !(glm::length(dir) > 0.5f && glm::length(dir) < 1.5f))
-    throw Error("shadows: FrameDesc.lights[0].direction must be a unit vector");
-  if (light.type != LightType::Directional) {
-    const char* kind = light.type == LightType::Spot ? "spot" : "point";
-    const bool shadowed = settings_.technique == Technique::RayTraced || settings_.technique == Technique::Izb ||
-                          (light.type == LightType::Spot && (settings_.technique == Technique::ShadowMap ||
-                                                              settings_.technique == Technique::Cascades));
-    if (!shadowed)
-      throw Error(std::string("shadows: FrameDesc.lights[0] is a ") + kind + " light: this version shadows " +
-                  (light.type == LightType::Spot ? "spot lights with Settings.technique izb, rt, sm or cascades"
-                                                 : "point lights with Settings.technique izb or rt") +
-                  " only");
-    if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))
-      throw Error("shadows: FrameDesc.lights[0].position must be finite");
-    if (!(light.range > 0.0f) || !std::isfinite(light.range))
-      throw Error("shadows: FrameDesc.lights[0].range must be finite and > 0");
-    if (light.type == LightType::Spot &&
-        !(light.inner_cone >= 0.0f && light.inner_cone < light.outer_cone && light.outer_cone <= 1.5707964f))
-      throw Error("shadows: FrameDesc.lights[0] cones must satisfy 0 <= inner_cone < outer_cone <= pi/2");
-    // The IZB's perspective grids are traced and culled by its compute passes only.
-    const IzbSettings& izb = settings_.izb;
-    if (settings_.technique == Technique::Izb &&
-        (izb.trace == PassBackend::Raster ||
-         (izb.csm && (izb.csm_backend == PassBackend::Raster || izb.csm_test == CsmTest::BarycentricHw ||
-                      izb.csm_test == CsmTest::InnerHw))))
-      throw Error(std::string("shadows: a ") + kind + " light takes the IZB's compute trace and compute CSM (hertel or bary): "
-                  "Settings.izb.trace/csm_backend/csm_test ask for a raster pass");
-  }
+                " but FrameDesc.light_outputs is null (one image per light after the first)");
+  for (uint32_t i = 1; i < f.light_count; ++i)
+    check_image(f.light_outputs[i - 1], ("FrameDesc.light_outputs[" + std::to_string(i - 1) + "]").c_str(),
+                {VK_FORMAT_R8_UNORM, VK_FORMAT_R16_SFLOAT, VK_FORMAT_R32_SFLOAT}, VK_IMAGE_USAGE_STORAGE_BIT,
+                {VK_IMAGE_LAYOUT_GENERAL}, extent);
+  for (uint32_t i = 0; i < f.light_count; ++i) validate_light(f.lights[i], "FrameDesc.lights[" + std::to_string(i) + "]");
   if (f.instance_count > 0 && !f.instances) throw Error("shadows: FrameDesc.instances is null with instance_count > 0");
   for (uint32_t i = 0; i < f.instance_count; ++i)
     if (!geometry_.find(f.instances[i].mesh))
@@ -395,26 +397,48 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
                  pass_shader_stages(*gpu_), kStorageReadWrite);
 }
 
-void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f) {
+void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool first) {
   // Every pass's writes of the term and overlay, visible to the copy into the host's images.
   memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-  const int which = f.output.format == VK_FORMAT_R8_UNORM ? 0 : f.output.format == VK_FORMAT_R16_SFLOAT ? 1 : 2;
+  const int which = output.format == VK_FORMAT_R8_UNORM ? 0 : output.format == VK_FORMAT_R16_SFLOAT ? 1 : 2;
   const engine::gpu::Pipeline& p = output_pipelines_[which];
   p.bind(cmd);
   namespace gs = gpu_shared;
   DescriptorWriter()
       .storage_image(gs::HOST_OUTPUT_BINDING_TERM, shadow_term_.view())
       .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY, overlay_.view())
-      .storage_image(gs::HOST_OUTPUT_BINDING_OUT, f.output.view)
+      .storage_image(gs::HOST_OUTPUT_BINDING_OUT, output.view)
       .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT, f.overlay.present() ? f.overlay.view : overlay_.view())
       .push(*gpu_, cmd, p);
   uint32_t what = settings_.technique == Technique::Off ? gs::HOST_OUTPUT_ALL_LIT : 0u;
-  if (f.overlay.present())
+  // The overlay is the first light's (later lights leave the host's overlay as the first wrote it).
+  if (f.overlay.present() && first)
     what |= settings_.debug != DebugView::None ? gs::HOST_OUTPUT_COPY_OVERLAY : gs::HOST_OUTPUT_ZERO_OVERLAY;
   const glm::uvec4 push(extent_.width, extent_.height, what, 0u);
   p.push_constants(cmd, push);
   vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
+}
+
+void ContextImpl::set_light(View& view, const Light& light) {
+  view.local_light = light.type != LightType::Directional;
+  if (light.type != LightType::Point) view.light_direction = glm::normalize(glm::make_vec3(light.direction));
+  view.light_position = glm::make_vec3(light.position);
+  view.light_range = light.range;
+  view.light_cos_outer = light.type == LightType::Spot ? std::cos(light.outer_cone) : -1.0f;
+  view.light_face = false;
+}
+
+// Between two lights of one record: the output pass's reads of the term finish before it is cleared to
+// lit again, and the clear is visible to the next light's passes.
+void ContextImpl::restart_term(VkCommandBuffer cmd) {
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
+                 VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}};
+  vkCmdClearColorImage(cmd, shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, &one, 1, &range);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, pass_shader_stages(*gpu_),
+                 kStorageReadWrite);
 }
 
 void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
@@ -446,12 +470,6 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   view.view_projection = projection * view.view;
   view.inverse_view_projection = glm::inverse(view.view_projection);
   view.camera_position = glm::vec3(glm::inverse(view.view)[3]);
-  const Light& light = f.lights[0];
-  view.local_light = light.type != LightType::Directional;
-  if (light.type != LightType::Point) view.light_direction = glm::normalize(glm::make_vec3(light.direction));
-  view.light_position = glm::make_vec3(light.position);
-  view.light_range = light.range;
-  view.light_cos_outer = light.type == LightType::Spot ? std::cos(light.outer_cone) : -1.0f;
   // A perspective projection scales x and y by the cotangent of the half field of view.
   view.tan_half_fov = glm::vec2(1.0f / std::max(std::abs(projection[0][0]), 1e-6f),
                                 1.0f / std::max(std::abs(projection[1][1]), 1e-6f));
@@ -493,26 +511,32 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
                                                    f.native.receives.view}
                                    : ShadingInputs{inputs_.world_position.view(), inputs_.geometric_normal.view(),
                                                    inputs_.albedo.view()};
-  Frame frame{*gpu_, cmd, profiler, view, inputs, shadow_term_, overlay_, geometry_.geometry(), draws_,
-              uint32_t(f.frame_index % frames_in_flight_), frames_in_flight_};
-  record_technique(frame);
-  {
+  for (uint32_t i = 0; i < f.light_count; ++i) {
+    // Each light in turn through the same passes and the same term, which the output pass then copies
+    // into that light's image; a region per light when there are several.
+    std::optional<engine::gpu::ScopedGpuRegion> light_region;
+    if (f.light_count > 1) light_region.emplace(*gpu_, profiler, cmd, "light " + std::to_string(i));
+    if (i > 0) restart_term(cmd);
+    set_light(view, f.lights[i]);
+    Frame frame{*gpu_, cmd, profiler, view, inputs, shadow_term_, overlay_, geometry_.geometry(), draws_,
+                uint32_t(f.frame_index % frames_in_flight_), frames_in_flight_};
+    record_technique(frame);
     engine::gpu::ScopedGpuRegion output_region(*gpu_, profiler, cmd, "host_output");
-    record_output(cmd, f);
+    record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == 0);
   }
   slot.frame = f.frame_index;
   slot.technique = settings_.technique;
   slot.csm = settings_.izb.csm;
 }
 
-// A point light in the IZB: six spot-light passes along the axes, each a cone just wider than a cube
-// face's (half angle acos(1/sqrt 3) = 54.7 degrees, plus half a degree), so together they cover every
-// direction; each resolve writes only the points in its own cone, and where cones overlap both faces
-// compute the same exact answer.
 // The PCF radius of a spot light's filtered map (Technique::Cascades), in map texels.
 constexpr float kSpotFilterTexels = 2.5f;
 
-void ContextImpl::record_point_light_faces(Frame& frame) {
+// A point light's six cones around the axes, each just wider than a cube face's (half angle
+// acos(1/sqrt 3) = 54.7 degrees, plus half a degree) so that together they cover every direction, shadowed as a spot light by
+// `record_face`; a face's resolve writes only the points in its own cone.
+template <typename RecordFace>
+void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_face) {
   View face_view = frame.view;
   face_view.light_face = true;
   face_view.light_cos_outer = std::cos(std::acos(1.0f / std::sqrt(3.0f)) + glm::radians(0.5f));
@@ -521,12 +545,48 @@ void ContextImpl::record_point_light_faces(Frame& frame) {
     face_view.light_direction = axis;
     Frame f{frame.ctx, frame.cmd, frame.profiler, face_view, frame.gbuffer, frame.shadow_term, frame.overlay,
             frame.geometry, frame.draws, frame.slot, frame.slots};
-    izb().record(f, settings_.izb, settings_.debug, false, collect_stats_);
+    record_face(f);
     pass_barrier(*gpu_, frame.cmd);
   }
 }
 
+void ContextImpl::record_local_light(Frame& frame) {
+  const bool point = frame.view.light_cos_outer <= -1.0f;
+  switch (settings_.technique) {
+    case Technique::Off:
+      break;
+    case Technique::ShadowMap:
+    case Technique::Cascades: {
+      // One perspective map per spot light (per cube-face cone of a point light), unfiltered for sm and
+      // PCF-filtered for cascades.
+      if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
+      const float filter = settings_.technique == Technique::Cascades ? kSpotFilterTexels : 0.0f;
+      auto map = [&](Frame& f) { shadow_map_->record(f, settings_.shadow_map, filter); };
+      if (point) record_point_light_faces(frame, map);
+      else map(frame);
+      break;
+    }
+    case Technique::Izb:
+    case Technique::Hybrid: {
+      // The hybrid shadows a local light with the IZB alone: its range bounds the work, and every point
+      // it reaches gets the exact term.
+      auto izb_pass = [&](Frame& f) { izb().record(f, settings_.izb, settings_.debug, false, collect_stats_); };
+      if (point) record_point_light_faces(frame, izb_pass);
+      else izb_pass(frame);
+      break;
+    }
+    case Technique::RayTraced:
+      if (!ray_traced_) ray_traced_ = std::make_unique<RayTracedPass>(*gpu_);
+      ray_traced_->record(frame, settings_.izb.samples_per_pixel, collect_stats_);
+      break;
+  }
+}
+
 void ContextImpl::record_technique(Frame& frame) {
+  if (frame.view.local_light) {
+    record_local_light(frame);
+    return;
+  }
   switch (settings_.technique) {
     case Technique::Off:
       break;
@@ -535,19 +595,9 @@ void ContextImpl::record_technique(Frame& frame) {
       shadow_map_->record(frame, settings_.shadow_map);
       break;
     case Technique::Cascades:
-      // A spot light's counterpart: one filtered perspective map.
-      if (frame.view.local_light) {
-        if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
-        shadow_map_->record(frame, settings_.shadow_map, kSpotFilterTexels);
-        break;
-      }
       cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
       break;
     case Technique::Izb:
-      if (frame.view.local_light && frame.view.light_cos_outer <= -1.0f) {
-        record_point_light_faces(frame);
-        break;
-      }
       izb().record(frame, settings_.izb, settings_.debug, false, collect_stats_);
       break;
     case Technique::Hybrid: {

@@ -53,10 +53,15 @@ class ContextImpl final : public Context {
   void ensure_targets(VkExtent2D extent);
   // `clear`: the term to 1 and (with a debug view) the overlay to 0, where no input pass does.
   void prepare_targets(VkCommandBuffer cmd, bool clear);
-  void record_point_light_faces(Frame& frame);
+  template <typename RecordFace>
+  void record_point_light_faces(Frame& frame, RecordFace&& record_face);
+  void record_local_light(Frame& frame);
+  void set_light(View& view, const Light& light);
+  void restart_term(VkCommandBuffer cmd);
+  void validate_light(const Light& light, const std::string& name) const;
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
-  void record_output(VkCommandBuffer cmd, const FrameDesc& frame);
+  void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool first);
   void complete_slot(Slot& slot);
   void add_memory(Stats& s, Technique technique, bool csm) const;
   IzbPass& izb();

@@ -156,6 +156,9 @@ struct IzbPass::Impl {
 
   // Frame-sized in hybrid; otherwise 1x1 placeholders keep the bindings valid.
   void ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid) {
+    // A frame may shadow the sun with the hybrid and then a local light with the plain IZB: the
+    // hybrid's images stay until the extent changes.
+    if (!hybrid && soft_term.valid()) return;
     const VkExtent2D want = hybrid ? e : VkExtent2D{1, 1};
     if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height) return;
     hybrid_extent = want;

@@ -73,7 +73,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
     if (frame.view.local_light) {
       p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
-      p.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, 0.0f, 0.0f);
+      p.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
     }
     p.bias = glm::vec4(settings.constant_bias, filter_texels, 0.0f, 0.0f);
     p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);

@@ -124,13 +124,32 @@ class EngineShadowModule final : public ShadowModule {
     f.camera.reversed_z = true;
     f.camera.near_plane = frame.view.near_plane;
     f.camera.far_plane = frame.view.far_plane;
-    Light sun;
-    std::memcpy(sun.direction, glm::value_ptr(frame.view.light_direction), sizeof(sun.direction));
-    f.lights = light_ ? &*light_ : &sun;
-    f.light_count = 1;
+    // The sun into the renderer's shadow term, then each local light into its own; a night without
+    // sunlight shadows the local lights alone. set_light() replaces them all with one light.
+    lights_.clear();
+    outputs_.clear();
+    const bool sun_lit = glm::length(frame.view.light_radiance) > 0.0f || frame.view.local_lights.empty();
+    if (light_) {
+      lights_.push_back(*light_);
+      outputs_.push_back(image_input(frame.shadow_term));
+    } else {
+      if (sun_lit) {
+        Light sun;
+        std::memcpy(sun.direction, glm::value_ptr(frame.view.light_direction), sizeof(sun.direction));
+        lights_.push_back(sun);
+        outputs_.push_back(image_input(frame.shadow_term));
+      }
+      for (size_t i = 0; i < frame.view.local_lights.size(); ++i) {
+        lights_.push_back(light_of(frame.view.local_lights[i]));
+        outputs_.push_back(image_input(frame.local_shadow_terms[i]));
+      }
+    }
+    f.lights = lights_.data();
+    f.light_count = uint32_t(lights_.size());
+    f.output = outputs_.front();
+    f.light_outputs = outputs_.data() + 1;
     f.instances = instances_.data();
     f.instance_count = uint32_t(instances_.size());
-    f.output = image_input(frame.shadow_term);
     f.overlay = image_input(frame.overlay);
     context_->record(frame.cmd, f);
     recorded_.push_back(f.frame_index);
@@ -253,10 +272,23 @@ class EngineShadowModule final : public ShadowModule {
   std::map<std::tuple<uint32_t, uint32_t, uint32_t>, MeshId> meshes_;
   std::map<uint32_t, TextureImage> textures_;
   std::vector<Instance> instances_;
+  std::vector<Light> lights_;         // this frame's, in FrameDesc order
+  std::vector<ImageInput> outputs_;   // their shadow terms
   std::deque<uint64_t> recorded_;  // frames recorded and not yet reported complete, oldest first
 };
 
 }  // namespace
+
+Light light_of(const engine::FrameLight& l) {
+  Light out;
+  out.type = l.kind == engine::LocalLightKind::Spot ? LightType::Spot : LightType::Point;
+  std::memcpy(out.position, glm::value_ptr(l.position), sizeof(out.position));
+  std::memcpy(out.direction, glm::value_ptr(l.direction), sizeof(out.direction));
+  out.range = l.range;
+  out.inner_cone = l.inner_cone;
+  out.outer_cone = l.outer_cone;
+  return out;
+}
 
 std::shared_ptr<ShadowModule> install(engine::Renderer& renderer, const Settings& settings) {
   auto module = std::make_shared<EngineShadowModule>(renderer, settings);

@@ -68,6 +68,8 @@ inline constexpr float kSpotOuterCone = 0.72f;
 inline constexpr glm::vec3 kPointPosition{3.5f, 2.2f, -3.0f};
 inline constexpr float kPointRange = 8.0f;
 inline constexpr glm::vec3 kMoonDirection{-0.3f, -1.0f, -0.4f};
+inline constexpr glm::vec3 kNightSky{0.03f, 0.04f, 0.07f};  // Scene::sky_color
+inline constexpr float kNightSkyBrightness = 0.06f;
 }  // namespace lamps
 
 // Mesh builders. All produce outward normals and counter-clockwise front faces seen from outside

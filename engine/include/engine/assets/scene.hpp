@@ -37,6 +37,10 @@ struct Scene {
   Registry registry;
   Entity camera = kNullEntity;
   Entity light = kNullEntity;
+  // The hemisphere ambient's sky colour (lighting.comp) and how bright the sky background is (1: day;
+  // a night scene lowers both).
+  glm::vec3 sky_color{0.26f, 0.31f, 0.40f};
+  float sky_brightness = 1.0f;
   std::vector<SceneView> views;  // at least one (the tour)
   std::optional<SceneView> start;  // where a player starts, when the scene says (else views[0])
 

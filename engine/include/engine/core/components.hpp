@@ -135,6 +135,7 @@ struct SpotLight {
   float range = 10.0f;
   float inner_cone = 0.0f;
   float outer_cone = 0.7853982f;
+  bool enabled = true;  // off: the renderer neither lights nor shadows with it
 };
 
 // A point light at the entity's world position; units as SpotLight.
@@ -142,6 +143,7 @@ struct PointLight {
   glm::vec3 color{1.0f};
   float intensity = 10.0f;
   float range = 10.0f;
+  bool enabled = true;  // off: the renderer neither lights nor shadows with it
 };
 
 // Whether this mesh enters the conservative shadow map z-prepass.

@@ -63,6 +63,18 @@ struct DrawItem {
   Aabb bounds;          // world space
 };
 
+// A spot or point light the lighting pass adds beside the sun, with its own shadow term.
+enum class LocalLightKind : uint32_t { Spot, Point };
+struct FrameLight {
+  Entity entity;
+  LocalLightKind kind = LocalLightKind::Point;
+  glm::vec3 position{0.0f};
+  glm::vec3 direction{0.0f, -1.0f, 0.0f};  // spot: the direction light travels, unit
+  glm::vec3 radiance{0.0f};                 // colour * intensity (candela)
+  float range = 0.0f;                       // world units
+  float inner_cone = 0.0f, outer_cone = 0.0f;  // spot: half angles, radians
+};
+
 struct FrameView {
   glm::mat4 view{1.0f};
   glm::mat4 projection{1.0f};
@@ -71,6 +83,9 @@ struct FrameView {
   glm::vec3 camera_position{0.0f};
   glm::vec3 light_direction{0.0f, -1.0f, 0.0f};  // travel direction, unit
   glm::vec3 light_radiance{1.0f};
+  // Enabled spot and point lights whose range reaches the view, nearest first, at most
+  // Renderer::kMaxLocalLights.
+  std::vector<FrameLight> local_lights;
   float near_plane = 0.05f;
   float far_plane = 200.0f;
   float vertical_fov = 1.0f;
@@ -94,7 +109,8 @@ struct FrameContext {
   gpu::GpuProfiler& profiler;
   const FrameView& view;
   GBuffer& gbuffer;
-  gpu::Image& shadow_term;     // R32F storage image, cleared to 1 (lit) before features run
+  gpu::Image& shadow_term;     // R32F storage image, cleared to 1 (lit) before features run: the sun's
+  gpu::Image* local_shadow_terms;  // view.local_lights.size() images as shadow_term, one per local light
   gpu::Image& overlay;         // RGBA8 storage image, cleared to 0; lighting blends rgb by a
   const gpu::Buffer& frame_uniforms;
   SceneGeometry& geometry;
@@ -120,6 +136,7 @@ class RenderFeature {
 class Renderer {
  public:
   static constexpr uint32_t kMaxFramesInFlight = 3;
+  static constexpr uint32_t kMaxLocalLights = 3;  // shadowed spot and point lights per frame (lighting.comp)
 
   // `frames_in_flight` (1..kMaxFramesInFlight): how many recorded frames the host may have on the GPU
   // at once. Frame N uses the per-frame data of slot N % frames_in_flight; before update() for frame N
@@ -166,6 +183,8 @@ class Renderer {
   gpu::Image& output() { return output_; }
   GBuffer& gbuffer() { return gbuffer_; }
   gpu::Image& shadow_term() { return shadow_term_; }
+  // Local light i's shadow term (FrameView::local_lights[i]).
+  gpu::Image& local_shadow_term(uint32_t i) { return local_shadow_terms_.at(i); }
   const FrameView& frame_view() const { return view_; }
   const std::vector<DrawItem>& draws() const { return draws_; }
   SceneGeometry* geometry() { return geometry_.get(); }
@@ -179,12 +198,14 @@ class Renderer {
   std::vector<glm::vec4> read_geometric_normals();
   std::vector<float> read_depth();
   std::vector<float> read_shadow_term();
+  std::vector<float> read_local_shadow_term(uint32_t i);
   void write_png(const std::filesystem::path& path);
 
  private:
   void create_targets();
   void record_frame(VkCommandBuffer cmd);
   void build_draw_list();
+  void gather_local_lights();
 
   gpu::Context& ctx_;
   VkExtent2D extent_;
@@ -196,6 +217,7 @@ class Renderer {
   SystemSchedule systems_;
   GBuffer gbuffer_;
   gpu::Image shadow_term_;
+  std::vector<gpu::Image> local_shadow_terms_;  // kMaxLocalLights
   gpu::Image overlay_;
   gpu::Image output_;
   uint32_t frames_in_flight_ = 1;

@@ -173,14 +173,13 @@ struct Instance {
 
 enum class LightType : uint32_t { Directional, Spot, Point };
 
-// A directional light is shadowed by every technique. A spot or point light (this version: a spot
-// light with Technique::Izb (CSM prepass included; compute trace and CSM, no lit culling),
-// RayTraced, ShadowMap or Cascades (one filtered perspective map), a point light with Izb (six cones around the axes; its IZB statistics are
-// the last cone's) or RayTraced; the others refuse it in one line) shadows the points it reaches: within
+// Every technique shadows every light type. A directional light as the technique says; a spot light
+// with one perspective light space from its position: Technique::Izb and Hybrid trace it with the IZB
+// (CSM prepass included; compute trace and CSM, no lit culling: the hybrid needs no filtered term
+// within a light's range), ShadowMap with one perspective map, Cascades with the same map PCF-filtered,
+// RayTraced with rays toward its position. A point light is six such cones around the axes (their
+// IZB statistics are the last cone's). A local light shadows the points it reaches: within
 // `range` of `position` and, for a spot light, inside its outer cone; every other point, and every
-// point whose geometric normal turns away from the light, is written 0. Shadow rays run from the
-// point (pushed off its surface as for the sun) toward `position`, and occluders closer than 0.01
-// world units to the light (its bulb and housing) do not count (shaders/shared/local_light.h).
 struct Light {
   LightType type = LightType::Directional;
   float direction[3] = {0.0f, -1.0f, 0.0f};  // directional and spot: the direction light travels, unit
@@ -229,6 +228,8 @@ struct Camera {
   float far_plane = 200.0f;  // the range between them; an infinite projection: the farthest shadowed)
 };
 
+constexpr uint32_t kMaxLightsPerRecord = 8;
+
 struct FrameDesc {
   uint64_t frame_index = 0;  // increases by one per record(); slot = frame_index % frames_in_flight
   // Depth: D32_SFLOAT, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT or D16_UNORM, SAMPLED usage. A pixel at
@@ -255,14 +256,19 @@ struct FrameDesc {
   // normals, geometric normals, terminator offset and receiver mask are checked but not read.
   NativeInputs native;
   Camera camera;
-  const Light* lights = nullptr;  // this version shadows exactly one light (see Light)
+  // The lights to shadow, 1..kMaxLightsPerRecord, each into its own image: lights[0] into `output`,
+  // lights[i] into light_outputs[i - 1]. They run one after another through the same passes, with a
+  // profiler region "light i" each when there are several; Stats describe the last of them.
+  const Light* lights = nullptr;
   uint32_t light_count = 0;
   const Instance* instances = nullptr;  // every caster this frame
   uint32_t instance_count = 0;
   // Visibility (1 lit .. 0 shadowed), per pixel of depth: R8_UNORM, R16_SFLOAT or R32_SFLOAT with
   // STORAGE usage, GENERAL layout, extent equal to depth's.
   ImageInput output;
-  // Optional debug overlay (Settings::debug): R8G8B8A8_UNORM, STORAGE usage, GENERAL; rgb colour, a
+  // With light_count > 1: light_count - 1 more images, as `output`, for lights[1..].
+  const ImageInput* light_outputs = nullptr;
+  // Optional debug overlay of the first light (Settings::debug): R8G8B8A8_UNORM, STORAGE usage, GENERAL; rgb colour, a
   // blend weight. Pixels the overlay does not mark are written 0.
   ImageInput overlay;
 };

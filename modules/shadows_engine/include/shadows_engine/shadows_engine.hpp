@@ -43,13 +43,17 @@ class ShadowModule : public engine::RenderFeature {
   virtual CsmSnapshot read_lit_map() = 0;
   // The host-API context the adapter drives.
   virtual Context& context() = 0;
-  // The light the module shadows from the next frame on, instead of the renderer's sun (nullopt: the
-  // sun again). The renderer's lighting is not told: for tests and tools that read the visibility.
+  // The one light the module shadows from the next frame on, into the renderer's sun term, instead of
+  // the renderer's sun and local lights (nullopt: those again). The renderer's lighting is not told:
+  // for tests and tools that read the visibility.
   virtual void set_light(std::optional<Light> light) = 0;
 };
 
 // Creates the module on the renderer's device, adds it to the renderer, and returns it.
 std::shared_ptr<ShadowModule> install(engine::Renderer& renderer, const Settings& settings = {});
+
+// The module's description of one of the renderer's local lights (FrameView::local_lights).
+Light light_of(const engine::FrameLight& light);
 
 // The entity a CSM decision is about (the adapter's Instance::id is index << 32 | generation).
 inline engine::Entity entity_of(const CsmDecision& decision) {
