@@ -112,7 +112,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--save-settings") o.save_settings = args.value();
     else if (a == "--fixed-size") o.fixed_size = true;
     else if (a == "--target-fps") o.target_fps = float_value(args, 1.0f, 1000.0f);
-    else if (a == "--time-of-day") o.time_of_day = float_value(args, 5.0f, 19.0f);
+    else if (a == "--time-of-day") o.time_of_day = float_value(args, 0.0f, 24.0f);
     else if (a == "--animate-sun") o.animate_sun = true;
     else if (a == "--overlay") {
       o.overlay = args.value();

@@ -55,6 +55,12 @@ glm::vec3 sun_direction(const glm::vec3& noon_direction, float hours) {
                                   std::cos(elevation) * std::cos(azimuth)));
 }
 
+float daylight(float hours) {
+  const float day = std::sin(kPi * (hours - 6.0f) / 12.0f);
+  const float t = std::clamp((day + 0.1f) / 0.3f, 0.0f, 1.0f);
+  return t * t * (3.0f - 2.0f * t);
+}
+
 // ---------------------------------------------------------------------------------------------
 // ---------------------------------------------------------------------------------------------
 Game::Game(std::unique_ptr<engine::Scene> scene, float seconds_per_view) : seconds_per_view_(seconds_per_view) {
@@ -74,8 +80,37 @@ void Game::set_scene(std::unique_ptr<engine::Scene> scene) {
   player_ = std::make_unique<Player>(&collision_, start.eye, start.target);
   tour_ = std::make_unique<CameraPath>(s, seconds_per_view_, &collision_);
   noon_sun_ = s.views.front().light_direction;
-  if (const auto* light = s.registry.try_get<engine::DirectionalLight>(s.light)) noon_sun_ = light->direction;
+  if (const auto* light = s.registry.try_get<engine::DirectionalLight>(s.light)) {
+    noon_sun_ = light->direction;
+    sun_color_ = light->color;
+    sun_intensity_ = light->intensity;
+  }
+  day_sky_ = s.sky_color;
+  day_sky_brightness_ = s.sky_brightness;
   sim_time = 0.0f;
+}
+
+// The sun by day, the moon (dim and blue, opposite the sun's path) by night; the sky and the ambient
+// darken with the daylight, and the lamps light at dusk.
+void Game::apply_time_of_day() {
+  engine::Scene& s = *scene_;
+  const float light = daylight(time_of_day);
+  if (s.registry.has<engine::DirectionalLight>(s.light)) {
+    auto& sun = s.registry.get<engine::DirectionalLight>(s.light);
+    const float moon_intensity = 0.06f * sun_intensity_;
+    sun.direction = light > 0.05f ? sun_direction(noon_sun_, time_of_day) : sun_direction(noon_sun_, time_of_day + 12.0f);
+    sun.color = glm::mix(glm::vec3(0.55f, 0.65f, 1.0f), sun_color_, light);
+    sun.intensity = glm::mix(moon_intensity, sun_intensity_, light);
+  }
+  s.sky_color = glm::mix(glm::vec3(0.025f, 0.035f, 0.06f), day_sky_, light);
+  s.sky_brightness = glm::mix(0.06f, day_sky_brightness_, light);
+  switch_lamps(light < 0.5f);
+}
+
+void Game::switch_lamps(bool on) {
+  if (!lamps_follow_time) return;
+  scene_->registry.each<engine::SpotLight>([&](engine::Entity, engine::SpotLight& l) { l.enabled = on; });
+  scene_->registry.each<engine::PointLight>([&](engine::Entity, engine::PointLight& l) { l.enabled = on; });
 }
 
 void Game::update(const InputFrame& input) {
@@ -93,11 +128,15 @@ void Game::update(const InputFrame& input) {
   }
   if (animate_sun) {
     time_of_day += dt * day_speed;
-    if (time_of_day > 19.0f) time_of_day -= 14.0f;  // loop over daylight hours 5..19
+    if (time_of_day >= 24.0f) time_of_day -= 24.0f;
   }
-  if ((playing || sun_from_time) && s.registry.has<engine::DirectionalLight>(s.light)) {
-    s.registry.get<engine::DirectionalLight>(s.light).direction =
-        (sun_from_time || animate_sun) ? sun_direction(noon_sun_, time_of_day) : noon_sun_;
+  if (sun_from_time || animate_sun) {
+    apply_time_of_day();
+  } else {
+    // The scene's own hour: lamps lit in a night scene (a dark sky), off by day.
+    switch_lamps(day_sky_brightness_ < 0.5f);
+    if (playing && s.registry.has<engine::DirectionalLight>(s.light))
+      s.registry.get<engine::DirectionalLight>(s.light).direction = noon_sun_;
   }
 }
 
@@ -165,6 +204,38 @@ void draw_help(PanelState& panel) {
   ImGui::End();
 }
 
+// The scene's spot and point lights: each switched on or off (then no longer by the time of day) and
+// its colour's intensity and range changed; which of them the renderer shadows this frame (the
+// nearest Renderer::kMaxLocalLights whose range reaches the view; the GPU time list shows a "light i"
+// region for each).
+void light_table(engine::Renderer& renderer, Game& game) {
+  engine::Scene* scene = renderer.scene();
+  if (!scene) return;
+  ImGui::Checkbox("lamps follow the time of day", &game.lamps_follow_time);
+  const auto& shadowed = renderer.frame_view().local_lights;
+  auto row = [&](engine::Entity e, const char* kind, bool& enabled, float& intensity, float& range) {
+    ImGui::PushID(int(e.index));
+    const auto* name = scene->registry.try_get<engine::Name>(e);
+    int slot = -1;
+    for (size_t i = 0; i < shadowed.size(); ++i)
+      if (shadowed[i].entity == e) slot = int(i);
+    if (ImGui::Checkbox("##on", &enabled)) game.lamps_follow_time = false;
+    ImGui::SameLine();
+    if (slot >= 0) ImGui::Text("%s %s (shadowed, light %d)", kind, name ? name->value.c_str() : "?", slot);
+    else ImGui::Text("%s %s", kind, name ? name->value.c_str() : "?");
+    ImGui::SetNextItemWidth(120);
+    ImGui::SliderFloat("cd", &intensity, 0.0f, 200.0f, "%.0f");
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(120);
+    ImGui::SliderFloat("range", &range, 0.5f, 40.0f, "%.1f");
+    ImGui::PopID();
+  };
+  scene->registry.each<engine::SpotLight>(
+      [&](engine::Entity e, engine::SpotLight& l) { row(e, "spot", l.enabled, l.intensity, l.range); });
+  scene->registry.each<engine::PointLight>(
+      [&](engine::Entity e, engine::PointLight& l) { row(e, "point", l.enabled, l.intensity, l.range); });
+}
+
 void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game& game, PanelState& panel) {
   // Per-pass GPU time history (kept while the panel is hidden too).
   for (const auto& [name, ms] : renderer.profiler().last_frame()) {
@@ -196,7 +267,7 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
       ImGui::SameLine();
       ImGui::Text("at %.1f %.1f %.1f", p.x, p.y, p.z);
     }
-    if (ImGui::SliderFloat("time of day", &game.time_of_day, 5.0f, 19.0f, "%.1f h")) game.sun_from_time = true;
+    if (ImGui::SliderFloat("time of day", &game.time_of_day, 0.0f, 24.0f, "%.1f h")) game.sun_from_time = true;
     if (ImGui::Checkbox("animate sun", &game.animate_sun) && game.animate_sun) game.sun_from_time = true;
     ImGui::SameLine();
     ImGui::SetNextItemWidth(100);
@@ -254,6 +325,8 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
     if (ImGui::Combo("overlay", &debug, debug_views, IM_ARRAYSIZE(debug_views))) s.debug = shadows::DebugView(debug);
     if (ImGui::Checkbox("statistics (extra passes)", &panel.statistics)) module.set_collect_stats(panel.statistics);
   }
+
+  if (ImGui::CollapsingHeader("Lights")) light_table(renderer, game);
 
   if (ImGui::CollapsingHeader("GPU time", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::Text("GPU ms, %ux%u on %s", renderer.extent().width, renderer.extent().height,
@@ -414,7 +487,7 @@ std::string load_settings(const std::string& path, shadows::ShadowModule& module
         s.izb.resolution = uint32_t(r);
       } else if (k == "hybrid_izb_distance") s.hybrid_izb_distance = v.get<float>();
       else if (k == "hybrid_soft_distance") s.hybrid_soft_distance = v.get<float>();
-      else if (k == "time_of_day") tod = std::clamp(v.get<float>(), 5.0f, 19.0f);
+      else if (k == "time_of_day") tod = std::clamp(v.get<float>(), 0.0f, 24.0f);
       else if (k == "animate_sun") animate = v.get<bool>();
       else if (k == "day_speed") speed = std::clamp(v.get<float>(), 0.0f, 10.0f);
       else if (k == "dynamic_resolution" || k == "target_fps") continue;

@@ -43,6 +43,9 @@ class CameraPath {
 // Sun direction for a time of day (hours): the scene's sun at noon, rising in the east of its
 // azimuth at 6 and setting at 18 (kept a little above the horizon outside those hours).
 glm::vec3 sun_direction(const glm::vec3& noon_direction, float hours);
+// How much of the sun's light the hour has: 1 from about 7 to 17 h, 0 from about 19 to 5 h (night),
+// smooth at dawn and dusk.
+float daylight(float hours);
 
 struct SceneEntry {
   std::string label;
@@ -61,9 +64,12 @@ class Game {
   bool playing = true;      // false: the camera tour
   bool paused = false;
   bool animate_sun = false;
-  float time_of_day = 12.0f;  // hours
+  float time_of_day = 12.0f;  // hours, 0..24
   float day_speed = 0.25f;    // hours per second while the sun animates
   bool sun_from_time = false; // the time-of-day slider moved, or the sun animates
+  // While the time of day drives the sun, the scene's spot and point lights switch on at dusk and off
+  // at dawn (a light switched by hand in the panel stops following).
+  bool lamps_follow_time = true;
   float sim_time = 0.0f;      // drives the animations
   Player& player() { return *player_; }
   CameraPath& tour() { return *tour_; }
@@ -77,6 +83,13 @@ class Game {
   std::unique_ptr<Player> player_;
   std::unique_ptr<CameraPath> tour_;
   glm::vec3 noon_sun_{0.0f, -1.0f, 0.0f};
+  // The scene's own sun and sky, which the time of day scales toward the moon and the night sky.
+  glm::vec3 sun_color_{1.0f};
+  float sun_intensity_ = 3.0f;
+  glm::vec3 day_sky_{0.26f, 0.31f, 0.40f};
+  float day_sky_brightness_ = 1.0f;
+  void apply_time_of_day();
+  void switch_lamps(bool on);  // unless lamps_follow_time is off
 };
 
 // Panel state that outlives one frame.
