@@ -44,6 +44,15 @@ add_test(NAME walkthrough_headless_runs
                  -- $<TARGET_FILE:walkthrough> ${args} --mode hybrid --out ${out}
                  --then $<TARGET_FILE:walkthrough> ${args} --mode off --out ${out}_off)
 set_tests_properties(walkthrough_headless_runs PROPERTIES LABELS gpu ENVIRONMENT "${CHECK_RUN_ENV}")
+# The courtyard at night: the moon and the three lamps, each with its own shadow term from one record.
+set(out ${CMAKE_CURRENT_BINARY_DIR}/walkthrough_night_out)
+set(args --headless --size 240x136 --frames 1 --time-of-day 22)
+add_test(NAME walkthrough_night_lamps
+         COMMAND ${CHECK_RUN} --fresh ${out} --fresh ${out}_off
+                 --png "${out}/frame_000.png --min-size 240x136 --darker-than ${out}_off/frame_000.png --min-darker 0.01"
+                 -- $<TARGET_FILE:walkthrough> ${args} --mode hybrid --out ${out}
+                 --then $<TARGET_FILE:walkthrough> ${args} --mode off --out ${out}_off)
+set_tests_properties(walkthrough_night_lamps PROPERTIES LABELS gpu ENVIRONMENT "${CHECK_RUN_ENV}")
 foreach(bad missing_file broken_json index_out_of_range nan_position)
   if(bad STREQUAL missing_file)
     set(file ${PROJECT_SOURCE_DIR}/content/test_gltf/does_not_exist.gltf)

@@ -280,6 +280,9 @@ void ContextImpl::validate(const FrameDesc& f) const {
     check_image(f.light_outputs[i - 1], ("FrameDesc.light_outputs[" + std::to_string(i - 1) + "]").c_str(),
                 {VK_FORMAT_R8_UNORM, VK_FORMAT_R16_SFLOAT, VK_FORMAT_R32_SFLOAT}, VK_IMAGE_USAGE_STORAGE_BIT,
                 {VK_IMAGE_LAYOUT_GENERAL}, extent);
+  if (f.overlay_light >= f.light_count)
+    throw Error("shadows: FrameDesc.overlay_light is " + std::to_string(f.overlay_light) + " with light_count " +
+                std::to_string(f.light_count));
   for (uint32_t i = 0; i < f.light_count; ++i) validate_light(f.lights[i], "FrameDesc.lights[" + std::to_string(i) + "]");
   if (f.instance_count > 0 && !f.instances) throw Error("shadows: FrameDesc.instances is null with instance_count > 0");
   for (uint32_t i = 0; i < f.instance_count; ++i)
@@ -397,7 +400,7 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
                  pass_shader_stages(*gpu_), kStorageReadWrite);
 }
 
-void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool first) {
+void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool with_overlay) {
   // Every pass's writes of the term and overlay, visible to the copy into the host's images.
   memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
@@ -412,8 +415,8 @@ void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const I
       .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT, f.overlay.present() ? f.overlay.view : overlay_.view())
       .push(*gpu_, cmd, p);
   uint32_t what = settings_.technique == Technique::Off ? gs::HOST_OUTPUT_ALL_LIT : 0u;
-  // The overlay is the first light's (later lights leave the host's overlay as the first wrote it).
-  if (f.overlay.present() && first)
+  // The overlay is FrameDesc::overlay_light's (the other lights leave the host's overlay alone).
+  if (f.overlay.present() && with_overlay)
     what |= settings_.debug != DebugView::None ? gs::HOST_OUTPUT_COPY_OVERLAY : gs::HOST_OUTPUT_ZERO_OVERLAY;
   const glm::uvec4 push(extent_.width, extent_.height, what, 0u);
   p.push_constants(cmd, push);
@@ -429,14 +432,17 @@ void ContextImpl::set_light(View& view, const Light& light) {
   view.light_face = false;
 }
 
-// Between two lights of one record: the output pass's reads of the term finish before it is cleared to
-// lit again, and the clear is visible to the next light's passes.
+// Between two lights of one record: every access of the previous light's passes (their statistics
+// copies, the output pass's reads of the term) finishes before the next light's rewrite the same
+// resources, and the term is cleared to lit again, visible to the next light's passes.
 void ContextImpl::restart_term(VkCommandBuffer cmd) {
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT,
-                 VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  pass_barrier(*gpu_, cmd);
   const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}};
+  const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}}, zero{{0.0f, 0.0f, 0.0f, 0.0f}};
   vkCmdClearColorImage(cmd, shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, &one, 1, &range);
+  // Each light's debug view marks a clean overlay (FrameDesc::overlay_light's is the one handed over).
+  if (settings_.debug != DebugView::None)
+    vkCmdClearColorImage(cmd, overlay_.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, pass_shader_stages(*gpu_),
                  kStorageReadWrite);
 }
@@ -522,7 +528,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
                 uint32_t(f.frame_index % frames_in_flight_), frames_in_flight_};
     record_technique(frame);
     engine::gpu::ScopedGpuRegion output_region(*gpu_, profiler, cmd, "host_output");
-    record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == 0);
+    record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light);
   }
   slot.frame = f.frame_index;
   slot.technique = settings_.technique;

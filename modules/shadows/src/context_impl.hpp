@@ -61,7 +61,7 @@ class ContextImpl final : public Context {
   void validate_light(const Light& light, const std::string& name) const;
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
-  void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool first);
+  void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool with_overlay);
   void complete_slot(Slot& slot);
   void add_memory(Stats& s, Technique technique, bool csm) const;
   IzbPass& izb();

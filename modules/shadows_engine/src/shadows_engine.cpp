@@ -144,6 +144,9 @@ class EngineShadowModule final : public ShadowModule {
         outputs_.push_back(image_input(frame.local_shadow_terms[i]));
       }
     }
+    // The debug overlay shows the nearest local light's passes when one is shadowed (the lamps a
+    // player stands by at night), else the sun's.
+    f.overlay_light = (!light_ && sun_lit && lights_.size() > 1) ? 1u : 0u;
     f.lights = lights_.data();
     f.light_count = uint32_t(lights_.size());
     f.output = outputs_.front();

@@ -268,9 +268,10 @@ struct FrameDesc {
   ImageInput output;
   // With light_count > 1: light_count - 1 more images, as `output`, for lights[1..].
   const ImageInput* light_outputs = nullptr;
-  // Optional debug overlay of the first light (Settings::debug): R8G8B8A8_UNORM, STORAGE usage, GENERAL; rgb colour, a
-  // blend weight. Pixels the overlay does not mark are written 0.
+  // Optional debug overlay (Settings::debug) of lights[overlay_light]: R8G8B8A8_UNORM, STORAGE usage,
+  // GENERAL; rgb colour, a blend weight. Pixels the overlay does not mark are written 0.
   ImageInput overlay;
+  uint32_t overlay_light = 0;  // < light_count
 };
 
 // What each technique can do on this device, with the one-line reason where not.
