@@ -672,7 +672,12 @@ std::vector<std::string> ContextImpl::pass_names() const {
   switch (settings_.technique) {
     case Technique::Off: return {};
     case Technique::ShadowMap: return {"sm_depth", "sm_resolve"};
-    case Technique::Cascades: return cascades;
+    case Technique::Cascades: {
+      // A local light's filtered maps are the shadow map's passes.
+      std::vector<std::string> names = cascades;
+      names.insert(names.end(), {"sm_depth", "sm_resolve"});
+      return names;
+    }
     case Technique::Izb: return izb;
     case Technique::Hybrid: {
       izb.insert(izb.begin(), cascades.begin(), cascades.end());
@@ -689,7 +694,7 @@ void ContextImpl::add_memory(Stats& s, Technique technique, bool csm) const {
   switch (technique) {
     case Technique::Off: break;
     case Technique::ShadowMap: prefixes = {"sm "}; break;
-    case Technique::Cascades: prefixes = {"cascade "}; break;
+    case Technique::Cascades: prefixes = {"cascade ", "sm "}; break;  // "sm ": a local light's maps
     case Technique::Izb: prefixes = {"izb "}; break;
     case Technique::Hybrid: prefixes = {"izb ", "cascade "}; break;
     case Technique::RayTraced: prefixes = {"rt "}; break;

@@ -320,7 +320,7 @@ class SHADOWS_API Context {
     double ms = 0.0;
   };
   virtual std::vector<PassTime> pass_times() const = 0;
-  // Names of the passes the current settings record, in order.
+  // Names of the passes the current settings can record, in order (one a frame did not run has no time).
   virtual std::vector<std::string> pass_names() const = 0;
 
   // Validation messages counted on the host's instance (ContextDesc::count_validation_messages).

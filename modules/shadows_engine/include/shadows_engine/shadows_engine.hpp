@@ -23,7 +23,8 @@ class ShadowModule : public engine::RenderFeature {
   virtual const Stats& stats() const = 0;
   // Statistics are read back every frame only while enabled (costs a small readback).
   virtual void set_collect_stats(bool enabled) = 0;
-  // Names of the GPU passes the current settings record, in order (profiler region names).
+  // Names of the GPU passes the current settings can record, in order (profiler region names; a pass a
+  // frame did not run, such as the local-light maps of cascades under the sun alone, has no region).
   virtual std::vector<std::string> pass_names() const = 0;
   // Whether a coverage test / technique can run on this device, and why not.
   virtual bool supported(CsmTest test, std::string* why = nullptr) const = 0;
