@@ -368,6 +368,13 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
                   (unsigned long long)st.rays_occluded, (unsigned long long)st.rt_instances);
     if (s.technique == shadows::Technique::Izb || s.technique == shadows::Technique::Hybrid)
       ImGui::Text("triangle tests %.1f per point", st.triangle_tests_per_pixel);
+    // Per light of the frame (the sun's and the lamps' records), with the GPU time of its passes.
+    for (size_t i = 0; i < st.lights.size(); ++i) {
+      const auto& l = st.lights[i];
+      ImGui::Text("light %zu %-11s %6.2f ms  points %llu  nodes %llu  rays %llu", i, l.kind.c_str(), l.gpu_ms,
+                  (unsigned long long)l.lit_candidates, (unsigned long long)l.nodes_inserted,
+                  (unsigned long long)l.rays_traced);
+    }
     // GPU memory the technique holds, largest resources first.
     ImGui::Text("GPU memory %.1f MiB", double(st.memory_total_bytes) / (1024.0 * 1024.0));
     std::vector<std::pair<uint64_t, std::string>> resources;

@@ -433,6 +433,13 @@ struct Bench {
     entry["culling_rate"] = st.culling_rate;
     entry["hardware_conservative"] = st.hardware_conservative;
     entry["csm_status"] = st.csm_status;
+    json lights = json::array();
+    for (const auto& l : st.lights)
+      lights.push_back({{"kind", l.kind}, {"lit_candidates", l.lit_candidates}, {"nodes_inserted", l.nodes_inserted},
+                        {"csm_culled", l.csm_culled}, {"node_overflow", l.node_overflow},
+                        {"list_length_max", l.list_length_max}, {"rays_traced", l.rays_traced},
+                        {"rays_occluded", l.rays_occluded}, {"gpu_ms", l.gpu_ms}});
+    entry["lights"] = lights;
     entry["lists"] = shadows::list_layout_name(run.settings.izb.lists);
     entry["memory_bytes"] = st.memory_bytes;
     entry["memory_total_bytes"] = st.memory_total_bytes;

@@ -363,9 +363,21 @@ TEST_F(RayTracedTest, EveryLightOfAFrameGetsTheTermItGetsAlone) {
     shadows::Settings settings;
     settings.technique = technique;
     module_ = shadows::install(r, settings);
+    module_->set_collect_stats(true);
     r.render_frame(0.0f);
     const engine::FrameView view = r.frame_view();
     ASSERT_EQ(view.local_lights.size(), 2u) << "both lamps reach the view";
+    // Statistics per light, in the record's order; the IZB's count the points each light reaches.
+    const std::vector<shadows::Stats::LightStats> per_light = module_->stats().lights;
+    ASSERT_EQ(per_light.size(), 3u);
+    EXPECT_EQ(per_light[0].kind, "directional");
+    for (uint32_t i = 1; i < 3; ++i)
+      EXPECT_EQ(per_light[i].kind, view.local_lights[i - 1].kind == engine::LocalLightKind::Spot ? "spot" : "point");
+    const bool izb = technique == shadows::Technique::Izb || technique == shadows::Technique::Hybrid;
+    for (const auto& l : per_light) {
+      EXPECT_GT(l.gpu_ms, 0.0) << l.kind;
+      if (izb) EXPECT_GT(l.lit_candidates, 0u) << l.kind;
+    }
     ASSERT_GT(glm::length(view.light_radiance), 0.0f) << "the moon is lit";
     std::vector<std::vector<float>> together = {r.read_shadow_term()};
     for (uint32_t i = 0; i < 2; ++i) together.push_back(r.read_local_shadow_term(i));
@@ -383,6 +395,9 @@ TEST_F(RayTracedTest, EveryLightOfAFrameGetsTheTermItGetsAlone) {
         shadowed += alone[p] < 0.5f;
       }
       EXPECT_EQ(differ, 0u) << "light " << i << ": " << differ << " pixels differ from its own record";
+      ASSERT_EQ(module_->stats().lights.size(), 1u);
+      EXPECT_EQ(module_->stats().lights[0].lit_candidates, per_light[i].lit_candidates) << "light " << i;
+      EXPECT_EQ(module_->stats().lights[0].nodes_inserted, per_light[i].nodes_inserted) << "light " << i;
       EXPECT_GT(shadowed, alone.size() / 100) << "light " << i << " shadows next to nothing";
     }
   }

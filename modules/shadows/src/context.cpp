@@ -517,7 +517,13 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
                                                    f.native.receives.view}
                                    : ShadingInputs{inputs_.world_position.view(), inputs_.geometric_normal.view(),
                                                    inputs_.albedo.view()};
+  const uint32_t slot_index = uint32_t(f.frame_index % frames_in_flight_);
+  slot.lights.clear();
   for (uint32_t i = 0; i < f.light_count; ++i) {
+    Slot::LightRecords records;
+    records.kind = f.lights[i].type == LightType::Spot ? "spot" : f.lights[i].type == LightType::Point ? "point" : "directional";
+    records.izb_first = izb_ ? izb_->records_so_far(slot_index, f.frame_index) : 0u;
+    records.rt_first = ray_traced_ ? ray_traced_->records_so_far(slot_index, f.frame_index) : 0u;
     // Each light in turn through the same passes and the same term, which the output pass then copies
     // into that light's image; a region per light when there are several.
     std::optional<engine::gpu::ScopedGpuRegion> light_region;
@@ -529,6 +535,9 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     record_technique(frame);
     engine::gpu::ScopedGpuRegion output_region(*gpu_, profiler, cmd, "host_output");
     record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light);
+    records.izb_count = (izb_ ? izb_->records_so_far(slot_index, f.frame_index) : 0u) - records.izb_first;
+    records.rt_count = (ray_traced_ ? ray_traced_->records_so_far(slot_index, f.frame_index) : 0u) - records.rt_first;
+    slot.lights.push_back(std::move(records));
   }
   slot.frame = f.frame_index;
   slot.technique = settings_.technique;
@@ -646,10 +655,38 @@ void ContextImpl::complete_slot(Slot& slot) {
   Stats fresh;  // only the techniques that ran this frame report
   const Technique t = slot.technique;
   const uint32_t index = uint32_t(&slot - slots_.data());
-  if ((t == Technique::Izb || t == Technique::Hybrid) && izb_) izb_->after_frame(fresh, index);
+  std::vector<Stats> izb_records, rt_records;
+  if ((t == Technique::Izb || t == Technique::Hybrid) && izb_) izb_->after_frame(izb_records, index);
+  if (t == Technique::RayTraced && ray_traced_) ray_traced_->after_frame(rt_records, index);
+  if (!rt_records.empty()) fresh = rt_records.back();
+  else if (!izb_records.empty()) fresh = izb_records.back();
   if ((t == Technique::Cascades || t == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh, index);
-  if (t == Technique::RayTraced && ray_traced_) ray_traced_->after_frame(fresh, index);
   if (collect_stats_) {
+    const std::vector<PassTime> times = pass_times();
+    auto region_ms = [&](const std::string& name) {
+      double ms = 0.0;
+      for (const PassTime& p : times) ms += p.name == name ? p.ms : 0.0;
+      return ms;
+    };
+    for (size_t i = 0; i < slot.lights.size(); ++i) {
+      const Slot::LightRecords& r = slot.lights[i];
+      Stats::LightStats& l = fresh.lights.emplace_back();
+      l.kind = r.kind;
+      for (uint32_t k = r.izb_first; k < r.izb_first + r.izb_count && k < izb_records.size(); ++k) {
+        const Stats& s = izb_records[k];
+        l.lit_candidates += s.lit_candidates;
+        l.nodes_inserted += s.nodes_inserted;
+        l.csm_culled += s.csm_culled;
+        l.node_overflow += s.node_overflow;
+        l.list_length_max = std::max(l.list_length_max, s.list_length_max);
+      }
+      for (uint32_t k = r.rt_first; k < r.rt_first + r.rt_count && k < rt_records.size(); ++k) {
+        l.lit_candidates += rt_records[k].lit_candidates;
+        l.rays_traced += rt_records[k].rays_traced;
+        l.rays_occluded += rt_records[k].rays_occluded;
+      }
+      l.gpu_ms = slot.lights.size() > 1 ? region_ms("light " + std::to_string(i)) : region_ms("shadows");
+    }
     add_memory(fresh, t, slot.csm);
     stats_ = std::move(fresh);
   }

@@ -47,6 +47,12 @@ class ContextImpl final : public Context {
     std::unique_ptr<engine::gpu::GpuProfiler> profiler;
     Technique technique = Technique::Off;
     bool csm = false;
+    // Per light of the frame: its kind and which IZB and rt statistics records it made.
+    struct LightRecords {
+      std::string kind;
+      uint32_t izb_first = 0, izb_count = 0, rt_first = 0, rt_count = 0;
+    };
+    std::vector<LightRecords> lights;
   };
 
   void validate(const FrameDesc& frame) const;

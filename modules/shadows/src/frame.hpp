@@ -111,15 +111,21 @@ struct Frame {
 class ReadbackRing {
  public:
   // After `writers` / `writes` (the stages and accesses that produced `source`), copies `bytes` of it
-  // into the frame's copy and makes that visible to the host.
+  // into a host-visible copy of the frame's and makes that visible to the host. A frame may record
+  // several copies (one per light, or per cone of a point light): each gets its own.
   void record_copy(const Frame& frame, const engine::gpu::Buffer& source, VkDeviceSize bytes,
                    VkPipelineStageFlags2 writers, VkAccessFlags2 writes, const char* name) {
-    if (copies_.size() != frame.slots) {
-      copies_.clear();
-      copies_.resize(frame.slots);
-      pending_.assign(frame.slots, false);
+    if (slots_.size() != frame.slots) {
+      slots_.clear();
+      slots_.resize(frame.slots);
     }
-    engine::gpu::Buffer& copy = copies_[frame.slot];
+    Slot& slot = slots_[frame.slot];
+    if (slot.count == 0 || slot.frame != frame.view.frame_index) {
+      slot.count = 0;
+      slot.frame = frame.view.frame_index;
+    }
+    if (slot.copies.size() <= slot.count) slot.copies.emplace_back();
+    engine::gpu::Buffer& copy = slot.copies[slot.count++];
     if (!copy.valid() || copy.size() < bytes)
       copy = engine::gpu::Buffer(frame.ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, name);
     engine::gpu::memory_barrier(frame.cmd, writers, writes, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
@@ -127,18 +133,32 @@ class ReadbackRing {
     vkCmdCopyBuffer(frame.cmd, source.handle(), copy.handle(), 1, &region);
     engine::gpu::memory_barrier(frame.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                                 VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
-    pending_[frame.slot] = true;
   }
-  // The slot's copy when its frame recorded one and it has not been taken yet; else null.
+  // How many copies the slot's frame `frame_index` has recorded so far.
+  uint32_t recorded(uint32_t slot, uint64_t frame_index) const {
+    return slot < slots_.size() && slots_[slot].frame == frame_index ? slots_[slot].count : 0u;
+  }
+  // The slot's copies, in the order its frame recorded them, when not taken yet; else none.
+  std::vector<const engine::gpu::Buffer*> take_all(uint32_t slot) {
+    std::vector<const engine::gpu::Buffer*> out;
+    if (slot >= slots_.size()) return out;
+    for (uint32_t i = 0; i < slots_[slot].count; ++i) out.push_back(&slots_[slot].copies[i]);
+    slots_[slot].count = 0;
+    return out;
+  }
+  // The last copy of the slot's frame, when not taken yet; else null.
   const engine::gpu::Buffer* take(uint32_t slot) {
-    if (slot >= pending_.size() || !pending_[slot]) return nullptr;
-    pending_[slot] = false;
-    return &copies_[slot];
+    const auto all = take_all(slot);
+    return all.empty() ? nullptr : all.back();
   }
 
  private:
-  std::vector<engine::gpu::Buffer> copies_;
-  std::vector<bool> pending_;
+  struct Slot {
+    std::vector<engine::gpu::Buffer> copies;
+    uint32_t count = 0;  // recorded and not taken
+    uint64_t frame = 0;
+  };
+  std::vector<Slot> slots_;
 };
 
 }  // namespace shadows::detail

@@ -889,66 +889,79 @@ LitMapSnapshot IzbPass::read_lit_map() {
   return snapshot;
 }
 
-void IzbPass::after_frame(Stats& s, uint32_t slot) {
+void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
   Impl& m = *impl_;
   m.csm->frame_completed(slot);
-  const Buffer* readback = m.counters_readback.take(slot);
-  if (!readback) return;
-  const auto* c = readback->as<uint32_t>();
-  auto sharded = [&](uint32_t counter) {
-    uint64_t sum = 0;
-    for (uint32_t k = 0; k < gpu_shared::kIzbCounterShards; ++k)
-      sum += c[gpu_shared::IZB_COUNTER_SHARDS + counter * gpu_shared::kIzbCounterShards + k];
-    return sum;
-  };
-  s.shading_points = sharded(gpu_shared::IZB_COUNTER_SHADING_POINTS);
-  s.lit_candidates = sharded(gpu_shared::IZB_COUNTER_CANDIDATES);
-  const uint64_t requested = c[gpu_shared::IZB_COUNTER_NODES];
-  s.node_pool_size = m.pool_size;
-  s.nodes_inserted = std::min<uint64_t>(requested, m.pool_size);
-  s.node_overflow = c[gpu_shared::IZB_COUNTER_OVERFLOW];
-  s.overflow_pixels = c[gpu_shared::IZB_COUNTER_OVERFLOW_PIXELS];
-  s.csm_culled = sharded(gpu_shared::IZB_COUNTER_CSM_CULLED);
-  s.culling_rate = s.lit_candidates ? double(s.csm_culled) / double(s.lit_candidates) : 0.0;
-  s.lit_culled = sharded(gpu_shared::IZB_COUNTER_LIT_CULLED);
-  s.trace_fragments_before_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS];
-  s.trace_fragments_after_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS_KEPT];
-  s.triangle_tests = c[gpu_shared::IZB_COUNTER_TRIANGLE_TESTS];
-  s.triangle_tests_per_pixel = s.lit_candidates ? double(s.triangle_tests) / double(s.lit_candidates) : 0.0;
-  s.list_length_max = c[gpu_shared::IZB_COUNTER_LIST_MAX];
-  s.nonempty_texels = c[gpu_shared::IZB_COUNTER_NONEMPTY];
-  s.list_length_average = s.nonempty_texels ? double(c[gpu_shared::IZB_COUNTER_LIST_SUM]) / double(s.nonempty_texels) : 0.0;
-  s.hardware_conservative = m.used_hardware;
-  s.trace_choice = m.trace_probe.choice();
-  if (m.last_used_csm) s.csm_choice = m.csm_probe.choice();
-  if (m.used_compute_trace) {
-    s.trace_records = c[gpu_shared::IZB_COUNTER_RECORDS];
-    s.trace_tile_pairs = c[gpu_shared::IZB_COUNTER_TILE_PAIRS];
-    s.trace_pairs = c[gpu_shared::IZB_COUNTER_PAIRS];
+  const auto readbacks = m.counters_readback.take_all(slot);
+  if (readbacks.empty()) return;
+  // The work lists and the pool grow to the most any record of the frame asked for.
+  uint64_t records_asked = 0, tile_pairs_asked = 0, pairs_asked = 0, nodes_asked = 0;
+  for (const Buffer* readback : readbacks) {
+    const auto* c = readback->as<uint32_t>();
+    auto sharded = [&](uint32_t counter) {
+      uint64_t sum = 0;
+      for (uint32_t k = 0; k < gpu_shared::kIzbCounterShards; ++k)
+        sum += c[gpu_shared::IZB_COUNTER_SHARDS + counter * gpu_shared::kIzbCounterShards + k];
+      return sum;
+    };
+    Stats& s = records.emplace_back();
+    s.shading_points = sharded(gpu_shared::IZB_COUNTER_SHADING_POINTS);
+    s.lit_candidates = sharded(gpu_shared::IZB_COUNTER_CANDIDATES);
+    const uint64_t requested = c[gpu_shared::IZB_COUNTER_NODES];
+    s.node_pool_size = m.pool_size;
+    s.nodes_inserted = std::min<uint64_t>(requested, m.pool_size);
+    s.node_overflow = c[gpu_shared::IZB_COUNTER_OVERFLOW];
+    s.overflow_pixels = c[gpu_shared::IZB_COUNTER_OVERFLOW_PIXELS];
+    s.csm_culled = sharded(gpu_shared::IZB_COUNTER_CSM_CULLED);
+    s.culling_rate = s.lit_candidates ? double(s.csm_culled) / double(s.lit_candidates) : 0.0;
+    s.lit_culled = sharded(gpu_shared::IZB_COUNTER_LIT_CULLED);
+    s.trace_fragments_before_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS];
+    s.trace_fragments_after_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS_KEPT];
+    s.triangle_tests = c[gpu_shared::IZB_COUNTER_TRIANGLE_TESTS];
+    s.triangle_tests_per_pixel = s.lit_candidates ? double(s.triangle_tests) / double(s.lit_candidates) : 0.0;
+    s.list_length_max = c[gpu_shared::IZB_COUNTER_LIST_MAX];
+    s.nonempty_texels = c[gpu_shared::IZB_COUNTER_NONEMPTY];
+    s.list_length_average =
+        s.nonempty_texels ? double(c[gpu_shared::IZB_COUNTER_LIST_SUM]) / double(s.nonempty_texels) : 0.0;
+    s.hardware_conservative = m.used_hardware;
+    s.trace_choice = m.trace_probe.choice();
+    if (m.last_used_csm) s.csm_choice = m.csm_probe.choice();
+    if (m.used_compute_trace) {
+      s.trace_records = c[gpu_shared::IZB_COUNTER_RECORDS];
+      s.trace_tile_pairs = c[gpu_shared::IZB_COUNTER_TILE_PAIRS];
+      s.trace_pairs = c[gpu_shared::IZB_COUNTER_PAIRS];
+    }
+    records_asked = std::max({records_asked, uint64_t(c[gpu_shared::IZB_COUNTER_RECORDS]),
+                              uint64_t(c[gpu_shared::IZB_COUNTER_RECORDS + 1]), uint64_t(c[gpu_shared::IZB_COUNTER_LIT_RECORDS])});
+    tile_pairs_asked = std::max({tile_pairs_asked, uint64_t(c[gpu_shared::IZB_COUNTER_TILE_PAIRS]),
+                                 uint64_t(c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1]),
+                                 uint64_t(c[gpu_shared::IZB_COUNTER_LIT_TILE_PAIRS])});
+    pairs_asked = std::max<uint64_t>(pairs_asked, c[gpu_shared::IZB_COUNTER_PAIRS]);
+    nodes_asked = std::max(nodes_asked, requested);
   }
   // Grow the compute passes' work lists to what this frame asked for (trace, CSM or lit map, whichever
   // more).
   auto grow = [](Impl::WorkList& list, uint64_t asked) {
     if (asked > list.capacity) list.demand = uint64_t(double(asked) * 1.25);
   };
-  const uint64_t records_asked = std::max({c[gpu_shared::IZB_COUNTER_RECORDS], c[gpu_shared::IZB_COUNTER_RECORDS + 1],
-                                           c[gpu_shared::IZB_COUNTER_LIT_RECORDS]});
-  const uint64_t tile_pairs_asked =
-      std::max({c[gpu_shared::IZB_COUNTER_TILE_PAIRS], c[gpu_shared::IZB_COUNTER_TILE_PAIRS + 1],
-                c[gpu_shared::IZB_COUNTER_LIT_TILE_PAIRS]});
   const bool overflowed = records_asked > m.records.capacity || tile_pairs_asked > m.tile_pairs.capacity ||
-                          c[gpu_shared::IZB_COUNTER_PAIRS] > m.pairs.capacity || requested > m.pool_size;
+                          pairs_asked > m.pairs.capacity || nodes_asked > m.pool_size;
   if (overflowed) {  // a frame slowed by an overflow does not speak for its backend
     m.trace_probe.discard_pending(slot);
     m.csm_probe.discard_pending(slot);
   }
   grow(m.records, records_asked);
   grow(m.tile_pairs, tile_pairs_asked);
-  grow(m.pairs, c[gpu_shared::IZB_COUNTER_PAIRS]);
-  m.csm->note_yield(s.culling_rate);
-  m.csm->after_frame(s, slot);
+  grow(m.pairs, pairs_asked);
+  Stats& last = records.back();
+  m.csm->note_yield(last.culling_rate);
+  m.csm->after_frame(last, slot);
   // Grow the pool for the next frame when this one overflowed (unless a fixed size was asked for).
-  if (requested > m.pool_size) m.pool_demand = uint64_t(double(requested) * 1.25);
+  if (nodes_asked > m.pool_size) m.pool_demand = uint64_t(double(nodes_asked) * 1.25);
+}
+
+uint32_t IzbPass::records_so_far(uint32_t slot, uint64_t frame_index) const {
+  return impl_->counters_readback.recorded(slot, frame_index);
 }
 
 }  // namespace shadows::detail

@@ -27,7 +27,11 @@ class IzbPass {
   PixelList hybrid_list() const;
   void record_hybrid_blend(Frame& frame);
   // The frame recorded in frame-in-flight slot `slot` has completed.
-  void after_frame(Stats& stats, uint32_t slot);
+  // One Stats per IZB record of the slot's frame (one per light, six for a point light), in order; the
+  // CSM's statistics go into the last.
+  void after_frame(std::vector<Stats>& records, uint32_t slot);
+  // How many IZB records the slot's frame `frame_index` has made so far.
+  uint32_t records_so_far(uint32_t slot, uint64_t frame_index) const;
   bool hardware_raster_available() const;
   bool csm_test_supported(CsmTest test, std::string* why) const;
   CsmSnapshot read_csm();

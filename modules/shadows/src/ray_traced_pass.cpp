@@ -350,17 +350,22 @@ void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collec
   }
 }
 
-void RayTracedPass::after_frame(Stats& s, uint32_t slot) {
+void RayTracedPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
   Impl& m = *impl_;
-  s.rt_instances = m.instance_count;
-  s.rt_triangles = m.bottom_triangles;
-  const Buffer* readback = m.counters_readback.take(slot);
-  if (!readback) return;
-  const auto* c = readback->as<uint32_t>();
-  s.shading_points = c[gpu_shared::RT_COUNTER_SHADING_POINTS];
-  s.lit_candidates = c[gpu_shared::RT_COUNTER_CANDIDATES];
-  s.rays_traced = c[gpu_shared::RT_COUNTER_RAYS];
-  s.rays_occluded = c[gpu_shared::RT_COUNTER_OCCLUDED];
+  for (const Buffer* readback : m.counters_readback.take_all(slot)) {
+    const auto* c = readback->as<uint32_t>();
+    Stats& s = records.emplace_back();
+    s.rt_instances = m.instance_count;
+    s.rt_triangles = m.bottom_triangles;
+    s.shading_points = c[gpu_shared::RT_COUNTER_SHADING_POINTS];
+    s.lit_candidates = c[gpu_shared::RT_COUNTER_CANDIDATES];
+    s.rays_traced = c[gpu_shared::RT_COUNTER_RAYS];
+    s.rays_occluded = c[gpu_shared::RT_COUNTER_OCCLUDED];
+  }
+}
+
+uint32_t RayTracedPass::records_so_far(uint32_t slot, uint64_t frame_index) const {
+  return impl_->counters_readback.recorded(slot, frame_index);
 }
 
 }  // namespace shadows::detail

@@ -16,7 +16,9 @@ class RayTracedPass {
   explicit RayTracedPass(engine::gpu::Context& ctx);
   ~RayTracedPass();
   void record(Frame& frame, uint32_t samples_per_pixel, bool collect_stats);
-  void after_frame(Stats& stats, uint32_t slot);
+  // One Stats per record of the slot's frame that collected statistics, in order.
+  void after_frame(std::vector<Stats>& records, uint32_t slot);
+  uint32_t records_so_far(uint32_t slot, uint64_t frame_index) const;
   // Forgets the bottom levels (the scene's geometry changed).
   void scene_changed();
 

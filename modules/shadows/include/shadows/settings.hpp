@@ -170,6 +170,21 @@ struct Stats {
   // CSM caster choice, and whether the prepass ran this frame ("ran", "off", or "skipped: why")
   std::vector<CsmDecision> csm_decisions;
   std::string csm_status = "off";
+  // One entry per light of the frame, in FrameDesc::lights order (the fields above describe the last
+  // IZB or ray-traced pass of the frame). A point light's IZB figures sum its six cones, which overlap:
+  // a point in two cones counts twice.
+  struct LightStats {
+    std::string kind;                // "directional", "spot" or "point"
+    uint64_t lit_candidates = 0;     // IZB or rt: points the light reaches and that face it
+    uint64_t nodes_inserted = 0;     // IZB
+    uint64_t csm_culled = 0;         // IZB with the CSM prepass
+    uint64_t node_overflow = 0;      // IZB
+    uint64_t list_length_max = 0;    // IZB
+    uint64_t rays_traced = 0;        // rt
+    uint64_t rays_occluded = 0;      // rt
+    double gpu_ms = 0.0;             // the light's passes: its "light i" region, or "shadows" for one light
+  };
+  std::vector<LightStats> lights;
 };
 
 // Parsing/printing helpers for command lines and JSON ("sm", "cascades", "izb", "izb+csm", "hybrid",
