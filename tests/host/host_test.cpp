@@ -207,6 +207,8 @@ class HostBadInput : public ::testing::Test {
 
   // record() refuses `frame` with one line naming `argument`; the command buffer stays empty (submitted,
   // it leaves the output as it was).
+  void expect_two_lights_refused(const shadows::Light& second, const shadows::ImageInput& second_output,
+                                 const std::string& argument);
   void expect_refused(const shadows::FrameDesc& frame, const std::string& argument) {
     std::string what;
     submit([&](VkCommandBuffer cmd) {
@@ -319,27 +321,33 @@ TEST_F(HostBadInput, TooManyLights) {
   expect_refused(f, "FrameDesc.light_count is 9 (1..8");
 }
 
-TEST_F(HostBadInput, SecondLightMalformed) {
-  shadows::Light bad = kSpotLight;
-  bad.outer_cone = 2.0f;
-  const shadows::Light lights[2] = {sun_, bad};
-  const shadows::ImageInput outputs[1] = {frame_.output};
+// Two lights, the second `second` and its output `second_output`, must be refused naming `argument`.
+void HostBadInput::expect_two_lights_refused(const shadows::Light& second, const shadows::ImageInput& second_output,
+                                             const std::string& argument) {
+  const shadows::Light lights[2] = {sun_, second};
+  const shadows::ImageInput outputs[1] = {second_output};
   shadows::FrameDesc f = frame_;
   f.lights = lights;
   f.light_count = 2;
   f.light_outputs = outputs;
-  expect_refused(f, "FrameDesc.lights[1] cones");
+  expect_refused(f, argument);
+}
+
+TEST_F(HostBadInput, SecondLightMalformed) {
+  shadows::Light bad = kSpotLight;
+  bad.outer_cone = 2.0f;
+  expect_two_lights_refused(bad, frame_.output, "FrameDesc.lights[1] cones");
 }
 
 TEST_F(HostBadInput, SecondLightsOutputInAnotherFormat) {
   extra_ = make(kExtent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT);
-  const shadows::Light lights[2] = {sun_, kSpotLight};
-  const shadows::ImageInput outputs[1] = {extra_.input(VK_IMAGE_LAYOUT_GENERAL)};
+  expect_two_lights_refused(kSpotLight, extra_.input(VK_IMAGE_LAYOUT_GENERAL), "FrameDesc.light_outputs[0]");
+}
+
+TEST_F(HostBadInput, OverlayOfALightNotRecorded) {
   shadows::FrameDesc f = frame_;
-  f.lights = lights;
-  f.light_count = 2;
-  f.light_outputs = outputs;
-  expect_refused(f, "FrameDesc.light_outputs[0]");
+  f.overlay_light = 1;
+  expect_refused(f, "FrameDesc.overlay_light is 1 with light_count 1");
 }
 
 TEST_F(HostBadInput, SpotLightWithTheRasterTrace) {

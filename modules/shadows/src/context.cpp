@@ -325,9 +325,13 @@ void ContextImpl::prepare_targets(VkCommandBuffer cmd, bool clear) {
                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
   targets_fresh_ = false;
-  if (!clear) return;
   // Without the input pass (native inputs), the term starts lit and the overlay, when a debug view
-  // draws, empty: cleared here, visible to every pass.
+  // draws, empty.
+  if (clear) clear_term_and_overlay(cmd);
+}
+
+// The term to lit and, when a debug view draws, the overlay to empty; visible to every pass.
+void ContextImpl::clear_term_and_overlay(VkCommandBuffer cmd) {
   const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
   const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}}, zero{{0.0f, 0.0f, 0.0f, 0.0f}};
   vkCmdClearColorImage(cmd, shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, &one, 1, &range);
@@ -434,17 +438,11 @@ void ContextImpl::set_light(View& view, const Light& light) {
 
 // Between two lights of one record: every access of the previous light's passes (their statistics
 // copies, the output pass's reads of the term) finishes before the next light's rewrite the same
-// resources, and the term is cleared to lit again, visible to the next light's passes.
+// resources; the term starts lit again and each light's debug view marks a clean overlay
+// (FrameDesc::overlay_light's is the one handed over).
 void ContextImpl::restart_term(VkCommandBuffer cmd) {
   pass_barrier(*gpu_, cmd);
-  const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}}, zero{{0.0f, 0.0f, 0.0f, 0.0f}};
-  vkCmdClearColorImage(cmd, shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, &one, 1, &range);
-  // Each light's debug view marks a clean overlay (FrameDesc::overlay_light's is the one handed over).
-  if (settings_.debug != DebugView::None)
-    vkCmdClearColorImage(cmd, overlay_.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &range);
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, pass_shader_stages(*gpu_),
-                 kStorageReadWrite);
+  clear_term_and_overlay(cmd);
 }
 
 void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {

@@ -64,6 +64,7 @@ class ContextImpl final : public Context {
   void record_local_light(Frame& frame);
   void set_light(View& view, const Light& light);
   void restart_term(VkCommandBuffer cmd);
+  void clear_term_and_overlay(VkCommandBuffer cmd);
   void validate_light(const Light& light, const std::string& name) const;
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
