@@ -24,14 +24,16 @@ void main() {
       behind = behind && d < 0.0;
       inv_w[i] = 1.0 / max(d, 1.0e-30);
     }
-    if (apart) {
+    // No shadow ray meets a triangle wholly behind the light's plane (the cone, at most a half space,
+    // lies in front) or wholly outside its range (a ray runs from a point within range to the light,
+    // inside the range ball): it is left out, as degenerate, and never listed. Its bounding box bounds
+    // its distance.
+    vec3 lo = min(min(v[0], v[1]), v[2]), hi = max(max(v[0], v[1]), v[2]);
+    vec3 nearest = clamp(params.light_position.xyz, lo, hi);
+    bool unreached = behind || distance(nearest, params.light_position.xyz) > params.light_position.w;
+    if (apart || unreached) {
       for (uint i = 0u; i < 3u; ++i) grid_triangles[3u * t + i] = vec4(-1.0e9, -1.0e9, 2.0, 1.0);
-      // No shadow ray meets a triangle wholly behind the light's plane (the cone, at most a half space,
-      // lies in front) or wholly outside its range (a ray runs from a point within range to the light,
-      // inside the range ball): such a straddler is not listed. Its bounding box bounds its distance.
-      vec3 lo = min(min(v[0], v[1]), v[2]), hi = max(max(v[0], v[1]), v[2]);
-      vec3 nearest = clamp(params.light_position.xyz, lo, hi);
-      if (behind || distance(nearest, params.light_position.xyz) > params.light_position.w) return;
+      if (unreached) return;
       uint k = atomicAdd(counters[IZB_COUNTER_STRADDLERS], 1u);
       grid_triangles[3u * push.triangle_count + k] = vec4(uintBitsToFloat(t), 0.0, 0.0, 0.0);
       return;
