@@ -101,18 +101,18 @@ Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent, uint32_t frames_in_flig
         {gpu_shared::SHADING_POINTS_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
         {gpu_shared::SHADING_POINTS_BINDING_TERMINATOR_OFFSET, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
        0});
-  lighting_pipeline_ = factory.compute({"lighting.comp",
-                                        {{gpu_shared::LIGHTING_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-                                         {gpu_shared::LIGHTING_BINDING_ALBEDO, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_SHADOW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_OUTPUT, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                         {gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
-                                        0});
+  std::vector<Binding> lighting_bindings = {
+      {gpu_shared::LIGHTING_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+      {gpu_shared::LIGHTING_BINDING_ALBEDO, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+      {gpu_shared::LIGHTING_BINDING_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+      {gpu_shared::LIGHTING_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+      {gpu_shared::LIGHTING_BINDING_SHADOW, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+      {gpu_shared::LIGHTING_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+      {gpu_shared::LIGHTING_BINDING_OUTPUT, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
+  lighting_pipeline_ = factory.compute({"lighting.comp", lighting_bindings, 0});
+  for (uint32_t i = 0; i < kMaxLocalLights; ++i)
+    lighting_bindings.push_back({gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + i, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
+  local_lighting_pipeline_ = factory.compute({"lighting_local_lights.comp", lighting_bindings, 0});
   static_assert(kMaxLocalLights == gpu_shared::kMaxLocalLights && kMaxLocalLights == 3);
 
   VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
@@ -415,19 +415,21 @@ void Renderer::record_frame(VkCommandBuffer cmd) {
 
     {
       ScopedGpuRegion region(ctx_, profiler_, cmd, "lighting");
-      lighting_pipeline_.bind(cmd);
-      DescriptorWriter()
-          .uniform_buffer(gpu_shared::LIGHTING_BINDING_FRAME, frame_uniforms.handle())
+      const bool local = !view_.local_lights.empty();
+      const Pipeline& lighting = local ? local_lighting_pipeline_ : lighting_pipeline_;
+      lighting.bind(cmd);
+      DescriptorWriter writer;
+      writer.uniform_buffer(gpu_shared::LIGHTING_BINDING_FRAME, frame_uniforms.handle())
           .storage_image(gpu_shared::LIGHTING_BINDING_ALBEDO, gbuffer_.albedo.view())
           .storage_image(gpu_shared::LIGHTING_BINDING_NORMAL, gbuffer_.normal.view())
           .storage_image(gpu_shared::LIGHTING_BINDING_WORLD_POSITION, gbuffer_.world_position.view())
           .storage_image(gpu_shared::LIGHTING_BINDING_SHADOW, shadow_term_.view())
           .storage_image(gpu_shared::LIGHTING_BINDING_OVERLAY, overlay_.view())
-          .storage_image(gpu_shared::LIGHTING_BINDING_OUTPUT, output_.view())
-          .storage_image(gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 0, local_shadow_terms_[0].view())
-          .storage_image(gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 1, local_shadow_terms_[1].view())
-          .storage_image(gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + 2, local_shadow_terms_[2].view())
-          .push(ctx_, cmd, lighting_pipeline_);
+          .storage_image(gpu_shared::LIGHTING_BINDING_OUTPUT, output_.view());
+      if (local)
+        for (uint32_t i = 0; i < kMaxLocalLights; ++i)
+          writer.storage_image(gpu_shared::LIGHTING_BINDING_LOCAL_SHADOW + i, local_shadow_terms_[i].view());
+      writer.push(ctx_, cmd, lighting);
       vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
     }
     full_barrier(cmd);

@@ -231,7 +231,8 @@ class Renderer {
   gpu::Sampler nearest_sampler_;
   gpu::Pipeline gbuffer_pipeline_;
   gpu::Pipeline shading_points_pipeline_;
-  gpu::Pipeline lighting_pipeline_;
+  gpu::Pipeline lighting_pipeline_;        // the sun alone
+  gpu::Pipeline local_lighting_pipeline_;  // the sun and FrameView::local_lights
   gpu::GpuProfiler profiler_;
   VkCommandBuffer frame_cmd_ = VK_NULL_HANDLE;
   VkFence frame_fence_ = VK_NULL_HANDLE;
