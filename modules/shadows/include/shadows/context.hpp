@@ -22,7 +22,8 @@
 //     VK_ACCESS_2_SHADER_SAMPLED_READ_BIT by a barrier the host records before record(). The module
 //     never changes their layout. Native inputs (FrameDesc::native) are read as storage images
 //     instead: see NativeInputs.
-//   - The output (and the optional overlay) must be in VK_IMAGE_LAYOUT_GENERAL, with every earlier
+//   - The outputs (FrameDesc::output, light_outputs, and the optional overlay) must be in
+//     VK_IMAGE_LAYOUT_GENERAL, with every earlier
 //     access by the host finished before VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT (a barrier whose
 //     second scope is COMPUTE_SHADER / SHADER_STORAGE_WRITE). The module writes them with compute
 //     shaders only and leaves them in GENERAL: the host's next barrier on them needs
@@ -177,9 +178,12 @@ enum class LightType : uint32_t { Directional, Spot, Point };
 // with one perspective light space from its position: Technique::Izb and Hybrid trace it with the IZB
 // (CSM prepass included; compute trace and CSM, no lit culling: the hybrid needs no filtered term
 // within a light's range), ShadowMap with one perspective map, Cascades with the same map PCF-filtered,
-// RayTraced with rays toward its position. A point light is six such cones around the axes (their
-// IZB statistics are the last cone's). A local light shadows the points it reaches: within
+// RayTraced with rays toward its position. A point light is six such cones around the axes (its
+// Stats::lights entry sums them). A local light shadows the points it reaches: within
 // `range` of `position` and, for a spot light, inside its outer cone; every other point, and every
+// point whose geometric normal turns away from the light, is written 0. Shadow rays run from the
+// point (pushed off its surface as for the sun) toward `position`, and occluders closer than 0.01
+// world units to the light (its bulb and housing) do not count (shaders/shared/local_light.h).
 struct Light {
   LightType type = LightType::Directional;
   float direction[3] = {0.0f, -1.0f, 0.0f};  // directional and spot: the direction light travels, unit
@@ -258,7 +262,7 @@ struct FrameDesc {
   Camera camera;
   // The lights to shadow, 1..kMaxLightsPerRecord, each into its own image: lights[0] into `output`,
   // lights[i] into light_outputs[i - 1]. They run one after another through the same passes, with a
-  // profiler region "light i" each when there are several; Stats describe the last of them.
+  // profiler region "light i" each when there are several; Stats::lights has an entry per light.
   const Light* lights = nullptr;
   uint32_t light_count = 0;
   const Instance* instances = nullptr;  // every caster this frame
