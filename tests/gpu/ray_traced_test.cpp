@@ -376,7 +376,9 @@ TEST_F(RayTracedTest, EveryLightOfAFrameGetsTheTermItGetsAlone) {
     const bool izb = technique == shadows::Technique::Izb || technique == shadows::Technique::Hybrid;
     for (const auto& l : per_light) {
       EXPECT_GT(l.gpu_ms, 0.0) << l.kind;
-      if (izb) EXPECT_GT(l.lit_candidates, 0u) << l.kind;
+      if (izb) {
+        EXPECT_GT(l.lit_candidates, 0u) << l.kind;
+      }
     }
     ASSERT_GT(glm::length(view.light_radiance), 0.0f) << "the moon is lit";
     std::vector<std::vector<float>> together = {r.read_shadow_term()};
