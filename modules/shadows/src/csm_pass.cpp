@@ -7,6 +7,7 @@
 #include <iostream>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "engine/gpu/profiler.hpp"
 #include "light_space.hpp"
@@ -77,19 +78,29 @@ struct CsmPass::Impl {
     bool measured = false;
     bool pending = false;  // a measure is in flight
   };
-  // By instance id and mesh (instances sharing both share a measure).
-  std::map<std::pair<uint64_t, uint32_t>, Cached> cache;
+  // By instance id, mesh and the IZB record of the frame (instances sharing all three share a measure;
+  // each light of a frame, and each cone of a point light, keeps its own).
+  using CacheKey = std::tuple<uint64_t, uint32_t, uint32_t>;
+  uint64_t plan_frame = ~0ull;
+  uint32_t record_in_frame = 0;  // the IZB records of plan_frame planned so far, less one
+  std::map<CacheKey, Cached> cache;
   struct Job {
-    std::pair<uint64_t, uint32_t> instance;
+    CacheKey instance;
     MeasureKey key;
     uint64_t triangles;
   };
-  // Per frame-in-flight slot: the jobs its frame measured and the buffers it used. A slot's previous
-  // frame has completed when it records again, so its buffers are rewritten or replaced freely.
-  struct MeasureSlot {
+  // Per frame-in-flight slot: the jobs its frame measured and the buffers it used, one batch per
+  // record of the IZB (a frame records one per light, six for a point light). A slot's previous frame
+  // has completed when it records again, so its buffers are rewritten or replaced freely.
+  struct MeasureBatch {
     Buffer jobs, partials;
     std::vector<Job> pending;
     uint32_t groups_per_job = 0;
+  };
+  struct MeasureSlot {
+    std::vector<MeasureBatch> batches;
+    uint32_t count = 0;  // batches recorded and not yet read
+    uint64_t frame = 0;
   };
   std::vector<MeasureSlot> measure_slots;
   std::vector<Job> wanted;  // this frame's jobs
@@ -242,11 +253,12 @@ struct CsmPass::Impl {
       } else {
         decision.automatic = true;
         const MeasureKey key{d.world, frame.view.light_direction, texel};
-        Cached& cached = cache[{d.id, d.mesh}];
+        const CacheKey cache_key{d.id, d.mesh, record_in_frame};
+        Cached& cached = cache[cache_key];
         if ((!cached.measured || cached.key != key) && !cached.pending && wanted.size() < kMaxMeasuresPerFrame) {
           const MeshRange& range = frame.geometry.mesh(d.mesh);
           cached.pending = true;
-          wanted.push_back({{d.id, d.mesh}, key, range.index_count / 3});
+          wanted.push_back({cache_key, key, range.index_count / 3});
           wanted_gpu.push_back({d.world, range.first_index, range.vertex_offset, range.index_count / 3, 0u});
         }
         if (!cached.measured) {
@@ -273,10 +285,17 @@ struct CsmPass::Impl {
 
 void CsmPass::Impl::record_measures(const Frame& frame) {
   if (measure_slots.size() <= frame.slot) measure_slots.resize(frame.slot + 1);
-  MeasureSlot& slot = measure_slots[frame.slot];
-  for (const Job& job : slot.pending) cache[job.instance].pending = false;  // never read back: ask again
-  slot.pending.clear();
+  MeasureSlot& measure_slot = measure_slots[frame.slot];
+  if (measure_slot.frame != frame.view.frame_index) {
+    // The slot's earlier frame was never read back: ask again.
+    for (uint32_t b = 0; b < measure_slot.count; ++b)
+      for (const Job& job : measure_slot.batches[b].pending) cache[job.instance].pending = false;
+    measure_slot.count = 0;
+    measure_slot.frame = frame.view.frame_index;
+  }
   if (wanted.empty()) return;
+  if (measure_slot.batches.size() <= measure_slot.count) measure_slot.batches.emplace_back();
+  MeasureBatch& slot = measure_slot.batches[measure_slot.count++];
   uint64_t most = 1;
   for (const Job& job : wanted) most = std::max(most, job.triangles);
   // Enough workgroups per instance that each thread sums a few dozen triangles at most.
@@ -314,22 +333,26 @@ void CsmPass::Impl::record_measures(const Frame& frame) {
 
 void CsmPass::Impl::take_measures(uint32_t slot_index) {
   if (slot_index >= measure_slots.size()) return;
-  MeasureSlot& slot = measure_slots[slot_index];
-  const auto* partials = slot.partials.as<glm::vec2>();
-  for (size_t k = 0; k < slot.pending.size(); ++k) {
-    const Job& job = slot.pending[k];
-    double projected = 0.0, coverable = 0.0;
-    for (uint32_t g = 0; g < slot.groups_per_job; ++g) {
-      projected += partials[k * slot.groups_per_job + g].x;
-      coverable += partials[k * slot.groups_per_job + g].y;
+  MeasureSlot& measure_slot = measure_slots[slot_index];
+  for (uint32_t b = 0; b < measure_slot.count; ++b) {
+    MeasureBatch& slot = measure_slot.batches[b];
+    const auto* partials = slot.partials.as<glm::vec2>();
+    for (size_t k = 0; k < slot.pending.size(); ++k) {
+      const Job& job = slot.pending[k];
+      double projected = 0.0, coverable = 0.0;
+      for (uint32_t g = 0; g < slot.groups_per_job; ++g) {
+        projected += partials[k * slot.groups_per_job + g].x;
+        coverable += partials[k * slot.groups_per_job + g].y;
+      }
+      Cached& cached = cache[job.instance];
+      cached.pending = false;
+      cached.measured = true;
+      cached.key = job.key;
+      cached.measure = {projected > 0.0 ? coverable / projected : 0.0, projected, job.triangles};
     }
-    Cached& cached = cache[job.instance];
-    cached.pending = false;
-    cached.measured = true;
-    cached.key = job.key;
-    cached.measure = {projected > 0.0 ? coverable / projected : 0.0, projected, job.triangles};
+    slot.pending.clear();
   }
-  slot.pending.clear();
+  measure_slot.count = 0;
 }
 
 CsmPass::CsmPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
@@ -349,6 +372,12 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
     m.status = "off";
     m.decisions.clear();
     return false;
+  }
+  if (m.plan_frame != frame.view.frame_index) {
+    m.plan_frame = frame.view.frame_index;
+    m.record_in_frame = 0;
+  } else {
+    ++m.record_in_frame;
   }
   m.choose(frame, resolution);
   m.record_measures(frame);
