@@ -110,13 +110,17 @@ struct CsmPass::Impl {
   std::vector<bool> in_csm;  // per draw, this frame
   bool ran = false;
   std::string status = "off";
-  // Adaptive skipping under Auto.
-  double last_yield = 1.0;
-  bool have_yield = false;
-  uint32_t frames_since_probe = 0;
-  std::vector<bool> last_choice;
-  glm::vec3 last_light{0.0f};
-  uint32_t last_resolution = 0;
+  // Adaptive skipping under Auto, per IZB record of a frame (each light, each cone of a point light).
+  struct Adaptive {
+    bool ran = false;
+    double last_yield = 1.0;
+    bool have_yield = false;
+    uint32_t frames_since_probe = 0;
+    std::vector<bool> last_choice;
+    glm::vec3 last_light{0.0f};
+    uint32_t last_resolution = 0;
+  };
+  std::vector<Adaptive> adaptive;
 
   explicit Impl(Context& c) : ctx(c) {
     nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "csm nearest");
@@ -390,30 +394,34 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
     m.status = "skipped: no caster chosen for the CSM";
     return false;
   }
-  const bool changed = m.in_csm != m.last_choice || frame.view.light_direction != m.last_light ||
-                       resolution != m.last_resolution;
-  m.last_choice = m.in_csm;
-  m.last_light = frame.view.light_direction;
-  m.last_resolution = resolution;
-  if (changed) m.have_yield = false;
-  if (!explicit_on && m.have_yield && m.last_yield < kCsmMinimumYield && ++m.frames_since_probe < kCsmReprobeFrames) {
+  if (m.adaptive.size() <= m.record_in_frame) m.adaptive.resize(m.record_in_frame + 1);
+  Impl::Adaptive& a = m.adaptive[m.record_in_frame];
+  a.ran = false;
+  const bool changed = m.in_csm != a.last_choice || frame.view.light_direction != a.last_light ||
+                       resolution != a.last_resolution;
+  a.last_choice = m.in_csm;
+  a.last_light = frame.view.light_direction;
+  a.last_resolution = resolution;
+  if (changed) a.have_yield = false;
+  if (!explicit_on && a.have_yield && a.last_yield < kCsmMinimumYield && ++a.frames_since_probe < kCsmReprobeFrames) {
     std::ostringstream why;
     why.precision(3);
-    why << "skipped: auto choice culled " << m.last_yield * 100.0 << "% of points when last run (< "
+    why << "skipped: auto choice culled " << a.last_yield * 100.0 << "% of points when last run (< "
         << kCsmMinimumYield * 100.0 << "%)";
     m.status = why.str();
     return false;
   }
-  m.frames_since_probe = 0;
+  a.frames_since_probe = 0;
   m.status = "ran";
   m.ran = true;
+  a.ran = true;
   return true;
 }
 
-void CsmPass::note_yield(double culling_rate) {
-  if (!impl_->ran) return;
-  impl_->last_yield = culling_rate;
-  impl_->have_yield = true;
+void CsmPass::note_yield(uint32_t record, double culling_rate) {
+  if (record >= impl_->adaptive.size() || !impl_->adaptive[record].ran) return;
+  impl_->adaptive[record].last_yield = culling_rate;
+  impl_->adaptive[record].have_yield = true;
 }
 
 void CsmPass::record(Frame& frame, const IzbSettings& settings, const Buffer& izb_frame,

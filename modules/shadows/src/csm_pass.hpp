@@ -53,8 +53,9 @@ class CsmPass {
   // kCsmMinimumYield); call once per frame before prepare(). Records the measures the automatic
   // choice still needs into frame.cmd; they count from the frame after the one that took them.
   bool plan(const Frame& frame, const IzbSettings& settings, uint32_t resolution);
-  // The culling rate the IZB measured on a frame the prepass ran.
-  void note_yield(double culling_rate);
+  // The culling rate the IZB measured with the prepass of the frame's IZB record `record` (0 for the
+  // first light, counting each cone of a point light), when that prepass ran.
+  void note_yield(uint32_t record, double culling_rate);
   // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`. With
   // `compute_fill`, that callback records compute work leaving the depths (float bits, [0,1]) in
   // `compute_texels` instead, which the IZB build reads directly; only statistics (the covered-texel
