@@ -3,6 +3,7 @@
 // the best GPU), so under CTest (ENGINE_DEVICE=lavapipe) the comparisons skip with the device's reason
 // and the one test that runs checks that reason; run `build/bin/gpu_tests --gtest_filter='*RayTraced*'`
 // on a ray tracing GPU for the comparisons. The validation layer is on either way.
+#include <unistd.h>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <fstream>
@@ -459,7 +460,9 @@ std::string write_lights_gltf() {
        {{{"bufferView", 0}, {"componentType", 5126}, {"count", n}, {"type", "VEC3"}, {"min", {-6, 0, -6}}, {"max", {6, 1.5, 6}}},
         {{"bufferView", 1}, {"componentType", 5126}, {"count", n}, {"type", "VEC3"}},
         {{"bufferView", 2}, {"componentType", 5125}, {"count", indices.size()}, {"type", "SCALAR"}}}}};
-  const std::string path = (std::filesystem::temp_directory_path() / "shadow_lights_test.gltf").string();
+  // One file per process: the plain and synchronization-validation runs of this test may run at once.
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("shadow_lights_test_" + std::to_string(getpid()) + ".gltf")).string();
   std::ofstream(path) << doc.dump();
   return path;
 }
