@@ -206,8 +206,8 @@ void draw_help(PanelState& panel) {
 
 // The scene's spot and point lights: each switched on or off (then no longer by the time of day) and
 // its colour's intensity and range changed; which of them the renderer shadows this frame (the
-// nearest Renderer::kMaxLocalLights whose range reaches the view; the GPU time list shows a "light i"
-// region for each).
+// nearest Renderer::kMaxLocalLights whose range reaches the view; their GPU time is in the "light i"
+// regions of the GPU time list and in the statistics).
 void light_table(engine::Renderer& renderer, Game& game) {
   engine::Scene* scene = renderer.scene();
   if (!scene) return;
@@ -216,13 +216,10 @@ void light_table(engine::Renderer& renderer, Game& game) {
   auto row = [&](engine::Entity e, const char* kind, bool& enabled, float& intensity, float& range) {
     ImGui::PushID(int(e.index));
     const auto* name = scene->registry.try_get<engine::Name>(e);
-    int slot = -1;
-    for (size_t i = 0; i < shadowed.size(); ++i)
-      if (shadowed[i].entity == e) slot = int(i);
+    const bool is_shadowed = std::any_of(shadowed.begin(), shadowed.end(), [&](const auto& l) { return l.entity == e; });
     if (ImGui::Checkbox("##on", &enabled)) game.lamps_follow_time = false;
     ImGui::SameLine();
-    if (slot >= 0) ImGui::Text("%s %s (shadowed, light %d)", kind, name ? name->value.c_str() : "?", slot);
-    else ImGui::Text("%s %s", kind, name ? name->value.c_str() : "?");
+    ImGui::Text("%s %s%s", kind, name ? name->value.c_str() : "?", is_shadowed ? " (shadowed)" : "");
     ImGui::SetNextItemWidth(120);
     ImGui::SliderFloat("cd", &intensity, 0.0f, 200.0f, "%.0f");
     ImGui::SameLine();

@@ -212,7 +212,8 @@ void Renderer::build_draw_list() {
 void Renderer::gather_local_lights() {
   view_.local_lights.clear();
   Registry& r = scene_->registry;
-  auto add = [&](Entity e, LocalLightKind kind, const glm::vec3& color, float intensity, float range) {
+  auto add = [&](Entity e, LocalLightKind kind, const glm::vec3& color, float intensity, float range,
+                 float inner_cone, float outer_cone) {
     const auto* t = r.try_get<Transform>(e);
     if (!t || !(intensity > 0.0f) || !(range > 0.0f)) return;
     FrameLight l;
@@ -222,6 +223,8 @@ void Renderer::gather_local_lights() {
     l.direction = glm::normalize(-glm::vec3(t->world[2]));  // glTF: a spot light shines down local -Z
     l.radiance = color * intensity;
     l.range = range;
+    l.inner_cone = inner_cone;
+    l.outer_cone = outer_cone;
     // A light whose sphere of reach lies outside the view lights no pixel: no pass runs for it.
     Aabb reach;
     reach.extend(l.position - glm::vec3(range));
@@ -230,15 +233,10 @@ void Renderer::gather_local_lights() {
     view_.local_lights.push_back(l);
   };
   r.each<SpotLight>([&](Entity e, SpotLight& s) {
-    if (!s.enabled) return;
-    add(e, LocalLightKind::Spot, s.color, s.intensity, s.range);
-    if (!view_.local_lights.empty() && view_.local_lights.back().entity == e) {
-      view_.local_lights.back().inner_cone = s.inner_cone;
-      view_.local_lights.back().outer_cone = s.outer_cone;
-    }
+    if (s.enabled) add(e, LocalLightKind::Spot, s.color, s.intensity, s.range, s.inner_cone, s.outer_cone);
   });
   r.each<PointLight>([&](Entity e, PointLight& p) {
-    if (p.enabled) add(e, LocalLightKind::Point, p.color, p.intensity, p.range);
+    if (p.enabled) add(e, LocalLightKind::Point, p.color, p.intensity, p.range, 0.0f, 0.0f);
   });
   // The nearest lights (by the distance to their sphere of reach) when there are more than the pass takes.
   std::stable_sort(view_.local_lights.begin(), view_.local_lights.end(), [&](const FrameLight& a, const FrameLight& b) {

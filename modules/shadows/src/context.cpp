@@ -529,7 +529,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     if (i > 0) restart_term(cmd);
     set_light(view, f.lights[i]);
     Frame frame{*gpu_, cmd, profiler, view, inputs, shadow_term_, overlay_, geometry_.geometry(), draws_,
-                uint32_t(f.frame_index % frames_in_flight_), frames_in_flight_};
+                slot_index, frames_in_flight_};
     record_technique(frame);
     engine::gpu::ScopedGpuRegion output_region(*gpu_, profiler, cmd, "host_output");
     record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light);
@@ -563,10 +563,12 @@ void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_fac
   }
 }
 
+// The techniques whose passes differ for a spot or point light (off and rt take every light alike).
 void ContextImpl::record_local_light(Frame& frame) {
   const bool point = frame.view.light_cos_outer <= -1.0f;
   switch (settings_.technique) {
     case Technique::Off:
+    case Technique::RayTraced:
       break;
     case Technique::ShadowMap:
     case Technique::Cascades: {
@@ -588,15 +590,11 @@ void ContextImpl::record_local_light(Frame& frame) {
       else izb_pass(frame);
       break;
     }
-    case Technique::RayTraced:
-      if (!ray_traced_) ray_traced_ = std::make_unique<RayTracedPass>(*gpu_);
-      ray_traced_->record(frame, settings_.izb.samples_per_pixel, collect_stats_);
-      break;
   }
 }
 
 void ContextImpl::record_technique(Frame& frame) {
-  if (frame.view.local_light) {
+  if (frame.view.local_light && settings_.technique != Technique::Off && settings_.technique != Technique::RayTraced) {
     record_local_light(frame);
     return;
   }
