@@ -291,11 +291,52 @@ float lit_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float area, fl
   // A near-degenerate triangle's arithmetic may overflow (inf, or NaN from inf * 0): then no bound.
   return abs(bound) < 3.0e38 ? bound : -3.0e38;
 }
+// The lit map's second half, its planes: per texel corner (a (res+1)² grid after the two texel
+// maps) a depth no farther than the plane of any caster touching a texel at that corner, evaluated at
+// the corner. A plane is affine, so its value at a point of the texel is the bilinear blend of its
+// values at the four corners, and the blend of the corners' minimums bounds every touching caster's
+// plane there, not only its nearest point over the whole texel. That proves lit the points of a
+// receiver that is itself a caster (a floor): its own plane passes through them, and the shadow-ray
+// offset lifts them in front of it, where no texel-wide bound reaches.
+uint lit_corner_index(ivec2 corner) {
+  return 2u * izb_resolution() * izb_resolution() + uint(corner.y) * (izb_resolution() + 1u) + uint(corner.x);
+}
+// A lower bound of the triangle's plane at `corner` as the node test computes depths there (the same
+// margins as lit_nearest_depth, plus the rounding of the plane's own evaluation).
+float lit_plane_depth(vec2 corner, vec3 a, vec3 b, vec3 c, float area) {
+  float dzdx = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
+  float dzdy = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
+  vec2 run = abs(corner - a.xy);
+  float plane = a.z + dzdx * (corner.x - a.x) + dzdy * (corner.y - a.y);
+  // The slopes' own rounding: their numerators cancel for a triangle nearly edge-on.
+  float slope_error_x = 1.0e-6 * (abs((b.z - a.z) * (c.y - a.y)) + abs((c.z - a.z) * (b.y - a.y))) / abs(area);
+  float slope_error_y = 1.0e-6 * (abs((c.z - a.z) * (b.x - a.x)) + abs((b.z - a.z) * (c.x - a.x))) / abs(area);
+  float extent = triangle_extent(a, b, c);
+  float barycentric_error = 2.0e-6 * (extent + lit_quad_reach() + 2.0) * extent / abs(area);
+  float bound = plane - 1.0e-6 - 1.0e-6 * (abs(plane) + abs(a.z) + abs(dzdx) * run.x + abs(dzdy) * run.y) -
+                slope_error_x * run.x - slope_error_y * run.y - barycentric_error * (abs(a.z) + abs(b.z) + abs(c.z));
+  return abs(bound) < 3.0e38 ? bound : -3.0e38;
+}
+void lower_lit_corner(ivec2 corner, vec3 a, vec3 b, vec3 c, float area) {
+  uint bits = ordered_depth_bits(lit_plane_depth(vec2(corner), a, b, c, area));
+  uint index = lit_corner_index(corner);
+  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+}
 // Whether grid point `g` is proved lit: inside the grid (outside it the texel clamp would compare it
-// with a texel that is not its own) and no farther than its texel's bound.
+// with a texel that is not its own) and no farther than its texel's bound, or than the blend of its
+// texel's corner planes (less that blend's own rounding).
 bool lit_map_proves_lit(vec3 g) {
   if (!(all(greaterThanEqual(g.xy, vec2(0.0))) && all(lessThan(g.xy, vec2(float(izb_resolution())))))) return false;
-  return g.z <= ordered_depth(csm_texels[lit_map_index(texel_index(grid_texel(g)))]);
+  ivec2 texel = grid_texel(g);
+  if (g.z <= ordered_depth(csm_texels[lit_map_index(texel_index(texel))])) return true;
+  float c00 = ordered_depth(csm_texels[lit_corner_index(texel)]);
+  float c10 = ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 0))]);
+  float c01 = ordered_depth(csm_texels[lit_corner_index(texel + ivec2(0, 1))]);
+  float c11 = ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 1))]);
+  vec2 f = clamp(g.xy - vec2(texel), vec2(0.0), vec2(1.0));
+  float blend = mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
+  float largest = max(max(abs(c00), abs(c10)), max(abs(c01), abs(c11)));
+  return g.z <= blend - 1.0e-6 * largest;  // false for NaN (an empty corner: inf - inf)
 }
 
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its

@@ -143,7 +143,8 @@ SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;    // per fit workgroup: ve
 SHARED_CONST uint IZB_BINDING_MATERIAL_TEXTURES = 24u;  // the scene's material textures (shared/material.h)
 SHARED_CONST uint IZB_BINDING_DRAW_FLAGS = 25u;         // per caster draw: IZB_DRAW_* bits for this frame
 // Compute CSM: depth bits per texel in [0, res^2); then the lit map in [res^2, 2 res^2): per texel the
-// nearest depth (ordered bits, izb_common.glsl) of every caster touching it. One binding for both,
+// nearest depth (ordered bits, izb_common.glsl) of every caster touching it; then its (res+1)^2 texel
+// corners: the nearest plane depth there of every caster touching a texel at it. One binding for all,
 // since push descriptors allow no more than 32.
 SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;
 SHARED_CONST uint IZB_BINDING_TILE_PAIRS = 27u;         // uvec2 {triangle, tile}

@@ -88,7 +88,8 @@ struct CsmSnapshot {
 // the light than any caster touching it (+infinity where none does).
 struct LitMapSnapshot {
   uint32_t resolution = 0;
-  std::vector<float> depth;  // row-major, resolution^2
+  std::vector<float> depth;         // row-major, resolution^2
+  std::vector<float> corner_depth;  // the texels' corners' plane bounds, row-major, (resolution + 1)^2
   glm::mat4 light_view_projection{1.0f};
 };
 

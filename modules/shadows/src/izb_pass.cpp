@@ -277,8 +277,9 @@ struct IzbPass::Impl {
       list_cursor = Buffer(ctx, texels * 4, usage, false, "izb sorted list fill cursors");
       const VkDeviceSize blocks = (texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock;
       scan_blocks = Buffer(ctx, blocks * 4, usage, false, "izb prefix-sum blocks");
-      // The compute CSM's depths, then the lit map's (izb.h: one binding for both).
-      csm_texels = Buffer(ctx, 2 * texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
+      // The compute CSM's depths, then the lit map's texels and corners (izb.h: one binding for all).
+      const VkDeviceSize corners = VkDeviceSize(resolution + 1) * (resolution + 1);
+      csm_texels = Buffer(ctx, (2 * texels + corners) * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
                           "csm compute depths and lit map");
       tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
       tile_farthest = Buffer(ctx, VkDeviceSize(tiles_per_side) * tiles_per_side * 4, usage, false,
@@ -697,7 +698,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     // light-space tiles like the compute CSM (it shares the CSM's work lists; the barrier below
     // orders the two). The build reads it.
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "lit_map");
-    vkCmdFillBuffer(cmd, m.csm_texels.handle(), grid_bytes, grid_bytes, gpu_shared::kIzbLitEmpty);
+    vkCmdFillBuffer(cmd, m.csm_texels.handle(), grid_bytes, VK_WHOLE_SIZE, gpu_shared::kIzbLitEmpty);
     pass_barrier(frame.ctx, cmd);
     m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_LIT, "lit");
     pass_barrier(frame.ctx, cmd);
@@ -881,6 +882,14 @@ LitMapSnapshot IzbPass::read_lit_map() {
     std::memcpy(&bits, bytes.data() + (texels + i) * 4, 4);
     bits = (bits & 0x80000000u) ? (bits & 0x7fffffffu) : ~bits;  // ordered bits -> float (izb_common.glsl)
     std::memcpy(&snapshot.depth[i], &bits, 4);
+  }
+  const size_t corners = size_t(m.resolution + 1) * (m.resolution + 1);
+  snapshot.corner_depth.resize(corners);
+  for (size_t i = 0; i < corners; ++i) {
+    uint32_t bits;
+    std::memcpy(&bits, bytes.data() + (2 * texels + i) * 4, 4);
+    bits = (bits & 0x80000000u) ? (bits & 0x7fffffffu) : ~bits;
+    std::memcpy(&snapshot.corner_depth[i], &bits, 4);
   }
   const auto frame_bytes = read_buffer(m.ctx, m.frame_data);
   gpu_shared::IzbFrame frame;

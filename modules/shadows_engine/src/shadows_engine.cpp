@@ -184,7 +184,7 @@ class EngineShadowModule final : public ShadowModule {
 
   CsmSnapshot read_lit_map() override {
     detail::LitMapSnapshot s = context_->read_lit_map();
-    return {s.resolution, std::move(s.depth), s.light_view_projection};
+    return {s.resolution, std::move(s.depth), s.light_view_projection, std::move(s.corner_depth)};
   }
 
  private:

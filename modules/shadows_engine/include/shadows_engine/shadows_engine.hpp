@@ -37,10 +37,12 @@ class ShadowModule : public engine::RenderFeature {
     uint32_t resolution = 0;
     std::vector<float> depth;
     glm::mat4 light_view_projection{1.0f};
+    std::vector<float> corner_depth;  // the lit map's alone: its texel corners' plane bounds, (resolution + 1)^2
   };
   virtual CsmSnapshot read_csm() = 0;
   // The last frame's lit map (IzbSettings::lit_culling; row-major, resolution^2 depths, +infinity
-  // where no caster touches the texel) and the transform it was built with. Empty when it did not run.
+  // where no caster touches the texel; and the corners' plane bounds) and the transform it was built
+  // with. Empty when it did not run.
   virtual CsmSnapshot read_lit_map() = 0;
   // The host-API context the adapter drives.
   virtual Context& context() = 0;
