@@ -43,7 +43,6 @@ void main() {
       vec3 g[4];
       if (izb_samples() == 1u) {
         g[0] = to_grid(shadow_ray_origin(p.position, p.normal));
-        store_quad_point(index, 0u, g[0]);
         node_depth = g[0].z;
         if (csm_proves_shadowed(g[0])) mask = 1u;
       } else {
@@ -52,7 +51,6 @@ void main() {
         node_depth = -1.0e30;
         for (int i = 0; i < 4; ++i) {
           g[i] = to_grid(c[i]);
-          store_quad_point(index, uint(i), g[i]);
           node_depth = max(node_depth, g[i].z);
         }
         for (uint s = 0u; s < 32u; ++s)
@@ -89,6 +87,9 @@ void main() {
       } else {
         count = lit ? 0u : node_texels(g, mask, texels);
       }
+      // Only a pixel with nodes is read again (by the trace, and the sorted lists' scatter).
+      if (count != 0u)
+        for (uint i = 0u; i < (izb_samples() == 1u ? 1u : 4u); ++i) store_quad_point(index, i, g[i]);
     }
   }
   uint refused = 0u;  // nodes past the pool

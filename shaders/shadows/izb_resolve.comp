@@ -138,8 +138,9 @@ void main() {
   if (kDebug == kDebugVisibility && (state & IZB_PIXEL_CANDIDATE) != 0u) {
     imageStore(overlay, pixel, vec4(mix(vec3(1.0, 0.2, 0.1), vec3(0.1, 1.0, 0.2), visibility), 0.6));
   } else if (kDebug == kDebugListLength && (state & IZB_PIXEL_CANDIDATE) != 0u) {
-    ivec2 t = grid_texel(quad_point(index, 0u));
-    uint length = list_length(texel_index(t), 64u);
+    // A pixel culled whole (by the CSM or the lit map) has no node nor stored points: no list.
+    bool has_nodes = (state & (IZB_PIXEL_CSM_CULLED | IZB_PIXEL_LIT_CULLED)) == 0u;
+    uint length = has_nodes ? list_length(texel_index(grid_texel(quad_point(index, 0u))), 64u) : 0u;
     imageStore(overlay, pixel, vec4(heat(log2(float(length) + 1.0) / 6.0), 0.7));
   } else if (kDebug == kDebugCsm && (state & IZB_PIXEL_CSM_CULLED) != 0u) {
     imageStore(overlay, pixel, vec4(0.1, 0.4, 1.0, 0.6));

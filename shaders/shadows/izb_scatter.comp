@@ -10,7 +10,8 @@ void main() {
   if (any(greaterThanEqual(pixel, params.extent.xy))) return;
   uint index = pixel.y * params.extent.x + pixel.x;
   uint state = pixel_state[index];
-  if ((state & IZB_PIXEL_CANDIDATE) == 0u || (state & IZB_PIXEL_OVERFLOW) != 0u) return;
+  // A pixel the lit map proved lit, or past the pool, has no node (nor stored points).
+  if ((state & IZB_PIXEL_CANDIDATE) == 0u || (state & (IZB_PIXEL_OVERFLOW | IZB_PIXEL_LIT_CULLED)) != 0u) return;
   vec3 g[4];
   for (uint i = 0u; i < (izb_samples() == 1u ? 1u : 4u); ++i) g[i] = quad_point(index, i);
   uint texels[32];

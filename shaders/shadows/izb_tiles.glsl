@@ -11,6 +11,7 @@ layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest
 layout(constant_id = 0) const uint kIzbTileStepLanes = 32u;
 layout(constant_id = 1) const uint kIzbRecordsPerGroup = kIzbRecordsPerGroupGpu;
 layout(constant_id = 2) const uint kIzbTilePairsPerGroup = kIzbTilePairsPerGroupGpu;
+layout(constant_id = 3) const uint kIzbLitDirectTexels = kIzbLitDirectTexelsGpu;
 
 uint tiles_per_side() { return params.capacities.y; }
 bool is_csm_work(uint mode) { return mode == IZB_WORK_CSM_HERTEL || mode == IZB_WORK_CSM_BARYCENTRIC; }

@@ -218,8 +218,11 @@ SHARED_CONST uint kIzbLitEmpty = 0xff800000u;
 // A 32 spp point is lit-culled only when its μQuad spans at most this many texels per axis: the
 // rounding bounds of the lit map (izb_common.glsl) assume it.
 SHARED_CONST float kIzbLitQuadReach = 16.0f;
-// Lit map: a triangle whose widened bounds hold at most this many texels writes them in step 1.
-SHARED_CONST uint kIzbLitDirectTexels = 256u;
+// Lit map: a triangle whose widened bounds hold at most this many texels writes them in step 1
+// (specialization constant id 3). A CPU device pays for a tile's idle lanes, a GPU for a thread that
+// loops while its subgroup waits: few on a GPU.
+SHARED_CONST uint kIzbLitDirectTexelsGpu = 16u;
+SHARED_CONST uint kIzbLitDirectTexelsCpu = 256u;
 // push.debug of the dispatch-argument pass: which step's work to dispatch.
 SHARED_CONST uint IZB_ARGS_RECORDS = 0u;
 SHARED_CONST uint IZB_ARGS_TILE_PAIRS = 1u;

@@ -207,7 +207,8 @@ struct IzbPass::Impl {
     const std::vector<SpecializationConstant> shape = {
         {0, cpu ? 8u : 32u},
         {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
-        {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu}};
+        {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu},
+        {3, cpu ? gpu_shared::kIzbLitDirectTexelsCpu : gpu_shared::kIzbLitDirectTexelsGpu}};
     ps.tile_records = compute("izb_records.comp", shape);
     ps.tile_bin = compute("izb_tile_bin.comp", shape);
     ps.texel_bin = compute("izb_texel_bin.comp", shape);
