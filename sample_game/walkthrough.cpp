@@ -299,7 +299,8 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
     bool spp32 = s.izb.samples_per_pixel == 32;
     if (ImGui::Checkbox("32 samples per pixel", &spp32)) s.izb.samples_per_pixel = spp32 ? 32 : 1;
     ImGui::Checkbox("CSM z-prepass", &s.izb.csm);
-    ImGui::Checkbox("known-lit culling", &s.izb.lit_culling);
+    int lit = int(s.izb.lit_culling);
+    if (ImGui::Combo("known-lit culling", &lit, "off\0on\0auto\0")) s.izb.lit_culling = shadows::LitCulling(lit);
     const char* tests[] = {"hertel", "bary", "bary-hw", "inner-hw"};
     int test = int(s.izb.csm_test);
     if (ImGui::Combo("coverage test", &test, tests, IM_ARRAYSIZE(tests))) {

@@ -74,7 +74,7 @@ const char* kUsage =
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
     "  csm tests: hertel, bary, bary-hw, inner-hw; trace and CSM backends: auto, raster, compute\n"
     "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up);\n"
-    "  lit culling: on, off (repeat to alternate: on,off,on,off).\n"
+    "  lit culling: on, off, auto (timed both ways, the faster kept; repeat to alternate: on,off,on,off).\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
     "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
@@ -272,9 +272,10 @@ std::vector<RunConfig> expand_runs(const Options& o) {
       continue;
     }
     for (const auto& value : o.lit_culling) {
-      if (value != "on" && value != "off") throw std::runtime_error("--lit-culling '" + value + "': expected on or off");
+      const auto mode = shadows::parse_lit_culling(value);
+      if (!mode) throw std::runtime_error("--lit-culling '" + value + "': expected on, off or auto");
       RunConfig r = run;
-      r.settings.izb.lit_culling = value == "on";
+      r.settings.izb.lit_culling = *mode;
       lit_runs.push_back(r);
     }
   }
@@ -371,7 +372,7 @@ struct Bench {
     entry["trace"] = run.trace;
     entry["csm_backend"] = run.csm_backend;
     entry["csm_everything"] = run.csm_everything;
-    entry["lit_culling"] = run.settings.izb.lit_culling;
+    entry["lit_culling"] = shadows::lit_culling_name(run.settings.izb.lit_culling);
     std::string why;
     if (!module->supported(run.settings.technique, &why) ||
         (run.csm_test != "none" && !module->supported(run.settings.izb.csm_test, &why))) {
@@ -398,8 +399,12 @@ struct Bench {
     // Automatic backends first time both (a few frames), then keep the faster. Timed frames run
     // without the statistics passes; one more frame after them collects the statistics.
     module->set_collect_stats(true);
-    for (int f = 0; f < 16 && (module->stats().trace_choice.reason == "probing" ||
-                               module->stats().csm_choice.reason == "probing" || f == 0);
+    const auto lit_undecided = [&] {
+      const auto& lit = module->stats().lit_choice;
+      return run.settings.izb.lit_culling == shadows::LitCulling::Auto && (lit.reason == "probing" || lit.reason.empty());
+    };
+    for (int f = 0; f < 24 && (module->stats().trace_choice.reason == "probing" ||
+                               module->stats().csm_choice.reason == "probing" || lit_undecided() || f == 0);
          ++f)
       renderer.render_frame(0.0f);
     module->set_collect_stats(false);
@@ -445,6 +450,7 @@ struct Bench {
     entry["memory_total_bytes"] = st.memory_total_bytes;
     if (!st.trace_choice.backend.empty()) entry["trace_choice"] = choice_json(st.trace_choice);
     if (!st.csm_choice.backend.empty()) entry["csm_choice"] = choice_json(st.csm_choice);
+    if (!st.lit_choice.backend.empty()) entry["lit_choice"] = choice_json(st.lit_choice);
     if (!st.cascade_splits.empty()) entry["cascade_splits"] = st.cascade_splits;
     json decisions = json::array();
     for (const auto& d : st.csm_decisions)
@@ -496,7 +502,11 @@ struct Bench {
         return asked == "none" || c.backend.empty() ? asked : c.backend;
       };
       if (!o.lit_culling.empty())
-        std::printf("lit culling %s: %llu of %llu candidates culled, %llu nodes\n", run.settings.izb.lit_culling ? "on" : "off",
+        std::printf("lit culling %s%s: %llu of %llu candidates culled, %llu nodes\n",
+                    shadows::lit_culling_name(run.settings.izb.lit_culling).c_str(),
+                    run.settings.izb.lit_culling == shadows::LitCulling::Auto
+                        ? (" (" + st.lit_choice.backend + ", " + st.lit_choice.reason + ")").c_str()
+                        : "",
                     (unsigned long long)st.lit_culled, (unsigned long long)st.lit_candidates,
                     (unsigned long long)st.nodes_inserted);
       std::printf("%-12s %-9s %-8s %-8s %4u %10.3f %10.3f %12.6f %12llu %10.5f %9.1f\n", run.mode.c_str(),

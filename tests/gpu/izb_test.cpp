@@ -246,9 +246,9 @@ TEST_P(IzbSceneTest, LitCullingIsExact) {
     for (const auto& [name, base] : {std::pair<const char*, shadows::Settings>{"izb", plain_izb}, {"izb+csm", with_csm},
                                      {"hybrid+csm", hybrid}}) {
       auto off = base;
-      off.izb.lit_culling = false;
+      off.izb.lit_culling = shadows::LitCulling::Off;
       auto on = base;
-      on.izb.lit_culling = true;
+      on.izb.lit_culling = shadows::LitCulling::On;
       const auto a = render(GetParam().scene, GetParam().view, off, reference.empty());
       if (reference.empty()) reference = a.reference;
       const auto b = render(GetParam().scene, GetParam().view, on, false);
@@ -402,7 +402,7 @@ TEST_P(IzbSceneTest, LitMapHoldsNoFartherThanEveryTouchingTriangle) {
   const size_t view = GetParam().view;
   for (uint32_t spp : {1u, 32u}) {
     auto s = izb(spp);
-    s.izb.lit_culling = true;
+    s.izb.lit_culling = shadows::LitCulling::On;
     auto& r = make_renderer(scene, view, kSize, kSize);
     module_ = shadows::install(r, s);
     r.render_frame(0.0f);
@@ -502,7 +502,7 @@ TEST_P(IzbSceneTest, LitMapHoldsNoFartherThanEveryTouchingTriangle) {
 // the floor's own plane at the texel corners) need no node.
 TEST_F(IzbTest, LitCullingCullsOnContact) {
   auto on = izb(1);
-  on.izb.lit_culling = true;
+  on.izb.lit_culling = shadows::LitCulling::On;
   const auto r = render("contact", 0, on, false);
   const auto off = render("contact", 0, izb(1), false);
   EXPECT_GT(r.stats.lit_culled * 2, r.stats.lit_candidates);
@@ -510,6 +510,30 @@ TEST_F(IzbTest, LitCullingCullsOnContact) {
   EXPECT_EQ(r.visibility, off.visibility);
   EXPECT_LT(r.stats.trace_fragments_after_cull + r.stats.triangle_tests,
             off.stats.trace_fragments_after_cull + off.stats.triangle_tests);
+}
+
+// LitCulling::Auto times the IZB's passes with the lit map and without once the trace's choice is
+// made, keeps one, and says why; the answer is the one without, frame by frame.
+TEST_F(IzbTest, AutomaticLitCullingTimesBothAndKeepsOne) {
+  auto s = izb(1);
+  s.izb.lit_culling = shadows::LitCulling::Auto;
+  const auto off = render("contact", 0, izb(1), false);
+  auto& r = make_renderer("contact", 0, kSize, kSize);
+  module_ = shadows::install(r, s);
+  std::vector<std::string> seen;
+  for (int i = 0; i < 16; ++i) {
+    r.render_frame(0.0f);
+    EXPECT_EQ(module_->read_visibility(), off.visibility) << "frame " << i;
+    seen.push_back(module_->stats().lit_choice.backend);
+  }
+  const auto& choice = module_->stats().lit_choice;
+  EXPECT_EQ(choice.reason.rfind("auto: ", 0), 0u) << choice.reason;
+  EXPECT_TRUE(choice.backend == "on" || choice.backend == "off") << choice.backend;
+  EXPECT_GT(choice.raster_ms, 0.0);   // with the lit map
+  EXPECT_GT(choice.compute_ms, 0.0);  // without
+  EXPECT_NE(std::find(seen.begin(), seen.end(), "on"), seen.end());
+  EXPECT_NE(std::find(seen.begin(), seen.end(), "off"), seen.end());
+  EXPECT_EQ(module_->stats().lit_culled > 0, choice.backend == "on");
 }
 
 TEST_F(IzbTest, AutomaticCsmChoiceTakesArchitectureAndLeavesFoliage) {

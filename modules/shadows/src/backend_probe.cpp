@@ -31,33 +31,43 @@ PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, boo
     // Only whole frames count: the region of the frame that last used this slot (collected in the
     // profiler's segment of the same index: the host's frame N uses slot and segment N % F), if this
     // pass recorded it.
+    double total = 0.0;
+    bool seen = false;
     for (const auto& [name, ms] : profiler.last_frame_of_slot(frame_slot))
-      if (name == region_) samples[slot(*pending)].push_back(ms);
+      if (std::find(regions_.begin(), regions_.end(), name) != regions_.end()) {
+        total += ms;
+        seen = true;
+      }
+    if (seen) samples[slot(*pending)].push_back(total);
     pending.reset();
   }
   choice_.raster_ms = best(samples[0]);
   choice_.compute_ms = best(samples[1]);
+  probing_ = false;
+  const std::string& raster = names_[0];
+  const std::string& compute = names_[1];
   auto use = [&](PassBackend b, std::string reason) {
-    choice_.backend = backend_name(b);
+    choice_.backend = names_[slot(b)];
     choice_.reason = std::move(reason);
     return b;
   };
   if (requested != PassBackend::Auto) return use(requested, "forced");
-  if (!raster_available) return use(PassBackend::Compute, "only compute available");
-  if (!compute_available) return use(PassBackend::Raster, "only raster available");
-  if (!profiler.enabled()) return use(PassBackend::Compute, "no GPU timestamps to probe with: compute");
+  if (!raster_available) return use(PassBackend::Compute, "only " + compute + " available");
+  if (!compute_available) return use(PassBackend::Raster, "only " + raster + " available");
+  if (!profiler.enabled()) return use(PassBackend::Compute, "no GPU timestamps to probe with: " + compute);
   if (!decided && samples[0].size() >= kFramesEach && samples[1].size() >= kFramesEach) {
     decided = choice_.compute_ms <= choice_.raster_ms ? PassBackend::Compute : PassBackend::Raster;
   }
   if (decided) {
     std::ostringstream why;
     why.precision(3);
-    why << "auto: " << backend_name(*decided) << " faster (raster " << choice_.raster_ms << " ms, compute "
-        << choice_.compute_ms << " ms, best of " << kFramesEach << " frames each)";
+    why << "auto: " << names_[slot(*decided)] << " faster (" << raster << " " << choice_.raster_ms << " ms, "
+        << compute << " " << choice_.compute_ms << " ms, best of " << kFramesEach << " frames each)";
     return use(*decided, why.str());
   }
   const PassBackend next = samples[0].size() <= samples[1].size() ? PassBackend::Raster : PassBackend::Compute;
   pending = next;
+  probing_ = true;
   return use(next, "probing");
 }
 

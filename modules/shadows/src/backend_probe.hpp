@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -22,13 +23,19 @@ class BackendProbe {
   static constexpr size_t kFramesEach = 2;
   static constexpr size_t kRememberedKeys = 64;  // beyond this many configurations, probing starts afresh
 
-  explicit BackendProbe(std::string region) : region_(std::move(region)) {}
+  explicit BackendProbe(std::string region) : regions_{std::move(region)} {}
+  // A choice between two ways of doing the same work, timed by the sum of several regions (every
+  // occurrence in the frame), named `names` (for Raster and Compute) in choice().
+  BackendProbe(std::vector<std::string> regions, std::array<std::string, 2> names)
+      : regions_(std::move(regions)), names_(std::move(names)) {}
   BackendProbe(const BackendProbe&) = delete;  // probe_ points into probes_
   BackendProbe& operator=(const BackendProbe&) = delete;
   // This frame's backend. `key` identifies what the timing depends on (sizes, scene, mode).
   PassBackend pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
                    const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot = 0);
   const Stats::BackendChoice& choice() const { return choice_; }
+  // Whether the last pick was a probe frame (no decision yet for its key).
+  bool probing() const { return probing_; }
   // The frame just recorded is not representative (e.g. its work lists overflowed and grow for the
   // next frame): its time is not taken, and the probe runs that backend again.
   void discard_pending(uint32_t frame_slot) {
@@ -36,7 +43,9 @@ class BackendProbe {
   }
 
  private:
-  std::string region_;
+  std::vector<std::string> regions_;
+  std::array<std::string, 2> names_ = {"raster", "compute"};
+  bool probing_ = false;
   uint64_t key_ = ~uint64_t(0);
   // Per frame-in-flight slot: the backend the frame in that slot ran, its time not yet read. The
   // profiler passed to pick() holds the times of the frame that last used the slot.

@@ -700,7 +700,7 @@ std::vector<Context::PassTime> ContextImpl::pass_times() const {
 std::vector<std::string> ContextImpl::pass_names() const {
   std::vector<std::string> izb = {"light_frustum", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"};
   if (settings_.izb.csm) izb.insert(izb.begin() + 1, "csm");
-  if (settings_.izb.lit_culling) izb.insert(izb.begin() + 1, "lit_map");
+  if (settings_.izb.lit_culling != LitCulling::Off) izb.insert(izb.begin() + 1, "lit_map");
   const std::vector<std::string> cascades = {"cascade_depth", "cascade_masks", "cascade_filter", "cascade_blur"};
   switch (settings_.technique) {
     case Technique::Off: return {};

@@ -121,6 +121,10 @@ struct IzbPass::Impl {
   uint32_t caster_draws = 0;
   BackendProbe trace_probe{"frustum_trace"};
   BackendProbe csm_probe{"csm"};
+  // Known-lit culling under LitCulling::Auto: the IZB's own passes timed with the lit map ("on", the
+  // probe's raster slot) and without ("off", its compute slot: the choice without timestamps).
+  BackendProbe lit_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"},
+                         {"on", "off"}};
   bool used_compute_trace = false;
   bool used_compute_csm = false;
   bool last_used_lit = false;
@@ -602,8 +606,19 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   m.used_compute_trace = use_compute_trace;
   m.used_compute_csm = use_compute_csm;
   m.last_used_csm = run_csm;
-  m.last_used_lit = settings.lit_culling;
-  m.ensure_work_lists(use_compute_trace || use_compute_csm || settings.lit_culling);
+  // Known-lit culling: the lit map is the sun's alone. Auto probes it once the trace's and the CSM's
+  // choices are made, so the frames it compares differ in nothing else.
+  bool lit = false;
+  if (!spot) {
+    if (settings.lit_culling == LitCulling::On) {
+      lit = true;
+    } else if (settings.lit_culling == LitCulling::Auto && !m.trace_probe.probing() &&
+               !(run_csm && m.csm_probe.probing())) {
+      lit = m.lit_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Raster;
+    }
+  }
+  m.last_used_lit = lit;
+  m.ensure_work_lists(use_compute_trace || use_compute_csm || lit);
   if (use_compute_csm) {
     // Per caster draw: whether it enters the CSM this frame.
     const auto& chosen = m.csm->chosen_draws();
@@ -652,7 +667,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
   if (run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   if (settings.progressive_removal) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
-  if (settings.lit_culling && !spot) flags |= gpu_shared::IZB_FLAG_LIT;  // the lit map is the sun's alone
+  if (lit) flags |= gpu_shared::IZB_FLAG_LIT;
   if (std::any_of(frame.draws.begin(), frame.draws.end(),
                   [](const DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
     flags |= gpu_shared::IZB_FLAG_ALPHA;
@@ -694,7 +709,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   }
   pass_barrier(frame.ctx, cmd);
   const VkDeviceSize grid_bytes = VkDeviceSize(m.resolution) * m.resolution * 4;
-  if (settings.lit_culling) {
+  if (lit) {
     // The lit map: every caster triangle's nearest depth over the texels it touches, binned over
     // light-space tiles like the compute CSM (it shares the CSM's work lists; the barrier below
     // orders the two). The build reads it.
@@ -936,6 +951,7 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
     s.hardware_conservative = m.used_hardware;
     s.trace_choice = m.trace_probe.choice();
     if (m.last_used_csm) s.csm_choice = m.csm_probe.choice();
+    s.lit_choice = m.lit_probe.choice();
     if (m.used_compute_trace) {
       s.trace_records = c[gpu_shared::IZB_COUNTER_RECORDS];
       s.trace_tile_pairs = c[gpu_shared::IZB_COUNTER_TILE_PAIRS];
@@ -959,6 +975,7 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
   if (overflowed) {  // a frame slowed by an overflow does not speak for its backend
     m.trace_probe.discard_pending(slot);
     m.csm_probe.discard_pending(slot);
+    m.lit_probe.discard_pending(slot);
   }
   grow(m.records, records_asked);
   grow(m.tile_pairs, tile_pairs_asked);

@@ -110,4 +110,20 @@ std::optional<ListLayout> parse_list_layout(const std::string& name) {
 
 std::string list_layout_name(ListLayout layout) { return layout == ListLayout::Sorted ? "sorted" : "linked"; }
 
+std::optional<LitCulling> parse_lit_culling(const std::string& name) {
+  if (name == "off") return LitCulling::Off;
+  if (name == "on") return LitCulling::On;
+  if (name == "auto") return LitCulling::Auto;
+  return std::nullopt;
+}
+
+std::string lit_culling_name(LitCulling mode) {
+  switch (mode) {
+    case LitCulling::Off: return "off";
+    case LitCulling::On: return "on";
+    case LitCulling::Auto: return "auto";
+  }
+  return "?";
+}
+
 }  // namespace shadows

@@ -46,6 +46,9 @@ enum class PassBackend { Auto, Raster, Compute };
 // counting sort (count per texel, prefix sum, scatter into contiguous ranges).
 enum class ListLayout { Linked, Sorted };
 
+// Known-lit culling (IzbSettings::lit_culling): off, on, or chosen by timing both (Auto).
+enum class LitCulling { Off, On, Auto };
+
 struct ShadowMapSettings {
   uint32_t size = 1024;
   float constant_bias = 1.0e-4f;  // in light depth units ([0,1] over the fitted depth range)
@@ -72,13 +75,17 @@ struct IzbSettings {
   uint32_t samples_per_pixel = 1;     // 1 (ray per pixel) or 32 (frustum per pixel footprint)
   float max_distance = 0.0f;          // 0: every visible point; else only points nearer the camera
   bool csm = false;                   // conservative shadow map z-prepass culls certainly shadowed points
-  // Known-lit culling, the CSM's dual: a compute pass keeps per grid texel the nearest light depth of
-  // every caster touching it (alpha-tested ones included); a point no farther from the light than
-  // that over its texel (at 32 spp: every sample over its own texel) is lit for certain and enters
-  // no list. Exact: the answer is the same with it off. Off by default: a receiver's own surface
-  // bounds its texel, so few points are proved lit, and on lavapipe the map costs far more than the
-  // trace saves (tests/bench/BENCHMARKS.md, "Known-lit culling").
-  bool lit_culling = false;
+  // Known-lit culling, the CSM's dual (the sun's IZB; a local light's runs without): a compute pass
+  // keeps per grid texel the nearest light depth of every caster touching it (alpha-tested ones
+  // included) and per texel corner the nearest of their planes there; a point no farther from the
+  // light than its texel's bound or the blend of its corners' planes (at 32 spp: every sample, each
+  // in its own texel) is lit for certain and enters no list. Exact: the answer is the same with it
+  // off. It proves most open ground lit (a floor's own plane passes through its points), but the map
+  // visits every texel every caster touches: it pays where much of the view is lit ground under
+  // few casters and costs where many large casters overlap (tests/bench/BENCHMARKS.md, "Known-lit
+  // culling"). Auto times the IZB's passes with it off and on for two frames each, once the trace's
+  // and the CSM's own choices are made, and keeps the faster per configuration (Stats::lit_choice).
+  LitCulling lit_culling = LitCulling::Off;
   CsmTest csm_test = CsmTest::Barycentric;
   ConservativeRaster raster = ConservativeRaster::Auto;  // for the raster trace
   PassBackend trace = PassBackend::Auto;     // frustum trace: conservative raster or compute binning
@@ -148,6 +155,7 @@ struct Stats {
   };
   BackendChoice trace_choice;
   BackendChoice csm_choice;
+  BackendChoice lit_choice;  // known-lit culling: backend "off" or "on", and why
   // Compute trace work: tile-row records, (triangle, tile) pairs kept, (triangle, texel) pairs kept.
   uint64_t trace_records = 0;
   uint64_t trace_tile_pairs = 0;
@@ -200,5 +208,7 @@ SHADOWS_API std::optional<PassBackend> parse_backend(const std::string& name);  
 SHADOWS_API std::string backend_name(PassBackend backend);
 SHADOWS_API std::optional<ListLayout> parse_list_layout(const std::string& name);  // "linked", "sorted"
 SHADOWS_API std::string list_layout_name(ListLayout layout);
+SHADOWS_API std::optional<LitCulling> parse_lit_culling(const std::string& name);  // "off", "on", "auto"
+SHADOWS_API std::string lit_culling_name(LitCulling mode);
 
 }  // namespace shadows
