@@ -238,9 +238,15 @@ bool rect_touches_triangle(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float orien
 // A lower bound of the triangle's light depth over the rectangle [lo, hi]: its plane's minimum over
 // the corners, never below its nearest vertex, less a rounding margin; clamped to [0,1] as the raster
 // trace's depth clamp does.
+// The triangle's depth slopes (d depth / dx, d depth / dy) in grid space; `area` from edge_fn(c, a, b).
+vec2 plane_slopes(vec3 a, vec3 b, vec3 c, float area) {
+  return vec2((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y),
+              (c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
+}
+
 float triangle_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float area) {
-  float dzdx = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
-  float dzdy = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
+  vec2 slope = plane_slopes(a, b, c, area);
+  float dzdx = slope.x, dzdy = slope.y;
   vec2 corner = vec2(dzdx >= 0.0 ? lo.x : hi.x, dzdy >= 0.0 ? lo.y : hi.y);
   float plane = a.z + dzdx * (corner.x - a.x) + dzdy * (corner.y - a.y);
   float nearest = max(plane, min(min(a.z, b.z), c.z));
@@ -278,16 +284,20 @@ float triangle_extent(vec3 a, vec3 b, vec3 c) {
 float lit_slack(vec3 a, vec3 b, vec3 c) {
   return 1.0e-3 + 2.0e-6 * (triangle_extent(a, b, c) + lit_quad_reach() + 2.0) + 5.0e-7 * float(izb_resolution());
 }
-float lit_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float area, float slack) {
-  float dzdx = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
-  float dzdy = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
-  vec2 corner = vec2(dzdx >= 0.0 ? lo.x - slack : hi.x + slack, dzdy >= 0.0 ? lo.y - slack : hi.y + slack);
-  float plane = a.z + dzdx * (corner.x - a.x) + dzdy * (corner.y - a.y);
-  float nearest = max(plane, min(min(a.z, b.z), c.z));
+// The depth the node test's barycentric rounding can move the triangle's interpolated depth.
+float lit_barycentric_rounding(vec3 a, vec3 b, vec3 c, float area) {
   float extent = triangle_extent(a, b, c);
   // |area| / extent is at most the triangle's least height.
   float barycentric_error = 2.0e-6 * (extent + lit_quad_reach() + 2.0) * extent / abs(area);
-  float bound = nearest - 1.0e-6 - 1.0e-6 * abs(nearest) - barycentric_error * (abs(a.z) + abs(b.z) + abs(c.z));
+  return barycentric_error * (abs(a.z) + abs(b.z) + abs(c.z));
+}
+float lit_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float area, float slack) {
+  vec2 slope = plane_slopes(a, b, c, area);
+  float dzdx = slope.x, dzdy = slope.y;
+  vec2 corner = vec2(dzdx >= 0.0 ? lo.x - slack : hi.x + slack, dzdy >= 0.0 ? lo.y - slack : hi.y + slack);
+  float plane = a.z + dzdx * (corner.x - a.x) + dzdy * (corner.y - a.y);
+  float nearest = max(plane, min(min(a.z, b.z), c.z));
+  float bound = nearest - 1.0e-6 - 1.0e-6 * abs(nearest) - lit_barycentric_rounding(a, b, c, area);
   // A near-degenerate triangle's arithmetic may overflow (inf, or NaN from inf * 0): then no bound.
   return abs(bound) < 3.0e38 ? bound : -3.0e38;
 }
@@ -301,26 +311,25 @@ float lit_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float area, fl
 uint lit_corner_index(ivec2 corner) {
   return 2u * izb_resolution() * izb_resolution() + uint(corner.y) * (izb_resolution() + 1u) + uint(corner.x);
 }
-// A lower bound of the triangle's plane at `corner` as the node test computes depths there (the same
-// margins as lit_nearest_depth, plus the rounding of the plane's own evaluation).
-float lit_plane_depth(vec2 corner, vec3 a, vec3 b, vec3 c, float area) {
-  float dzdx = ((b.z - a.z) * (c.y - a.y) - (c.z - a.z) * (b.y - a.y)) / area;
-  float dzdy = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) / area;
-  vec2 run = abs(corner - a.xy);
-  float plane = a.z + dzdx * (corner.x - a.x) + dzdy * (corner.y - a.y);
-  // The slopes' own rounding: their numerators cancel for a triangle nearly edge-on.
+// Lowers the four corners of `texel` to a lower bound of the triangle's plane there as the node test
+// computes depths (the same margins as lit_nearest_depth, plus the rounding of the plane's own
+// evaluation, and of its slopes, whose numerators cancel for a triangle nearly edge-on).
+void lower_lit_corners(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
+  vec2 slope = plane_slopes(a, b, c, area);
+  float dzdx = slope.x, dzdy = slope.y;
   float slope_error_x = 1.0e-6 * (abs((b.z - a.z) * (c.y - a.y)) + abs((c.z - a.z) * (b.y - a.y))) / abs(area);
   float slope_error_y = 1.0e-6 * (abs((c.z - a.z) * (b.x - a.x)) + abs((b.z - a.z) * (c.x - a.x))) / abs(area);
-  float extent = triangle_extent(a, b, c);
-  float barycentric_error = 2.0e-6 * (extent + lit_quad_reach() + 2.0) * extent / abs(area);
-  float bound = plane - 1.0e-6 - 1.0e-6 * (abs(plane) + abs(a.z) + abs(dzdx) * run.x + abs(dzdy) * run.y) -
-                slope_error_x * run.x - slope_error_y * run.y - barycentric_error * (abs(a.z) + abs(b.z) + abs(c.z));
-  return abs(bound) < 3.0e38 ? bound : -3.0e38;
-}
-void lower_lit_corner(ivec2 corner, vec3 a, vec3 b, vec3 c, float area) {
-  uint bits = ordered_depth_bits(lit_plane_depth(vec2(corner), a, b, c, area));
-  uint index = lit_corner_index(corner);
-  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  float rounding = lit_barycentric_rounding(a, b, c, area);
+  for (int k = 0; k < 4; ++k) {
+    ivec2 corner = texel + ivec2(k & 1, k >> 1);
+    vec2 run = abs(vec2(corner) - a.xy);
+    float plane = a.z + dzdx * (float(corner.x) - a.x) + dzdy * (float(corner.y) - a.y);
+    float bound = plane - 1.0e-6 - 1.0e-6 * (abs(plane) + abs(a.z) + abs(dzdx) * run.x + abs(dzdy) * run.y) -
+                  slope_error_x * run.x - slope_error_y * run.y - rounding;
+    uint bits = ordered_depth_bits(abs(bound) < 3.0e38 ? bound : -3.0e38);
+    uint index = lit_corner_index(corner);
+    if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  }
 }
 // Whether grid point `g` is proved lit: inside the grid (outside it the texel clamp would compare it
 // with a texel that is not its own) and no farther than its texel's bound, or than the blend of its

@@ -167,7 +167,7 @@ void lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
   uint index = lit_map_index(texel_index(texel));
   if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
-  for (int k = 0; k < 4; ++k) lower_lit_corner(texel + ivec2(k & 1, k >> 1), a, b, c, area);
+  lower_lit_corners(texel, a, b, c, area);
 }
 
 // Step 3 for one texel of a kept tile, done serially where a buffer overflowed.

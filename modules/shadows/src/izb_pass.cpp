@@ -891,22 +891,20 @@ LitMapSnapshot IzbPass::read_lit_map() {
   if (!m.last_used_lit) return snapshot;
   snapshot.resolution = m.resolution;
   const auto bytes = read_buffer(m.ctx, m.csm_texels);
+  // Ordered bits -> floats (izb_common.glsl), `count` words from word `first` on.
+  const auto decode = [&](size_t first, size_t count) {
+    std::vector<float> depths(count);
+    for (size_t i = 0; i < count; ++i) {
+      uint32_t bits;
+      std::memcpy(&bits, bytes.data() + (first + i) * 4, 4);
+      bits = (bits & 0x80000000u) ? (bits & 0x7fffffffu) : ~bits;
+      std::memcpy(&depths[i], &bits, 4);
+    }
+    return depths;
+  };
   const size_t texels = size_t(m.resolution) * m.resolution;
-  snapshot.depth.resize(texels);
-  for (size_t i = 0; i < texels; ++i) {
-    uint32_t bits;
-    std::memcpy(&bits, bytes.data() + (texels + i) * 4, 4);
-    bits = (bits & 0x80000000u) ? (bits & 0x7fffffffu) : ~bits;  // ordered bits -> float (izb_common.glsl)
-    std::memcpy(&snapshot.depth[i], &bits, 4);
-  }
-  const size_t corners = size_t(m.resolution + 1) * (m.resolution + 1);
-  snapshot.corner_depth.resize(corners);
-  for (size_t i = 0; i < corners; ++i) {
-    uint32_t bits;
-    std::memcpy(&bits, bytes.data() + (2 * texels + i) * 4, 4);
-    bits = (bits & 0x80000000u) ? (bits & 0x7fffffffu) : ~bits;
-    std::memcpy(&snapshot.corner_depth[i], &bits, 4);
-  }
+  snapshot.depth = decode(texels, texels);
+  snapshot.corner_depth = decode(2 * texels, size_t(m.resolution + 1) * (m.resolution + 1));
   const auto frame_bytes = read_buffer(m.ctx, m.frame_data);
   gpu_shared::IzbFrame frame;
   std::memcpy(&frame, frame_bytes.data(), sizeof(frame));
