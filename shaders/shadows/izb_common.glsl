@@ -19,6 +19,7 @@ layout(set = 0, binding = IZB_BINDING_GRID_TRIANGLES, std430) buffer GridTriangl
 layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
 layout(set = 0, binding = IZB_BINDING_LIST_COUNTS, std430) buffer ListCounts { uint list_counts[]; };
 layout(set = 0, binding = IZB_BINDING_LIST_CURSOR, std430) buffer ListCursor { uint list_cursor[]; };
+layout(set = 0, binding = IZB_BINDING_CASTER_DRAWS, std430) buffer CasterDraws { uint caster_draw_words[]; };
 
 #define MATERIAL_TEXTURES_BINDING IZB_BINDING_MATERIAL_TEXTURES
 #include "material_textures.glsl"
@@ -75,6 +76,26 @@ struct CasterAlpha {
 };
 
 uint caster_draw(uint t) { return floatBitsToUint(casters[t].p0.w); }
+
+// The caster draws' words (IZB_BINDING_CASTER_DRAWS): where each section starts.
+uint caster_draw_count() { return params.capacities.z; }
+uint draw_bounds_word(uint draw) { return caster_draw_count() + 8u * draw; }
+uint frustum_draw_word(uint slot) { return 9u * caster_draw_count() + 2u * slot; }
+uint listed_triangle_word(uint slot) { return 11u * caster_draw_count() + slot; }
+// The triangles listed this frame (izb_triangles.comp): those of draws in the light frustum that reach
+// the grid, in no particular order. Every pass that walks caster triangles walks these.
+uint listed_triangle_count() { return counters[IZB_COUNTER_LISTED_TRIANGLES]; }
+uint listed_triangle(uint slot) { return caster_draw_words[listed_triangle_word(slot)]; }
+// A thread's index in a dispatch in rows of kIzbDispatchRow workgroups of `group_size` threads.
+uint row_dispatch_index(uvec3 workgroup, uint local_index, uint group_size) {
+  return (workgroup.y * kIzbDispatchRow + workgroup.x) * group_size + local_index;
+}
+// Writes the indirect dispatch of `groups` workgroups, in such rows, at counters[at..at+2].
+void write_row_dispatch(uint at, uint groups) {
+  counters[at] = min(groups, kIzbDispatchRow);
+  counters[at + 1u] = (groups + kIzbDispatchRow - 1u) / kIzbDispatchRow;
+  counters[at + 2u] = 1u;
+}
 
 CasterAlpha load_caster_alpha(uint t) {
   CasterAlpha ca;

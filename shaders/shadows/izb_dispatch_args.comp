@@ -16,11 +16,12 @@ void main() {
   } else if (push.debug == IZB_ARGS_TILE_PAIRS) {
     groups = (tile_pair_count(push.mode) + kIzbTilePairsPerGroup - 1u) / kIzbTilePairsPerGroup;
     at = IZB_COUNTER_TILE_PAIR_DISPATCH;
-  } else {
+  } else if (push.debug == IZB_ARGS_PAIRS) {
     groups = (min(counters[IZB_COUNTER_PAIRS], params.limits.w) + kIzbPairGroup - 1u) / kIzbPairGroup;
     at = IZB_COUNTER_PAIR_DISPATCH;
+  } else {
+    groups = (listed_triangle_count() + 63u) / 64u;  // izb_records.comp's workgroups
+    at = IZB_COUNTER_TRIANGLE_DISPATCH;
   }
-  counters[at] = min(groups, kIzbDispatchRow);
-  counters[at + 1u] = (groups + kIzbDispatchRow - 1u) / kIzbDispatchRow;
-  counters[at + 2u] = 1u;
+  write_row_dispatch(at, groups);
 }

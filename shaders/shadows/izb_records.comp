@@ -6,36 +6,76 @@ layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
-// Compute trace / compute CSM, step 1 (see izb.h): a thread per caster triangle walks its rows of
+// The trace's (triangle, texel) pairs of the texels [direct.xy, direct.zw] that touch and survive
+// the texel's cull, appended to step 3's pairs (one atomic per subgroup: the texels are tested once
+// to count, again to write). A pair that does not fit is traced here.
+void trace_pairs_here(uint t, ivec4 direct, vec3 a, vec3 b, vec3 c, float area) {
+  uint kept = 0u, fragments = 0u;
+  for (int y = direct.y; y <= direct.w; ++y) {
+    for (int x = direct.x; x <= direct.z; ++x) {
+      uint outcome = trace_pair_outcome(ivec2(x, y), a, b, c, area);
+      kept += outcome == IZB_PAIR_KEPT ? 1u : 0u;
+      fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
+    }
+  }
+  uint offset = subgroupExclusiveAdd(kept);
+  uint total = subgroupAdd(kept);
+  uint base = 0u;
+  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_PAIRS], total);
+  uint slot = subgroupBroadcastFirst(base) + offset;
+  if (izb_flag(IZB_FLAG_STATS)) {
+    uint f = subgroupAdd(fragments);
+    if (subgroupElect() && f > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS], f);
+    if (subgroupElect() && total > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS_KEPT], total);
+  }
+  for (int y = direct.y; y <= direct.w && kept > 0u; ++y) {
+    for (int x = direct.x; x <= direct.z; ++x) {
+      ivec2 texel = ivec2(x, y);
+      if (trace_pair_outcome(texel, a, b, c, area) != IZB_PAIR_KEPT) continue;
+      if (slot < params.limits.w) pairs[slot] = uvec2(t, texel_index(texel));
+      else trace_texel_list(texel_index(texel), t, a, b, c, 1.0 / area);
+      ++slot;
+    }
+  }
+}
+
+// Compute trace / compute CSM, step 1 (see izb.h): a thread per listed caster triangle walks its rows of
 // tiles and cuts each row's span into records of at most kIzbRecordTiles tiles (a subgroup reserves
 // its records with one atomic). A record that does not fit the buffer is worked here, so nothing is
 // dropped; the request count grows the buffer for the next frame.
 void main() {
-  uint t = gl_GlobalInvocationID.x;
+  uint index = row_dispatch_index(gl_WorkGroupID, gl_LocalInvocationIndex, 64u);
+  bool in_range = index < listed_triangle_count();
+  uint t = in_range ? listed_triangle(index) : 0u;
   uint mode = push.mode;
   vec3 a = vec3(0.0), b = vec3(0.0), c = vec3(0.0);
   float area = 0.0;
   ivec2 rows = ivec2(0, -1);
-  if (t < push.triangle_count && triangle_wanted(t, mode)) {
+  ivec4 direct = ivec4(0, 0, -1, -1);  // texels [xy, zw] worked here (the trace: its pairs listed)
+  if (in_range && triangle_wanted(t, mode)) {
     load_grid_triangle(t, a, b, c);
     area = edge_fn(c.xy, a.xy, b.xy);
     bool useful = !is_csm_work(mode) || triangle_can_cover_a_texel(a, b, c, area);
     // (Edge-on to the light, |area| <= 1e-10: no trace tests it, so the lit map needs it neither.)
     if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c, walk_slack(a, b, c, mode));
-    if (mode == IZB_WORK_LIT && rows.x <= rows.y) {
+    if (rows.x <= rows.y) {
       // A small triangle's texels, here: a tile's workgroup would leave most of its lanes idle (a CPU
-      // device pays for them all). The same per-texel work, so the same map.
+      // device pays for them all), and a record its tiles' workgroups. The same per-texel work, so the
+      // same map, CSM and trace pairs (the trace's pairs after the others, in no particular order).
       float slack = walk_slack(a, b, c, mode);
       float last = float(izb_resolution()) - 1.0;
       vec2 lo = clamp(floor(min(min(a.xy, b.xy), c.xy) - slack), vec2(0.0), vec2(last + 1.0));
       vec2 hi = clamp(floor(max(max(a.xy, b.xy), c.xy) + slack), vec2(-1.0), vec2(last));
-      if ((hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) <= float(kIzbLitDirectTexels)) {
-        for (int y = int(lo.y); y <= int(hi.y); ++y)
-          for (int x = int(lo.x); x <= int(hi.x); ++x) lit_texel(ivec2(x, y), a, b, c, area);
+      if ((hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) <= float(kIzbDirectTexels)) {
+        direct = ivec4(lo, hi);
         rows = ivec2(0, -1);
+        if (mode != IZB_WORK_TRACE)
+          for (int y = direct.y; y <= direct.w; ++y)
+            for (int x = direct.x; x <= direct.z; ++x) work_texel_here(ivec2(x, y), t, a, b, c, area, mode);
       }
     }
   }
+  if (mode == IZB_WORK_TRACE) trace_pairs_here(t, direct, a, b, c, area);
   float slack = walk_slack(a, b, c, mode);
   uint count = 0u;
   for (int r = rows.x; r <= rows.y; ++r) {

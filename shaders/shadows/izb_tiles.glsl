@@ -5,13 +5,12 @@
 layout(set = 0, binding = IZB_BINDING_RECORDS, std430) buffer Records { uvec4 records[]; };
 layout(set = 0, binding = IZB_BINDING_TILE_PAIRS, std430) buffer TilePairs { uvec2 tile_pairs[]; };
 layout(set = 0, binding = IZB_BINDING_PAIRS, std430) buffer Pairs { uvec2 pairs[]; };
-layout(set = 0, binding = IZB_BINDING_DRAW_FLAGS, std430) readonly buffer DrawFlags { uint draw_flags[]; };
 layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest { uint tile_farthest[]; };
 
 layout(constant_id = 0) const uint kIzbTileStepLanes = 32u;
 layout(constant_id = 1) const uint kIzbRecordsPerGroup = kIzbRecordsPerGroupGpu;
 layout(constant_id = 2) const uint kIzbTilePairsPerGroup = kIzbTilePairsPerGroupGpu;
-layout(constant_id = 3) const uint kIzbLitDirectTexels = kIzbLitDirectTexelsGpu;
+layout(constant_id = 3) const uint kIzbDirectTexels = kIzbDirectTexelsGpu;
 
 uint tiles_per_side() { return params.capacities.y; }
 bool is_csm_work(uint mode) { return mode == IZB_WORK_CSM_HERTEL || mode == IZB_WORK_CSM_BARYCENTRIC; }
@@ -29,7 +28,7 @@ uint tile_pair_count(uint mode) { return min(counters[tile_pair_counter(mode)], 
 
 // The lit map takes every caster; the CSM those chosen for it this frame.
 bool triangle_wanted(uint t, uint mode) {
-  return !is_csm_work(mode) || (draw_flags[caster_draw(t)] & IZB_DRAW_IN_CSM) != 0u;
+  return !is_csm_work(mode) || (caster_draw_words[caster_draw(t)] & IZB_DRAW_IN_CSM) != 0u;
 }
 
 // How far (texels) the tile walk widens a triangle: more than the trace's and CSM's touch tests'

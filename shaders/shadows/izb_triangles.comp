@@ -5,8 +5,9 @@ layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
-// Every caster triangle into grid space (texels, light depth) once per frame, after the light
-// frustum is fitted; the CSM, both traces and the fallback read these.
+// Every caster triangle of the draws in the light frustum (izb_cull_draws.comp) into grid space
+// (texels, light depth) once per frame; the CSM, both traces and the fallback read these. Those that
+// reach the grid are listed: the compute passes and the fallback walk only the listed triangles.
 // A spot light: a triangle reaching behind its near plane (where the projection folds over) or within
 // twice the light's radius of it is left out of the grid (degenerate, far outside it: every pass skips
 // it) and listed after the grid triangles, from 3 * triangle_count on; the resolve ray-tests it in
@@ -44,9 +45,15 @@ bool outside_light_pyramid(vec3 v[3], float depth[3]) {
   return !any || hi.x < -1.0 || hi.y < -1.0 || lo.x > res + 1.0 || lo.y > res + 1.0;
 }
 
-void main() {
-  uint t = gl_GlobalInvocationID.x;
-  if (t >= push.triangle_count) return;
+// Whether a triangle's grid bounds reach the grid (widened by kIzbCullMargin texels).
+bool reaches_grid(vec4 g0, vec4 g1, vec4 g2) {
+  float res = float(izb_resolution());
+  vec2 lo = min(min(g0.xy, g1.xy), g2.xy), hi = max(max(g0.xy, g1.xy), g2.xy);
+  return all(greaterThanEqual(hi, vec2(-kIzbCullMargin))) && all(lessThanEqual(lo, vec2(res + kIzbCullMargin)));
+}
+
+// Writes triangle t's grid-space vertices; whether it is to be listed.
+bool set_up_triangle(uint t) {
   vec3 v[3] = vec3[3](casters[t].p0.xyz, casters[t].p1.xyz, casters[t].p2.xyz);
   vec3 inv_w = vec3(1.0);
   if (spot_light()) {
@@ -69,11 +76,49 @@ void main() {
     if (apart && !unreached) unreached = outside_light_pyramid(v, depth);
     if (apart || unreached) {
       for (uint i = 0u; i < 3u; ++i) grid_triangles[3u * t + i] = vec4(-1.0e9, -1.0e9, 2.0, 1.0);
-      if (unreached) return;
+      if (unreached) return false;
       uint k = atomicAdd(counters[IZB_COUNTER_STRADDLERS], 1u);
       grid_triangles[3u * push.triangle_count + k] = vec4(uintBitsToFloat(t), 0.0, 0.0, 0.0);
-      return;
+      return false;
     }
   }
-  for (uint i = 0u; i < 3u; ++i) grid_triangles[3u * t + i] = vec4(to_grid(v[i]), inv_w[i]);
+  vec4 g[3];
+  for (uint i = 0u; i < 3u; ++i) {
+    g[i] = vec4(to_grid(v[i]), inv_w[i]);
+    grid_triangles[3u * t + i] = g[i];
+  }
+  return reaches_grid(g[0], g[1], g[2]);
+}
+
+// The caster triangle at `slot` among the frustum draws' triangles: its draw is the last listed one
+// whose first slot is at most `slot`.
+uint frustum_triangle(uint slot) {
+  uint lo = 0u, hi = counters[IZB_COUNTER_FRUSTUM_DRAWS] - 1u;
+  while (lo < hi) {
+    uint mid = (lo + hi + 1u) / 2u;
+    if (caster_draw_words[frustum_draw_word(mid) + 1u] <= slot) lo = mid;
+    else hi = mid - 1u;
+  }
+  uint w = frustum_draw_word(lo);
+  return caster_draw_words[w] + (slot - caster_draw_words[w + 1u]);
+}
+
+// Lists the triangle (one atomic per subgroup) when its grid bounds reach the grid: one wholly beside
+// it touches no texel, so no pass would find work in it.
+void list_triangle(bool listed, uint t) {
+  uint before = subgroupExclusiveAdd(listed ? 1u : 0u);
+  uint total = subgroupAdd(listed ? 1u : 0u);
+  uint base = 0u;
+  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_LISTED_TRIANGLES], total);
+  uint slot = subgroupBroadcastFirst(base) + before;
+  if (listed) caster_draw_words[listed_triangle_word(slot)] = t;
+}
+
+void main() {
+  uint slot = row_dispatch_index(gl_WorkGroupID, gl_LocalInvocationIndex, 64u);
+  bool in_range = slot < counters[IZB_COUNTER_FRUSTUM_TRIANGLES];
+  uint t = in_range ? frustum_triangle(slot) : 0u;
+  bool listed = false;
+  if (in_range) listed = set_up_triangle(t);
+  list_triangle(listed, t);
 }

@@ -22,7 +22,7 @@ struct IzbParams {
   vec4 depth_range;          // x: near, y: far light-view distance of the casters (for the projection)
   uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (also a specialization constant)
   uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*, also a specialization constant); z: record capacity; w: pair capacity
-  uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z, w: unused
+  uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z: caster draws; w: unused
   vec4 light_position;       // a spot light: xyz its position, w its range (0: the sun)
   vec4 light_cone;           // a spot light: x cosine of its outer cone, y tangent of its grid's half angle; z 1: a face of a point light
 };
@@ -75,17 +75,26 @@ SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel p
 // Hybrid: the pixels the resolve listed for the cascades, then 3 uints: indirect dispatch over them in
 // workgroups of kIzbHybridEntriesPerGroup entries.
 SHARED_CONST uint IZB_COUNTER_HYBRID = 36u;
+// Casters in the light frustum (izb_cull_draws.comp, izb_triangles.comp): the triangles listed (those
+// reaching the grid), the caster draws whose bounds reach it and their triangles, then 3 uints each:
+// the indirect dispatch over those draws' triangles, and over the listed triangles.
+SHARED_CONST uint IZB_COUNTER_LISTED_TRIANGLES = 40u;
+SHARED_CONST uint IZB_COUNTER_FRUSTUM_DRAWS = 41u;
+SHARED_CONST uint IZB_COUNTER_FRUSTUM_TRIANGLES = 42u;
+SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
+SHARED_CONST uint IZB_COUNTER_TRIANGLE_DISPATCH = 48u;
 // The build's per-pixel counts, added once per subgroup by every subgroup of the frame, go to one of
 // kIzbCounterShards slots each (a single address would serialize hundreds of thousands of atomics);
 // the CPU sums the shards. Counter k (a sharded IZB_COUNTER_*) lives at IZB_COUNTER_SHARDS + k * shards.
 SHARED_CONST uint kIzbCounterShards = 64u;
-SHARED_CONST uint IZB_COUNTER_SHARDS = 40u;
-SHARED_CONST uint IZB_COUNTER_COUNT = 40u + 18u * 64u;  // shard rows up to IZB_COUNTER_LIT_CULLED
+SHARED_CONST uint IZB_COUNTER_SHARDS = 52u;
+SHARED_CONST uint IZB_COUNTER_COUNT = 52u + 18u * 64u;  // shard rows up to IZB_COUNTER_LIT_CULLED
 
 // Compute trace, compute CSM and lit map, hierarchically over light-space tiles of kIzbTile² texels
 // (each tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
-//  1. a thread per caster triangle walks its rows of tiles and cuts each row's exact span into
-//     records (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles;
+//  1. a thread per listed caster triangle walks its rows of tiles and cuts each row's exact span into
+//     records (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles (a small
+//     triangle instead works its few texels itself, kIzbDirectTexels);
 //  2. a thread per (record, tile) keeps the (triangle, tile) pairs the triangle touches (and, for the
 //     trace, does not lie behind every node of);
 //  3. a workgroup per (triangle, tile), a thread per texel: the CSM writes fully covered texels, the
@@ -141,7 +150,11 @@ SHARED_CONST uint IZB_BINDING_RECORDS = 21u;             // uvec4 records {trian
 SHARED_CONST uint IZB_BINDING_PAIRS = 22u;              // uvec2 {triangle, texel} surviving the depth cull
 SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;    // per fit workgroup: vec4 (min x, min y, max x, max y)
 SHARED_CONST uint IZB_BINDING_MATERIAL_TEXTURES = 24u;  // the scene's material textures (shared/material.h)
-SHARED_CONST uint IZB_BINDING_DRAW_FLAGS = 25u;         // per caster draw: IZB_DRAW_* bits for this frame
+// Per caster draw, in caster-draw order, as 32-bit words (D caster draws, capacities.z; T caster
+// triangles): [0, D) its IZB_DRAW_* bits for this frame; [D, 9D) IzbDrawBounds; [9D, 11D) the draws
+// in the light frustum this frame, {first triangle, first slot in the frustum's triangles}; then up to
+// T listed triangles (caster triangle indices). One binding, since push descriptors allow 32.
+SHARED_CONST uint IZB_BINDING_CASTER_DRAWS = 25u;
 // Compute CSM: depth bits per texel in [0, res^2); then the lit map in [res^2, 2 res^2): per texel the
 // nearest depth (ordered bits, izb_common.glsl) of every caster touching it; then its (res+1)^2 texel
 // corners: the nearest plane depth there of every caster touching a texel at it. One binding for all,
@@ -218,15 +231,28 @@ SHARED_CONST uint kIzbLitEmpty = 0xff800000u;
 // A 32 spp point is lit-culled only when its μQuad spans at most this many texels per axis: the
 // rounding bounds of the lit map (izb_common.glsl) assume it.
 SHARED_CONST float kIzbLitQuadReach = 16.0f;
-// Lit map: a triangle whose widened bounds hold at most this many texels writes them in step 1
+// A triangle whose (widened) bounds hold at most this many texels is worked texel by texel in step 1
+// (the lit map and CSM write them; the trace lists its pairs for step 4), skipping steps 2 and 3
 // (specialization constant id 3). A CPU device pays for a tile's idle lanes, a GPU for a thread that
 // loops while its subgroup waits: few on a GPU.
-SHARED_CONST uint kIzbLitDirectTexelsGpu = 16u;
-SHARED_CONST uint kIzbLitDirectTexelsCpu = 256u;
+SHARED_CONST uint kIzbDirectTexelsGpu = 16u;
+SHARED_CONST uint kIzbDirectTexelsCpu = 256u;
 // push.debug of the dispatch-argument pass: which step's work to dispatch.
 SHARED_CONST uint IZB_ARGS_RECORDS = 0u;
 SHARED_CONST uint IZB_ARGS_TILE_PAIRS = 1u;
 SHARED_CONST uint IZB_ARGS_PAIRS = 2u;
+SHARED_CONST uint IZB_ARGS_TRIANGLES = 3u;  // over the listed triangles (IZB_COUNTER_TRIANGLE_DISPATCH)
+
+// A caster draw's world-space bounds for the light-frustum cull, uploaded when the casters change.
+// An invalid box (lo > hi) is unbounded: never culled.
+struct IzbDrawBounds {
+  vec4 lo;  // xyz; w: its first caster triangle (uint bits)
+  vec4 hi;  // xyz; w: its triangle count (uint bits)
+};
+// How far (texels) outside the grid a caster's bounds or triangle must lie to be left out: beyond the
+// hardware conservative rasterizer's overestimate (a draw left out is still drawn by the raster
+// passes, which must find no texel of it) and the rounding of the corners' transform.
+SHARED_CONST float kIzbCullMargin = 4.0f;
 
 SHARED_END
 
@@ -236,5 +262,6 @@ static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 2 * 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterTriangle) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterDraw) == 96);
+static_assert(sizeof(gpu_shared::IzbDrawBounds) == 32);
 #endif
 #endif

@@ -299,6 +299,8 @@ json stats_json(const shadows::Stats& s) {
   c["nodes_inserted"] = s.nodes_inserted;
   c["csm_culled"] = s.csm_culled;
   c["lit_culled"] = s.lit_culled;
+  c["caster_triangles"] = s.caster_triangles;
+  c["caster_triangles_listed"] = s.caster_triangles_listed;
   c["csm_texels_covered"] = s.csm_texels_covered;
   c["node_pool_size"] = s.node_pool_size;
   c["node_overflow"] = s.node_overflow;
@@ -509,6 +511,9 @@ struct Bench {
                         : "",
                     (unsigned long long)st.lit_culled, (unsigned long long)st.lit_candidates,
                     (unsigned long long)st.nodes_inserted);
+      if (st.caster_triangles > 0)
+        std::printf("light frustum: %llu of %llu caster triangles listed\n",
+                    (unsigned long long)st.caster_triangles_listed, (unsigned long long)st.caster_triangles);
       std::printf("%-12s %-9s %-8s %-8s %4u %10.3f %10.3f %12.6f %12llu %10.5f %9.1f\n", run.mode.c_str(),
                   run.csm_test.c_str(), ran(st.trace_choice, run.trace).c_str(),
                   ran(st.csm_choice, run.csm_backend).c_str(), spp, gpu_ms["total"].get<double>(), frame_ms,

@@ -498,6 +498,59 @@ TEST_P(IzbSceneTest, LitMapHoldsNoFartherThanEveryTouchingTriangle) {
   }
 }
 
+// The light frustum walks only the casters near the view: of nine copies of contact side by side,
+// the passes list about one copy's triangles, never fewer than those whose grid bounds (in double
+// precision, from the fitted transform) reach the grid, and the answer stays Embree's with the
+// compute trace (and the lit map, which reads the same list) and with the raster one, which still
+// draws every caster the CPU keeps.
+TEST_F(IzbTest, LightFrustumListsOnlyTheCastersNearTheView) {
+  for (const auto trace : {shadows::PassBackend::Compute, shadows::PassBackend::Raster}) {
+    if (trace == shadows::PassBackend::Raster && !ctx_->features().geometry_shader) continue;
+    auto s = izb(1);
+    s.izb.trace = trace;
+    s.izb.lit_culling = trace == shadows::PassBackend::Compute ? shadows::LitCulling::On : shadows::LitCulling::Off;
+    scene_ = engine::load_scene("contact");
+    engine::replicate_scene(*scene_, 9);
+    scene_->apply_view(0);
+    renderer_ = std::make_unique<engine::Renderer>(*ctx_, VkExtent2D{kSize, kSize});
+    renderer_->set_scene(*scene_);
+    module_ = shadows::install(*renderer_, s);
+    renderer_->render_frame(0.0f);
+    const auto stats = module_->stats();
+    const std::string name = shadows::backend_name(trace);
+    reference::EmbreeTracer tracer(scene_->registry);
+    const auto cmp = reference::compare_visibility(module_->read_visibility(),
+                                                   support::reference_visibility(*renderer_, tracer, 1));
+    EXPECT_GT(cmp.pixels, kSize * kSize / 4) << name;
+    EXPECT_LE(cmp.mismatch_rate, 0.0002) << name << ": " << cmp.mismatched << " of " << cmp.pixels;
+    EXPECT_GT(stats.nodes_inserted, 0u) << name;
+    EXPECT_GT(stats.caster_triangles_listed, 0u) << name;
+    EXPECT_LT(stats.caster_triangles_listed * 3, stats.caster_triangles) << name;
+    std::printf("%s trace: %llu of %llu caster triangles listed\n", name.c_str(),
+                (unsigned long long)stats.caster_triangles_listed, (unsigned long long)stats.caster_triangles);
+    if (trace != shadows::PassBackend::Compute) continue;
+    const auto map = module_->read_lit_map();
+    ASSERT_EQ(map.resolution, kGrid);
+    uint64_t reaching = 0;
+    for (const auto& d : renderer_->draws()) {
+      if (!d.shadow.casts_shadow) continue;
+      const auto& mesh = *scene_->registry.get<engine::Mesh>(d.entity).data;
+      for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+        glm::dvec2 lo(1e30), hi(-1e30);
+        for (int k = 0; k < 3; ++k) {
+          const glm::dvec4 clip = glm::dmat4(map.light_view_projection) * glm::dmat4(d.world) *
+                                  glm::dvec4(glm::dvec3(mesh.vertices[mesh.indices[i + k]].position), 1.0);
+          const glm::dvec2 g = (glm::dvec2(clip) * 0.5 + 0.5) * double(kGrid);
+          lo = glm::min(lo, g);
+          hi = glm::max(hi, g);
+        }
+        reaching += hi.x >= 0.0 && hi.y >= 0.0 && lo.x <= kGrid && lo.y <= kGrid;
+      }
+    }
+    EXPECT_GE(stats.caster_triangles_listed, reaching);
+  }
+}
+
 // The culling culls: on contact view 0 most lit candidates (the floor's open ground, proved lit by
 // the floor's own plane at the texel corners) need no node.
 TEST_F(IzbTest, LitCullingCullsOnContact) {

@@ -49,7 +49,7 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_PAIRS, storage},
           {gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, storage},
           {gpu_shared::IZB_BINDING_MATERIAL_TEXTURES, storage},
-          {gpu_shared::IZB_BINDING_DRAW_FLAGS, storage},
+          {gpu_shared::IZB_BINDING_CASTER_DRAWS, storage},
           {gpu_shared::IZB_BINDING_CSM_TEXELS, storage},
           {gpu_shared::IZB_BINDING_TILE_PAIRS, storage},
           {gpu_shared::IZB_BINDING_TILE_FARTHEST, storage},
@@ -78,7 +78,7 @@ struct IzbPass::Impl {
     Pipeline software, hardware, count_software, count_hardware;
   };
   struct Pipelines {
-    Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
+    Pipeline fit, setup, cull_draws, build, fallback, list_stats, grid_setup, scan, scatter;
     Pipeline tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
     TracePipelines trace;
   };
@@ -104,8 +104,9 @@ struct IzbPass::Impl {
   Buffer params, frame_data, counters;
   ReadbackRing counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
-  Buffer grid_triangles, draw_flags, bounds_partials, csm_texels, tile_farthest;
-  size_t triangle_capacity = 0, draw_capacity = 0;
+  Buffer grid_triangles, caster_draw_words, bounds_partials, csm_texels, tile_farthest;
+  size_t triangle_capacity = 0;
+  uint64_t caster_draw_word_capacity = 0;
   std::vector<uint32_t> first_triangle;  // per frame draw: its first caster triangle (casters only)
   std::vector<gpu_shared::IzbCasterDraw> caster_table;  // this frame's caster draws
   std::vector<gpu_shared::IzbCasterDraw> built_table;   // the caster draws `triangles` was built from
@@ -200,6 +201,7 @@ struct IzbPass::Impl {
     };
     ps.fit = compute("izb_fit.comp");
     ps.setup = compute("izb_setup.comp");
+    ps.cull_draws = compute("izb_cull_draws.comp");
     ps.build = compute("izb_build.comp");
     ps.fallback = compute("izb_fallback.comp");
     ps.list_stats = compute("izb_list_stats.comp");
@@ -212,7 +214,7 @@ struct IzbPass::Impl {
         {0, cpu ? 8u : 32u},
         {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
         {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu},
-        {3, cpu ? gpu_shared::kIzbLitDirectTexelsCpu : gpu_shared::kIzbLitDirectTexelsGpu}};
+        {3, cpu ? gpu_shared::kIzbDirectTexelsCpu : gpu_shared::kIzbDirectTexelsGpu}};
     ps.tile_records = compute("izb_records.comp", shape);
     ps.tile_bin = compute("izb_tile_bin.comp", shape);
     ps.texel_bin = compute("izb_texel_bin.comp", shape);
@@ -367,11 +369,14 @@ struct IzbPass::Impl {
     }
     caster_draws = uint32_t(caster_table.size());
     triangle_count = caster_triangles;
-    if (caster_table.size() > draw_capacity || !draw_flags.valid()) {
-      draw_capacity = std::max<size_t>(caster_table.size(), 1);
-      draw_flags = Buffer(ctx, draw_capacity * sizeof(uint32_t),
-                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false,
-                          "izb caster draw flags");
+    // Flags, bounds and the frustum's draws per caster draw, then the listed triangles (izb.h).
+    const uint64_t words = 11 * uint64_t(caster_table.size()) + triangle_count;
+    if (words > caster_draw_word_capacity || !caster_draw_words.valid()) {
+      caster_draw_word_capacity = std::max<uint64_t>(words, 1);
+      caster_draw_words = Buffer(ctx, caster_draw_word_capacity * sizeof(uint32_t),
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false,
+                                 "izb caster draws");
+      built_table.clear();  // a new buffer holds no bounds yet
     }
     // Mesh ranges are never reused (the geometry only grows), so an equal table means equal triangles.
     const size_t table_bytes = caster_table.size() * sizeof(gpu_shared::IzbCasterDraw);
@@ -388,6 +393,25 @@ struct IzbPass::Impl {
     }
     built_table = caster_table;
     if (triangle_count == 0) return;
+    // The light-frustum cull's bounds, in the command stream (earlier frames' passes still read the
+    // old ones; record_update orders them).
+    std::vector<gpu_shared::IzbDrawBounds> bounds;
+    bounds.reserve(caster_table.size());
+    for (size_t i = 0; i < frame.draws.size(); ++i) {
+      const DrawItem& d = frame.draws[i];
+      if (!d.shadow.casts_shadow) continue;
+      const gpu_shared::IzbCasterDraw& c = caster_table[bounds.size()];
+      gpu_shared::IzbDrawBounds b{};
+      const bool bounded = d.bounds.valid() && std::isfinite(d.bounds.min.x + d.bounds.min.y + d.bounds.min.z) &&
+                           std::isfinite(d.bounds.max.x + d.bounds.max.y + d.bounds.max.z);
+      b.lo = glm::vec4(bounded ? d.bounds.min : glm::vec3(1.0f), 0.0f);
+      b.hi = glm::vec4(bounded ? d.bounds.max : glm::vec3(-1.0f), 0.0f);  // lo > hi: never culled
+      std::memcpy(&b.lo.w, &c.first_triangle, 4);
+      std::memcpy(&b.hi.w, &c.triangle_count, 4);
+      bounds.push_back(b);
+    }
+    record_update(ctx, frame.cmd, caster_draw_words, bounds.data(), bounds.size() * sizeof(bounds[0]),
+                  caster_table.size() * sizeof(uint32_t));
     // The table in this frame-in-flight slot's own host buffer: the frame that last read it (the
     // slot's previous one) has completed, so it is rewritten and, when too small, replaced freely.
     if (caster_tables.size() <= frame.slot) caster_tables.resize(frame.slot + 1);
@@ -472,7 +496,7 @@ struct IzbPass::Impl {
         .storage_buffer(gpu_shared::IZB_BINDING_SCAN_BLOCKS, scan_blocks.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, bounds_partials.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_MATERIAL_TEXTURES, frame.geometry.textures().handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_DRAW_FLAGS, draw_flags.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_CASTER_DRAWS, caster_draw_words.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_CSM_TEXELS, csm_texels.handle())
         .sampled_image(gpu_shared::IZB_BINDING_CSM_DEPTH, csm->depth_view(), nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
         .push(ctx, cmd, p);
@@ -518,7 +542,7 @@ struct IzbPass::Impl {
     push.mode = mode;
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
-      dispatch(cmd, frame, p->tile_records, push, (triangle_count + 63) / 64);
+      dispatch_indirect(cmd, frame, p->tile_records, push, gpu_shared::IZB_COUNTER_TRIANGLE_DISPATCH);
     }
     pass_barrier(frame.ctx, cmd);
     {
@@ -629,7 +653,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
       flags.push_back(i < chosen.size() && chosen[i] ? gpu_shared::IZB_DRAW_IN_CSM : 0u);
     }
     // In the command stream: each frame in flight reads its own flags.
-    if (!flags.empty()) record_update(m.ctx, frame.cmd, m.draw_flags, flags.data(), flags.size() * sizeof(uint32_t));
+    if (!flags.empty()) record_update(m.ctx, frame.cmd, m.caster_draw_words, flags.data(), flags.size() * sizeof(uint32_t));
   }
 
   // CPU side of the frustum: the light's rotation and the casters' depth range along it. A spot
@@ -685,7 +709,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   p.limits = glm::uvec4(uint32_t(std::min<uint64_t>(m.pool_size, UINT32_MAX)), flags,
                         uint32_t(std::min<uint64_t>(m.records.capacity, UINT32_MAX)),
                         uint32_t(std::min<uint64_t>(m.pairs.capacity, UINT32_MAX)));
-  p.capacities = glm::uvec4(uint32_t(std::min<uint64_t>(m.tile_pairs.capacity, UINT32_MAX)), m.tiles_per_side, 0u, 0u);
+  p.capacities = glm::uvec4(uint32_t(std::min<uint64_t>(m.tile_pairs.capacity, UINT32_MAX)), m.tiles_per_side, m.caster_draws, 0u);
   if (spot) {
     p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
     p.light_cone = glm::vec4(frame.view.light_cos_outer, tan_half, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
@@ -704,8 +728,20 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
     pass_barrier(frame.ctx, cmd);
     m.dispatch(cmd, frame, m.p->setup, push, 1);
-    pass_barrier(frame.ctx, cmd);
-    if (m.triangle_count > 0) m.dispatch(cmd, frame, m.p->grid_setup, push, (m.triangle_count + 63) / 64);
+    if (m.triangle_count > 0) {
+      // Casters whose bounds reach the fitted grid -> their triangles into grid space, listed where
+      // they reach it -> the dispatch over the listed ones (the compute passes' first step).
+      pass_barrier(frame.ctx, cmd);
+      m.dispatch(cmd, frame, m.p->cull_draws, push, 1);
+      pass_barrier(frame.ctx, cmd);
+      m.dispatch_indirect(cmd, frame, m.p->grid_setup, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
+      if (use_compute_trace || use_compute_csm || lit) {
+        pass_barrier(frame.ctx, cmd);
+        gpu_shared::IzbComputePush args = push;
+        args.debug = gpu_shared::IZB_ARGS_TRIANGLES;
+        m.dispatch(cmd, frame, m.p->dispatch_args, args, 1);
+      }
+    }
   }
   pass_barrier(frame.ctx, cmd);
   const VkDeviceSize grid_bytes = VkDeviceSize(m.resolution) * m.resolution * 4;
@@ -938,6 +974,8 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
     s.csm_culled = sharded(gpu_shared::IZB_COUNTER_CSM_CULLED);
     s.culling_rate = s.lit_candidates ? double(s.csm_culled) / double(s.lit_candidates) : 0.0;
     s.lit_culled = sharded(gpu_shared::IZB_COUNTER_LIT_CULLED);
+    s.caster_triangles = m.triangle_count;
+    s.caster_triangles_listed = c[gpu_shared::IZB_COUNTER_LISTED_TRIANGLES];
     s.trace_fragments_before_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS];
     s.trace_fragments_after_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS_KEPT];
     s.triangle_tests = c[gpu_shared::IZB_COUNTER_TRIANGLE_TESTS];

@@ -156,6 +156,10 @@ struct Stats {
   BackendChoice trace_choice;
   BackendChoice csm_choice;
   BackendChoice lit_choice;  // known-lit culling: backend "off" or "on", and why
+  // IZB casters: every caster triangle, and those its passes walked this frame (in a caster whose
+  // world bounds reach the light frustum fitted to the view's points, and reaching it themselves).
+  uint64_t caster_triangles = 0;
+  uint64_t caster_triangles_listed = 0;
   // Compute trace work: tile-row records, (triangle, tile) pairs kept, (triangle, texel) pairs kept.
   uint64_t trace_records = 0;
   uint64_t trace_tile_pairs = 0;
