@@ -16,12 +16,9 @@ void main() {
   } else if (push.debug == IZB_ARGS_TILE_PAIRS) {
     groups = (tile_pair_count(push.mode) + kIzbTilePairsPerGroup - 1u) / kIzbTilePairsPerGroup;
     at = IZB_COUNTER_TILE_PAIR_DISPATCH;
-  } else if (push.debug == IZB_ARGS_PAIRS) {
+  } else {
     groups = (min(counters[IZB_COUNTER_PAIRS], params.limits.w) + kIzbPairGroup - 1u) / kIzbPairGroup;
     at = IZB_COUNTER_PAIR_DISPATCH;
-  } else {
-    groups = (listed_triangle_count() + 63u) / 64u;  // izb_records.comp's workgroups
-    at = IZB_COUNTER_TRIANGLE_DISPATCH;
   }
   write_row_dispatch(at, groups);
 }

@@ -5,22 +5,16 @@ layout(local_size_x = 256) in;
 
 layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) readonly buffer BoundsPartials { vec4 bounds_partials[]; };
 
-shared vec4 subgroup_bounds[256];
+layout(push_constant) uniform Push { IzbComputePush push; };
 
-// Light frustum fit, step 2: reduces the fit's per-workgroup bounds, then builds an orthographic projection whose x/y window covers the reduced bounds
-// plus a one-texel border (so no point sits on the grid's edge), and whose depth range spans the
-// casters (from the CPU, which knows their bounds).
-void main() {
-  uint partials = ((params.extent.x + 31u) / 32u) * ((params.extent.y + 31u) / 32u);
-  vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
-  for (uint i = gl_LocalInvocationIndex; i < partials; i += gl_WorkGroupSize.x) {
-    vec4 p = bounds_partials[i];
-    b = vec4(min(b.xy, p.xy), max(b.zw, p.zw));
-  }
-  b = vec4(subgroupMin(b.xy), subgroupMax(b.zw));
-  if (subgroupElect()) subgroup_bounds[gl_SubgroupID] = b;
-  barrier();
-  if (gl_LocalInvocationIndex != 0u) return;
+shared vec4 subgroup_bounds[256];
+shared mat4 fitted_light_view_projection;
+shared uint subgroup_sums[2 * 256];  // any subgroup size
+shared uint running[2];
+
+// Thread 0: the grid from the reduced bounds (izb.light_view_projection, izb.grid; also in
+// fitted_light_view_projection for the workgroup).
+void fit_grid(vec4 b) {
   for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
   float lo_x = b.x;
   float lo_y = b.y;
@@ -47,7 +41,7 @@ void main() {
   // The light view looks down -z: distance d = -z.
   ortho[2][2] = -1.0 / (far_d - near_d);
   ortho[3][2] = -near_d / (far_d - near_d);
-  izb.light_view_projection = ortho * params.light_view;
+  fitted_light_view_projection = ortho * params.light_view;
   izb.grid = vec4(res, 1.0 / res, size / res, empty ? 0.0 : 1.0);
   if (spot_light()) {
     // A spot light: a square perspective grid over its cone (x, y / depth within the tangent in
@@ -60,7 +54,7 @@ void main() {
     perspective[2][2] = -far_d / (far_d - near_d);
     perspective[2][3] = -1.0;
     perspective[3][2] = -far_d * near_d / (far_d - near_d);
-    izb.light_view_projection = perspective * params.light_view;
+    fitted_light_view_projection = perspective * params.light_view;
     izb.grid = vec4(res, 1.0 / res, 2.0 * t / res, empty ? 0.0 : 1.0);
   }
   // The overflow fallback's indirect dispatch: the build pass raises x as pixels overflow.
@@ -68,4 +62,104 @@ void main() {
   counters[IZB_COUNTER_DISPATCH + 2u] = 1u;
   counters[IZB_COUNTER_HYBRID + 2u] = 1u;
   counters[IZB_COUNTER_HYBRID + 3u] = 1u;
+  izb.light_view_projection = fitted_light_view_projection;
+}
+
+// Whether a caster draw's world bounds reach the fitted grid (widened by kIzbCullMargin texels). A
+// spot light's perspective grid folds over behind the light, so there every draw is kept.
+bool draw_in_frustum(IzbDrawBounds b, mat4 light_view_projection) {
+  if (spot_light() || any(greaterThan(b.lo.xyz, b.hi.xyz))) return true;
+  float res = float(izb_resolution());
+  vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
+  for (int i = 0; i < 8; ++i) {
+    vec3 corner = vec3((i & 1) != 0 ? b.hi.x : b.lo.x, (i & 2) != 0 ? b.hi.y : b.lo.y, (i & 4) != 0 ? b.hi.z : b.lo.z);
+    vec2 g = ((light_view_projection * vec4(corner, 1.0)).xy * 0.5 + 0.5) * res;
+    lo = min(lo, g);
+    hi = max(hi, g);
+  }
+  return all(greaterThanEqual(hi, vec2(-kIzbCullMargin))) && all(lessThanEqual(lo, vec2(res + kIzbCullMargin)));
+}
+
+IzbDrawBounds load_draw_bounds(uint draw) {
+  uint w = draw_bounds_word(draw);
+  IzbDrawBounds b;
+  b.lo = vec4(uintBitsToFloat(caster_draw_words[w]), uintBitsToFloat(caster_draw_words[w + 1u]),
+              uintBitsToFloat(caster_draw_words[w + 2u]), uintBitsToFloat(caster_draw_words[w + 3u]));
+  b.hi = vec4(uintBitsToFloat(caster_draw_words[w + 4u]), uintBitsToFloat(caster_draw_words[w + 5u]),
+              uintBitsToFloat(caster_draw_words[w + 6u]), uintBitsToFloat(caster_draw_words[w + 7u]));
+  return b;
+}
+
+// The light-frustum cull, after the fit: the workgroup lists, in draw order, the caster draws whose
+// bounds reach the grid with the first slot of their triangles among all such draws' (a running
+// prefix sum, so izb_triangles.comp finds a slot's draw by binary search), and writes the dispatch
+// over those triangles. The passes after it touch only them: the frame's cost follows the casters
+// near the view, not the scene's size.
+void cull_draws(mat4 light_view_projection) {
+  for (uint first = 0u; first < caster_draw_count(); first += gl_WorkGroupSize.x) {
+    uint draw = first + gl_LocalInvocationIndex;
+    uint kept = 0u, triangles = 0u, first_triangle = 0u;
+    if (draw < caster_draw_count()) {
+      IzbDrawBounds b = load_draw_bounds(draw);
+      first_triangle = floatBitsToUint(b.lo.w);
+      if (draw_in_frustum(b, light_view_projection)) {
+        kept = 1u;
+        triangles = floatBitsToUint(b.hi.w);
+      }
+    }
+    // Exclusive prefix sums over the workgroup: in the subgroup, then over the subgroups' sums.
+    uvec2 before = uvec2(subgroupExclusiveAdd(kept), subgroupExclusiveAdd(triangles));
+    uvec2 sums = uvec2(subgroupAdd(kept), subgroupAdd(triangles));
+    if (subgroupElect()) {
+      subgroup_sums[2u * gl_SubgroupID] = sums.x;
+      subgroup_sums[2u * gl_SubgroupID + 1u] = sums.y;
+    }
+    barrier();
+    uvec2 base = uvec2(running[0], running[1]);
+    uvec2 total = uvec2(0u);
+    for (uint s = 0u; s < gl_NumSubgroups; ++s) {
+      uvec2 v = uvec2(subgroup_sums[2u * s], subgroup_sums[2u * s + 1u]);
+      if (s < gl_SubgroupID) before += v;
+      total += v;
+    }
+    if (kept != 0u) {
+      uint w = frustum_draw_word(base.x + before.x);
+      caster_draw_words[w] = first_triangle;
+      caster_draw_words[w + 1u] = base.y + before.y;
+    }
+    barrier();  // every thread has read running[] and subgroup_sums[]
+    if (gl_LocalInvocationIndex == 0u) {
+      running[0] = base.x + total.x;
+      running[1] = base.y + total.y;
+    }
+    barrier();
+  }
+  if (gl_LocalInvocationIndex == 0u) {
+    counters[IZB_COUNTER_FRUSTUM_DRAWS] = running[0];
+    counters[IZB_COUNTER_FRUSTUM_TRIANGLES] = running[1];
+    write_row_dispatch(IZB_COUNTER_GRID_SETUP_DISPATCH, (running[1] + 63u) / 64u);
+  }
+}
+
+// Light frustum fit, step 2, and the cull of the casters against it: reduces the fit's per-workgroup
+// bounds, builds an orthographic projection whose x/y window covers them plus a border (so no point
+// sits on the grid's edge), and whose depth range spans the casters (from the CPU, which knows their
+// bounds); then lists the caster draws whose bounds reach the grid.
+void main() {
+  uint partials = ((params.extent.x + 31u) / 32u) * ((params.extent.y + 31u) / 32u);
+  vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
+  for (uint i = gl_LocalInvocationIndex; i < partials; i += gl_WorkGroupSize.x) {
+    vec4 p = bounds_partials[i];
+    b = vec4(min(b.xy, p.xy), max(b.zw, p.zw));
+  }
+  b = vec4(subgroupMin(b.xy), subgroupMax(b.zw));
+  if (subgroupElect()) subgroup_bounds[gl_SubgroupID] = b;
+  barrier();
+  if (gl_LocalInvocationIndex == 0u) {
+    fit_grid(b);
+    running[0] = 0u;
+    running[1] = 0u;
+  }
+  barrier();  // the grid's transform, in shared memory, for every thread
+  cull_draws(fitted_light_view_projection);
 }

@@ -75,20 +75,20 @@ SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel p
 // Hybrid: the pixels the resolve listed for the cascades, then 3 uints: indirect dispatch over them in
 // workgroups of kIzbHybridEntriesPerGroup entries.
 SHARED_CONST uint IZB_COUNTER_HYBRID = 36u;
-// Casters in the light frustum (izb_cull_draws.comp, izb_triangles.comp): the triangles listed (those
-// reaching the grid), the caster draws whose bounds reach it and their triangles, then 3 uints each:
-// the indirect dispatch over those draws' triangles, and over the listed triangles.
+// Casters in the light frustum (izb_setup.comp, izb_triangles.comp): the triangles listed (those
+// reaching the grid), the caster draws whose bounds reach it and their triangles, then 3 uints: the
+// indirect dispatch over those draws' triangles, 64 per workgroup (the grid setup's, and the compute
+// passes' first step's, whose threads past the listed triangles exit).
 SHARED_CONST uint IZB_COUNTER_LISTED_TRIANGLES = 40u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_DRAWS = 41u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_TRIANGLES = 42u;
 SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
-SHARED_CONST uint IZB_COUNTER_TRIANGLE_DISPATCH = 48u;
 // The build's per-pixel counts, added once per subgroup by every subgroup of the frame, go to one of
 // kIzbCounterShards slots each (a single address would serialize hundreds of thousands of atomics);
 // the CPU sums the shards. Counter k (a sharded IZB_COUNTER_*) lives at IZB_COUNTER_SHARDS + k * shards.
 SHARED_CONST uint kIzbCounterShards = 64u;
-SHARED_CONST uint IZB_COUNTER_SHARDS = 52u;
-SHARED_CONST uint IZB_COUNTER_COUNT = 52u + 18u * 64u;  // shard rows up to IZB_COUNTER_LIT_CULLED
+SHARED_CONST uint IZB_COUNTER_SHARDS = 48u;
+SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u;  // shard rows up to IZB_COUNTER_LIT_CULLED
 
 // Compute trace, compute CSM and lit map, hierarchically over light-space tiles of kIzbTile² texels
 // (each tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
@@ -241,7 +241,6 @@ SHARED_CONST uint kIzbDirectTexelsCpu = 256u;
 SHARED_CONST uint IZB_ARGS_RECORDS = 0u;
 SHARED_CONST uint IZB_ARGS_TILE_PAIRS = 1u;
 SHARED_CONST uint IZB_ARGS_PAIRS = 2u;
-SHARED_CONST uint IZB_ARGS_TRIANGLES = 3u;  // over the listed triangles (IZB_COUNTER_TRIANGLE_DISPATCH)
 
 // A caster draw's world-space bounds for the light-frustum cull, uploaded when the casters change.
 // An invalid box (lo > hi) is unbounded: never culled.

@@ -78,7 +78,7 @@ struct IzbPass::Impl {
     Pipeline software, hardware, count_software, count_hardware;
   };
   struct Pipelines {
-    Pipeline fit, setup, cull_draws, build, fallback, list_stats, grid_setup, scan, scatter;
+    Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
     Pipeline tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
     TracePipelines trace;
   };
@@ -201,7 +201,6 @@ struct IzbPass::Impl {
     };
     ps.fit = compute("izb_fit.comp");
     ps.setup = compute("izb_setup.comp");
-    ps.cull_draws = compute("izb_cull_draws.comp");
     ps.build = compute("izb_build.comp");
     ps.fallback = compute("izb_fallback.comp");
     ps.list_stats = compute("izb_list_stats.comp");
@@ -542,7 +541,8 @@ struct IzbPass::Impl {
     push.mode = mode;
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
-      dispatch_indirect(cmd, frame, p->tile_records, push, gpu_shared::IZB_COUNTER_TRIANGLE_DISPATCH);
+      // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
+      dispatch_indirect(cmd, frame, p->tile_records, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
     }
     pass_barrier(frame.ctx, cmd);
     {
@@ -727,21 +727,11 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
     m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
     pass_barrier(frame.ctx, cmd);
-    m.dispatch(cmd, frame, m.p->setup, push, 1);
-    if (m.triangle_count > 0) {
-      // Casters whose bounds reach the fitted grid -> their triangles into grid space, listed where
-      // they reach it -> the dispatch over the listed ones (the compute passes' first step).
-      pass_barrier(frame.ctx, cmd);
-      m.dispatch(cmd, frame, m.p->cull_draws, push, 1);
-      pass_barrier(frame.ctx, cmd);
+    m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
+    pass_barrier(frame.ctx, cmd);
+    // Their triangles into grid space, listed where they reach it.
+    if (m.triangle_count > 0)
       m.dispatch_indirect(cmd, frame, m.p->grid_setup, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
-      if (use_compute_trace || use_compute_csm || lit) {
-        pass_barrier(frame.ctx, cmd);
-        gpu_shared::IzbComputePush args = push;
-        args.debug = gpu_shared::IZB_ARGS_TRIANGLES;
-        m.dispatch(cmd, frame, m.p->dispatch_args, args, 1);
-      }
-    }
   }
   pass_barrier(frame.ctx, cmd);
   const VkDeviceSize grid_bytes = VkDeviceSize(m.resolution) * m.resolution * 4;
