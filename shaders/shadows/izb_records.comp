@@ -7,14 +7,20 @@ layout(local_size_x = 64) in;
 layout(push_constant) uniform Push { IzbComputePush push; };
 
 // The trace's (triangle, texel) pairs of the texels [direct.xy, direct.zw] that touch and survive
-// the texel's cull, appended to step 3's pairs (one atomic per subgroup: the texels are tested once
-// to count, again to write). A pair that does not fit is traced here.
+// the texel's cull, appended to step 4's pairs (one atomic per subgroup). The first 32 texels' outcomes
+// are kept as bits (a GPU's few texels are tested once), any more tested again to write. A pair that
+// does not fit is traced here.
 void trace_pairs_here(uint t, ivec4 direct, vec3 a, vec3 b, vec3 c, float area) {
-  uint kept = 0u, fragments = 0u;
+  uint kept = 0u, fragments = 0u, kept_bits = 0u;
+  int width = direct.z - direct.x + 1;
   for (int y = direct.y; y <= direct.w; ++y) {
     for (int x = direct.x; x <= direct.z; ++x) {
       uint outcome = trace_pair_outcome(ivec2(x, y), a, b, c, area);
-      kept += outcome == IZB_PAIR_KEPT ? 1u : 0u;
+      int i = (y - direct.y) * width + (x - direct.x);
+      if (outcome == IZB_PAIR_KEPT) {
+        ++kept;
+        if (i < 32) kept_bits |= 1u << uint(i);
+      }
       fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
     }
   }
@@ -31,7 +37,9 @@ void trace_pairs_here(uint t, ivec4 direct, vec3 a, vec3 b, vec3 c, float area) 
   for (int y = direct.y; y <= direct.w && kept > 0u; ++y) {
     for (int x = direct.x; x <= direct.z; ++x) {
       ivec2 texel = ivec2(x, y);
-      if (trace_pair_outcome(texel, a, b, c, area) != IZB_PAIR_KEPT) continue;
+      int i = (y - direct.y) * width + (x - direct.x);
+      bool keep = i < 32 ? (kept_bits & (1u << uint(i))) != 0u : trace_pair_outcome(texel, a, b, c, area) == IZB_PAIR_KEPT;
+      if (!keep) continue;
       if (slot < params.limits.w) pairs[slot] = uvec2(t, texel_index(texel));
       else trace_texel_list(texel_index(texel), t, a, b, c, 1.0 / area);
       ++slot;
