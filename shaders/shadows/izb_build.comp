@@ -37,9 +37,13 @@ void main() {
   if (inside) {
     PixelPoint p = load_pixel(pixel);
     covered = p.covered ? 1u : 0u;
+    if (p.covered) {
+      state = IZB_PIXEL_COVERED | (p.facing ? IZB_PIXEL_FACING : 0u);
+      if (distance(p.position, params.camera_position.xyz) > izb_reach()) state |= IZB_PIXEL_BEYOND;
+    }
     if (p.candidate) {
       candidate = 1u;
-      state = IZB_PIXEL_CANDIDATE;
+      state |= IZB_PIXEL_CANDIDATE;
       vec3 g[4];
       if (izb_samples() == 1u) {
         g[0] = to_grid(shadow_ray_origin(p.position, p.normal));

@@ -81,21 +81,23 @@ void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
-  // Candidates are known from the build's per-pixel state: the surface is enough here.
-  PixelPoint p = inside ? load_surface(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
-  uint state = p.covered ? pixel_state[index] : 0u;
+  // The build classified every pixel (IZB_PIXEL_*). The surface itself is read only where the blend's
+  // distance or a local light's rays need it.
+  uint state = inside ? pixel_state[index] : 0u;
+  bool covered = (state & IZB_PIXEL_COVERED) != 0u;
+  bool surface = covered && (kHybrid != 0u || spot_light());
+  PixelPoint p = surface ? load_surface(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
   uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
   float visibility = 1.0;
-  bool facing = p.facing;
+  bool facing = (state & IZB_PIXEL_FACING) != 0u;
   float reach = izb_reach();
-  float dist = distance(p.position, params.camera_position.xyz);
   bool beyond = false;  // past the IZB's range: the cascades' term alone
   if ((state & IZB_PIXEL_CANDIDATE) != 0u) {
     if (spot_light() && mask != full_mask()) mask |= straddler_samples(pixel, p);
     visibility = 1.0 - float(bitCount(mask)) / float(izb_samples());
   } else if (!facing) {
     visibility = 0.0;
-  } else if (dist > reach) {
+  } else if ((state & IZB_PIXEL_BEYOND) != 0u) {
     beyond = true;
     visibility = 0.0;
   } else {
@@ -111,8 +113,9 @@ void main() {
     bool occluded = (state & IZB_PIXEL_CANDIDATE) != 0u && mask != 0u && gap_world < 1.0e20;
     float gap_weight = occluded ? clamp(gap_world / push.soft_distance, 0.0, 1.0) : 0.0;
     // (Unlimited range: reach is huge and the fade 0.)
+    float dist = distance(p.position, params.camera_position.xyz);
     float fade = beyond ? 1.0 : clamp((dist - 0.9 * reach) / (0.1 * reach), 0.0, 1.0);
-    bool listed = p.covered && facing && (gap_weight > 0.0 || fade > 0.0);
+    bool listed = covered && facing && (gap_weight > 0.0 || fade > 0.0);
     // One atomic per subgroup; the dispatch over the list grows with it.
     uint total = subgroupAdd(listed ? 1u : 0u);
     uint slot = subgroupExclusiveAdd(listed ? 1u : 0u);
@@ -126,7 +129,7 @@ void main() {
       hybrid_list[base + slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
                                        floatBitsToUint(fade), 0u);
   }
-  if (!p.covered) return;
+  if (!covered) return;
   if (beyond && kHybrid == 0u) return;  // beyond the IZB: the term already there stays
   // One face of a point light (six overlapping cones that cover every direction): only the points in
   // its cone are this pass's; the others keep what the other faces write.

@@ -121,6 +121,10 @@ SHARED_CONST uint IZB_PIXEL_CANDIDATE = 1u;
 SHARED_CONST uint IZB_PIXEL_OVERFLOW = 2u;
 SHARED_CONST uint IZB_PIXEL_CSM_CULLED = 4u;
 SHARED_CONST uint IZB_PIXEL_LIT_CULLED = 8u;
+// The surface as the build classified it, so the resolve reads 4 bytes per pixel, not the surface:
+SHARED_CONST uint IZB_PIXEL_COVERED = 16u;
+SHARED_CONST uint IZB_PIXEL_FACING = 32u;   // faces the light (a spot light: and lies in its reach)
+SHARED_CONST uint IZB_PIXEL_BEYOND = 64u;   // farther from the camera than the IZB's range
 
 // Bindings (one layout shared by all IZB passes, so every pass sees the same buffers).
 SHARED_CONST uint IZB_BINDING_PARAMS = 0u;
