@@ -642,12 +642,6 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     }
   }
   m.last_used_lit = lit;
-  // A probe frame is timed as the passes run without statistics: what they add (the trace's touch test
-  // before its depth cull, the build's counts) weighs more on the backend with more work, so a frame
-  // with it would skew the choice. Such a frame's statistics are left uncounted.
-  if (m.trace_probe.probing() || (run_csm && m.csm_probe.probing()) ||
-      (settings.lit_culling == LitCulling::Auto && m.lit_probe.probing()))
-    collect_stats = false;
   m.ensure_work_lists(use_compute_trace || use_compute_csm || lit);
   if (use_compute_csm) {
     // Per caster draw: whether it enters the CSM this frame.
