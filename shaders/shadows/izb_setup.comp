@@ -69,14 +69,16 @@ void fit_grid(vec4 b) {
 // spot light's perspective grid folds over behind the light, so there every draw is kept.
 bool draw_in_frustum(IzbDrawBounds b, mat4 light_view_projection) {
   if (spot_light() || any(greaterThan(b.lo.xyz, b.hi.xyz))) return true;
+  // An affine map's range over the box: its value at the centre +- |its linear part| times the
+  // half extent, per grid axis.
+  vec3 centre = 0.5 * (b.lo.xyz + b.hi.xyz), half_extent = 0.5 * (b.hi.xyz - b.lo.xyz);
+  mat4 m = light_view_projection;
+  vec2 mid = vec2(dot(vec3(m[0][0], m[1][0], m[2][0]), centre) + m[3][0],
+                  dot(vec3(m[0][1], m[1][1], m[2][1]), centre) + m[3][1]);
+  vec2 reach = vec2(dot(abs(vec3(m[0][0], m[1][0], m[2][0])), half_extent),
+                    dot(abs(vec3(m[0][1], m[1][1], m[2][1])), half_extent));
   float res = float(izb_resolution());
-  vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
-  for (int i = 0; i < 8; ++i) {
-    vec3 corner = vec3((i & 1) != 0 ? b.hi.x : b.lo.x, (i & 2) != 0 ? b.hi.y : b.lo.y, (i & 4) != 0 ? b.hi.z : b.lo.z);
-    vec2 g = ((light_view_projection * vec4(corner, 1.0)).xy * 0.5 + 0.5) * res;
-    lo = min(lo, g);
-    hi = max(hi, g);
-  }
+  vec2 lo = ((mid - reach) * 0.5 + 0.5) * res, hi = ((mid + reach) * 0.5 + 0.5) * res;
   return all(greaterThanEqual(hi, vec2(-kIzbCullMargin))) && all(lessThanEqual(lo, vec2(res + kIzbCullMargin)));
 }
 
@@ -90,22 +92,29 @@ IzbDrawBounds load_draw_bounds(uint draw) {
   return b;
 }
 
-// The light-frustum cull, after the fit: the workgroup lists, in draw order, the caster draws whose
-// bounds reach the grid with the first slot of their triangles among all such draws' (a running
-// prefix sum, so izb_triangles.comp finds a slot's draw by binary search), and writes the dispatch
-// over those triangles. The passes after it touch only them: the frame's cost follows the casters
-// near the view, not the scene's size.
+const uint kDrawsPerThread = 4u;  // fewer rounds of the workgroup's scan
+
+// The light-frustum cull, after the fit: the workgroup lists the caster draws whose bounds reach the
+// grid, each with the first slot of its triangles among all such draws' (slots and triangle slots
+// from one running prefix sum, both ascending, so izb_triangles.comp finds a slot's draw by binary
+// search), and writes the dispatch over those triangles. The passes after it touch only them: the
+// frame's cost follows the casters near the view, not the scene's size.
 void cull_draws(mat4 light_view_projection) {
-  for (uint first = 0u; first < caster_draw_count(); first += gl_WorkGroupSize.x) {
-    uint draw = first + gl_LocalInvocationIndex;
-    uint kept = 0u, triangles = 0u, first_triangle = 0u;
-    if (draw < caster_draw_count()) {
-      IzbDrawBounds b = load_draw_bounds(draw);
-      first_triangle = floatBitsToUint(b.lo.w);
-      if (draw_in_frustum(b, light_view_projection)) {
-        kept = 1u;
-        triangles = floatBitsToUint(b.hi.w);
-      }
+  for (uint first = 0u; first < caster_draw_count(); first += gl_WorkGroupSize.x * kDrawsPerThread) {
+    uint draw0 = first + gl_LocalInvocationIndex * kDrawsPerThread;
+    uint kept = 0u, triangles = 0u, kept_bits = 0u;
+    uint first_triangle[kDrawsPerThread], draw_triangles[kDrawsPerThread];
+    for (uint k = 0u; k < kDrawsPerThread; ++k) {
+      first_triangle[k] = 0u;
+      draw_triangles[k] = 0u;
+      if (draw0 + k >= caster_draw_count()) continue;
+      IzbDrawBounds b = load_draw_bounds(draw0 + k);
+      if (!draw_in_frustum(b, light_view_projection)) continue;
+      first_triangle[k] = floatBitsToUint(b.lo.w);
+      draw_triangles[k] = floatBitsToUint(b.hi.w);
+      kept_bits |= 1u << k;
+      ++kept;
+      triangles += draw_triangles[k];
     }
     // Exclusive prefix sums over the workgroup: in the subgroup, then over the subgroups' sums.
     uvec2 before = uvec2(subgroupExclusiveAdd(kept), subgroupExclusiveAdd(triangles));
@@ -122,10 +131,13 @@ void cull_draws(mat4 light_view_projection) {
       if (s < gl_SubgroupID) before += v;
       total += v;
     }
-    if (kept != 0u) {
-      uint w = frustum_draw_word(base.x + before.x);
-      caster_draw_words[w] = first_triangle;
-      caster_draw_words[w + 1u] = base.y + before.y;
+    uvec2 at = base + before;  // this thread's first slot and first triangle slot
+    for (uint k = 0u; k < kDrawsPerThread; ++k) {
+      if ((kept_bits & (1u << k)) == 0u) continue;
+      uint w = frustum_draw_word(at.x);
+      caster_draw_words[w] = first_triangle[k];
+      caster_draw_words[w + 1u] = at.y;
+      at += uvec2(1u, draw_triangles[k]);
     }
     barrier();  // every thread has read running[] and subgroup_sums[]
     if (gl_LocalInvocationIndex == 0u) {

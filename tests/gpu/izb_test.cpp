@@ -498,7 +498,7 @@ TEST_P(IzbSceneTest, LitMapHoldsNoFartherThanEveryTouchingTriangle) {
   }
 }
 
-// The light frustum walks only the casters near the view: of nine copies of contact side by side,
+// The light frustum walks only the casters near the view: of 225 copies of contact side by side,
 // the passes list about one copy's triangles, never fewer than those whose grid bounds (in double
 // precision, from the fitted transform) reach the grid, and the answer stays Embree's with the
 // compute trace (and the lit map, which reads the same list) and with the raster one, which still
@@ -510,7 +510,7 @@ TEST_F(IzbTest, LightFrustumListsOnlyTheCastersNearTheView) {
     s.izb.trace = trace;
     s.izb.lit_culling = trace == shadows::PassBackend::Compute ? shadows::LitCulling::On : shadows::LitCulling::Off;
     scene_ = engine::load_scene("contact");
-    engine::replicate_scene(*scene_, 9);
+    engine::replicate_scene(*scene_, 225);  // more caster draws than one round of the cull's scan (1024)
     scene_->apply_view(0);
     renderer_ = std::make_unique<engine::Renderer>(*ctx_, VkExtent2D{kSize, kSize});
     renderer_->set_scene(*scene_);
@@ -529,6 +529,9 @@ TEST_F(IzbTest, LightFrustumListsOnlyTheCastersNearTheView) {
     std::printf("%s trace: %llu of %llu caster triangles listed\n", name.c_str(),
                 (unsigned long long)stats.caster_triangles_listed, (unsigned long long)stats.caster_triangles);
     if (trace != shadows::PassBackend::Compute) continue;
+    const auto caster_draws = std::count_if(renderer_->draws().begin(), renderer_->draws().end(),
+                                            [](const auto& d) { return d.shadow.casts_shadow; });
+    EXPECT_GT(caster_draws, 1024);  // the cull's scan takes several rounds
     const auto map = module_->read_lit_map();
     ASSERT_EQ(map.resolution, kGrid);
     uint64_t reaching = 0;
