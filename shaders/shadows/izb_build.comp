@@ -111,11 +111,7 @@ void main() {
   } else {
     // One atomic per subgroup reserves every lane's nodes. Every texel is requested even past the
     // pool, so the counter measures the true demand the pool is grown to.
-    uint offset = subgroupExclusiveAdd(count);
-    uint total = subgroupAdd(count);
-    uint base = 0u;
-    if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_NODES], total);
-    base = subgroupBroadcastFirst(base) + offset;
+    uint base = reserve_slots(IZB_COUNTER_NODES, count);
     if (sorted_lists()) {
       // Counting sort, step 1: count each texel's nodes (izb_scatter.comp places them after the
       // prefix sum). A pixel takes all its nodes or, past the pool, none.

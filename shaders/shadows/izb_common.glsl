@@ -90,6 +90,16 @@ uint listed_triangle(uint slot) { return caster_draw_words[listed_triangle_word(
 uint row_dispatch_index(uvec3 workgroup, uint local_index, uint group_size) {
   return (workgroup.y * kIzbDispatchRow + workgroup.x) * group_size + local_index;
 }
+// Reserves `count` consecutive slots of the counter counters[counter] for this invocation, with one
+// atomic per subgroup (a single address would serialize every lane's); returns the first. Every lane
+// of the subgroup calls it together.
+uint reserve_slots(uint counter, uint count) {
+  uint offset = subgroupExclusiveAdd(count);
+  uint total = subgroupAdd(count);
+  uint base = 0u;
+  if (subgroupElect() && total > 0u) base = atomicAdd(counters[counter], total);
+  return subgroupBroadcastFirst(base) + offset;
+}
 // Writes the indirect dispatch of `groups` workgroups, in such rows, at counters[at..at+2].
 void write_row_dispatch(uint at, uint groups) {
   counters[at] = min(groups, kIzbDispatchRow);

@@ -24,15 +24,12 @@ void trace_pairs_here(uint t, ivec4 direct, vec3 a, vec3 b, vec3 c, float area) 
       fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
     }
   }
-  uint offset = subgroupExclusiveAdd(kept);
-  uint total = subgroupAdd(kept);
-  uint base = 0u;
-  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_PAIRS], total);
-  uint slot = subgroupBroadcastFirst(base) + offset;
+  uint slot = reserve_slots(IZB_COUNTER_PAIRS, kept);
   if (izb_flag(IZB_FLAG_STATS)) {
     uint f = subgroupAdd(fragments);
+    uint k = subgroupAdd(kept);
     if (subgroupElect() && f > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS], f);
-    if (subgroupElect() && total > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS_KEPT], total);
+    if (subgroupElect() && k > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS_KEPT], k);
   }
   for (int y = direct.y; y <= direct.w && kept > 0u; ++y) {
     for (int x = direct.x; x <= direct.z; ++x) {
@@ -90,11 +87,7 @@ void main() {
     ivec2 span = triangle_tile_span(a, b, c, r, slack);
     if (span.x <= span.y) count += (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
   }
-  uint offset = subgroupExclusiveAdd(count);
-  uint total = subgroupAdd(count);
-  uint base = 0u;
-  if (subgroupElect() && total > 0u) base = atomicAdd(counters[record_counter(mode)], total);
-  uint slot = subgroupBroadcastFirst(base) + offset;
+  uint slot = reserve_slots(record_counter(mode), count);
   for (int r = rows.x; r <= rows.y && count > 0u; ++r) {
     ivec2 span = triangle_tile_span(a, b, c, r, slack);
     for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {

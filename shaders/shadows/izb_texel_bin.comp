@@ -37,13 +37,8 @@ void main() {
     uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;
     bool keep = outcome == IZB_PAIR_KEPT;
     uint want = keep ? 1u : 0u;
-    uint offset = subgroupExclusiveAdd(want);
-    uint total = subgroupAdd(want);
-    uint base = 0u;
-    if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_PAIRS], total);
-    base = subgroupBroadcastFirst(base);
+    uint slot = reserve_slots(IZB_COUNTER_PAIRS, want);
     if (keep) {
-      uint slot = base + offset;
       if (slot < params.limits.w) pairs[slot] = uvec2(pair.x, texel_index(texel));
       else trace_texel_list(texel_index(texel), pair.x, a, b, c, 1.0 / area);
     }

@@ -24,14 +24,8 @@ void main() {
     for (uint x = rec.z; x <= rec.w; x += kIzbTileStepLanes) {
       uvec2 tile = uvec2(x + gl_LocalInvocationID.x, rec.y);
       bool keep = tile.x <= rec.w && tile_survives(tile, a, b, c, area, mode);
-      uint want = keep ? 1u : 0u;
-      uint offset = subgroupExclusiveAdd(want);
-      uint total = subgroupAdd(want);
-      uint base = 0u;
-      if (subgroupElect() && total > 0u) base = atomicAdd(counters[slot_counter], total);
-      base = subgroupBroadcastFirst(base);
+      uint slot = reserve_slots(slot_counter, keep ? 1u : 0u);
       if (keep) {
-        uint slot = base + offset;
         if (slot < params.capacities.x) tile_pairs[slot] = uvec2(rec.x, tile.y * tiles_per_side() + tile.x);
         else work_tile_here(tile, rec.x, a, b, c, area, mode);
       }

@@ -106,11 +106,7 @@ uint frustum_triangle(uint slot) {
 // Lists the triangle (one atomic per subgroup) when its grid bounds reach the grid: one wholly beside
 // it touches no texel, so no pass would find work in it.
 void list_triangle(bool listed, uint t) {
-  uint before = subgroupExclusiveAdd(listed ? 1u : 0u);
-  uint total = subgroupAdd(listed ? 1u : 0u);
-  uint base = 0u;
-  if (subgroupElect() && total > 0u) base = atomicAdd(counters[IZB_COUNTER_LISTED_TRIANGLES], total);
-  uint slot = subgroupBroadcastFirst(base) + before;
+  uint slot = reserve_slots(IZB_COUNTER_LISTED_TRIANGLES, listed ? 1u : 0u);
   if (listed) caster_draw_words[listed_triangle_word(slot)] = t;
 }
 

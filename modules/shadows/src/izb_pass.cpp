@@ -108,6 +108,7 @@ struct IzbPass::Impl {
   size_t triangle_capacity = 0;
   uint64_t caster_draw_word_capacity = 0;
   std::vector<uint32_t> first_triangle;  // per frame draw: its first caster triangle (casters only)
+  std::vector<uint32_t> caster_items;    // per caster draw, in order: its index in the frame's draws
   std::vector<gpu_shared::IzbCasterDraw> caster_table;  // this frame's caster draws
   std::vector<gpu_shared::IzbCasterDraw> built_table;   // the caster draws `triangles` was built from
   std::vector<Buffer> caster_tables;                    // per frame-in-flight slot: the table the build read
@@ -348,6 +349,7 @@ struct IzbPass::Impl {
   void ensure_triangles(const Frame& frame) {
     first_triangle.assign(frame.draws.size(), 0);
     caster_table.clear();
+    caster_items.clear();
     uint32_t caster_triangles = 0;
     for (size_t i = 0; i < frame.draws.size(); ++i) {
       const DrawItem& d = frame.draws[i];
@@ -364,6 +366,7 @@ struct IzbPass::Impl {
       c.texture = d.base_color_texture;
       caster_table.push_back(c);
       first_triangle[i] = caster_triangles;
+      caster_items.push_back(uint32_t(i));
       caster_triangles += c.triangle_count;
     }
     caster_draws = uint32_t(caster_table.size());
@@ -396,10 +399,9 @@ struct IzbPass::Impl {
     // old ones; record_update orders them).
     std::vector<gpu_shared::IzbDrawBounds> bounds;
     bounds.reserve(caster_table.size());
-    for (size_t i = 0; i < frame.draws.size(); ++i) {
-      const DrawItem& d = frame.draws[i];
-      if (!d.shadow.casts_shadow) continue;
-      const gpu_shared::IzbCasterDraw& c = caster_table[bounds.size()];
+    for (size_t k = 0; k < caster_table.size(); ++k) {
+      const DrawItem& d = frame.draws[caster_items[k]];
+      const gpu_shared::IzbCasterDraw& c = caster_table[k];
       gpu_shared::IzbDrawBounds b{};
       const bool bounded = d.bounds.valid() && std::isfinite(d.bounds.min.x + d.bounds.min.y + d.bounds.min.z) &&
                            std::isfinite(d.bounds.max.x + d.bounds.max.y + d.bounds.max.z);
@@ -648,10 +650,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     const auto& chosen = m.csm->chosen_draws();
     std::vector<uint32_t> flags;
     flags.reserve(m.caster_draws);
-    for (size_t i = 0; i < frame.draws.size(); ++i) {
-      if (!frame.draws[i].shadow.casts_shadow) continue;
+    for (const uint32_t i : m.caster_items)
       flags.push_back(i < chosen.size() && chosen[i] ? gpu_shared::IZB_DRAW_IN_CSM : 0u);
-    }
     // In the command stream: each frame in flight reads its own flags.
     if (!flags.empty()) record_update(m.ctx, frame.cmd, m.caster_draw_words, flags.data(), flags.size() * sizeof(uint32_t));
   }
