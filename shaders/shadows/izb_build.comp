@@ -147,6 +147,11 @@ void main() {
       atomicMax(counters[IZB_COUNTER_DISPATCH], slot / 64u + 1u);
     }
     pixel_state[index] = state;
+    // What izb_resolve.comp would write before the trace: candidates lit unless the CSM settled them,
+    // surfaces facing away shadowed, the others lit; beyond the range the term already there stays.
+    bool facing = (state & IZB_PIXEL_FACING) != 0u;
+    if (izb_flag(IZB_FLAG_DIRECT_TERM) && covered != 0u && (candidate != 0u || !facing || (state & IZB_PIXEL_BEYOND) == 0u))
+      imageStore(shadow_term, pixel, vec4(candidate != 0u ? (mask != 0u ? 0.0 : 1.0) : (facing ? 1.0 : 0.0)));
     if (candidate != 0u) {  // only candidates' masks and occluder distances are ever read
       if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
       visibility_mask[index] = mask;

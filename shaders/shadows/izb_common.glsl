@@ -11,6 +11,7 @@ layout(set = 0, binding = IZB_BINDING_FARTHEST, std430) buffer Farthest { uint f
 layout(set = 0, binding = IZB_BINDING_NODES, std430) buffer Nodes { uvec2 nodes[]; };
 layout(set = 0, binding = IZB_BINDING_MASK, std430) buffer Mask { uint visibility_mask[]; };
 layout(set = 0, binding = IZB_BINDING_PIXEL_STATE, std430) buffer PixelState { uint pixel_state[]; };
+layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
 layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer Quads { float quads[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Casters { IzbCasterTriangle casters[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
@@ -409,6 +410,11 @@ uint list_length(uint texel, uint cap) {
   return length;
 }
 
+// IZB_FLAG_DIRECT_TERM: the pixel (row-major index) is shadowed; at 1 spp its one sample is all of it.
+void write_shadowed_term(uint pixel) {
+  imageStore(shadow_term, ivec2(pixel % params.extent.x, pixel / params.extent.x), vec4(0.0));
+}
+
 // Tests the triangle against one node's pixel and ORs its shadowed samples into the pixel's mask;
 // false when skipped (progressive removal of a fully shadowed pixel).
 bool trace_node(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area) {
@@ -416,7 +422,10 @@ bool trace_node(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_ar
   if (izb_flag(IZB_FLAG_PROGRESSIVE) && current == full_mask()) return false;
   float gap = 1.0e30;
   uint bits = occluded_samples(pixel, ca, a, b, c, inv_area, gap);
-  if ((bits & ~current) != 0u) atomicOr(visibility_mask[pixel], bits);
+  if ((bits & ~current) != 0u) {
+    atomicOr(visibility_mask[pixel], bits);
+    if (izb_flag(IZB_FLAG_DIRECT_TERM)) write_shadowed_term(pixel);
+  }
   if (bits != 0u) note_occluder_gap(pixel, gap);
   return true;
 }

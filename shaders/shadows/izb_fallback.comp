@@ -24,5 +24,6 @@ void main() {
     bits |= occluded_samples(pixel, load_caster_alpha(t), a, b, c, 1.0 / area, gap);
   }
   visibility_mask[pixel] = bits;
+  if (izb_flag(IZB_FLAG_DIRECT_TERM) && bits != 0u) write_shadowed_term(pixel);
   if (bits != 0u) note_occluder_gap(pixel, gap);
 }

@@ -3,7 +3,6 @@
 #include "shadows/izb_prelude.glsl"
 layout(local_size_x = 64) in;
 
-layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
 layout(set = 0, binding = IZB_BINDING_SOFT_TERM, r32f) uniform image2D soft_term;
 layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) readonly buffer HybridList { uvec4 hybrid_list[]; };
 

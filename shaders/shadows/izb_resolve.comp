@@ -5,7 +5,6 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
-layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
 layout(set = 0, binding = IZB_BINDING_OVERLAY, rgba8) uniform image2D overlay;
 layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList { uvec4 hybrid_list[]; };
 

@@ -698,6 +698,10 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (hybrid && soft_distance > 0.0f) flags |= gpu_shared::IZB_FLAG_GAPS;
   if (m.samples == 1 && !sorted && m.pool_size >= uint64_t(frame.view.extent.width) * frame.view.extent.height)
     flags |= gpu_shared::IZB_FLAG_DIRECT_NODES;
+  // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
+  // local light's straddling casters and cone faces.
+  const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
+  if (direct_term) flags |= gpu_shared::IZB_FLAG_DIRECT_TERM;
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
   p.light_view = light_view;
@@ -725,11 +729,18 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   pass_barrier(frame.ctx, cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
-    m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
+    {
+      ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "frustum_fit");
+      m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
+    }
     pass_barrier(frame.ctx, cmd);
-    m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
+    {
+      ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "frustum_cull");
+      m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
+    }
     pass_barrier(frame.ctx, cmd);
     // Their triangles into grid space, listed where they reach it.
+    ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "frustum_triangles");
     if (m.triangle_count > 0)
       m.dispatch_indirect(cmd, frame, m.p->grid_setup, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
   }
@@ -854,7 +865,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     m.dispatch_indirect(cmd, frame, m.p->fallback, push, gpu_shared::IZB_COUNTER_DISPATCH);
   }
   pass_barrier(frame.ctx, cmd);
-  {
+  if (!direct_term) {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_resolve");
     m.dispatch_pixels(cmd, frame, m.resolve_pipeline(m.samples, flags, debug_code(debug), hybrid), push);
   }
