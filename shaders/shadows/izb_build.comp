@@ -6,11 +6,33 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
 
-// Raises a texel's farthest node depth. Depths are clamped into [0,1], where float order is bit
-// order: the buffer copies straight into the raster trace's depth attachment.
-void raise_farthest(uint texel, float depth) {
-  uint bits = floatBitsToUint(clamp(depth, 0.0, 1.0));
+// Depths are clamped into [0,1], where float order is bit order: the texels' buffer copies straight
+// into the raster trace's depth attachment.
+uint depth_bits(float depth) { return floatBitsToUint(clamp(depth, 0.0, 1.0)); }
+uint tile_of(uint texel) {
+  uint res = izb_resolution();
+  return (texel / res / kIzbTile) * tiles_per_side() + (texel % res) / kIzbTile;
+}
+// Raises a texel's farthest node depth, and its tile's unless the caller raises that for a whole
+// subgroup (raise_tiles_farthest).
+void raise_farthest(uint texel, float depth, bool tile_too) {
+  uint bits = depth_bits(depth);
   if (bits > farthest[texel]) atomicMax(farthest[texel], bits);  // most nodes are not their texel's farthest
+  if (!tile_too) return;
+  uint tile = tile_of(texel);
+  if (bits > tile_farthest[tile]) atomicMax(tile_farthest[tile], bits);
+}
+// 1 spp: every lane of the subgroup together (`has`: the lane's pixel has a node in `texel`). The
+// lanes' pixels neighbour one another, so mostly one tile takes one atomic.
+void raise_tiles_farthest(uint texel, float depth, bool has) {
+  uint tile = has ? tile_of(texel) : 0xffffffffu;
+  uint bits = has ? depth_bits(depth) : 0u;
+  if (subgroupMin(tile) == subgroupMax(tile)) {  // (arithmetic subgroup operations only)
+    uint highest = subgroupMax(bits);
+    if (subgroupElect() && has && highest > tile_farthest[tile]) atomicMax(tile_farthest[tile], highest);
+  } else if (has && bits > tile_farthest[tile]) {
+    atomicMax(tile_farthest[tile], bits);
+  }
 }
 
 // The CSM holds, where one triangle fully covers a texel, a depth no nearer the light than that
@@ -102,8 +124,9 @@ void main() {
     // CPU device would otherwise run every atomic of the general path below for every pixel).
     if (count != 0u) {
       nodes[index] = uvec2(atomicExchange(heads[texel0], index), index);
-      raise_farthest(texel0, node_depth);
+      raise_farthest(texel0, node_depth, false);
     }
+    raise_tiles_farthest(texel0, node_depth, count != 0u);
     if (izb_flag(IZB_FLAG_STATS)) {
       uint requested = subgroupAdd(count);
       if (subgroupElect() && requested > 0u) atomicAdd(counters[IZB_COUNTER_NODES], requested);
@@ -119,7 +142,7 @@ void main() {
         for (uint k = 0u; k < count; ++k) {
           uint texel = izb_samples() == 1u ? texel0 : texels[k];
           atomicAdd(list_counts[texel], 1u);
-          raise_farthest(texel, node_depth);
+          raise_farthest(texel, node_depth, true);
         }
       } else {
         refused = count;
@@ -133,7 +156,7 @@ void main() {
         }
         uint texel = izb_samples() == 1u ? texel0 : texels[k];
         nodes[node] = uvec2(atomicExchange(heads[texel], node), index);
-        raise_farthest(texel, node_depth);
+        raise_farthest(texel, node_depth, true);
       }
     }
   }

@@ -12,6 +12,10 @@ layout(set = 0, binding = IZB_BINDING_NODES, std430) buffer Nodes { uvec2 nodes[
 layout(set = 0, binding = IZB_BINDING_MASK, std430) buffer Mask { uint visibility_mask[]; };
 layout(set = 0, binding = IZB_BINDING_PIXEL_STATE, std430) buffer PixelState { uint pixel_state[]; };
 layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
+// Per light-space tile (kIzbTile² texels): its farthest node depth (float bits, 0: no node), raised by
+// the build for the compute trace's tile-level cull.
+layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest { uint tile_farthest[]; };
+uint tiles_per_side() { return params.capacities.y; }
 layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer Quads { float quads[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Casters { IzbCasterTriangle casters[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };

@@ -5,14 +5,12 @@
 layout(set = 0, binding = IZB_BINDING_RECORDS, std430) buffer Records { uvec4 records[]; };
 layout(set = 0, binding = IZB_BINDING_TILE_PAIRS, std430) buffer TilePairs { uvec2 tile_pairs[]; };
 layout(set = 0, binding = IZB_BINDING_PAIRS, std430) buffer Pairs { uvec2 pairs[]; };
-layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest { uint tile_farthest[]; };
 
 layout(constant_id = 0) const uint kIzbTileStepLanes = 32u;
 layout(constant_id = 1) const uint kIzbRecordsPerGroup = kIzbRecordsPerGroupGpu;
 layout(constant_id = 2) const uint kIzbTilePairsPerGroup = kIzbTilePairsPerGroupGpu;
 layout(constant_id = 3) const uint kIzbDirectTexels = kIzbDirectTexelsGpu;
 
-uint tiles_per_side() { return params.capacities.y; }
 bool is_csm_work(uint mode) { return mode == IZB_WORK_CSM_HERTEL || mode == IZB_WORK_CSM_BARYCENTRIC; }
 // Each work's own request counters.
 uint record_counter(uint mode) {

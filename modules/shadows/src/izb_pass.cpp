@@ -79,7 +79,7 @@ struct IzbPass::Impl {
   };
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
-    Pipeline tile_records, tile_bin, texel_bin, tile_far, trace_compute, dispatch_args;
+    Pipeline tile_records, tile_bin, texel_bin, trace_compute, dispatch_args;
     TracePipelines trace;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
@@ -218,7 +218,6 @@ struct IzbPass::Impl {
     ps.tile_records = compute("izb_records.comp", shape);
     ps.tile_bin = compute("izb_tile_bin.comp", shape);
     ps.texel_bin = compute("izb_texel_bin.comp", shape);
-    ps.tile_far = compute("izb_tile_farthest.comp", shape);
     ps.trace_compute = compute("izb_trace.comp", shape);
     ps.dispatch_args = compute("izb_dispatch_args.comp", shape);
     ps.trace = trace_pipelines(samples_per_pixel, flags);
@@ -726,6 +725,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (sorted) vkCmdFillBuffer(cmd, m.list_counts.handle(), 0, VK_WHOLE_SIZE, 0);
   else vkCmdFillBuffer(cmd, m.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
   vkCmdFillBuffer(cmd, m.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
+  vkCmdFillBuffer(cmd, m.tile_farthest.handle(), 0, VK_WHOLE_SIZE, 0);
   pass_barrier(frame.ctx, cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
@@ -849,8 +849,6 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     // Tiles' farthest nodes -> (triangle, tile) pairs not culled -> (triangle, texel) pairs that touch
     // and survive the texel's cull -> one thread per pair walks the texel's list.
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    m.dispatch(cmd, frame, m.p->tile_far, push, m.tiles_per_side, m.tiles_per_side);
-    pass_barrier(frame.ctx, cmd);
     m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_TRACE, "trace");
     pass_barrier(frame.ctx, cmd);
     ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "trace_pairs");
