@@ -111,6 +111,32 @@ void write_row_dispatch(uint at, uint groups) {
   counters[at + 1u] = (groups + kIzbDispatchRow - 1u) / kIzbDispatchRow;
   counters[at + 2u] = 1u;
 }
+// Raises the indirect dispatch at counters[at..at+2] (zeroed each frame) to rows of kIzbDispatchRow
+// workgroups that cover `items` items of `per_group` each. x and y grow with the items alone, so the
+// largest of several producers' raises is what they leave.
+void raise_row_dispatch(uint at, uint items, uint per_group) {
+  uint groups = (items + per_group - 1u) / per_group;
+  if (groups == 0u) return;
+  atomicMax(counters[at], min(groups, kIzbDispatchRow));
+  atomicMax(counters[at + 1u], (groups + kIzbDispatchRow - 1u) / kIzbDispatchRow);
+  atomicMax(counters[at + 2u], 1u);
+}
+// reserve_slots, also raising the dispatch at `at` over the counter's items (at most `capacity`) of
+// `per_group` each: the pass that reads them needs no pass before it to size its dispatch.
+uint reserve_slots_dispatched(uint counter, uint count, uint at, uint capacity, uint per_group) {
+  uint offset = subgroupExclusiveAdd(count);
+  uint total = subgroupAdd(count);
+  uint base = 0u;
+  if (subgroupElect() && total > 0u) {
+    base = atomicAdd(counters[counter], total);
+    raise_row_dispatch(at, min(base + total, capacity), per_group);
+  }
+  return subgroupBroadcastFirst(base) + offset;
+}
+// The trace's (triangle, texel) pairs, appended by steps 1 and 3 of the tile work (izb.h).
+uint reserve_pairs(uint count) {
+  return reserve_slots_dispatched(IZB_COUNTER_PAIRS, count, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
+}
 
 CasterAlpha load_caster_alpha(uint t) {
   CasterAlpha ca;

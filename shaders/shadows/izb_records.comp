@@ -24,7 +24,7 @@ void trace_pairs_here(uint t, ivec4 direct, vec3 a, vec3 b, vec3 c, float area) 
       fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
     }
   }
-  uint slot = reserve_slots(IZB_COUNTER_PAIRS, kept);
+  uint slot = reserve_pairs(kept);
   if (izb_flag(IZB_FLAG_STATS)) {
     uint f = subgroupAdd(fragments);
     uint k = subgroupAdd(kept);
@@ -87,7 +87,8 @@ void main() {
     ivec2 span = triangle_tile_span(a, b, c, r, slack);
     if (span.x <= span.y) count += (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
   }
-  uint slot = reserve_slots(record_counter(mode), count);
+  uint slot = reserve_slots_dispatched(record_counter(mode), count, record_dispatch_at(mode), params.limits.z,
+                                       kIzbRecordsPerGroup);
   for (int r = rows.x; r <= rows.y && count > 0u; ++r) {
     ivec2 span = triangle_tile_span(a, b, c, r, slack);
     for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {

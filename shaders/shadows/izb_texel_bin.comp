@@ -37,7 +37,7 @@ void main() {
     uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;
     bool keep = outcome == IZB_PAIR_KEPT;
     uint want = keep ? 1u : 0u;
-    uint slot = reserve_slots(IZB_COUNTER_PAIRS, want);
+    uint slot = reserve_pairs(want);
     if (keep) {
       if (slot < params.limits.w) pairs[slot] = uvec2(pair.x, texel_index(texel));
       else trace_texel_list(texel_index(texel), pair.x, a, b, c, 1.0 / area);

@@ -72,8 +72,6 @@ SHARED_CONST uint IZB_COUNTER_LIT_RECORDS = 18u;   // lit map: tile-row records 
 SHARED_CONST uint IZB_COUNTER_LIT_TILE_PAIRS = 19u;// lit map: (triangle, tile) pairs requested
 SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
 SHARED_CONST uint IZB_COUNTER_STRADDLERS = 23u;     // spot light: caster triangles across the near plane
-SHARED_CONST uint IZB_COUNTER_RECORD_DISPATCH = 24u;    // 3 uints: over records
-SHARED_CONST uint IZB_COUNTER_TILE_PAIR_DISPATCH = 28u; // 3 uints: over tile pairs
 SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel pairs
 // Hybrid: the pixels the resolve listed for the cascades, then 3 uints: indirect dispatch over them in
 // workgroups of kIzbHybridEntriesPerGroup entries.
@@ -91,7 +89,11 @@ SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
 // the CPU sums the shards. Counter k (a sharded IZB_COUNTER_*) lives at IZB_COUNTER_SHARDS + k * shards.
 SHARED_CONST uint kIzbCounterShards = 64u;
 SHARED_CONST uint IZB_COUNTER_SHARDS = 48u;
-SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u;  // shard rows up to IZB_COUNTER_LIT_CULLED
+// After the shard rows (up to IZB_COUNTER_LIT_CULLED's): per tile work (trace, CSM, lit map: 6 uints
+// each), the indirect dispatches of its steps 2 and 3 (3 uints each), raised by the steps before them
+// as they append (izb_tiles.glsl), so no pass between computes them.
+SHARED_CONST uint IZB_COUNTER_STEP_DISPATCH = 48u + 18u * 64u;
+SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u + 18u;
 
 // Compute trace, compute CSM and lit map, hierarchically over light-space tiles of kIzbTile² texels
 // (each tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
@@ -244,10 +246,6 @@ SHARED_CONST float kIzbLitQuadReach = 16.0f;
 // loops while its subgroup waits: few on a GPU.
 SHARED_CONST uint kIzbDirectTexelsGpu = 16u;
 SHARED_CONST uint kIzbDirectTexelsCpu = 256u;
-// push.debug of the dispatch-argument pass: which step's work to dispatch.
-SHARED_CONST uint IZB_ARGS_RECORDS = 0u;
-SHARED_CONST uint IZB_ARGS_TILE_PAIRS = 1u;
-SHARED_CONST uint IZB_ARGS_PAIRS = 2u;
 
 // A caster draw's world-space bounds for the light-frustum cull, uploaded when the casters change.
 // An invalid box (lo > hi) is unbounded: never culled.

@@ -79,7 +79,7 @@ struct IzbPass::Impl {
   };
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
-    Pipeline tile_records, tile_bin, texel_bin, trace_compute, dispatch_args;
+    Pipeline tile_records, tile_bin, texel_bin, trace_compute;
     TracePipelines trace;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
@@ -219,7 +219,6 @@ struct IzbPass::Impl {
     ps.tile_bin = compute("izb_tile_bin.comp", shape);
     ps.texel_bin = compute("izb_texel_bin.comp", shape);
     ps.trace_compute = compute("izb_trace.comp", shape);
-    ps.dispatch_args = compute("izb_dispatch_args.comp", shape);
     ps.trace = trace_pipelines(samples_per_pixel, flags);
     return ps;
   }
@@ -526,20 +525,14 @@ struct IzbPass::Impl {
     vkCmdDispatchIndirect(cmd, counters.handle(), VkDeviceSize(counter) * 4);
   }
 
-  void dispatch_step(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p,
-                     gpu_shared::IzbComputePush push, uint32_t args, uint32_t counter) {
-    gpu_shared::IzbComputePush a = push;
-    a.debug = args;
-    dispatch(cmd, frame, this->p->dispatch_args, a, 1);
-    pass_barrier(frame.ctx, cmd);
-    dispatch_indirect(cmd, frame, p, push, counter);
-  }
-
   // Compute trace / compute CSM, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*), each step in a nested
   // profiler region "<region>_records", "<region>_tiles", "<region>_texels".
   void record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,
                         uint32_t mode, const std::string& region) {
     push.mode = mode;
+    // Steps 2 and 3 are dispatched as the steps before them sized them (izb_tiles.glsl).
+    const uint32_t work = mode == gpu_shared::IZB_WORK_TRACE ? 0u : (mode == gpu_shared::IZB_WORK_LIT ? 2u : 1u);
+    const uint32_t records_dispatch = gpu_shared::IZB_COUNTER_STEP_DISPATCH + 6u * work;
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
       // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
@@ -548,12 +541,11 @@ struct IzbPass::Impl {
     pass_barrier(frame.ctx, cmd);
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_tiles");
-      dispatch_step(cmd, frame, p->tile_bin, push, gpu_shared::IZB_ARGS_RECORDS, gpu_shared::IZB_COUNTER_RECORD_DISPATCH);
+      dispatch_indirect(cmd, frame, p->tile_bin, push, records_dispatch);
     }
     pass_barrier(frame.ctx, cmd);
     ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_texels");
-    dispatch_step(cmd, frame, p->texel_bin, push, gpu_shared::IZB_ARGS_TILE_PAIRS,
-                  gpu_shared::IZB_COUNTER_TILE_PAIR_DISPATCH);
+    dispatch_indirect(cmd, frame, p->texel_bin, push, records_dispatch + 3u);
   }
 };
 
@@ -852,7 +844,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_TRACE, "trace");
     pass_barrier(frame.ctx, cmd);
     ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "trace_pairs");
-    m.dispatch_step(cmd, frame, m.p->trace_compute, push, gpu_shared::IZB_ARGS_PAIRS, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
+    m.dispatch_indirect(cmd, frame, m.p->trace_compute, push, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
   } else {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
     draw_trace(false, settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
