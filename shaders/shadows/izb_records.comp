@@ -6,6 +6,12 @@ layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
+// The workgroup's tile rows laid end to end: each thread's triangle, its first row, and where its
+// rows start (an exclusive prefix sum; [64] holds the total).
+shared uint walk_triangle[64];
+shared int walk_first_row[64];
+shared uint walk_row_start[65];
+
 // The trace's (triangle, texel) pairs of the texels [direct.xy, direct.zw] that touch and survive
 // the texel's cull, appended to step 4's pairs (one atomic per subgroup). The first 32 texels' outcomes
 // are kept as bits (a GPU's few texels are tested once), any more tested again to write. A pair that
@@ -44,10 +50,12 @@ void trace_pairs_here(uint t, ivec4 direct, vec3 a, vec3 b, vec3 c, float area) 
   }
 }
 
-// Compute trace / compute CSM, step 1 (see izb.h): a thread per listed caster triangle walks its rows of
-// tiles and cuts each row's span into records of at most kIzbRecordTiles tiles (a subgroup reserves
-// its records with one atomic). A record that does not fit the buffer is worked here, so nothing is
-// dropped; the request count grows the buffer for the next frame.
+// Compute trace / compute CSM, step 1 (see izb.h): a thread per listed caster triangle finds its rows
+// of tiles; then the workgroup walks all its triangles' rows together, a thread per row (a large
+// triangle's many rows would otherwise serialize its one thread), cutting each row's span into records
+// of at most kIzbRecordTiles tiles (a subgroup reserves its records with one atomic). A record that
+// does not fit the buffer is worked here, so nothing is dropped; the request count grows the buffer
+// for the next frame.
 void main() {
   uint index = row_dispatch_index(gl_WorkGroupID, gl_LocalInvocationIndex, 64u);
   bool in_range = index < listed_triangle_count();
@@ -81,23 +89,49 @@ void main() {
     }
   }
   if (mode == IZB_WORK_TRACE) trace_pairs_here(t, direct, a, b, c, area);
-  float slack = walk_slack(a, b, c, mode);
-  uint count = 0u;
-  for (int r = rows.x; r <= rows.y; ++r) {
-    ivec2 span = triangle_tile_span(a, b, c, r, slack);
-    if (span.x <= span.y) count += (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
+
+  uint lane = gl_LocalInvocationIndex;
+  walk_triangle[lane] = t;
+  walk_first_row[lane] = rows.x;
+  walk_row_start[lane + 1u] = rows.x <= rows.y ? uint(rows.y - rows.x + 1) : 0u;
+  barrier();
+  if (lane == 0u) {
+    walk_row_start[0] = 0u;
+    for (uint i = 1u; i <= 64u; ++i) walk_row_start[i] += walk_row_start[i - 1u];
   }
-  uint slot = reserve_slots_dispatched(record_counter(mode), count, record_dispatch_at(mode), params.limits.z,
-                                       kIzbRecordsPerGroup);
-  for (int r = rows.x; r <= rows.y && count > 0u; ++r) {
-    ivec2 span = triangle_tile_span(a, b, c, r, slack);
+  barrier();
+  uint total_rows = walk_row_start[64];
+  for (uint first = 0u; first < total_rows; first += 64u) {
+    uint j = first + lane;
+    uint row_triangle = 0u;
+    int r = 0;
+    ivec2 span = ivec2(0, -1);
+    uint count = 0u;
+    if (j < total_rows) {
+      // The thread whose rows hold row j: the last whose rows start at or before it.
+      uint lo = 0u, hi = 63u;
+      while (lo < hi) {
+        uint mid = (lo + hi + 1u) / 2u;
+        if (walk_row_start[mid] <= j) lo = mid;
+        else hi = mid - 1u;
+      }
+      row_triangle = walk_triangle[lo];
+      r = walk_first_row[lo] + int(j - walk_row_start[lo]);
+      load_grid_triangle(row_triangle, a, b, c);
+      area = edge_fn(c.xy, a.xy, b.xy);
+      span = triangle_tile_span(a, b, c, r, walk_slack(a, b, c, mode));
+      if (span.x <= span.y) count = (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
+    }
+    uint slot = reserve_slots_dispatched(record_counter(mode), count, record_dispatch_at(mode), params.limits.z,
+                                         kIzbRecordsPerGroup);
     for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {
       int last = min(x + int(kIzbRecordTiles) - 1, span.y);
       if (slot < params.limits.z) {
-        records[slot] = uvec4(t, uint(r), uint(x), uint(last));
+        records[slot] = uvec4(row_triangle, uint(r), uint(x), uint(last));
       } else {
         for (int k = x; k <= last; ++k)
-          if (tile_survives(uvec2(k, r), a, b, c, area, mode)) work_tile_here(uvec2(k, r), t, a, b, c, area, mode);
+          if (tile_survives(uvec2(k, r), a, b, c, area, mode))
+            work_tile_here(uvec2(k, r), row_triangle, a, b, c, area, mode);
       }
       ++slot;
     }
