@@ -117,9 +117,12 @@ void write_row_dispatch(uint at, uint groups) {
 void raise_row_dispatch(uint at, uint items, uint per_group) {
   uint groups = (items + per_group - 1u) / per_group;
   if (groups == 0u) return;
-  atomicMax(counters[at], min(groups, kIzbDispatchRow));
-  atomicMax(counters[at + 1u], (groups + kIzbDispatchRow - 1u) / kIzbDispatchRow);
-  atomicMax(counters[at + 2u], 1u);
+  uint x = min(groups, kIzbDispatchRow), y = (groups + kIzbDispatchRow - 1u) / kIzbDispatchRow;
+  // Atomics on one address serialize: raise only what is short. A stale read is never above the value
+  // (they only grow), so at worst it costs an atomic more.
+  if (x > counters[at]) atomicMax(counters[at], x);
+  if (y > counters[at + 1u]) atomicMax(counters[at + 1u], y);
+  if (counters[at + 2u] == 0u) counters[at + 2u] = 1u;  // every writer writes 1
 }
 // reserve_slots, also raising the dispatch at `at` over the counter's items (at most `capacity`) of
 // `per_group` each: the pass that reads them needs no pass before it to size its dispatch.
@@ -133,7 +136,8 @@ uint reserve_slots_dispatched(uint counter, uint count, uint at, uint capacity, 
   }
   return subgroupBroadcastFirst(base) + offset;
 }
-// The trace's (triangle, texel) pairs, appended by steps 1 and 3 of the tile work (izb.h).
+// The trace's (triangle, texel) pairs, appended by step 1 of the tile work (izb.h; step 3 reserves
+// a workgroup's at once, izb_texel_bin.comp).
 uint reserve_pairs(uint count) {
   return reserve_slots_dispatched(IZB_COUNTER_PAIRS, count, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
 }

@@ -24,8 +24,7 @@ void main() {
     for (uint x = rec.z; x <= rec.w; x += kIzbTileStepLanes) {
       uvec2 tile = uvec2(x + gl_LocalInvocationID.x, rec.y);
       bool keep = tile.x <= rec.w && tile_survives(tile, a, b, c, area, mode);
-      uint slot = reserve_slots_dispatched(slot_counter, keep ? 1u : 0u, tile_pair_dispatch_at(mode),
-                                           params.capacities.x, kIzbTilePairsPerGroup);
+      uint slot = reserve_slots(slot_counter, keep ? 1u : 0u);
       if (keep) {
         if (slot < params.capacities.x) tile_pairs[slot] = uvec2(rec.x, tile.y * tiles_per_side() + tile.x);
         else work_tile_here(tile, rec.x, a, b, c, area, mode);

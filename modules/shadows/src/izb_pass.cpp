@@ -79,7 +79,7 @@ struct IzbPass::Impl {
   };
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
-    Pipeline tile_records, tile_bin, texel_bin, trace_compute;
+    Pipeline tile_records, tile_bin, texel_bin, trace_compute, tile_pair_args;
     TracePipelines trace;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
@@ -219,6 +219,7 @@ struct IzbPass::Impl {
     ps.tile_bin = compute("izb_tile_bin.comp", shape);
     ps.texel_bin = compute("izb_texel_bin.comp", shape);
     ps.trace_compute = compute("izb_trace.comp", shape);
+    ps.tile_pair_args = compute("izb_dispatch_args.comp", shape);
     ps.trace = trace_pipelines(samples_per_pixel, flags);
     return ps;
   }
@@ -530,7 +531,8 @@ struct IzbPass::Impl {
   void record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,
                         uint32_t mode, const std::string& region) {
     push.mode = mode;
-    // Steps 2 and 3 are dispatched as the steps before them sized them (izb_tiles.glsl).
+    // Step 2's dispatch (and the trace's step 4's) are raised by the steps before them as they append
+    // (izb_tiles.glsl); step 3's by a pass of its own.
     const uint32_t work = mode == gpu_shared::IZB_WORK_TRACE ? 0u : (mode == gpu_shared::IZB_WORK_LIT ? 2u : 1u);
     const uint32_t records_dispatch = gpu_shared::IZB_COUNTER_STEP_DISPATCH + 6u * work;
     {
@@ -545,6 +547,8 @@ struct IzbPass::Impl {
     }
     pass_barrier(frame.ctx, cmd);
     ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_texels");
+    dispatch(cmd, frame, p->tile_pair_args, push, 1);
+    pass_barrier(frame.ctx, cmd);
     dispatch_indirect(cmd, frame, p->texel_bin, push, records_dispatch + 3u);
   }
 };
