@@ -186,19 +186,9 @@ void main() {
   }
   // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.
   if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) return;
-  uint covered_sum = subgroupAdd(covered);
-  uint candidate_sum = subgroupAdd(candidate);
-  uint culled_sum = subgroupAdd(culled);
-  uint lit_sum = izb_flag(IZB_FLAG_LIT) ? subgroupAdd(lit_culled) : 0u;
-  if (subgroupElect()) {
-    uint shard = (gl_WorkGroupID.x * 7u + gl_WorkGroupID.y * 13u + gl_SubgroupID) % kIzbCounterShards;
-    if (covered_sum > 0u)
-      atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_SHADING_POINTS * kIzbCounterShards + shard], covered_sum);
-    if (candidate_sum > 0u)
-      atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_CANDIDATES * kIzbCounterShards + shard], candidate_sum);
-    if (culled_sum > 0u)
-      atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_CSM_CULLED * kIzbCounterShards + shard], culled_sum);
-    if (lit_sum > 0u)
-      atomicAdd(counters[IZB_COUNTER_SHARDS + IZB_COUNTER_LIT_CULLED * kIzbCounterShards + shard], lit_sum);
-  }
+  uint seed = IZB_SHARD_SEED;
+  add_sharded(IZB_COUNTER_SHADING_POINTS, covered, seed);
+  add_sharded(IZB_COUNTER_CANDIDATES, candidate, seed);
+  add_sharded(IZB_COUNTER_CSM_CULLED, culled, seed);
+  if (izb_flag(IZB_FLAG_LIT)) add_sharded(IZB_COUNTER_LIT_CULLED, lit_culled, seed);
 }

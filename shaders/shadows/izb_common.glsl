@@ -105,6 +105,17 @@ uint reserve_slots(uint counter, uint count) {
   if (subgroupElect() && total > 0u) base = atomicAdd(counters[counter], total);
   return subgroupBroadcastFirst(base) + offset;
 }
+// Adds every lane's `value` to the sharded counter `counter` (IZB_COUNTER_SHARDS), one atomic per
+// subgroup; `seed` picks the shard, so that subgroups far apart in the frame hit different addresses
+// (statistics would otherwise slow the frames they measure).
+void add_sharded(uint counter, uint value, uint seed) {
+  uint sum = subgroupAdd(value);
+  if (subgroupElect() && sum > 0u)
+    atomicAdd(counters[IZB_COUNTER_SHARDS + counter * kIzbCounterShards + seed % kIzbCounterShards], sum);
+}
+// A compute invocation's shard seed.
+#define IZB_SHARD_SEED (gl_WorkGroupID.x * 7u + gl_WorkGroupID.y * 13u + gl_SubgroupID)
+
 // Writes the indirect dispatch of `groups` workgroups, in such rows, at counters[at..at+2].
 void write_row_dispatch(uint at, uint groups) {
   counters[at] = min(groups, kIzbDispatchRow);

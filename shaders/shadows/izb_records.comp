@@ -32,10 +32,8 @@ void trace_pairs_here(uint t, ivec4 direct, vec3 a, vec3 b, vec3 c, float area) 
   }
   uint slot = reserve_pairs(kept);
   if (izb_flag(IZB_FLAG_STATS)) {
-    uint f = subgroupAdd(fragments);
-    uint k = subgroupAdd(kept);
-    if (subgroupElect() && f > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS], f);
-    if (subgroupElect() && k > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS_KEPT], k);
+    add_sharded(IZB_COUNTER_FRAGMENTS, fragments, IZB_SHARD_SEED);
+    add_sharded(IZB_COUNTER_FRAGMENTS_KEPT, kept, IZB_SHARD_SEED);
   }
   for (int y = direct.y; y <= direct.w && kept > 0u; ++y) {
     for (int x = direct.x; x <= direct.z; ++x) {

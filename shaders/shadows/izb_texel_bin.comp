@@ -76,11 +76,7 @@ void main() {
     kept += want;
   }
   if (izb_flag(IZB_FLAG_STATS) && mode == IZB_WORK_TRACE) {
-    uint f = subgroupAdd(fragments);
-    uint k = subgroupAdd(kept);
-    if (subgroupElect()) {
-      if (f > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS], f);
-      if (k > 0u) atomicAdd(counters[IZB_COUNTER_FRAGMENTS_KEPT], k);
-    }
+    add_sharded(IZB_COUNTER_FRAGMENTS, fragments, IZB_SHARD_SEED);
+    add_sharded(IZB_COUNTER_FRAGMENTS_KEPT, kept, IZB_SHARD_SEED);
   }
 }

@@ -15,8 +15,5 @@ void main() {
     load_grid_triangle(pair.x, a, b, c);
     tests = trace_texel_list(pair.y, pair.x, a, b, c, 1.0 / edge_fn(c.xy, a.xy, b.xy));
   }
-  if (izb_flag(IZB_FLAG_STATS)) {
-    uint s = subgroupAdd(tests);
-    if (subgroupElect() && s > 0u) atomicAdd(counters[IZB_COUNTER_TRIANGLE_TESTS], s);
-  }
+  if (izb_flag(IZB_FLAG_STATS)) add_sharded(IZB_COUNTER_TRIANGLE_TESTS, tests, IZB_SHARD_SEED);
 }

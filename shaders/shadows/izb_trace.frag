@@ -24,11 +24,8 @@ void main() {
     if (kCountOnly == 0u) tests = trace_texel_list(texel_index(texel), triangle, a, b, c, 1.0 / area);
   }
   if (izb_flag(IZB_FLAG_STATS)) {
-    uint f = subgroupAdd(fragment);
-    uint s = subgroupAdd(tests);
-    if (subgroupElect()) {
-      if (f > 0u) atomicAdd(counters[kCountOnly != 0u ? IZB_COUNTER_FRAGMENTS : IZB_COUNTER_FRAGMENTS_KEPT], f);
-      if (s > 0u) atomicAdd(counters[IZB_COUNTER_TRIANGLE_TESTS], s);
-    }
+    uint seed = (uint(gl_FragCoord.x) / 8u) * 7u + (uint(gl_FragCoord.y) / 8u) * 13u;
+    add_sharded(kCountOnly != 0u ? IZB_COUNTER_FRAGMENTS : IZB_COUNTER_FRAGMENTS_KEPT, fragment, seed);
+    add_sharded(IZB_COUNTER_TRIANGLE_TESTS, tests, seed);
   }
 }

@@ -971,9 +971,9 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
     s.lit_culled = sharded(gpu_shared::IZB_COUNTER_LIT_CULLED);
     s.caster_triangles = m.triangle_count;
     s.caster_triangles_listed = c[gpu_shared::IZB_COUNTER_LISTED_TRIANGLES];
-    s.trace_fragments_before_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS];
-    s.trace_fragments_after_cull = c[gpu_shared::IZB_COUNTER_FRAGMENTS_KEPT];
-    s.triangle_tests = c[gpu_shared::IZB_COUNTER_TRIANGLE_TESTS];
+    s.trace_fragments_before_cull = sharded(gpu_shared::IZB_COUNTER_FRAGMENTS);
+    s.trace_fragments_after_cull = sharded(gpu_shared::IZB_COUNTER_FRAGMENTS_KEPT);
+    s.triangle_tests = sharded(gpu_shared::IZB_COUNTER_TRIANGLE_TESTS);
     s.triangle_tests_per_pixel = s.lit_candidates ? double(s.triangle_tests) / double(s.lit_candidates) : 0.0;
     s.list_length_max = c[gpu_shared::IZB_COUNTER_LIST_MAX];
     s.nonempty_texels = c[gpu_shared::IZB_COUNTER_NONEMPTY];
