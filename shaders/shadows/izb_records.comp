@@ -121,7 +121,7 @@ void main() {
       if (span.x <= span.y) count = (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
     }
     uint slot = reserve_slots_dispatched(record_counter(mode), count, record_dispatch_at(mode), params.limits.z,
-                                         kIzbRecordsPerGroup);
+                                         kIzbRecordsPerGroup * kIzbTileStepRecords);
     for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {
       int last = min(x + int(kIzbRecordTiles) - 1, span.y);
       if (slot < params.limits.z) {

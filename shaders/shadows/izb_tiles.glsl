@@ -10,6 +10,9 @@ layout(constant_id = 0) const uint kIzbTileStepLanes = 32u;
 layout(constant_id = 1) const uint kIzbRecordsPerGroup = kIzbRecordsPerGroupGpu;
 layout(constant_id = 2) const uint kIzbTilePairsPerGroup = kIzbTilePairsPerGroupGpu;
 layout(constant_id = 3) const uint kIzbDirectTexels = kIzbDirectTexelsGpu;
+// Step 2's records worked side by side in a workgroup (kIzbTileStepLanes / this lanes each, at least
+// kIzbRecordTiles when above 1): its workgroups reserve their pairs with one atomic.
+layout(constant_id = 4) const uint kIzbTileStepRecords = 1u;
 
 bool is_csm_work(uint mode) { return mode == IZB_WORK_CSM_HERTEL || mode == IZB_WORK_CSM_BARYCENTRIC; }
 // Each work's own request counters.

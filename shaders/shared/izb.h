@@ -107,16 +107,17 @@ SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u + 18u;
 //     texel) pairs that touch and survive the texel's farthest-node cull;
 //  4. trace only: a thread per (triangle, texel) walks the texel's list.
 // Each step's output is appended densely (one atomic per subgroup), so a large triangle spreads over
-// many workgroups instead of serializing a thread. Step 2's workgroup shape is a specialization
-// constant pair (ids 0, 1): on a GPU a record per workgroup (idle subgroups exit at once); on a CPU
-// device, which pays for every workgroup, many records per workgroup; likewise step 3's tile pairs per
-// workgroup (id 2). Dispatches use rows of kIzbDispatchRow workgroups (the portable limit per
+// many workgroups instead of serializing a thread. Step 2's workgroup shape is specialization
+// constants (ids 0, 1, 4): on a GPU kIzbTileStepRecordsGpu records side by side, 32 lanes each, so a
+// workgroup appends its pairs with one atomic; on a CPU device, which pays for every workgroup, many
+// records per workgroup one after another; likewise step 3's tile pairs per workgroup (id 2). Dispatches use rows of kIzbDispatchRow workgroups (the portable limit per
 // dimension is 65535).
 SHARED_CONST uint kIzbTile = 16u;
 SHARED_CONST uint kIzbRecordTiles = 32u;
 SHARED_CONST uint kIzbRecordsPerGroupGpu = 1u;
 SHARED_CONST uint kIzbRecordsPerGroupCpu = 64u;
 SHARED_CONST uint kIzbTilePairsPerGroupGpu = 1u;
+SHARED_CONST uint kIzbTileStepRecordsGpu = 4u;  // step 2's records side by side on a GPU
 SHARED_CONST uint kIzbTilePairsPerGroupCpu = 16u;
 SHARED_CONST uint kIzbDispatchRow = 32768u;
 SHARED_CONST uint kIzbPairGroup = 64u;             // pairs per workgroup of the compute trace

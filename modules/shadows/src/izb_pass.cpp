@@ -211,10 +211,11 @@ struct IzbPass::Impl {
     // Workgroup shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
     const bool cpu = ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
     const std::vector<SpecializationConstant> shape = {
-        {0, cpu ? 8u : 32u},
+        {0, cpu ? 8u : 32u * gpu_shared::kIzbTileStepRecordsGpu},
         {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
         {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu},
-        {3, cpu ? gpu_shared::kIzbDirectTexelsCpu : gpu_shared::kIzbDirectTexelsGpu}};
+        {3, cpu ? gpu_shared::kIzbDirectTexelsCpu : gpu_shared::kIzbDirectTexelsGpu},
+        {4, cpu ? 1u : gpu_shared::kIzbTileStepRecordsGpu}};
     ps.tile_records = compute("izb_records.comp", shape);
     ps.tile_bin = compute("izb_tile_bin.comp", shape);
     ps.texel_bin = compute("izb_texel_bin.comp", shape);
