@@ -6,51 +6,30 @@ layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
-// The workgroup's tile rows laid end to end: each thread's triangle, its first row, and where its
-// rows start (an exclusive prefix sum; [64] holds the total).
+// The workgroup's work laid end to end, a thread per item: each thread's triangle, its direct texels
+// (a rectangle) and its first tile row, and where its texels and its rows start (exclusive prefix sums;
+// [64] holds the totals).
 shared uint walk_triangle[64];
+shared ivec4 walk_direct[64];
 shared int walk_first_row[64];
+shared uint walk_texel_start[65];
 shared uint walk_row_start[65];
 
-// The trace's (triangle, texel) pairs of the texels [direct.xy, direct.zw] that touch and survive
-// the texel's cull, appended to step 4's pairs (one atomic per subgroup). The first 32 texels' outcomes
-// are kept as bits (a GPU's few texels are tested once), any more tested again to write. A pair that
-// does not fit is traced here.
-void trace_pairs_here(uint t, ivec4 direct, vec3 a, vec3 b, vec3 c, float area) {
-  uint kept = 0u, fragments = 0u, kept_bits = 0u;
-  int width = direct.z - direct.x + 1;
-  for (int y = direct.y; y <= direct.w; ++y) {
-    for (int x = direct.x; x <= direct.z; ++x) {
-      uint outcome = trace_pair_outcome(ivec2(x, y), a, b, c, area);
-      int i = (y - direct.y) * width + (x - direct.x);
-      if (outcome == IZB_PAIR_KEPT) {
-        ++kept;
-        if (i < 32) kept_bits |= 1u << uint(i);
-      }
-      fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
-    }
+// Item j's thread: the last whose items start at or before it.
+uint walk_owner(uint j, bool rows) {
+  uint lo = 0u, hi = 63u;
+  while (lo < hi) {
+    uint mid = (lo + hi + 1u) / 2u;
+    if ((rows ? walk_row_start[mid] : walk_texel_start[mid]) <= j) lo = mid;
+    else hi = mid - 1u;
   }
-  uint slot = reserve_pairs(kept);
-  if (izb_flag(IZB_FLAG_STATS)) {
-    add_sharded(IZB_COUNTER_FRAGMENTS, fragments, IZB_SHARD_SEED);
-    add_sharded(IZB_COUNTER_FRAGMENTS_KEPT, kept, IZB_SHARD_SEED);
-  }
-  for (int y = direct.y; y <= direct.w && kept > 0u; ++y) {
-    for (int x = direct.x; x <= direct.z; ++x) {
-      ivec2 texel = ivec2(x, y);
-      int i = (y - direct.y) * width + (x - direct.x);
-      bool keep = i < 32 ? (kept_bits & (1u << uint(i))) != 0u : trace_pair_outcome(texel, a, b, c, area) == IZB_PAIR_KEPT;
-      if (!keep) continue;
-      if (slot < params.limits.w) pairs[slot] = uvec2(t, texel_index(texel));
-      else trace_texel_list(texel_index(texel), t, a, b, c, 1.0 / area);
-      ++slot;
-    }
-  }
+  return lo;
 }
 
-// Compute trace / compute CSM, step 1 (see izb.h): a thread per listed caster triangle finds its rows
-// of tiles; then the workgroup walks all its triangles' rows together, a thread per row (a large
-// triangle's many rows would otherwise serialize its one thread), cutting each row's span into records
+// Compute trace / compute CSM, step 1 (see izb.h): a thread per listed caster triangle finds its few
+// texels (a small triangle) or its rows of tiles; then the workgroup works all its triangles' texels
+// and rows together, a thread per texel or row (a triangle's many would otherwise serialize its one
+// thread, and its subgroup with it), cutting each row's span into records
 // of at most kIzbRecordTiles tiles (a subgroup reserves its records with one atomic). A record that
 // does not fit the buffer is worked here, so nothing is dropped; the request count grows the buffer
 // for the next frame.
@@ -80,24 +59,59 @@ void main() {
       if ((hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) <= float(kIzbDirectTexels)) {
         direct = ivec4(lo, hi);
         rows = ivec2(0, -1);
-        if (mode != IZB_WORK_TRACE)
-          for (int y = direct.y; y <= direct.w; ++y)
-            for (int x = direct.x; x <= direct.z; ++x) work_texel_here(ivec2(x, y), t, a, b, c, area, mode);
       }
     }
   }
-  if (mode == IZB_WORK_TRACE) trace_pairs_here(t, direct, a, b, c, area);
-
   uint lane = gl_LocalInvocationIndex;
   walk_triangle[lane] = t;
+  walk_direct[lane] = direct;
   walk_first_row[lane] = rows.x;
+  walk_texel_start[lane + 1u] = direct.x <= direct.z ? uint((direct.z - direct.x + 1) * (direct.w - direct.y + 1)) : 0u;
   walk_row_start[lane + 1u] = rows.x <= rows.y ? uint(rows.y - rows.x + 1) : 0u;
   barrier();
   if (lane == 0u) {
+    walk_texel_start[0] = 0u;
     walk_row_start[0] = 0u;
-    for (uint i = 1u; i <= 64u; ++i) walk_row_start[i] += walk_row_start[i - 1u];
+    for (uint i = 1u; i <= 64u; ++i) {
+      walk_texel_start[i] += walk_texel_start[i - 1u];
+      walk_row_start[i] += walk_row_start[i - 1u];
+    }
   }
   barrier();
+
+  // The small triangles' texels: the lit map and CSM write them, the trace lists its pairs for step 4.
+  uint total_texels = walk_texel_start[64];
+  for (uint first = 0u; first < total_texels; first += 64u) {
+    uint j = first + lane;
+    uint outcome = IZB_PAIR_OUTSIDE;
+    uint texel_triangle = 0u;
+    ivec2 texel = ivec2(0);
+    if (j < total_texels) {
+      uint owner = walk_owner(j, false);
+      texel_triangle = walk_triangle[owner];
+      ivec4 d = walk_direct[owner];
+      uint i = j - walk_texel_start[owner];
+      uint width = uint(d.z - d.x + 1);
+      texel = d.xy + ivec2(i % width, i / width);
+      load_grid_triangle(texel_triangle, a, b, c);
+      area = edge_fn(c.xy, a.xy, b.xy);
+      if (mode != IZB_WORK_TRACE) work_texel_here(texel, texel_triangle, a, b, c, area, mode);
+      else outcome = trace_pair_outcome(texel, a, b, c, area);
+    }
+    if (mode != IZB_WORK_TRACE) continue;  // uniform
+    bool keep = outcome == IZB_PAIR_KEPT;
+    uint slot = reserve_pairs(keep ? 1u : 0u);
+    if (izb_flag(IZB_FLAG_STATS)) {
+      add_sharded(IZB_COUNTER_FRAGMENTS, outcome != IZB_PAIR_OUTSIDE ? 1u : 0u, IZB_SHARD_SEED);
+      add_sharded(IZB_COUNTER_FRAGMENTS_KEPT, keep ? 1u : 0u, IZB_SHARD_SEED);
+    }
+    if (keep) {
+      if (slot < params.limits.w) pairs[slot] = uvec2(texel_triangle, texel_index(texel));
+      else trace_texel_list(texel_index(texel), texel_triangle, a, b, c, 1.0 / area);
+    }
+  }
+
+  // The larger triangles' tile rows, cut into records.
   uint total_rows = walk_row_start[64];
   for (uint first = 0u; first < total_rows; first += 64u) {
     uint j = first + lane;
@@ -106,15 +120,9 @@ void main() {
     ivec2 span = ivec2(0, -1);
     uint count = 0u;
     if (j < total_rows) {
-      // The thread whose rows hold row j: the last whose rows start at or before it.
-      uint lo = 0u, hi = 63u;
-      while (lo < hi) {
-        uint mid = (lo + hi + 1u) / 2u;
-        if (walk_row_start[mid] <= j) lo = mid;
-        else hi = mid - 1u;
-      }
-      row_triangle = walk_triangle[lo];
-      r = walk_first_row[lo] + int(j - walk_row_start[lo]);
+      uint owner = walk_owner(j, true);
+      row_triangle = walk_triangle[owner];
+      r = walk_first_row[owner] + int(j - walk_row_start[owner]);
       load_grid_triangle(row_triangle, a, b, c);
       area = edge_fn(c.xy, a.xy, b.xy);
       span = triangle_tile_span(a, b, c, r, walk_slack(a, b, c, mode));

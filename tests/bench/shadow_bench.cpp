@@ -398,9 +398,10 @@ struct Bench {
         for (auto& [e, c] : saved) registry.get<engine::ShadowCaster>(e).csm = c;
       }
     } restore{scene.registry, saved_choices};
-    // Automatic backends first time both (a few frames), then keep the faster. Timed frames run
-    // without the statistics passes; one more frame after them collects the statistics.
-    module->set_collect_stats(true);
+    // Automatic backends first time both (a few frames), then keep the faster. The probing and timed
+    // frames run without the statistics (as an application's frames do: their counting would weigh
+    // on the probe's timings); one more frame after them collects the statistics.
+    module->set_collect_stats(false);
     const auto lit_undecided = [&] {
       const auto& lit = module->stats().lit_choice;
       return run.settings.izb.lit_culling == shadows::LitCulling::Auto && (lit.reason == "probing" || lit.reason.empty());
@@ -409,7 +410,6 @@ struct Bench {
                                module->stats().csm_choice.reason == "probing" || lit_undecided() || f == 0);
          ++f)
       renderer.render_frame(0.0f);
-    module->set_collect_stats(false);
     for (int f = 0; f < o.warmup; ++f) renderer.render_frame(0.0f);
     renderer.profiler().clear_history();
     for (int f = 0; f < o.frames; ++f) renderer.render_frame(0.0f);
