@@ -131,9 +131,10 @@ void raise_row_dispatch(uint at, uint items, uint per_group) {
   uint x = min(groups, kIzbDispatchRow), y = (groups + kIzbDispatchRow - 1u) / kIzbDispatchRow;
   // Atomics on one address serialize: raise only what is short. A stale read is never above the value
   // (they only grow), so at worst it costs an atomic more.
-  if (x > counters[at]) atomicMax(counters[at], x);
-  if (y > counters[at + 1u]) atomicMax(counters[at + 1u], y);
-  if (counters[at + 2u] == 0u) counters[at + 2u] = 1u;  // every writer writes 1
+  uvec3 now = uvec3(counters[at], counters[at + 1u], counters[at + 2u]);  // read together: one round trip
+  if (x > now.x) atomicMax(counters[at], x);
+  if (y > now.y) atomicMax(counters[at + 1u], y);
+  if (now.z == 0u) counters[at + 2u] = 1u;  // every writer writes 1
 }
 // reserve_slots, also raising the dispatch at `at` over the counter's items (at most `capacity`) of
 // `per_group` each: the pass that reads them needs no pass before it to size its dispatch.

@@ -2,6 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
 #include "shadows/izb_tiles.glsl"
+#include "shadows/izb_group_reserve.glsl"
 layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
@@ -79,67 +80,75 @@ void main() {
   }
   barrier();
 
-  // The small triangles' texels: the lit map and CSM write them, the trace lists its pairs for step 4.
+  // The small triangles' texels: the lit map and CSM write them, the trace lists its pairs for step 4
+  // (counted first, so that the workgroup reserves them with one atomic, then written).
   uint total_texels = walk_texel_start[64];
-  for (uint first = 0u; first < total_texels; first += 64u) {
-    uint j = first + lane;
-    uint outcome = IZB_PAIR_OUTSIDE;
-    uint texel_triangle = 0u;
-    ivec2 texel = ivec2(0);
-    if (j < total_texels) {
+  uint kept_total = 0u, fragments = 0u;
+  for (uint pass = (mode == IZB_WORK_TRACE ? 0u : 1u); pass < 2u; ++pass) {  // trace: count, then write
+    uint slot = 0u;
+    if (pass == 1u && mode == IZB_WORK_TRACE)
+      slot = reserve_group_slots(IZB_COUNTER_PAIRS, kept_total, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
+    for (uint j = lane; j < total_texels; j += 64u) {
       uint owner = walk_owner(j, false);
-      texel_triangle = walk_triangle[owner];
+      uint texel_triangle = walk_triangle[owner];
       ivec4 d = walk_direct[owner];
       uint i = j - walk_texel_start[owner];
       uint width = uint(d.z - d.x + 1);
-      texel = d.xy + ivec2(i % width, i / width);
+      ivec2 texel = d.xy + ivec2(i % width, i / width);
       load_grid_triangle(texel_triangle, a, b, c);
       area = edge_fn(c.xy, a.xy, b.xy);
-      if (mode != IZB_WORK_TRACE) work_texel_here(texel, texel_triangle, a, b, c, area, mode);
-      else outcome = trace_pair_outcome(texel, a, b, c, area);
-    }
-    if (mode != IZB_WORK_TRACE) continue;  // uniform
-    bool keep = outcome == IZB_PAIR_KEPT;
-    uint slot = reserve_pairs(keep ? 1u : 0u);
-    if (izb_flag(IZB_FLAG_STATS)) {
-      add_sharded(IZB_COUNTER_FRAGMENTS, outcome != IZB_PAIR_OUTSIDE ? 1u : 0u, IZB_SHARD_SEED);
-      add_sharded(IZB_COUNTER_FRAGMENTS_KEPT, keep ? 1u : 0u, IZB_SHARD_SEED);
-    }
-    if (keep) {
+      if (mode != IZB_WORK_TRACE) {
+        work_texel_here(texel, texel_triangle, a, b, c, area, mode);
+        continue;
+      }
+      uint outcome = trace_pair_outcome(texel, a, b, c, area);
+      if (pass == 0u) {
+        kept_total += outcome == IZB_PAIR_KEPT ? 1u : 0u;
+        fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
+        continue;
+      }
+      if (outcome != IZB_PAIR_KEPT) continue;
       if (slot < params.limits.w) pairs[slot] = uvec2(texel_triangle, texel_index(texel));
       else trace_texel_list(texel_index(texel), texel_triangle, a, b, c, 1.0 / area);
+      ++slot;
     }
   }
+  if (izb_flag(IZB_FLAG_STATS) && mode == IZB_WORK_TRACE) {
+    add_sharded(IZB_COUNTER_FRAGMENTS, fragments, IZB_SHARD_SEED);
+    add_sharded(IZB_COUNTER_FRAGMENTS_KEPT, kept_total, IZB_SHARD_SEED);
+  }
 
-  // The larger triangles' tile rows, cut into records.
+  // The larger triangles' tile rows, cut into records (counted, reserved, then written likewise).
   uint total_rows = walk_row_start[64];
-  for (uint first = 0u; first < total_rows; first += 64u) {
-    uint j = first + lane;
-    uint row_triangle = 0u;
-    int r = 0;
-    ivec2 span = ivec2(0, -1);
-    uint count = 0u;
-    if (j < total_rows) {
+  uint record_total = 0u;
+  for (uint pass = 0u; pass < 2u; ++pass) {
+    uint slot = 0u;
+    if (pass == 1u)
+      slot = reserve_group_slots(record_counter(mode), record_total, record_dispatch_at(mode), params.limits.z,
+                                 kIzbRecordsPerGroup * kIzbTileStepRecords);
+    for (uint j = lane; j < total_rows; j += 64u) {
       uint owner = walk_owner(j, true);
-      row_triangle = walk_triangle[owner];
-      r = walk_first_row[owner] + int(j - walk_row_start[owner]);
+      uint row_triangle = walk_triangle[owner];
+      int r = walk_first_row[owner] + int(j - walk_row_start[owner]);
       load_grid_triangle(row_triangle, a, b, c);
       area = edge_fn(c.xy, a.xy, b.xy);
-      span = triangle_tile_span(a, b, c, r, walk_slack(a, b, c, mode));
-      if (span.x <= span.y) count = (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
-    }
-    uint slot = reserve_slots_dispatched(record_counter(mode), count, record_dispatch_at(mode), params.limits.z,
-                                         kIzbRecordsPerGroup * kIzbTileStepRecords);
-    for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {
-      int last = min(x + int(kIzbRecordTiles) - 1, span.y);
-      if (slot < params.limits.z) {
-        records[slot] = uvec4(row_triangle, uint(r), uint(x), uint(last));
-      } else {
-        for (int k = x; k <= last; ++k)
-          if (tile_survives(uvec2(k, r), a, b, c, area, mode))
-            work_tile_here(uvec2(k, r), row_triangle, a, b, c, area, mode);
+      ivec2 span = triangle_tile_span(a, b, c, r, walk_slack(a, b, c, mode));
+      if (span.x > span.y) continue;
+      if (pass == 0u) {
+        record_total += (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;
+        continue;
       }
-      ++slot;
+      for (int x = span.x; x <= span.y; x += int(kIzbRecordTiles)) {
+        int last = min(x + int(kIzbRecordTiles) - 1, span.y);
+        if (slot < params.limits.z) {
+          records[slot] = uvec4(row_triangle, uint(r), uint(x), uint(last));
+        } else {
+          for (int k = x; k <= last; ++k)
+            if (tile_survives(uvec2(k, r), a, b, c, area, mode))
+              work_tile_here(uvec2(k, r), row_triangle, a, b, c, area, mode);
+        }
+        ++slot;
+      }
     }
   }
 }

@@ -2,39 +2,10 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
 #include "shadows/izb_tiles.glsl"
+#include "shadows/izb_group_reserve.glsl"
 layout(local_size_x = kIzbTile, local_size_y = kIzbTile) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
-
-shared uint subgroup_pair_offsets[kIzbTile * kIzbTile];
-shared uint group_pair_base;
-
-// Reserves the invocation's `count` trace pairs with one atomic for the whole workgroup (most
-// workgroups keep some pairs, and atomics on one address serialize), raising the trace's dispatch.
-// Every invocation calls it together.
-uint reserve_group_pairs(uint count) {
-  uint offset = subgroupExclusiveAdd(count);
-  uint total = subgroupAdd(count);
-  barrier();  // the previous call's reads are done
-  if (subgroupElect()) subgroup_pair_offsets[gl_SubgroupID] = total;
-  barrier();
-  if (gl_LocalInvocationIndex == 0u) {
-    uint sum = 0u;
-    for (uint i = 0u; i < gl_NumSubgroups; ++i) {
-      uint t = subgroup_pair_offsets[i];
-      subgroup_pair_offsets[i] = sum;
-      sum += t;
-    }
-    uint base = 0u;
-    if (sum > 0u) {
-      base = atomicAdd(counters[IZB_COUNTER_PAIRS], sum);
-      raise_row_dispatch(IZB_COUNTER_PAIR_DISPATCH, min(base + sum, params.limits.w), kIzbPairGroup);
-    }
-    group_pair_base = base;
-  }
-  barrier();
-  return group_pair_base + subgroup_pair_offsets[gl_SubgroupID] + offset;
-}
 
 // Compute trace / compute CSM, step 3 (see izb.h): a thread per texel of kIzbTilePairsPerGroup
 // (triangle, tile) pairs. The CSM writes fully covered texels' depth bounds, the lit map touched
@@ -67,7 +38,7 @@ void main() {
     uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;
     bool keep = outcome == IZB_PAIR_KEPT;
     uint want = keep ? 1u : 0u;
-    uint slot = reserve_group_pairs(want);
+    uint slot = reserve_group_slots(IZB_COUNTER_PAIRS, want, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
     if (keep) {
       if (slot < params.limits.w) pairs[slot] = uvec2(pair.x, texel_index(texel));
       else trace_texel_list(texel_index(texel), pair.x, a, b, c, 1.0 / area);

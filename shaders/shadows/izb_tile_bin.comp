@@ -2,35 +2,10 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
 #include "shadows/izb_tiles.glsl"
+#include "shadows/izb_group_reserve.glsl"
 layout(local_size_x_id = 0) in;  // kIzbTileStepLanes
 
 layout(push_constant) uniform Push { IzbComputePush push; };
-
-shared uint subgroup_slot_offsets[256];
-shared uint group_slot_base;
-
-// Reserves the invocation's `count` tile pairs with one atomic for the whole workgroup (atomics on one
-// address serialize; a GPU's workgroup works several records at once). Every invocation calls it
-// together.
-uint reserve_tile_pairs(uint counter, uint count) {
-  if (gl_NumSubgroups == 1u) return reserve_slots(counter, count);
-  uint offset = subgroupExclusiveAdd(count);
-  uint total = subgroupAdd(count);
-  barrier();  // the previous call's reads are done
-  if (subgroupElect()) subgroup_slot_offsets[gl_SubgroupID] = total;
-  barrier();
-  if (gl_LocalInvocationIndex == 0u) {
-    uint sum = 0u;
-    for (uint i = 0u; i < gl_NumSubgroups; ++i) {
-      uint t = subgroup_slot_offsets[i];
-      subgroup_slot_offsets[i] = sum;
-      sum += t;
-    }
-    group_slot_base = sum > 0u ? atomicAdd(counters[counter], sum) : 0u;
-  }
-  barrier();
-  return group_slot_base + subgroup_slot_offsets[gl_SubgroupID] + offset;
-}
 
 // Compute trace / compute CSM, step 2 (see izb.h): kIzbTileStepRecords records side by side, a thread
 // per tile (kIzbRecordsPerGroup such rounds per workgroup), keeps the (triangle, tile) pairs the
@@ -55,7 +30,7 @@ void main() {
       if (kIzbTileStepRecords == 1u && rec.z + x0 > rec.w) break;  // uniform: one record
       uvec2 tile = uvec2(rec.z + x0 + lane, rec.y);
       bool keep = tile.x <= rec.w && tile_survives(tile, a, b, c, area, mode);
-      uint slot = reserve_tile_pairs(slot_counter, keep ? 1u : 0u);
+      uint slot = reserve_group_slots(slot_counter, keep ? 1u : 0u, kIzbNoDispatch, 0u, 1u);
       if (keep) {
         if (slot < params.capacities.x) tile_pairs[slot] = uvec2(rec.x, tile.y * tiles_per_side() + tile.x);
         else work_tile_here(tile, rec.x, a, b, c, area, mode);

@@ -1,0 +1,38 @@
+// A workgroup's appends to a counter with one atomic (atomics on one address serialize, and each
+// costs its subgroup a round trip). Include after izb_prelude.glsl.
+
+shared uint group_subgroup_offsets[256];
+shared uint group_reserved_base;
+
+const uint kIzbNoDispatch = 0xffffffffu;
+
+// Reserves the invocation's `count` consecutive slots of counters[counter] and returns the first;
+// unless `dispatch_at` is kIzbNoDispatch, also raises the indirect dispatch there to the counter's
+// items (at most `capacity`) in workgroups of `per_group`. Every invocation of the workgroup calls it
+// together, in uniform control flow.
+uint reserve_group_slots(uint counter, uint count, uint dispatch_at, uint capacity, uint per_group) {
+  if (gl_NumSubgroups == 1u)
+    return dispatch_at == kIzbNoDispatch ? reserve_slots(counter, count)
+                                         : reserve_slots_dispatched(counter, count, dispatch_at, capacity, per_group);
+  uint offset = subgroupExclusiveAdd(count);
+  uint total = subgroupAdd(count);
+  barrier();  // the previous call's reads are done
+  if (subgroupElect()) group_subgroup_offsets[gl_SubgroupID] = total;
+  barrier();
+  if (gl_LocalInvocationIndex == 0u) {
+    uint sum = 0u;
+    for (uint i = 0u; i < gl_NumSubgroups; ++i) {
+      uint t = group_subgroup_offsets[i];
+      group_subgroup_offsets[i] = sum;
+      sum += t;
+    }
+    uint base = 0u;
+    if (sum > 0u) {
+      base = atomicAdd(counters[counter], sum);
+      if (dispatch_at != kIzbNoDispatch) raise_row_dispatch(dispatch_at, min(base + sum, capacity), per_group);
+    }
+    group_reserved_base = base;
+  }
+  barrier();
+  return group_reserved_base + group_subgroup_offsets[gl_SubgroupID] + offset;
+}
