@@ -38,7 +38,7 @@ void main() {
   uint index = row_dispatch_index(gl_WorkGroupID, gl_LocalInvocationIndex, 64u);
   bool in_range = index < listed_triangle_count();
   uint t = in_range ? listed_triangle(index) : 0u;
-  uint mode = push.mode;
+  uint mode = kIzbWork;
   vec3 a = vec3(0.0), b = vec3(0.0), c = vec3(0.0);
   float area = 0.0;
   ivec2 rows = ivec2(0, -1);

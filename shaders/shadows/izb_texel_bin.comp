@@ -14,7 +14,7 @@ layout(push_constant) uniform Push { IzbComputePush push; };
 // the list walks of step 4 fill every lane. A pair that does not fit the buffer is traced here.
 void main() {
   uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
-  uint mode = push.mode;
+  uint mode = kIzbWork;
   uint count = tile_pair_count(mode);
   uint fragments = 0u, kept = 0u;
   for (uint k = 0u; k < kIzbTilePairsPerGroup; ++k) {

@@ -13,7 +13,7 @@ layout(push_constant) uniform Push { IzbComputePush push; };
 // every node of. A pair that does not fit the buffer is worked here.
 void main() {
   uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
-  uint mode = push.mode;
+  uint mode = kIzbWork;
   uint count = record_count(mode);
   uint slot_counter = tile_pair_counter(mode);
   uint lanes = kIzbTileStepLanes / kIzbTileStepRecords;

@@ -2,8 +2,10 @@
 #include "izb_pass.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <functional>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -79,7 +81,18 @@ struct IzbPass::Impl {
   };
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
-    Pipeline tile_records, tile_bin, texel_bin, trace_compute, tile_pair_args;
+    // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use.
+    struct TileWork {
+      Pipeline records, tile_bin, texel_bin;
+    };
+    mutable std::array<TileWork, 4> tile_work;
+    std::function<void(TileWork&, uint32_t)> make_tile_work;
+    const TileWork& tile_work_for(uint32_t mode) const {
+      TileWork& w = tile_work.at(mode);
+      if (!w.records.valid()) make_tile_work(w, mode);
+      return w;
+    }
+    Pipeline trace_compute, tile_pair_args;
     TracePipelines trace;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
@@ -216,9 +229,15 @@ struct IzbPass::Impl {
         {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu},
         {3, cpu ? gpu_shared::kIzbDirectTexelsCpu : gpu_shared::kIzbDirectTexelsGpu},
         {4, cpu ? 1u : gpu_shared::kIzbTileStepRecordsGpu}};
-    ps.tile_records = compute("izb_records.comp", shape);
-    ps.tile_bin = compute("izb_tile_bin.comp", shape);
-    ps.texel_bin = compute("izb_texel_bin.comp", shape);
+    ps.make_tile_work = [this, samples_per_pixel, flags, shape](Pipelines::TileWork& w, uint32_t mode) {
+      const auto bindings = izb_bindings();
+      std::vector<SpecializationConstant> constants = shape;
+      constants.insert(constants.end(), {{5, mode}, {10, samples_per_pixel}, {11, flags}});
+      const uint32_t push = sizeof(gpu_shared::IzbComputePush);
+      w.records = factory.compute({"izb_records.comp", bindings, push, constants});
+      w.tile_bin = factory.compute({"izb_tile_bin.comp", bindings, push, constants});
+      w.texel_bin = factory.compute({"izb_texel_bin.comp", bindings, push, constants});
+    };
     ps.trace_compute = compute("izb_trace.comp", shape);
     ps.tile_pair_args = compute("izb_dispatch_args.comp", shape);
     ps.trace = trace_pipelines(samples_per_pixel, flags);
@@ -536,21 +555,22 @@ struct IzbPass::Impl {
     // (izb_tiles.glsl); step 3's by a pass of its own.
     const uint32_t work = mode == gpu_shared::IZB_WORK_TRACE ? 0u : (mode == gpu_shared::IZB_WORK_LIT ? 2u : 1u);
     const uint32_t records_dispatch = gpu_shared::IZB_COUNTER_STEP_DISPATCH + 6u * work;
+    const Pipelines::TileWork& tile_work = p->tile_work_for(mode);
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
       // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
-      dispatch_indirect(cmd, frame, p->tile_records, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
+      dispatch_indirect(cmd, frame, tile_work.records, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
     }
     pass_barrier(frame.ctx, cmd);
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_tiles");
-      dispatch_indirect(cmd, frame, p->tile_bin, push, records_dispatch);
+      dispatch_indirect(cmd, frame, tile_work.tile_bin, push, records_dispatch);
     }
     pass_barrier(frame.ctx, cmd);
     ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_texels");
     dispatch(cmd, frame, p->tile_pair_args, push, 1);
     pass_barrier(frame.ctx, cmd);
-    dispatch_indirect(cmd, frame, p->texel_bin, push, records_dispatch + 3u);
+    dispatch_indirect(cmd, frame, tile_work.texel_bin, push, records_dispatch + 3u);
   }
 };
 
