@@ -4,16 +4,12 @@
 shared uint group_subgroup_offsets[256];
 shared uint group_reserved_base;
 
-const uint kIzbNoDispatch = 0xffffffffu;
-
 // Reserves the invocation's `count` consecutive slots of counters[counter] and returns the first;
-// unless `dispatch_at` is kIzbNoDispatch, also raises the indirect dispatch there to the counter's
-// items (at most `capacity`) in workgroups of `per_group`. Every invocation of the workgroup calls it
+// also raises the indirect dispatch at `dispatch_at` to the counter's items (at most `capacity`) in
+// workgroups of `per_group`, for the pass that reads them. Every invocation of the workgroup calls it
 // together, in uniform control flow.
 uint reserve_group_slots(uint counter, uint count, uint dispatch_at, uint capacity, uint per_group) {
-  if (gl_NumSubgroups == 1u)
-    return dispatch_at == kIzbNoDispatch ? reserve_slots(counter, count)
-                                         : reserve_slots_dispatched(counter, count, dispatch_at, capacity, per_group);
+  if (gl_NumSubgroups == 1u) return reserve_slots_dispatched(counter, count, dispatch_at, capacity, per_group);
   uint offset = subgroupExclusiveAdd(count);
   uint total = subgroupAdd(count);
   barrier();  // the previous call's reads are done
@@ -29,7 +25,7 @@ uint reserve_group_slots(uint counter, uint count, uint dispatch_at, uint capaci
     uint base = 0u;
     if (sum > 0u) {
       base = atomicAdd(counters[counter], sum);
-      if (dispatch_at != kIzbNoDispatch) raise_row_dispatch(dispatch_at, min(base + sum, capacity), per_group);
+      raise_row_dispatch(dispatch_at, min(base + sum, capacity), per_group);
     }
     group_reserved_base = base;
   }

@@ -30,7 +30,8 @@ void main() {
       if (kIzbTileStepRecords == 1u && rec.z + x0 > rec.w) break;  // uniform: one record
       uvec2 tile = uvec2(rec.z + x0 + lane, rec.y);
       bool keep = tile.x <= rec.w && tile_survives(tile, a, b, c, area, mode);
-      uint slot = reserve_group_slots(slot_counter, keep ? 1u : 0u, kIzbNoDispatch, 0u, 1u);
+      uint slot = reserve_group_slots(slot_counter, keep ? 1u : 0u, tile_pair_dispatch_at(mode), params.capacities.x,
+                                      kIzbTilePairsPerGroup);
       if (keep) {
         if (slot < params.capacities.x) tile_pairs[slot] = uvec2(rec.x, tile.y * tiles_per_side() + tile.x);
         else work_tile_here(tile, rec.x, a, b, c, area, mode);

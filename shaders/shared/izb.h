@@ -90,8 +90,8 @@ SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
 SHARED_CONST uint kIzbCounterShards = 64u;
 SHARED_CONST uint IZB_COUNTER_SHARDS = 48u;
 // After the shard rows (up to IZB_COUNTER_LIT_CULLED's): per tile work (trace, CSM, lit map: 6 uints
-// each), the indirect dispatches of its steps 2 and 3 (3 uints each): step 1 raises step 2's as it
-// appends (izb_common.glsl), so no pass between computes it; step 3's is written by a pass.
+// each), the indirect dispatches of its steps 2 and 3 (3 uints each), raised by steps 1 and 2 as they
+// append (izb_group_reserve.glsl), so no pass between computes them.
 SHARED_CONST uint IZB_COUNTER_STEP_DISPATCH = 48u + 18u * 64u;
 SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u + 18u;
 

@@ -92,7 +92,7 @@ struct IzbPass::Impl {
       if (!w.records.valid()) make_tile_work(w, mode);
       return w;
     }
-    Pipeline trace_compute, tile_pair_args;
+    Pipeline trace_compute;
     TracePipelines trace;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
@@ -239,7 +239,6 @@ struct IzbPass::Impl {
       w.texel_bin = factory.compute({"izb_texel_bin.comp", bindings, push, constants});
     };
     ps.trace_compute = compute("izb_trace.comp", shape);
-    ps.tile_pair_args = compute("izb_dispatch_args.comp", shape);
     ps.trace = trace_pipelines(samples_per_pixel, flags);
     return ps;
   }
@@ -551,8 +550,8 @@ struct IzbPass::Impl {
   void record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,
                         uint32_t mode, const std::string& region) {
     push.mode = mode;
-    // Step 2's dispatch (and the trace's step 4's) are raised by the steps before them as they append
-    // (izb_tiles.glsl); step 3's by a pass of its own.
+    // The dispatches of steps 2 and 3 (and the trace's step 4) are raised by the steps before them as
+    // they append (izb_group_reserve.glsl): no pass between sizes them.
     const uint32_t work = mode == gpu_shared::IZB_WORK_TRACE ? 0u : (mode == gpu_shared::IZB_WORK_LIT ? 2u : 1u);
     const uint32_t records_dispatch = gpu_shared::IZB_COUNTER_STEP_DISPATCH + 6u * work;
     const Pipelines::TileWork& tile_work = p->tile_work_for(mode);
@@ -568,8 +567,6 @@ struct IzbPass::Impl {
     }
     pass_barrier(frame.ctx, cmd);
     ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_texels");
-    dispatch(cmd, frame, p->tile_pair_args, push, 1);
-    pass_barrier(frame.ctx, cmd);
     dispatch_indirect(cmd, frame, tile_work.texel_bin, push, records_dispatch + 3u);
   }
 };
@@ -875,16 +872,17 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     draw_trace(false, settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
   }
   pass_barrier(frame.ctx, cmd);
-  {
+  // With a node per pixel in a pool of one per pixel (IZB_FLAG_DIRECT_NODES) no pixel overflows.
+  if ((flags & gpu_shared::IZB_FLAG_DIRECT_NODES) == 0) {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_fallback");
     m.dispatch_indirect(cmd, frame, m.p->fallback, push, gpu_shared::IZB_COUNTER_DISPATCH);
+    pass_barrier(frame.ctx, cmd);
   }
-  pass_barrier(frame.ctx, cmd);
   if (!direct_term) {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_resolve");
     m.dispatch_pixels(cmd, frame, m.resolve_pipeline(m.samples, flags, debug_code(debug), hybrid), push);
+    pass_barrier(frame.ctx, cmd);
   }
-  pass_barrier(frame.ctx, cmd);
   if (collect_stats) {
     // Statistics only (excluded from the technique's total): fragments before depth culling.
     // (The compute trace counts fragments before the cull as it bins.)
