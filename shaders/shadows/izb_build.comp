@@ -169,9 +169,9 @@ void main() {
       overflow_pixels[slot] = index;
       atomicMax(counters[IZB_COUNTER_DISPATCH], slot / 64u + 1u);
     }
-    // Only the resolve and the sorted lists' scatter read the state; with the term written here and in
-    // the trace, and linked lists, only a pixel with a node has its mask read (by the trace or the
-    // fallback).
+    // Only the resolve and the sorted lists' scatter read the state. With the term written here and in
+    // the trace, the mask is read only by the scatter, the fallback (a pixel past the pool) and the
+    // progressive removal (a pixel with a node).
     bool direct_term = izb_flag(IZB_FLAG_DIRECT_TERM);
     if (!direct_term || sorted_lists()) pixel_state[index] = state;
     // What izb_resolve.comp would write before the trace: candidates lit unless the CSM settled them,
@@ -179,7 +179,9 @@ void main() {
     bool facing = (state & IZB_PIXEL_FACING) != 0u;
     if (direct_term && covered != 0u && (candidate != 0u || !facing || (state & IZB_PIXEL_BEYOND) == 0u))
       imageStore(shadow_term, pixel, vec4(candidate != 0u ? (mask != 0u ? 0.0 : 1.0) : (facing ? 1.0 : 0.0)));
-    if (candidate != 0u && (!direct_term || count != 0u || sorted_lists())) {  // only candidates' are read
+    bool mask_read = !direct_term || sorted_lists() ||
+                     (count != 0u && (izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));
+    if (candidate != 0u && mask_read) {  // only candidates' are read
       if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
       visibility_mask[index] = mask;
     }

@@ -464,6 +464,12 @@ void write_shadowed_term(uint pixel) {
 // Tests the triangle against one node's pixel and ORs its shadowed samples into the pixel's mask;
 // false when skipped (progressive removal of a fully shadowed pixel).
 bool trace_node(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area) {
+  if (izb_flag(IZB_FLAG_DIRECT_TERM) && !izb_flag(IZB_FLAG_PROGRESSIVE)) {
+    // The term is all that is read afterwards, and darkening it again is harmless: no mask.
+    float unused_gap = 1.0e30;
+    if (occluded_samples(pixel, ca, a, b, c, inv_area, unused_gap) != 0u) write_shadowed_term(pixel);
+    return true;
+  }
   uint current = visibility_mask[pixel];
   if (izb_flag(IZB_FLAG_PROGRESSIVE) && current == full_mask()) return false;
   float gap = 1.0e30;
