@@ -38,7 +38,7 @@ uint izb_resolution() { return params.extent.z; }
 uint izb_samples() { return kIzbSamples; }
 bool izb_flag(uint flag) { return (kIzbFlags & flag) != 0u; }
 
-// A spot light (else the sun): its grid is a perspective one from its position (izb_setup.glsl), in
+// A spot light (else the sun): its grid is a perspective one from its position (izb_setup.comp), in
 // which rays toward the light run along the depth axis as the sun's do in its orthographic grid.
 bool spot_light() { return params.light_position.w > 0.0; }
 

@@ -4,17 +4,13 @@
 #include "shadows/izb_pixel.glsl"
 layout(local_size_x = 16, local_size_y = 16) in;  // each thread 2x2 pixels: a 32x32 block
 
-// Coherent: the last workgroup reads every other's.
-layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) coherent buffer BoundsPartials { vec4 bounds_partials[]; };
+layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) buffer BoundsPartials { vec4 bounds_partials[]; };
 
-#include "shadows/izb_setup.glsl"
-
-shared bool fit_is_last;
+shared vec4 subgroup_bounds[256];
 
 // Light frustum fit, step 1: light-view x/y bounds of every lit candidate's ray origin (and, at 32
 // spp, its μQuad corners), reduced over the workgroup's 32x32 pixels and written once per workgroup: no atomics,
-// so no contention on a handful of addresses. The last workgroup to finish reduces the partials and
-// sets the grid up (izb_setup.glsl): no pass of its own, nor a barrier before it.
+// so no contention on a handful of addresses (izb_setup.comp reduces the partials).
 void main() {
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
   float reach = izb_reach();
@@ -56,11 +52,5 @@ void main() {
     vec4 b = subgroup_bounds[0];
     for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
     bounds_partials[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = b;
-    memoryBarrierBuffer();  // the partial before the count that admits the last workgroup
-    fit_is_last = atomicAdd(counters[IZB_COUNTER_FIT_DONE], 1u) == gl_NumWorkGroups.x * gl_NumWorkGroups.y - 1u;
   }
-  barrier();
-  if (!fit_is_last) return;  // uniform: shared
-  memoryBarrierBuffer();
-  setup_grid_and_cull();
 }

@@ -5,7 +5,7 @@ layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
-// Every caster triangle of the draws in the light frustum (izb_setup.glsl) into grid space
+// Every caster triangle of the draws in the light frustum (izb_setup.comp) into grid space
 // (texels, light depth) once per frame; the CSM, both traces and the fallback read these. Those that
 // reach the grid are listed: the compute passes and the fallback walk only the listed triangles.
 // A spot light: a triangle reaching behind its near plane (where the projection folds over) or within

@@ -76,14 +76,13 @@ SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel p
 // Hybrid: the pixels the resolve listed for the cascades, then 3 uints: indirect dispatch over them in
 // workgroups of kIzbHybridEntriesPerGroup entries.
 SHARED_CONST uint IZB_COUNTER_HYBRID = 36u;
-// Casters in the light frustum (izb_setup.glsl, izb_triangles.comp): the triangles listed (those
+// Casters in the light frustum (izb_setup.comp, izb_triangles.comp): the triangles listed (those
 // reaching the grid), the caster draws whose bounds reach it and their triangles, then 3 uints: the
 // indirect dispatch over those draws' triangles, 64 per workgroup (the grid setup's, and the compute
 // passes' first step's, whose threads past the listed triangles exit).
 SHARED_CONST uint IZB_COUNTER_LISTED_TRIANGLES = 40u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_DRAWS = 41u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_TRIANGLES = 42u;
-SHARED_CONST uint IZB_COUNTER_FIT_DONE = 43u;  // the fit's workgroups done (its last sets the grid up)
 SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
 // The build's per-pixel counts, added once per subgroup by every subgroup of the frame, go to one of
 // kIzbCounterShards slots each (a single address would serialize hundreds of thousands of atomics);

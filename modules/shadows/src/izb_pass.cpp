@@ -80,7 +80,7 @@ struct IzbPass::Impl {
     Pipeline software, hardware, count_software, count_hardware;
   };
   struct Pipelines {
-    Pipeline fit, build, fallback, list_stats, grid_setup, scan, scatter;
+    Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
     // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use.
     struct TileWork {
       Pipeline records, tile_bin, texel_bin;
@@ -214,6 +214,7 @@ struct IzbPass::Impl {
       return factory.compute({shader, bindings, push, constants});
     };
     ps.fit = compute("izb_fit.comp");
+    ps.setup = compute("izb_setup.comp");
     ps.build = compute("izb_build.comp");
     ps.fallback = compute("izb_fallback.comp");
     ps.list_stats = compute("izb_list_stats.comp");
@@ -743,9 +744,13 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
     {
-      // Its last workgroup also fits the grid and lists the caster draws whose bounds reach it.
       ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "frustum_fit");
       m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
+    }
+    pass_barrier(frame.ctx, cmd);
+    {
+      ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "frustum_cull");
+      m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
     }
     pass_barrier(frame.ctx, cmd);
     // Their triangles into grid space, listed where they reach it.

@@ -1,7 +1,11 @@
-// The light frustum's grid and the cull of the caster draws against it (izb_fit.comp's last
-// workgroup runs it). Include after izb_prelude.glsl, with `bounds_partials` declared and a workgroup
-// of kSetupThreads invocations.
-const uint kSetupThreads = 256u;
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "shadows/izb_prelude.glsl"
+layout(local_size_x = 256) in;
+
+layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) readonly buffer BoundsPartials { vec4 bounds_partials[]; };
+
+layout(push_constant) uniform Push { IzbComputePush push; };
 
 shared vec4 subgroup_bounds[256];
 shared mat4 fitted_light_view_projection;
@@ -96,7 +100,7 @@ const uint kDrawsPerThread = 4u;  // fewer rounds of the workgroup's scan
 // search), and writes the dispatch over those triangles. The passes after it touch only them: the
 // frame's cost follows the casters near the view, not the scene's size.
 void cull_draws(mat4 light_view_projection) {
-  for (uint first = 0u; first < caster_draw_count(); first += kSetupThreads * kDrawsPerThread) {
+  for (uint first = 0u; first < caster_draw_count(); first += gl_WorkGroupSize.x * kDrawsPerThread) {
     uint draw0 = first + gl_LocalInvocationIndex * kDrawsPerThread;
     uint kept = 0u, triangles = 0u, kept_bits = 0u;
     uint first_triangle[kDrawsPerThread], draw_triangles[kDrawsPerThread];
@@ -149,14 +153,14 @@ void cull_draws(mat4 light_view_projection) {
   }
 }
 
-// Light frustum fit, step 2, and the cull of the casters against it, by the fit's last workgroup:
-// reduces every workgroup's bounds, builds an orthographic projection whose x/y window covers them
-// plus a border (so no point sits on the grid's edge), and whose depth range spans the casters (from
-// the CPU, which knows their bounds); then lists the caster draws whose bounds reach the grid.
-void setup_grid_and_cull() {
+// Light frustum fit, step 2, and the cull of the casters against it: reduces the fit's per-workgroup
+// bounds, builds an orthographic projection whose x/y window covers them plus a border (so no point
+// sits on the grid's edge), and whose depth range spans the casters (from the CPU, which knows their
+// bounds); then lists the caster draws whose bounds reach the grid.
+void main() {
   uint partials = ((params.extent.x + 31u) / 32u) * ((params.extent.y + 31u) / 32u);
   vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
-  for (uint i = gl_LocalInvocationIndex; i < partials; i += kSetupThreads) {
+  for (uint i = gl_LocalInvocationIndex; i < partials; i += gl_WorkGroupSize.x) {
     vec4 p = bounds_partials[i];
     b = vec4(min(b.xy, p.xy), max(b.zw, p.zw));
   }
