@@ -743,18 +743,11 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   pass_barrier(frame.ctx, cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
-    {
-      ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "frustum_fit");
-      m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
-    }
+    m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
     pass_barrier(frame.ctx, cmd);
-    {
-      ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "frustum_cull");
-      m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
-    }
+    m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
     pass_barrier(frame.ctx, cmd);
     // Their triangles into grid space, listed where they reach it.
-    ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "frustum_triangles");
     if (m.triangle_count > 0)
       m.dispatch_indirect(cmd, frame, m.p->grid_setup, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
   }
