@@ -95,27 +95,6 @@ uint listed_triangle(uint slot) { return caster_draw_words[listed_triangle_word(
 uint row_dispatch_index(uvec3 workgroup, uint local_index, uint group_size) {
   return (workgroup.y * kIzbDispatchRow + workgroup.x) * group_size + local_index;
 }
-// Reserves `count` consecutive slots of the counter counters[counter] for this invocation, with one
-// atomic per subgroup (a single address would serialize every lane's); returns the first. Every lane
-// of the subgroup calls it together.
-uint reserve_slots(uint counter, uint count) {
-  uint offset = subgroupExclusiveAdd(count);
-  uint total = subgroupAdd(count);
-  uint base = 0u;
-  if (subgroupElect() && total > 0u) base = atomicAdd(counters[counter], total);
-  return subgroupBroadcastFirst(base) + offset;
-}
-// Adds every lane's `value` to the sharded counter `counter` (IZB_COUNTER_SHARDS), one atomic per
-// subgroup; `seed` picks the shard, so that subgroups far apart in the frame hit different addresses
-// (statistics would otherwise slow the frames they measure).
-void add_sharded(uint counter, uint value, uint seed) {
-  uint sum = subgroupAdd(value);
-  if (subgroupElect() && sum > 0u)
-    atomicAdd(counters[IZB_COUNTER_SHARDS + counter * kIzbCounterShards + seed % kIzbCounterShards], sum);
-}
-// A compute invocation's shard seed.
-#define IZB_SHARD_SEED (gl_WorkGroupID.x * 7u + gl_WorkGroupID.y * 13u + gl_SubgroupID)
-
 // Writes the indirect dispatch of `groups` workgroups, in such rows, at counters[at..at+2].
 void write_row_dispatch(uint at, uint groups) {
   counters[at] = min(groups, kIzbDispatchRow);
@@ -136,23 +115,32 @@ void raise_row_dispatch(uint at, uint items, uint per_group) {
   if (y > now.y) atomicMax(counters[at + 1u], y);
   if (now.z == 0u) counters[at + 2u] = 1u;  // every writer writes 1
 }
-// reserve_slots, also raising the dispatch at `at` over the counter's items (at most `capacity`) of
-// `per_group` each: the pass that reads them needs no pass before it to size its dispatch.
-uint reserve_slots_dispatched(uint counter, uint count, uint at, uint capacity, uint per_group) {
+// Reserves `count` consecutive slots of the counter counters[counter] for this invocation, with one
+// atomic per subgroup (a single address would serialize every lane's); returns the first. Every lane
+// of the subgroup calls it together. With `raise`, also raises the indirect dispatch at `dispatch_at`
+// over the counter's items (at most `capacity`) in workgroups of `per_group`.
+uint reserve_slots_raising(uint counter, uint count, bool raise, uint dispatch_at, uint capacity, uint per_group) {
   uint offset = subgroupExclusiveAdd(count);
   uint total = subgroupAdd(count);
   uint base = 0u;
   if (subgroupElect() && total > 0u) {
     base = atomicAdd(counters[counter], total);
-    raise_row_dispatch(at, min(base + total, capacity), per_group);
+    if (raise) raise_row_dispatch(dispatch_at, min(base + total, capacity), per_group);
   }
   return subgroupBroadcastFirst(base) + offset;
 }
-// The trace's (triangle, texel) pairs, appended by step 1 of the tile work (izb.h; step 3 reserves
-// a workgroup's at once, izb_texel_bin.comp).
-uint reserve_pairs(uint count) {
-  return reserve_slots_dispatched(IZB_COUNTER_PAIRS, count, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
+uint reserve_slots(uint counter, uint count) { return reserve_slots_raising(counter, count, false, 0u, 0u, 1u); }
+// Adds every lane's `value` to the sharded counter `counter` (IZB_COUNTER_SHARDS), one atomic per
+// subgroup; `seed` picks the shard, so that subgroups far apart in the frame hit different addresses
+// (statistics would otherwise slow the frames they measure).
+void add_sharded(uint counter, uint value, uint seed) {
+  uint sum = subgroupAdd(value);
+  if (subgroupElect() && sum > 0u)
+    atomicAdd(counters[IZB_COUNTER_SHARDS + counter * kIzbCounterShards + seed % kIzbCounterShards], sum);
 }
+// A compute invocation's shard seed.
+#define IZB_SHARD_SEED (gl_WorkGroupID.x * 7u + gl_WorkGroupID.y * 13u + gl_SubgroupID)
+
 
 CasterAlpha load_caster_alpha(uint t) {
   CasterAlpha ca;

@@ -31,7 +31,7 @@ uint walk_owner(uint j, bool rows) {
 // texels (a small triangle) or its rows of tiles; then the workgroup works all its triangles' texels
 // and rows together, a thread per texel or row (a triangle's many would otherwise serialize its one
 // thread, and its subgroup with it), cutting each row's span into records
-// of at most kIzbRecordTiles tiles (a subgroup reserves its records with one atomic). A record that
+// of at most kIzbRecordTiles tiles (the workgroup reserves its records with one atomic). A record that
 // does not fit the buffer is worked here, so nothing is dropped; the request count grows the buffer
 // for the next frame.
 void main() {

@@ -26,11 +26,9 @@ uint tile_pair_counter(uint mode) {
   return mode == IZB_WORK_TRACE ? IZB_COUNTER_TILE_PAIRS
                                 : (mode == IZB_WORK_LIT ? IZB_COUNTER_LIT_TILE_PAIRS : IZB_COUNTER_TILE_PAIRS + 1u);
 }
-// Where each work's step 2 and step 3 dispatches live (IZB_COUNTER_STEP_DISPATCH).
-uint record_dispatch_at(uint mode) {
-  return IZB_COUNTER_STEP_DISPATCH + 6u * (mode == IZB_WORK_TRACE ? 0u : (mode == IZB_WORK_LIT ? 2u : 1u));
-}
-uint tile_pair_dispatch_at(uint mode) { return record_dispatch_at(mode) + 3u; }
+// Where each work's step 2 and step 3 dispatches live.
+uint record_dispatch_at(uint mode) { return izb_step_dispatch_at(mode); }
+uint tile_pair_dispatch_at(uint mode) { return izb_step_dispatch_at(mode) + 3u; }
 uint record_count(uint mode) { return min(counters[record_counter(mode)], params.limits.z); }
 uint tile_pair_count(uint mode) { return min(counters[tile_pair_counter(mode)], params.capacities.x); }
 

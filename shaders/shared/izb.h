@@ -84,7 +84,7 @@ SHARED_CONST uint IZB_COUNTER_LISTED_TRIANGLES = 40u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_DRAWS = 41u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_TRIANGLES = 42u;
 SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
-// The build's per-pixel counts, added once per subgroup by every subgroup of the frame, go to one of
+// The build's per-pixel counts and the trace's statistics, added once per subgroup, go to one of
 // kIzbCounterShards slots each (a single address would serialize hundreds of thousands of atomics);
 // the CPU sums the shards. Counter k (a sharded IZB_COUNTER_*) lives at IZB_COUNTER_SHARDS + k * shards.
 SHARED_CONST uint kIzbCounterShards = 64u;
@@ -97,17 +97,19 @@ SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u + 18u;
 
 // Compute trace, compute CSM and lit map, hierarchically over light-space tiles of kIzbTile² texels
 // (each tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
-//  1. a thread per listed caster triangle walks its rows of tiles and cuts each row's exact span into
-//     records (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles (a small
-//     triangle instead works its few texels itself, kIzbDirectTexels);
+//  1. a thread per listed caster triangle finds its rows of tiles, or its few texels when it is small
+//     (kIzbDirectTexels); the workgroup then works all its triangles' texels (the CSM and lit map
+//     write them, the trace lists its pairs for step 4) and cuts each row's exact span into records
+//     (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles, a thread per texel
+//     or row;
 //  2. a thread per (record, tile) keeps the (triangle, tile) pairs the triangle touches (and, for the
 //     trace, does not lie behind every node of);
 //  3. a workgroup per (triangle, tile), a thread per texel: the CSM writes fully covered texels, the
 //     lit map touched texels (a small triangle's already in step 1), the trace keeps the (triangle,
 //     texel) pairs that touch and survive the texel's farthest-node cull;
 //  4. trace only: a thread per (triangle, texel) walks the texel's list.
-// Each step's output is appended densely (one atomic per subgroup), so a large triangle spreads over
-// many workgroups instead of serializing a thread. Step 2's workgroup shape is specialization
+// Each step's output is appended densely (one atomic per workgroup, izb_group_reserve.glsl), so a
+// large triangle spreads over many workgroups instead of serializing a thread. Step 2's workgroup shape is specialization
 // constants (ids 0, 1, 4): on a GPU kIzbTileStepRecordsGpu records side by side, 32 lanes each, so a
 // workgroup appends its pairs with one atomic; on a CPU device, which pays for every workgroup, many
 // records per workgroup one after another; likewise step 3's tile pairs per workgroup (id 2). Dispatches use rows of kIzbDispatchRow workgroups (the portable limit per
@@ -235,6 +237,10 @@ SHARED_CONST uint IZB_WORK_TRACE = 0u;
 SHARED_CONST uint IZB_WORK_CSM_HERTEL = 1u;
 SHARED_CONST uint IZB_WORK_CSM_BARYCENTRIC = 2u;
 SHARED_CONST uint IZB_WORK_LIT = 3u;  // the lit map (nearest caster depth per texel, see izb_common.glsl)
+// Where work `mode`'s step 2 dispatch lives (IZB_COUNTER_STEP_DISPATCH; its step 3's follows it).
+SHARED_INLINE uint izb_step_dispatch_at(uint mode) {
+  return IZB_COUNTER_STEP_DISPATCH + 6u * (mode == IZB_WORK_TRACE ? 0u : (mode == IZB_WORK_LIT ? 2u : 1u));
+}
 
 // Lit map: an empty texel (no caster touches it) holds the ordered bits of +infinity.
 SHARED_CONST uint kIzbLitEmpty = 0xff800000u;

@@ -5,7 +5,6 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <functional>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -81,22 +80,18 @@ struct IzbPass::Impl {
   };
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
-    // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use.
+    // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use (tile_work_for()) with the
+    // set's constants.
     struct TileWork {
       Pipeline records, tile_bin, texel_bin;
     };
-    mutable std::array<TileWork, 4> tile_work;
-    std::function<void(TileWork&, uint32_t)> make_tile_work;
-    const TileWork& tile_work_for(uint32_t mode) const {
-      TileWork& w = tile_work.at(mode);
-      if (!w.records.valid()) make_tile_work(w, mode);
-      return w;
-    }
+    std::array<TileWork, 4> tile_work;
+    std::vector<SpecializationConstant> constants;  // the compute trace's workgroup shape, samples, flags
     Pipeline trace_compute;
     TracePipelines trace;
   };
   std::map<uint64_t, std::unique_ptr<Pipelines>> pipeline_sets;
-  const Pipelines* p = nullptr;  // this frame's
+  Pipelines* p = nullptr;  // this frame's
   std::map<uint64_t, Pipeline> resolve_pipelines;  // also per debug view and hybrid
 
   const Pipeline& resolve_pipeline(uint32_t samples_per_pixel, uint32_t flags, uint32_t debug, bool hybrid) {
@@ -201,7 +196,7 @@ struct IzbPass::Impl {
   bool raster_trace_available() const { return ctx.features().geometry_shader; }
 
   // The pipelines for `samples` and `flags`, made on first use and kept.
-  const Pipelines& pipelines(uint32_t samples_per_pixel, uint32_t flags) {
+  Pipelines& pipelines(uint32_t samples_per_pixel, uint32_t flags) {
     auto& slot = pipeline_sets[(uint64_t(samples_per_pixel) << 32) | flags];
     if (slot) return *slot;
     slot = std::make_unique<Pipelines>();
@@ -229,15 +224,8 @@ struct IzbPass::Impl {
         {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu},
         {3, cpu ? gpu_shared::kIzbDirectTexelsCpu : gpu_shared::kIzbDirectTexelsGpu},
         {4, cpu ? 1u : gpu_shared::kIzbTileStepRecordsGpu}};
-    ps.make_tile_work = [this, samples_per_pixel, flags, shape](Pipelines::TileWork& w, uint32_t mode) {
-      const auto bindings = izb_bindings();
-      std::vector<SpecializationConstant> constants = shape;
-      constants.insert(constants.end(), {{5, mode}, {10, samples_per_pixel}, {11, flags}});
-      const uint32_t push = sizeof(gpu_shared::IzbComputePush);
-      w.records = factory.compute({"izb_records.comp", bindings, push, constants});
-      w.tile_bin = factory.compute({"izb_tile_bin.comp", bindings, push, constants});
-      w.texel_bin = factory.compute({"izb_texel_bin.comp", bindings, push, constants});
-    };
+    ps.constants = shape;
+    ps.constants.insert(ps.constants.end(), variant.begin(), variant.end());
     ps.trace_compute = compute("izb_trace.comp", shape);
     ps.trace = trace_pipelines(samples_per_pixel, flags);
     return ps;
@@ -545,6 +533,20 @@ struct IzbPass::Impl {
     vkCmdDispatchIndirect(cmd, counters.handle(), VkDeviceSize(counter) * 4);
   }
 
+  // This frame's pipelines of steps 1-3 for `mode` (IZB_WORK_*).
+  const Pipelines::TileWork& tile_work_for(uint32_t mode) {
+    Pipelines::TileWork& w = p->tile_work.at(mode);
+    if (w.records.valid()) return w;
+    std::vector<SpecializationConstant> constants = p->constants;
+    constants.push_back({5, mode});
+    const auto bindings = izb_bindings();
+    const uint32_t push = sizeof(gpu_shared::IzbComputePush);
+    w.records = factory.compute({"izb_records.comp", bindings, push, constants});
+    w.tile_bin = factory.compute({"izb_tile_bin.comp", bindings, push, constants});
+    w.texel_bin = factory.compute({"izb_texel_bin.comp", bindings, push, constants});
+    return w;
+  }
+
   // Compute trace / compute CSM, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*), each step in a nested
   // profiler region "<region>_records", "<region>_tiles", "<region>_texels".
   void record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,
@@ -552,9 +554,8 @@ struct IzbPass::Impl {
     push.mode = mode;
     // The dispatches of steps 2 and 3 (and the trace's step 4) are raised by the steps before them as
     // they append (izb_group_reserve.glsl): no pass between sizes them.
-    const uint32_t work = mode == gpu_shared::IZB_WORK_TRACE ? 0u : (mode == gpu_shared::IZB_WORK_LIT ? 2u : 1u);
-    const uint32_t records_dispatch = gpu_shared::IZB_COUNTER_STEP_DISPATCH + 6u * work;
-    const Pipelines::TileWork& tile_work = p->tile_work_for(mode);
+    const uint32_t records_dispatch = gpu_shared::izb_step_dispatch_at(mode);
+    const Pipelines::TileWork& tile_work = tile_work_for(mode);
     {
       ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
       // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
