@@ -6,6 +6,12 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
 
+// A node per pixel (IZB_FLAG_DIRECT_NODES): the workgroup's texels (none: 0xffffffff), node depths and
+// the list heads its runs replaced (see main).
+shared uint run_texel[8 * 8];
+shared uint run_depth_bits[8 * 8];
+shared uint run_old_head[8 * 8];
+
 // Depths are clamped into [0,1], where float order is bit order: the texels' buffer copies straight
 // into the raster trace's depth attachment.
 uint depth_bits(float depth) { return floatBitsToUint(clamp(depth, 0.0, 1.0)); }
@@ -13,12 +19,10 @@ uint tile_of(uint texel) {
   uint res = izb_resolution();
   return (texel / res / kIzbTile) * tiles_per_side() + (texel % res) / kIzbTile;
 }
-// Raises a texel's farthest node depth, and its tile's unless the caller raises that for a whole
-// subgroup (raise_tiles_farthest).
-void raise_farthest(uint texel, float depth, bool tile_too) {
+// Raises a texel's farthest node depth and its tile's.
+void raise_farthest(uint texel, float depth) {
   uint bits = depth_bits(depth);
   if (bits > farthest[texel]) atomicMax(farthest[texel], bits);  // most nodes are not their texel's farthest
-  if (!tile_too) return;
   uint tile = tile_of(texel);
   if (bits > tile_farthest[tile]) atomicMax(tile_farthest[tile], bits);
 }
@@ -122,9 +126,31 @@ void main() {
   if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
     // A pixel has at most one node and the pool holds one per pixel: no allocation, no overflow (a
     // CPU device would otherwise run every atomic of the general path below for every pixel).
+    // Neighbours along a row often share a texel: each run of them enters its list at once, heads ->
+    // first -> ... -> last -> the old head, with one exchange and one raise (atomics on one address
+    // serialize).
+    const uint row = gl_WorkGroupSize.x;
+    uint lane = gl_LocalInvocationIndex;
+    uint x = gl_LocalInvocationID.x;
+    uint key = count != 0u ? texel0 : 0xffffffffu;
+    run_texel[lane] = key;
+    run_depth_bits[lane] = depth_bits(node_depth);
+    barrier();
+    if (count != 0u && (x == 0u || run_texel[lane - 1u] != key)) {
+      uint highest = run_depth_bits[lane];
+      for (uint i = lane + 1u; i % row != 0u && run_texel[i] == key; ++i) highest = max(highest, run_depth_bits[i]);
+      run_old_head[lane] = atomicExchange(heads[texel0], index);
+      if (highest > farthest[texel0]) atomicMax(farthest[texel0], highest);
+    }
+    barrier();
     if (count != 0u) {
-      nodes[index] = uvec2(atomicExchange(heads[texel0], index), index);
-      raise_farthest(texel0, node_depth, false);
+      uint next = index + 1u;  // the next pixel of the row (a node's index is its pixel's)
+      if (x == row - 1u || run_texel[lane + 1u] != key) {
+        uint first = lane;
+        while (first % row != 0u && run_texel[first - 1u] == key) --first;
+        next = run_old_head[first];
+      }
+      nodes[index] = uvec2(next, index);
     }
     raise_tiles_farthest(texel0, node_depth, count != 0u);
     if (izb_flag(IZB_FLAG_STATS)) {
@@ -142,7 +168,7 @@ void main() {
         for (uint k = 0u; k < count; ++k) {
           uint texel = izb_samples() == 1u ? texel0 : texels[k];
           atomicAdd(list_counts[texel], 1u);
-          raise_farthest(texel, node_depth, true);
+          raise_farthest(texel, node_depth);
         }
       } else {
         refused = count;
@@ -156,7 +182,7 @@ void main() {
         }
         uint texel = izb_samples() == 1u ? texel0 : texels[k];
         nodes[node] = uvec2(atomicExchange(heads[texel], node), index);
-        raise_farthest(texel, node_depth, true);
+        raise_farthest(texel, node_depth);
       }
     }
   }

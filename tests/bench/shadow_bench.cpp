@@ -52,6 +52,8 @@ struct Options {
   std::vector<std::string> csm_backends = {"auto"};  // CSM backends to run
   std::string lists;  // empty: the default list layout
   std::vector<std::string> lit_culling;  // on/off per run, in order (repeats alternate); empty: the default
+  bool csm_timed = false;   // IzbSettings::csm_timed
+  bool step_times = false;  // IzbSettings::step_timings
   std::vector<uint32_t> instances = {1};  // copies of the scene on a grid (a list in the suite)
   std::string suite;   // "paper": the paper's tables, every technique, every view, two sizes
   bool quick = false;  // suite at small sizes (lavapipe, the tests)
@@ -65,7 +67,7 @@ const char* kUsage =
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent|auto]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted] [--lit-culling LIST]\n"
-    "                    [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
+    "                    [--csm-timed] [--step-times] [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
     "                    [--light sun|spot|point]\n"
@@ -75,6 +77,8 @@ const char* kUsage =
     "  csm tests: hertel, bary, bary-hw, inner-hw; trace and CSM backends: auto, raster, compute\n"
     "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up);\n"
     "  lit culling: on, off, auto (timed both ways, the faster kept; repeat to alternate: on,off,on,off).\n"
+    "  --csm-timed: an automatic CSM runs only where the IZB measures faster with it (IzbSettings::csm_timed).\n"
+    "  --step-times: each step of the compute trace, CSM and lit map timed apart (their timestamps cost waits).\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
     "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
@@ -153,6 +157,8 @@ Options parse(int argc, char** argv) {
     else if (a == "--frames") o.frames = int(args.uint_value());
     else if (a == "--warmup") o.warmup = int(args.uint_value());
     else if (a == "--reference") o.reference = true;
+    else if (a == "--csm-timed") o.csm_timed = true;
+    else if (a == "--step-times") o.step_times = true;
     else if (a == "--max-mismatch" || a == "--max-coverage-mae") {
       const std::string v = args.value();
       char* end = nullptr;
@@ -212,6 +218,8 @@ std::vector<RunConfig> expand_runs(const Options& o) {
     if (o.cascade_size) base.cascades.map_size = o.cascade_size;
     base.izb.samples_per_pixel = o.spp;
     base.izb.node_pool_override = o.node_pool;
+    base.izb.csm_timed = o.csm_timed;
+    base.izb.step_timings = o.step_times;
     if (!o.lists.empty()) {
       auto layout = shadows::parse_list_layout(o.lists);
       if (!layout) throw std::runtime_error("--lists '" + o.lists + "': expected linked or sorted");
@@ -375,6 +383,7 @@ struct Bench {
     entry["csm_backend"] = run.csm_backend;
     entry["csm_everything"] = run.csm_everything;
     entry["lit_culling"] = shadows::lit_culling_name(run.settings.izb.lit_culling);
+    entry["csm_timed"] = run.settings.izb.csm_timed;
     std::string why;
     if (!module->supported(run.settings.technique, &why) ||
         (run.csm_test != "none" && !module->supported(run.settings.izb.csm_test, &why))) {
@@ -406,8 +415,15 @@ struct Bench {
       const auto& lit = module->stats().lit_choice;
       return run.settings.izb.lit_culling == shadows::LitCulling::Auto && (lit.reason == "probing" || lit.reason.empty());
     };
-    for (int f = 0; f < 24 && (module->stats().trace_choice.reason == "probing" ||
-                               module->stats().csm_choice.reason == "probing" || lit_undecided() || f == 0);
+    // The timed CSM's probe starts once the backends are chosen, where the CSM runs at all.
+    const auto csm_run_undecided = [&] {
+      const auto& st = module->stats();
+      return run.settings.izb.csm_timed && run.settings.izb.csm &&
+             (st.csm_run_choice.reason == "probing" || (st.csm_run_choice.reason.empty() && st.csm_status == "ran"));
+    };
+    for (int f = 0; f < 32 && (module->stats().trace_choice.reason == "probing" ||
+                               module->stats().csm_choice.reason == "probing" || lit_undecided() ||
+                               csm_run_undecided() || f == 0);
          ++f)
       renderer.render_frame(0.0f);
     for (int f = 0; f < o.warmup; ++f) renderer.render_frame(0.0f);
@@ -453,6 +469,7 @@ struct Bench {
     if (!st.trace_choice.backend.empty()) entry["trace_choice"] = choice_json(st.trace_choice);
     if (!st.csm_choice.backend.empty()) entry["csm_choice"] = choice_json(st.csm_choice);
     if (!st.lit_choice.backend.empty()) entry["lit_choice"] = choice_json(st.lit_choice);
+    if (!st.csm_run_choice.backend.empty()) entry["csm_run_choice"] = choice_json(st.csm_run_choice);
     if (!st.cascade_splits.empty()) entry["cascade_splits"] = st.cascade_splits;
     json decisions = json::array();
     for (const auto& d : st.csm_decisions)
@@ -511,6 +528,9 @@ struct Bench {
                         : "",
                     (unsigned long long)st.lit_culled, (unsigned long long)st.lit_candidates,
                     (unsigned long long)st.nodes_inserted);
+      if (run.settings.izb.csm_timed && run.settings.izb.csm)
+        std::printf("csm: %s (timed: %s, %s)\n", st.csm_status.c_str(), st.csm_run_choice.backend.c_str(),
+                    st.csm_run_choice.reason.c_str());
       if (st.caster_triangles > 0)
         std::printf("light frustum: %llu of %llu caster triangles listed\n",
                     (unsigned long long)st.caster_triangles_listed, (unsigned long long)st.caster_triangles);

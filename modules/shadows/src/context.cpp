@@ -685,6 +685,13 @@ void ContextImpl::complete_slot(Slot& slot) {
     }
     add_memory(fresh, t, slot.csm);
     stats_ = std::move(fresh);
+  } else if (!izb_records.empty()) {
+    // Without the statistics the automatic choices still show (a caller waits for their probes).
+    stats_.trace_choice = fresh.trace_choice;
+    stats_.csm_choice = fresh.csm_choice;
+    stats_.lit_choice = fresh.lit_choice;
+    stats_.csm_run_choice = fresh.csm_run_choice;
+    stats_.csm_status = fresh.csm_status;
   }
   slot.frame.reset();
 }

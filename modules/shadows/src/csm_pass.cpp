@@ -109,6 +109,7 @@ struct CsmPass::Impl {
   std::vector<CsmDecision> decisions;
   std::vector<bool> in_csm;  // per draw, this frame
   bool ran = false;
+  bool automatic_only = true;  // no caster in the CSM by CsmChoice::On (plan())
   std::string status = "off";
   // Adaptive skipping under Auto, per IZB record of a frame (each light, each cone of a point light).
   struct Adaptive {
@@ -390,6 +391,7 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
     any = any || d.in_csm;
     explicit_on = explicit_on || (d.in_csm && !d.automatic);
   }
+  m.automatic_only = !explicit_on;
   if (!any) {
     m.status = "skipped: no caster chosen for the CSM";
     return false;
@@ -416,6 +418,15 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
   m.ran = true;
   a.ran = true;
   return true;
+}
+
+bool CsmPass::automatic_only() const { return impl_->automatic_only; }
+
+void CsmPass::skip(const std::string& why) {
+  Impl& m = *impl_;
+  m.ran = false;
+  if (m.record_in_frame < m.adaptive.size()) m.adaptive[m.record_in_frame].ran = false;
+  m.status = why;
 }
 
 void CsmPass::note_yield(uint32_t record, double culling_rate) {

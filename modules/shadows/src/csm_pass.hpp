@@ -53,6 +53,11 @@ class CsmPass {
   // kCsmMinimumYield); call once per frame before prepare(). Records the measures the automatic
   // choice still needs into frame.cmd; they count from the frame after the one that took them.
   bool plan(const Frame& frame, const IzbSettings& settings, uint32_t resolution);
+  // Whether every caster plan() put in the CSM was chosen automatically (none by CsmChoice::On).
+  bool automatic_only() const;
+  // Takes back plan()'s decision to run this frame (the caller timed the frames without the prepass
+  // faster): the prepass records nothing and no yield is noted; `why` becomes the status.
+  void skip(const std::string& why);
   // The culling rate the IZB measured with the prepass of the frame's IZB record `record` (0 for the
   // first light, counting each cone of a point light), when that prepass ran.
   void note_yield(uint32_t record, double culling_rate);

@@ -135,6 +135,11 @@ struct IzbPass::Impl {
   // probe's raster slot) and without ("off", its compute slot: the choice without timestamps).
   BackendProbe lit_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"},
                          {"on", "off"}};
+  // IzbSettings::csm_timed: the same passes timed with the automatic CSM prepass ("run", the raster
+  // slot) and without it ("skip").
+  BackendProbe csm_run_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback",
+                              "izb_resolve"},
+                             {"run", "skip"}};
   bool used_compute_trace = false;
   bool used_compute_csm = false;
   bool last_used_lit = false;
@@ -547,27 +552,28 @@ struct IzbPass::Impl {
     return w;
   }
 
-  // Compute trace / compute CSM, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*), each step in a nested
-  // profiler region "<region>_records", "<region>_tiles", "<region>_texels".
+  // Compute trace / compute CSM, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*); with `time_steps`
+  // (IzbSettings::step_timings) each step in a nested profiler region "<region>_records",
+  // "<region>_tiles", "<region>_texels".
   void record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,
-                        uint32_t mode, const std::string& region) {
+                        uint32_t mode, const std::string& region, bool time_steps) {
     push.mode = mode;
     // The dispatches of steps 2 and 3 (and the trace's step 4) are raised by the steps before them as
     // they append (izb_group_reserve.glsl): no pass between sizes them.
     const uint32_t records_dispatch = gpu_shared::izb_step_dispatch_at(mode);
     const Pipelines::TileWork& tile_work = tile_work_for(mode);
     {
-      ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_records");
+      OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_records");
       // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
       dispatch_indirect(cmd, frame, tile_work.records, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
     }
     pass_barrier(frame.ctx, cmd);
     {
-      ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_tiles");
+      OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_tiles");
       dispatch_indirect(cmd, frame, tile_work.tile_bin, push, records_dispatch);
     }
     pass_barrier(frame.ctx, cmd);
-    ScopedGpuRegion step(ctx, frame.profiler, cmd, region + "_texels");
+    OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_texels");
     dispatch_indirect(cmd, frame, tile_work.texel_bin, push, records_dispatch + 3u);
   }
 };
@@ -588,7 +594,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   m.ensure_buffers(frame, settings);
   m.ensure_hybrid(frame.cmd, frame.view.extent, hybrid);
   m.ensure_triangles(frame);
-  const bool run_csm = m.csm->plan(frame, settings, m.resolution);
+  bool run_csm = m.csm->plan(frame, settings, m.resolution);
   m.csm->prepare(frame.cmd, run_csm ? m.resolution : 1);
 
   // Raster or compute, per pass. The timing of either depends on the sizes, the scene and the mode.
@@ -600,7 +606,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   for (uint64_t v : {uint64_t(std::lround(2.0 * std::log2(std::max(pixels, 1.0)))), uint64_t(m.samples),
                      uint64_t(m.triangle_count), uint64_t(settings.csm), uint64_t(settings.csm_test),
                      uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid),
-                     uint64_t(settings.lit_culling)})
+                     uint64_t(settings.lit_culling), uint64_t(settings.csm_timed)})
     key = mix_key(key, v);
   const bool raster_trace_available = m.raster_trace_available();
   // A spot light's perspective grid is traced and culled by the compute passes, which read the
@@ -628,6 +634,13 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
                                m.ctx.device_name() + " (it needs geometry shaders)");
     use_compute_csm = spot || m.csm_probe.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler,
                                                frame.slot) == PassBackend::Compute;
+    // Whether the automatic prepass pays for itself here: timed once both backends are chosen.
+    if (settings.csm_timed && m.csm->automatic_only() && !m.trace_probe.probing() && !m.csm_probe.probing() &&
+        m.csm_run_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Compute) {
+      m.csm->skip("skipped: the IZB's passes timed faster without it (IzbSettings::csm_timed)");
+      run_csm = false;
+      use_compute_csm = false;
+    }
   }
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
                             (settings.raster == ConservativeRaster::Auto && m.hardware_trace_available());
@@ -653,7 +666,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (settings.lit_culling == LitCulling::On) {
       lit = true;
     } else if (settings.lit_culling == LitCulling::Auto && !m.trace_probe.probing() &&
-               !(run_csm && m.csm_probe.probing())) {
+               !(run_csm && m.csm_probe.probing()) && !m.csm_run_probe.probing()) {
       lit = m.lit_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Raster;
     }
   }
@@ -761,7 +774,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "lit_map");
     vkCmdFillBuffer(cmd, m.csm_texels.handle(), grid_bytes, VK_WHOLE_SIZE, gpu_shared::kIzbLitEmpty);
     pass_barrier(frame.ctx, cmd);
-    m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_LIT, "lit");
+    m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_LIT, "lit", settings.step_timings);
     pass_barrier(frame.ctx, cmd);
   }
   if (run_csm) {
@@ -773,7 +786,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
           [&](VkCommandBuffer c) {
             vkCmdFillBuffer(c, m.csm_texels.handle(), 0, grid_bytes, 0x3f800000u);  // 1.0: nothing stored
             pass_barrier(frame.ctx, c);
-            m.record_tile_work(c, frame, push, mode, "csm");
+            m.record_tile_work(c, frame, push, mode, "csm", settings.step_timings);
           },
           &m.csm_texels);
     } else {
@@ -857,9 +870,9 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     // Tiles' farthest nodes -> (triangle, tile) pairs not culled -> (triangle, texel) pairs that touch
     // and survive the texel's cull -> one thread per pair walks the texel's list.
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
-    m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_TRACE, "trace");
+    m.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_TRACE, "trace", settings.step_timings);
     pass_barrier(frame.ctx, cmd);
-    ScopedGpuRegion step(m.ctx, frame.profiler, cmd, "trace_pairs");
+    OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "trace_pairs");
     m.dispatch_indirect(cmd, frame, m.p->trace_compute, push, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
   } else {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "frustum_trace");
@@ -996,6 +1009,7 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
     s.trace_choice = m.trace_probe.choice();
     if (m.last_used_csm) s.csm_choice = m.csm_probe.choice();
     s.lit_choice = m.lit_probe.choice();
+    s.csm_run_choice = m.csm_run_probe.choice();
     if (m.used_compute_trace) {
       s.trace_records = c[gpu_shared::IZB_COUNTER_RECORDS];
       s.trace_tile_pairs = c[gpu_shared::IZB_COUNTER_TILE_PAIRS];
@@ -1020,6 +1034,7 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
     m.trace_probe.discard_pending(slot);
     m.csm_probe.discard_pending(slot);
     m.lit_probe.discard_pending(slot);
+    m.csm_run_probe.discard_pending(slot);
   }
   grow(m.records, records_asked);
   grow(m.tile_pairs, tile_pairs_asked);

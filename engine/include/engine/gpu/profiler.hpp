@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -104,6 +105,19 @@ class ScopedGpuRegion {
   GpuProfiler& profiler_;
   VkCommandBuffer cmd_;
   std::string name_;
+};
+
+// A ScopedGpuRegion only when `enabled` (detail a caller opts into: each region's timestamps wait for
+// the work recorded before them).
+class OptionalGpuRegion {
+ public:
+  OptionalGpuRegion(bool enabled, const Context& ctx, GpuProfiler& profiler, VkCommandBuffer cmd,
+                    const std::string& name) {
+    if (enabled) region_.emplace(ctx, profiler, cmd, name);
+  }
+
+ private:
+  std::optional<ScopedGpuRegion> region_;
 };
 
 }  // namespace engine::gpu

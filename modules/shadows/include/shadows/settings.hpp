@@ -86,6 +86,16 @@ struct IzbSettings {
   // culling"). Auto times the IZB's passes with it off and on for two frames each, once the trace's
   // and the CSM's own choices are made, and keeps the faster per configuration (Stats::lit_choice).
   LitCulling lit_culling = LitCulling::Off;
+  // With csm: where every caster in the CSM was chosen automatically (CsmChoice::Auto), also time the
+  // IZB's passes with the prepass and without it (two frames each, once the trace's and the CSM's
+  // backends are chosen, before the lit culling's probe) and skip it where it costs more than the
+  // trace work it saves, per configuration (Stats::csm_run_choice). Exact either way. A caster put
+  // in the CSM by CsmChoice::On keeps it running.
+  bool csm_timed = false;
+  // Times each step of the compute trace, CSM and lit map (regions "<work>_records", "_tiles",
+  // "_texels", "trace_pairs") inside their pass's region. Each region's timestamps wait for the work
+  // before them, a few µs per step on a GPU, so it is off where the frame's time matters.
+  bool step_timings = false;
   CsmTest csm_test = CsmTest::Barycentric;
   ConservativeRaster raster = ConservativeRaster::Auto;  // for the raster trace
   PassBackend trace = PassBackend::Auto;     // frustum trace: conservative raster or compute binning
@@ -156,6 +166,7 @@ struct Stats {
   BackendChoice trace_choice;
   BackendChoice csm_choice;
   BackendChoice lit_choice;  // known-lit culling: backend "off" or "on", and why
+  BackendChoice csm_run_choice;  // IzbSettings::csm_timed: backend "run" or "skip", and why
   // IZB casters: every caster triangle, and those its passes walked this frame (in a caster whose
   // world bounds reach the light frustum fitted to the view's points, and reaching it themselves).
   uint64_t caster_triangles = 0;
