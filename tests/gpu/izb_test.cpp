@@ -592,6 +592,74 @@ TEST_F(IzbTest, AutomaticLitCullingTimesBothAndKeepsOne) {
   EXPECT_EQ(module_->stats().lit_culled > 0, choice.backend == "on");
 }
 
+// IzbSettings::csm_timed: the automatic CSM is timed against no prepass and the faster kept, with
+// the answer unchanged on every frame; a caster put in the CSM by hand keeps it running untimed.
+TEST_F(IzbTest, TimedCsmTimesBothAndKeepsOne) {
+  auto plain = izb(1);
+  const auto reference = render("atrium", 0, plain, false);
+  auto s = izb(1, true);
+  s.izb.csm_timed = true;
+  auto& r = make_renderer("atrium", 0, kSize, kSize);
+  module_ = shadows::install(r, s);
+  std::vector<std::string> seen;
+  for (int i = 0; i < 16; ++i) {
+    r.render_frame(0.0f);
+    EXPECT_EQ(module_->read_visibility(), reference.visibility) << "frame " << i;
+    seen.push_back(module_->stats().csm_run_choice.backend);
+  }
+  const auto& st = module_->stats();
+  const auto& choice = st.csm_run_choice;
+  EXPECT_EQ(choice.reason.rfind("auto: ", 0), 0u) << choice.reason;
+  EXPECT_GT(choice.raster_ms, 0.0);   // with the prepass
+  EXPECT_GT(choice.compute_ms, 0.0);  // without
+  EXPECT_NE(std::find(seen.begin(), seen.end(), "run"), seen.end());
+  EXPECT_NE(std::find(seen.begin(), seen.end(), "skip"), seen.end());
+  if (choice.backend == "skip") {
+    EXPECT_EQ(st.csm_status.rfind("skipped: the IZB's passes timed faster", 0), 0u) << st.csm_status;
+    EXPECT_EQ(st.csm_culled, 0u);
+  } else {
+    EXPECT_EQ(choice.backend, "run");
+    EXPECT_EQ(st.csm_status, "ran");
+    EXPECT_GT(st.csm_culled, 0u);
+  }
+  module_.reset();
+
+  auto& forced = make_renderer("atrium", 0, kSize, kSize);
+  scene_->registry.each<engine::ShadowCaster>([](engine::Entity, engine::ShadowCaster& c) { c.csm = engine::CsmChoice::On; });
+  module_ = shadows::install(forced, s);
+  for (int i = 0; i < 6; ++i) {
+    forced.render_frame(0.0f);
+    EXPECT_EQ(module_->stats().csm_status, "ran") << "frame " << i;
+  }
+  EXPECT_TRUE(module_->stats().csm_run_choice.backend.empty()) << module_->stats().csm_run_choice.backend;
+  EXPECT_EQ(module_->read_visibility(), reference.visibility);
+}
+
+// IzbSettings::step_timings: the compute work's steps are timed apart only when asked (each
+// timestamp waits for the work before it); the pass's own region is there either way. The automatic
+// choices show without the statistics.
+TEST_F(IzbTest, StepTimingsOnlyWhenAsked) {
+  for (bool steps : {false, true}) {
+    auto s = izb(1);
+    s.izb.trace = shadows::PassBackend::Compute;
+    s.izb.step_timings = steps;
+    auto& r = make_renderer("contact", 0, kSize, kSize);
+    module_ = shadows::install(r, s);
+    module_->set_collect_stats(false);
+    r.render_frame(0.0f);
+    r.render_frame(0.0f);
+    const auto times = module_->context().pass_times();
+    const auto has = [&](const std::string& name) {
+      return std::any_of(times.begin(), times.end(), [&](const auto& t) { return t.name == name; });
+    };
+    EXPECT_TRUE(has("frustum_trace"));
+    for (const char* step : {"trace_records", "trace_tiles", "trace_texels", "trace_pairs"})
+      EXPECT_EQ(has(step), steps) << step;
+    EXPECT_EQ(module_->stats().trace_choice.backend, "compute");
+    module_.reset();
+  }
+}
+
 TEST_F(IzbTest, AutomaticCsmChoiceTakesArchitectureAndLeavesFoliage) {
   for (const char* scene : {"atrium", "foliage"}) {
     auto& r = make_renderer(scene, 0, kSize, kSize);

@@ -21,7 +21,8 @@ class ShadowModule : public engine::RenderFeature {
   virtual Settings& settings() = 0;
   // Statistics of the last completed frame (the renderer waits for each frame, so: the last frame).
   virtual const Stats& stats() const = 0;
-  // Statistics are read back every frame only while enabled (costs a small readback).
+  // Statistics are read back every frame only while enabled (costs a small readback); the automatic
+  // choices in them follow every frame either way.
   virtual void set_collect_stats(bool enabled) = 0;
   // Names of the GPU passes the current settings can record, in order (profiler region names; a pass a
   // frame did not run, such as the local-light maps of cascades under the sun alone, has no region).
