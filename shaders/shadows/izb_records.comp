@@ -35,8 +35,10 @@ uint walk_owner(uint j, bool rows) {
 // does not fit the buffer is worked here, so nothing is dropped; the request count grows the buffer
 // for the next frame.
 void main() {
-  uint index = row_dispatch_index(gl_WorkGroupID, gl_LocalInvocationIndex, 64u);
-  bool in_range = index < listed_triangle_count();
+  // The workgroup's triangles, a thread each; the other threads only help walk.
+  uint per_group = kIzbStepOneTriangles != 0u ? kIzbStepOneTriangles : counters[IZB_COUNTER_STEP_ONE_TRIANGLES];
+  uint index = row_dispatch_index(gl_WorkGroupID, gl_LocalInvocationIndex, per_group);
+  bool in_range = gl_LocalInvocationIndex < per_group && index < listed_triangle_count();
   uint t = in_range ? listed_triangle(index) : 0u;
   uint mode = kIzbWork;
   vec3 a = vec3(0.0), b = vec3(0.0), c = vec3(0.0);

@@ -15,6 +15,7 @@ layout(constant_id = 3) const uint kIzbDirectTexels = kIzbDirectTexelsGpu;
 layout(constant_id = 4) const uint kIzbTileStepRecords = 1u;
 // The work (IZB_WORK_*) of steps 1-3: a pipeline each, so that each holds only its own work's code.
 layout(constant_id = 5) const uint kIzbWork = IZB_WORK_TRACE;
+layout(constant_id = 6) const uint kIzbStepOneTriangles = 0u;  // 0: as izb_setup.comp picked
 
 bool is_csm_work(uint mode) { return mode == IZB_WORK_CSM_HERTEL || mode == IZB_WORK_CSM_BARYCENTRIC; }
 // Each work's own request counters.

@@ -78,12 +78,17 @@ SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel p
 SHARED_CONST uint IZB_COUNTER_HYBRID = 36u;
 // Casters in the light frustum (izb_setup.comp, izb_triangles.comp): the triangles listed (those
 // reaching the grid), the caster draws whose bounds reach it and their triangles, then 3 uints: the
-// indirect dispatch over those draws' triangles, 64 per workgroup (the grid setup's, and the compute
-// passes' first step's, whose threads past the listed triangles exit).
+// indirect dispatch over those draws' triangles, 64 per workgroup (the grid setup's, and a CPU
+// device's first step of the compute passes, whose threads past the listed triangles exit).
 SHARED_CONST uint IZB_COUNTER_LISTED_TRIANGLES = 40u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_DRAWS = 41u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_TRIANGLES = 42u;
 SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
+// On a GPU, step 1's caster triangles per workgroup (izb_setup.comp picks them, see
+// izb_step_one_triangles), and 3 uints: its indirect dispatch over the same triangles (a CPU
+// device's step 1 takes the grid setup's, 64 per workgroup).
+SHARED_CONST uint IZB_COUNTER_STEP_ONE_TRIANGLES = 43u;
+SHARED_CONST uint IZB_COUNTER_STEP_ONE_DISPATCH = 48u + 18u * 64u + 18u;
 // The build's per-pixel counts and the trace's statistics, added once per subgroup, go to one of
 // kIzbCounterShards slots each (a single address would serialize hundreds of thousands of atomics);
 // the CPU sums the shards. Counter k (a sharded IZB_COUNTER_*) lives at IZB_COUNTER_SHARDS + k * shards.
@@ -93,7 +98,7 @@ SHARED_CONST uint IZB_COUNTER_SHARDS = 48u;
 // each), the indirect dispatches of its steps 2 and 3 (3 uints each), raised by steps 1 and 2 as they
 // append (izb_group_reserve.glsl), so no pass between computes them.
 SHARED_CONST uint IZB_COUNTER_STEP_DISPATCH = 48u + 18u * 64u;
-SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u + 18u;
+SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u + 21u;
 
 // Compute trace, compute CSM and lit map, hierarchically over light-space tiles of kIzbTile² texels
 // (each tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
@@ -249,10 +254,22 @@ SHARED_CONST uint kIzbLitEmpty = 0xff800000u;
 SHARED_CONST float kIzbLitQuadReach = 16.0f;
 // A triangle whose (widened) bounds hold at most this many texels is worked texel by texel in step 1
 // (the lit map and CSM write them; the trace lists its pairs for step 4), skipping steps 2 and 3
-// (specialization constant id 3). A CPU device pays for a tile's idle lanes, a GPU for a thread that
-// loops while its subgroup waits: few on a GPU.
-SHARED_CONST uint kIzbDirectTexelsGpu = 16u;
+// (specialization constant id 3). A CPU device pays for a tile's idle lanes. On a GPU step 1 spreads
+// the texels over its workgroup; more of them there make its workgroups loop, fewer send small
+// triangles to 256-lane tile workgroups that are mostly idle (48: the bench views' best of 16-96).
+SHARED_CONST uint kIzbDirectTexelsGpu = 48u;
 SHARED_CONST uint kIzbDirectTexelsCpu = 256u;
+// Step 1's caster triangles per workgroup of 64 threads. A CPU device, which pays per workgroup, takes
+// 64 (specialization constant id 6); a GPU (id 6 = 0) takes fewer where the triangles are few, so
+// that the small triangles' texels spread over more workgroups (a thousand triangles in 64s would
+// keep a few multiprocessors busy while the rest wait), and 64 where they are many enough to fill
+// the device (each workgroup also does per-workgroup work).
+SHARED_CONST uint kIzbStepOneTrianglesCpu = 64u;
+SHARED_CONST uint kIzbStepOneGroupsWanted = 512u;
+SHARED_INLINE uint izb_step_one_triangles(uint frustum_triangles) {
+  uint per_group = frustum_triangles / kIzbStepOneGroupsWanted;
+  return per_group < 16u ? 16u : (per_group > 64u ? 64u : per_group);
+}
 
 // A caster draw's world-space bounds for the light-frustum cull, uploaded when the casters change.
 // An invalid box (lo > hi) is unbounded: never culled.

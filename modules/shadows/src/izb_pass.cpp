@@ -228,7 +228,8 @@ struct IzbPass::Impl {
         {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
         {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu},
         {3, cpu ? gpu_shared::kIzbDirectTexelsCpu : gpu_shared::kIzbDirectTexelsGpu},
-        {4, cpu ? 1u : gpu_shared::kIzbTileStepRecordsGpu}};
+        {4, cpu ? 1u : gpu_shared::kIzbTileStepRecordsGpu},
+        {6, cpu ? gpu_shared::kIzbStepOneTrianglesCpu : 0u}};
     ps.constants = shape;
     ps.constants.insert(ps.constants.end(), variant.begin(), variant.end());
     ps.trace_compute = compute("izb_trace.comp", shape);
@@ -564,8 +565,11 @@ struct IzbPass::Impl {
     const Pipelines::TileWork& tile_work = tile_work_for(mode);
     {
       OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_records");
-      // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
-      dispatch_indirect(cmd, frame, tile_work.records, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
+      // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp). A CPU device's
+      // step 1 takes 64 triangles per workgroup, as the grid setup does.
+      const bool cpu = ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+      dispatch_indirect(cmd, frame, tile_work.records, push,
+                        cpu ? gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH : gpu_shared::IZB_COUNTER_STEP_ONE_DISPATCH);
     }
     pass_barrier(frame.ctx, cmd);
     {
