@@ -9,13 +9,11 @@ layout(set = 0, binding = IZB_BINDING_PAIRS, std430) buffer Pairs { uvec2 pairs[
 layout(constant_id = 0) const uint kIzbTileStepLanes = 32u;
 layout(constant_id = 1) const uint kIzbRecordsPerGroup = kIzbRecordsPerGroupGpu;
 layout(constant_id = 2) const uint kIzbTilePairsPerGroup = kIzbTilePairsPerGroupGpu;
-layout(constant_id = 3) const uint kIzbDirectTexels = kIzbDirectTexelsGpu;
 // Step 2's records worked side by side in a workgroup (kIzbTileStepLanes / this lanes each, at least
 // kIzbRecordTiles when above 1): its workgroups reserve their pairs with one atomic.
 layout(constant_id = 4) const uint kIzbTileStepRecords = 1u;
 // The work (IZB_WORK_*) of steps 1-3: a pipeline each, so that each holds only its own work's code.
 layout(constant_id = 5) const uint kIzbWork = IZB_WORK_TRACE;
-layout(constant_id = 6) const uint kIzbStepOneTriangles = 0u;  // 0: as izb_setup.comp picked
 
 bool is_csm_work(uint mode) { return mode == IZB_WORK_CSM_HERTEL || mode == IZB_WORK_CSM_BARYCENTRIC; }
 // Each work's own request counters.

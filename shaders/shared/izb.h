@@ -22,7 +22,7 @@ struct IzbParams {
   vec4 depth_range;          // x: near, y: far light-view distance of the casters (for the projection)
   uvec4 extent;              // x,y: render size; z: grid resolution; w: samples per pixel (also a specialization constant)
   uvec4 limits;              // x: node pool size; y: flags (IZB_FLAG_*, also a specialization constant); z: record capacity; w: pair capacity
-  uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z: caster draws; w: unused
+  uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z: caster draws; w: step 1's shape (kIzbStepOne*)
   vec4 light_position;       // a spot light: xyz its position, w its range (0: the sun)
   vec4 light_cone;           // a spot light: x cosine of its outer cone, y tangent of its grid's half angle; z 1: a face of a point light
 };
@@ -43,8 +43,8 @@ SHARED_CONST uint IZB_FLAG_LIT = 2048u;          // the build culls points the l
 SHARED_CONST uint IZB_FLAG_DIRECT_TERM = 4096u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
-// through .x. Sorted lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous
-// nodes (.x unused). Each pixel's light-space data lives once in the
+// through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's and .y is not written. Sorted
+// lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous nodes (.x unused). Each pixel's light-space data lives once in the
 // "quads" buffer: 1 spp: its ray origin (grid x, grid y, light depth); 32 spp: the four μQuad corners
 // (c00, c10, c01, c11) as 12 floats, from which the trace rebuilds every sample.
 SHARED_CONST uint kIzbQuadFloats1 = 4u;
@@ -84,10 +84,8 @@ SHARED_CONST uint IZB_COUNTER_LISTED_TRIANGLES = 40u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_DRAWS = 41u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_TRIANGLES = 42u;
 SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
-// On a GPU, step 1's caster triangles per workgroup (izb_setup.comp picks them, see
-// izb_step_one_triangles), and 3 uints: its indirect dispatch over the same triangles (a CPU
-// device's step 1 takes the grid setup's, 64 per workgroup).
-SHARED_CONST uint IZB_COUNTER_STEP_ONE_TRIANGLES = 43u;
+// 3 uints: step 1's indirect dispatch over the same triangles, in workgroups of its shape's
+// (kIzbStepOne*).
 SHARED_CONST uint IZB_COUNTER_STEP_ONE_DISPATCH = 48u + 18u * 64u + 18u;
 // The build's per-pixel counts and the trace's statistics, added once per subgroup, go to one of
 // kIzbCounterShards slots each (a single address would serialize hundreds of thousands of atomics);
@@ -103,7 +101,7 @@ SHARED_CONST uint IZB_COUNTER_COUNT = 48u + 18u * 64u + 21u;
 // Compute trace, compute CSM and lit map, hierarchically over light-space tiles of kIzbTile² texels
 // (each tile knows its farthest node, so the trace culls a triangle from a whole tile at once):
 //  1. a thread per listed caster triangle finds its rows of tiles, or its few texels when it is small
-//     (kIzbDirectTexels); the workgroup then works all its triangles' texels (the CSM and lit map
+//     (kIzbStepOne*); the workgroup then works all its triangles' texels (the CSM and lit map
 //     write them, the trace lists its pairs for step 4) and cuts each row's exact span into records
 //     (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles, a thread per texel
 //     or row;
@@ -252,24 +250,17 @@ SHARED_CONST uint kIzbLitEmpty = 0xff800000u;
 // A 32 spp point is lit-culled only when its μQuad spans at most this many texels per axis: the
 // rounding bounds of the lit map (izb_common.glsl) assume it.
 SHARED_CONST float kIzbLitQuadReach = 16.0f;
-// A triangle whose (widened) bounds hold at most this many texels is worked texel by texel in step 1
-// (the lit map and CSM write them; the trace lists its pairs for step 4), skipping steps 2 and 3
-// (specialization constant id 3). A CPU device pays for a tile's idle lanes. On a GPU step 1 spreads
-// the texels over its workgroup; more of them there make its workgroups loop, fewer send small
-// triangles to 256-lane tile workgroups that are mostly idle (48: the bench views' best of 16-96).
-SHARED_CONST uint kIzbDirectTexelsGpu = 48u;
-SHARED_CONST uint kIzbDirectTexelsCpu = 256u;
-// Step 1's caster triangles per workgroup of 64 threads. A CPU device, which pays per workgroup, takes
-// 64 (specialization constant id 6); a GPU (id 6 = 0) takes fewer where the triangles are few, so
-// that the small triangles' texels spread over more workgroups (a thousand triangles in 64s would
-// keep a few multiprocessors busy while the rest wait), and 64 where they are many enough to fill
-// the device (each workgroup also does per-workgroup work).
-SHARED_CONST uint kIzbStepOneTrianglesCpu = 64u;
-SHARED_CONST uint kIzbStepOneGroupsWanted = 512u;
-SHARED_INLINE uint izb_step_one_triangles(uint frustum_triangles) {
-  uint per_group = frustum_triangles / kIzbStepOneGroupsWanted;
-  return per_group < 16u ? 16u : (per_group > 64u ? 64u : per_group);
-}
+// Step 1's shape (IzbParams::capacities.w: caster triangles per 64-thread workgroup | the texel
+// bound << 16). A triangle whose (widened) bounds hold at most the bound's texels is worked texel by
+// texel in step 1 (the lit map and CSM write them; the trace lists its pairs for step 4), skipping
+// steps 2 and 3, which give a (triangle, tile) pair a 256-lane workgroup. A CPU device pays for every
+// idle lane and workgroup: many triangles per workgroup, a high bound. On a GPU the better shape
+// depends on the casters: "wide" keeps each workgroup's texel walk short (many triangles of varied
+// sizes, Sponza), "narrow" spreads small triangles' texels over more workgroups (few triangles, or
+// many small ones: foliage); the module times both (Stats::tile_work_choice).
+SHARED_CONST uint kIzbStepOneCpu = 64u | (256u << 16);
+SHARED_CONST uint kIzbStepOneWide = 64u | (16u << 16);
+SHARED_CONST uint kIzbStepOneNarrow = 16u | (48u << 16);
 
 // A caster draw's world-space bounds for the light-frustum cull, uploaded when the casters change.
 // An invalid box (lo > hi) is unbounded: never culled.

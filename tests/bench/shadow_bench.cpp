@@ -421,9 +421,16 @@ struct Bench {
       return run.settings.izb.csm_timed && run.settings.izb.csm &&
              (st.csm_run_choice.reason == "probing" || (st.csm_run_choice.reason.empty() && st.csm_status == "ran"));
     };
+    // A GPU times step 1's shape once the backends are chosen, where the compute trace or CSM runs.
+    const bool gpu_device = ctx.properties().deviceType != VK_PHYSICAL_DEVICE_TYPE_CPU;
+    const auto shape_undecided = [&] {
+      const auto& st = module->stats();
+      const bool tile_work = st.trace_choice.backend == "compute" || st.csm_choice.backend == "compute";
+      return st.tile_work_choice.reason == "probing" || (gpu_device && tile_work && st.tile_work_choice.reason.empty());
+    };
     for (int f = 0; f < 32 && (module->stats().trace_choice.reason == "probing" ||
                                module->stats().csm_choice.reason == "probing" || lit_undecided() ||
-                               csm_run_undecided() || f == 0);
+                               csm_run_undecided() || shape_undecided() || f == 0);
          ++f)
       renderer.render_frame(0.0f);
     for (int f = 0; f < o.warmup; ++f) renderer.render_frame(0.0f);
@@ -470,6 +477,7 @@ struct Bench {
     if (!st.csm_choice.backend.empty()) entry["csm_choice"] = choice_json(st.csm_choice);
     if (!st.lit_choice.backend.empty()) entry["lit_choice"] = choice_json(st.lit_choice);
     if (!st.csm_run_choice.backend.empty()) entry["csm_run_choice"] = choice_json(st.csm_run_choice);
+    if (!st.tile_work_choice.backend.empty()) entry["tile_work_choice"] = choice_json(st.tile_work_choice);
     if (!st.cascade_splits.empty()) entry["cascade_splits"] = st.cascade_splits;
     json decisions = json::array();
     for (const auto& d : st.csm_decisions)
@@ -528,6 +536,8 @@ struct Bench {
                         : "",
                     (unsigned long long)st.lit_culled, (unsigned long long)st.lit_candidates,
                     (unsigned long long)st.nodes_inserted);
+      if (!st.tile_work_choice.backend.empty())
+        std::printf("tile work: %s (%s)\n", st.tile_work_choice.backend.c_str(), st.tile_work_choice.reason.c_str());
       if (run.settings.izb.csm_timed && run.settings.izb.csm)
         std::printf("csm: %s (timed: %s, %s)\n", st.csm_status.c_str(), st.csm_run_choice.backend.c_str(),
                     st.csm_run_choice.reason.c_str());

@@ -635,6 +635,33 @@ TEST_F(IzbTest, TimedCsmTimesBothAndKeepsOne) {
   EXPECT_EQ(module_->read_visibility(), reference.visibility);
 }
 
+// On a GPU the compute work's first step is timed in both shapes (izb.h, kIzbStepOne*) and the
+// faster kept, with the answer the same in every frame; a CPU device keeps its one shape untimed.
+TEST_F(IzbTest, StepOneShapeIsTimedOnAGpu) {
+  auto s = izb(1, true);
+  s.izb.trace = shadows::PassBackend::Compute;
+  s.izb.csm_backend = shadows::PassBackend::Compute;
+  const auto first = render("atrium", 0, s, false);
+  auto& r = make_renderer("atrium", 0, kSize, kSize);
+  module_ = shadows::install(r, s);
+  std::vector<std::string> seen;
+  for (int i = 0; i < 12; ++i) {
+    r.render_frame(0.0f);
+    EXPECT_EQ(module_->read_visibility(), first.visibility) << "frame " << i;
+    seen.push_back(module_->stats().tile_work_choice.backend);
+  }
+  const auto& choice = module_->stats().tile_work_choice;
+  if (ctx_->properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+    EXPECT_TRUE(choice.backend.empty()) << choice.backend;
+    return;
+  }
+  EXPECT_EQ(choice.reason.rfind("auto: ", 0), 0u) << choice.reason;
+  EXPECT_NE(std::find(seen.begin(), seen.end(), "wide"), seen.end());
+  EXPECT_NE(std::find(seen.begin(), seen.end(), "narrow"), seen.end());
+  EXPECT_GT(choice.raster_ms, 0.0);
+  EXPECT_GT(choice.compute_ms, 0.0);
+}
+
 // IzbSettings::step_timings: the compute work's steps are timed apart only when asked (each
 // timestamp waits for the work before it); the pass's own region is there either way. The automatic
 // choices show without the statistics.

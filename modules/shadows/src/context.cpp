@@ -691,6 +691,7 @@ void ContextImpl::complete_slot(Slot& slot) {
     stats_.csm_choice = fresh.csm_choice;
     stats_.lit_choice = fresh.lit_choice;
     stats_.csm_run_choice = fresh.csm_run_choice;
+    stats_.tile_work_choice = fresh.tile_work_choice;
     stats_.csm_status = fresh.csm_status;
   }
   slot.frame.reset();

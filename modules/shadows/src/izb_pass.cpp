@@ -135,6 +135,10 @@ struct IzbPass::Impl {
   // probe's raster slot) and without ("off", its compute slot: the choice without timestamps).
   BackendProbe lit_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"},
                          {"on", "off"}};
+  // Step 1's shape on a GPU (izb.h): the same passes timed "wide" (the raster slot) and "narrow".
+  BackendProbe shape_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback",
+                            "izb_resolve"},
+                           {"wide", "narrow"}};
   // IzbSettings::csm_timed: the same passes timed with the automatic CSM prepass ("run", the raster
   // slot) and without it ("skip").
   BackendProbe csm_run_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback",
@@ -227,9 +231,7 @@ struct IzbPass::Impl {
         {0, cpu ? 8u : 32u * gpu_shared::kIzbTileStepRecordsGpu},
         {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
         {2, cpu ? gpu_shared::kIzbTilePairsPerGroupCpu : gpu_shared::kIzbTilePairsPerGroupGpu},
-        {3, cpu ? gpu_shared::kIzbDirectTexelsCpu : gpu_shared::kIzbDirectTexelsGpu},
-        {4, cpu ? 1u : gpu_shared::kIzbTileStepRecordsGpu},
-        {6, cpu ? gpu_shared::kIzbStepOneTrianglesCpu : 0u}};
+        {4, cpu ? 1u : gpu_shared::kIzbTileStepRecordsGpu}};
     ps.constants = shape;
     ps.constants.insert(ps.constants.end(), variant.begin(), variant.end());
     ps.trace_compute = compute("izb_trace.comp", shape);
@@ -565,11 +567,8 @@ struct IzbPass::Impl {
     const Pipelines::TileWork& tile_work = tile_work_for(mode);
     {
       OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_records");
-      // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp). A CPU device's
-      // step 1 takes 64 triangles per workgroup, as the grid setup does.
-      const bool cpu = ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-      dispatch_indirect(cmd, frame, tile_work.records, push,
-                        cpu ? gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH : gpu_shared::IZB_COUNTER_STEP_ONE_DISPATCH);
+      // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
+      dispatch_indirect(cmd, frame, tile_work.records, push, gpu_shared::IZB_COUNTER_STEP_ONE_DISPATCH);
     }
     pass_barrier(frame.ctx, cmd);
     {
@@ -638,13 +637,23 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
                                m.ctx.device_name() + " (it needs geometry shaders)");
     use_compute_csm = spot || m.csm_probe.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler,
                                                frame.slot) == PassBackend::Compute;
-    // Whether the automatic prepass pays for itself here: timed once both backends are chosen.
-    if (settings.csm_timed && m.csm->automatic_only() && !m.trace_probe.probing() && !m.csm_probe.probing() &&
-        m.csm_run_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Compute) {
-      m.csm->skip("skipped: the IZB's passes timed faster without it (IzbSettings::csm_timed)");
-      run_csm = false;
-      use_compute_csm = false;
-    }
+  }
+  // Step 1's shape (izb.h, kIzbStepOne*): on a GPU timed both ways once the backends are chosen, where
+  // the compute trace or CSM runs its tile work.
+  const bool backends_chosen = !m.trace_probe.probing() && !(run_csm && m.csm_probe.probing());
+  uint32_t step_one_shape = gpu_shared::kIzbStepOneWide;
+  if (m.ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+    step_one_shape = gpu_shared::kIzbStepOneCpu;
+  } else if (backends_chosen && (use_compute_trace || use_compute_csm) &&
+             m.shape_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Compute) {
+    step_one_shape = gpu_shared::kIzbStepOneNarrow;
+  }
+  // Whether the automatic prepass pays for itself here: timed once the above are chosen.
+  if (run_csm && settings.csm_timed && m.csm->automatic_only() && backends_chosen && !m.shape_probe.probing() &&
+      m.csm_run_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Compute) {
+    m.csm->skip("skipped: the IZB's passes timed faster without it (IzbSettings::csm_timed)");
+    run_csm = false;
+    use_compute_csm = false;
   }
   const bool use_hardware = settings.raster == ConservativeRaster::Hardware ||
                             (settings.raster == ConservativeRaster::Auto && m.hardware_trace_available());
@@ -670,7 +679,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (settings.lit_culling == LitCulling::On) {
       lit = true;
     } else if (settings.lit_culling == LitCulling::Auto && !m.trace_probe.probing() &&
-               !(run_csm && m.csm_probe.probing()) && !m.csm_run_probe.probing()) {
+               !(run_csm && m.csm_probe.probing()) && !m.shape_probe.probing() && !m.csm_run_probe.probing()) {
       lit = m.lit_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Raster;
     }
   }
@@ -744,7 +753,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   p.limits = glm::uvec4(uint32_t(std::min<uint64_t>(m.pool_size, UINT32_MAX)), flags,
                         uint32_t(std::min<uint64_t>(m.records.capacity, UINT32_MAX)),
                         uint32_t(std::min<uint64_t>(m.pairs.capacity, UINT32_MAX)));
-  p.capacities = glm::uvec4(uint32_t(std::min<uint64_t>(m.tile_pairs.capacity, UINT32_MAX)), m.tiles_per_side, m.caster_draws, 0u);
+  p.capacities = glm::uvec4(uint32_t(std::min<uint64_t>(m.tile_pairs.capacity, UINT32_MAX)), m.tiles_per_side, m.caster_draws, step_one_shape);
   if (spot) {
     p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
     p.light_cone = glm::vec4(frame.view.light_cos_outer, tan_half, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
@@ -1014,6 +1023,7 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
     if (m.last_used_csm) s.csm_choice = m.csm_probe.choice();
     s.lit_choice = m.lit_probe.choice();
     s.csm_run_choice = m.csm_run_probe.choice();
+    s.tile_work_choice = m.shape_probe.choice();
     if (m.used_compute_trace) {
       s.trace_records = c[gpu_shared::IZB_COUNTER_RECORDS];
       s.trace_tile_pairs = c[gpu_shared::IZB_COUNTER_TILE_PAIRS];
@@ -1039,6 +1049,7 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
     m.csm_probe.discard_pending(slot);
     m.lit_probe.discard_pending(slot);
     m.csm_run_probe.discard_pending(slot);
+    m.shape_probe.discard_pending(slot);
   }
   grow(m.records, records_asked);
   grow(m.tile_pairs, tile_pairs_asked);

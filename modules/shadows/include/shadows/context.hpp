@@ -316,7 +316,7 @@ class SHADOWS_API Context {
 
   // Statistics of the latest frame whose results have come back (see frames in flight); collected only
   // while enabled (a small readback). The automatic choices (trace_choice, csm_choice, lit_choice,
-  // csm_run_choice) and csm_status follow every frame either way.
+  // csm_run_choice, tile_work_choice) and csm_status follow every frame either way.
   virtual void set_collect_stats(bool enabled) = 0;
   virtual const Stats& stats() const = 0;
   // The module's GPU passes of the latest completed frame: name and milliseconds, in recording order.

@@ -167,6 +167,9 @@ struct Stats {
   BackendChoice csm_choice;
   BackendChoice lit_choice;  // known-lit culling: backend "off" or "on", and why
   BackendChoice csm_run_choice;  // IzbSettings::csm_timed: backend "run" or "skip", and why
+  // On a GPU, the shape of the compute trace's and CSM's first step, timed: "wide" (many triangles per
+  // workgroup, only the smallest worked texel by texel there) or "narrow" (fewer, and more of them).
+  BackendChoice tile_work_choice;
   // IZB casters: every caster triangle, and those its passes walked this frame (in a caster whose
   // world bounds reach the light frustum fitted to the view's points, and reaching it themselves).
   uint64_t caster_triangles = 0;
