@@ -150,7 +150,7 @@ void main() {
         while (first % row != 0u && run_texel[first - 1u] == key) --first;
         next = run_old_head[first];
       }
-      nodes[index] = uvec2(next, index);
+      nodes[index] = uvec2(next, index);  // whole nodes: a half-written one costs more than its bytes
     }
     raise_tiles_farthest(texel0, node_depth, count != 0u);
     if (izb_flag(IZB_FLAG_STATS)) {

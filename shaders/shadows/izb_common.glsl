@@ -481,9 +481,17 @@ uint trace_texel_list(uint texel, uint triangle, vec3 a, vec3 b, vec3 c, float i
     return tests;
   }
   for (uint node = heads[texel]; node != kIzbEndOfList;) {
-    uvec2 n = nodes[node];
-    node = n.x;
-    tests += trace_node(n.y, ca, a, b, c, inv_area) ? 1u : 0u;
+    uint pixel;
+    if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
+      // A node's index is its pixel's: the pixel's point loads beside the next link, not after it.
+      pixel = node;
+      node = nodes[node].x;
+    } else {
+      uvec2 n = nodes[node];
+      node = n.x;
+      pixel = n.y;
+    }
+    tests += trace_node(pixel, ca, a, b, c, inv_area) ? 1u : 0u;
   }
   return tests;
 }

@@ -43,7 +43,7 @@ SHARED_CONST uint IZB_FLAG_LIT = 2048u;          // the build culls points the l
 SHARED_CONST uint IZB_FLAG_DIRECT_TERM = 4096u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
-// through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's and .y is not written. Sorted
+// through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted
 // lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous nodes (.x unused). Each pixel's light-space data lives once in the
 // "quads" buffer: 1 spp: its ray origin (grid x, grid y, light depth); 32 spp: the four μQuad corners
 // (c00, c10, c01, c11) as 12 floats, from which the trace rebuilds every sample.
