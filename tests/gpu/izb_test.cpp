@@ -680,7 +680,8 @@ TEST_F(IzbTest, StepTimingsOnlyWhenAsked) {
       return std::any_of(times.begin(), times.end(), [&](const auto& t) { return t.name == name; });
     };
     EXPECT_TRUE(has("frustum_trace"));
-    for (const char* step : {"trace_records", "trace_tiles", "trace_texels", "trace_pairs"})
+    for (const char* step : {"light_frustum_fit", "light_frustum_cull", "light_frustum_triangles", "trace_records",
+                             "trace_tiles", "trace_texels", "trace_pairs"})
       EXPECT_EQ(has(step), steps) << step;
     EXPECT_EQ(module_->stats().trace_choice.backend, "compute");
     module_.reset();

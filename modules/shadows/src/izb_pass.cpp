@@ -770,11 +770,18 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   pass_barrier(frame.ctx, cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
-    m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
+    {
+      OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_fit");
+      m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
+    }
     pass_barrier(frame.ctx, cmd);
-    m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
+    {
+      OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_cull");
+      m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
+    }
     pass_barrier(frame.ctx, cmd);
     // Their triangles into grid space, listed where they reach it.
+    OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_triangles");
     if (m.triangle_count > 0)
       m.dispatch_indirect(cmd, frame, m.p->grid_setup, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
   }
