@@ -257,7 +257,8 @@ SHARED_CONST float kIzbLitQuadReach = 16.0f;
 // idle lane and workgroup: many triangles per workgroup, a high bound. On a GPU the better shape
 // depends on the casters: "wide" keeps each workgroup's texel walk short (many triangles of varied
 // sizes, Sponza), "narrow" spreads small triangles' texels over more workgroups (few triangles, or
-// many small ones: foliage); the module times both (Stats::tile_work_choice).
+// many small ones: foliage); the module times both (Stats::tile_work_choice) unless
+// IzbSettings::step_one_shape forces one, on any device.
 SHARED_CONST uint kIzbStepOneCpu = 64u | (256u << 16);
 SHARED_CONST uint kIzbStepOneWide = 64u | (16u << 16);
 SHARED_CONST uint kIzbStepOneNarrow = 16u | (48u << 16);

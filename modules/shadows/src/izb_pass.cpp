@@ -609,7 +609,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   for (uint64_t v : {uint64_t(std::lround(2.0 * std::log2(std::max(pixels, 1.0)))), uint64_t(m.samples),
                      uint64_t(m.triangle_count), uint64_t(settings.csm), uint64_t(settings.csm_test),
                      uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid),
-                     uint64_t(settings.lit_culling), uint64_t(settings.csm_timed)})
+                     uint64_t(settings.lit_culling), uint64_t(settings.csm_timed),
+                     uint64_t(settings.step_one_shape)})
     key = mix_key(key, v);
   const bool raster_trace_available = m.raster_trace_available();
   // A spot light's perspective grid is traced and culled by the compute passes, which read the
@@ -642,7 +643,9 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   // the compute trace or CSM runs its tile work.
   const bool backends_chosen = !m.trace_probe.probing() && !(run_csm && m.csm_probe.probing());
   uint32_t step_one_shape = gpu_shared::kIzbStepOneWide;
-  if (m.ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+  if (settings.step_one_shape != StepOneShape::Auto) {
+    if (settings.step_one_shape == StepOneShape::Narrow) step_one_shape = gpu_shared::kIzbStepOneNarrow;
+  } else if (m.ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) {
     step_one_shape = gpu_shared::kIzbStepOneCpu;
   } else if (backends_chosen && (use_compute_trace || use_compute_csm) &&
              m.shape_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Compute) {

@@ -49,6 +49,12 @@ enum class ListLayout { Linked, Sorted };
 // Known-lit culling (IzbSettings::lit_culling): off, on, or chosen by timing both (Auto).
 enum class LitCulling { Off, On, Auto };
 
+// The shape of the compute trace's, CSM's and lit map's first step (IzbSettings::step_one_shape):
+// Wide (64 caster triangles per workgroup, up to 16 texels each worked there), Narrow (16, up to 48),
+// or Auto: a GPU times both and keeps the faster (Stats::tile_work_choice), a CPU device takes its
+// own (64, up to 256). The answer is the same in every shape.
+enum class StepOneShape { Auto, Wide, Narrow };
+
 struct ShadowMapSettings {
   uint32_t size = 1024;
   float constant_bias = 1.0e-4f;  // in light depth units ([0,1] over the fitted depth range)
@@ -97,6 +103,7 @@ struct IzbSettings {
   // their pass's region. Each region's timestamps wait for the work
   // before them, a few µs per step on a GPU, so it is off where the frame's time matters.
   bool step_timings = false;
+  StepOneShape step_one_shape = StepOneShape::Auto;
   CsmTest csm_test = CsmTest::Barycentric;
   ConservativeRaster raster = ConservativeRaster::Auto;  // for the raster trace
   PassBackend trace = PassBackend::Auto;     // frustum trace: conservative raster or compute binning
