@@ -126,31 +126,37 @@ void main() {
   if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
     // A pixel has at most one node and the pool holds one per pixel: no allocation, no overflow (a
     // CPU device would otherwise run every atomic of the general path below for every pixel).
-    // Neighbours along a row often share a texel: each run of them enters its list at once, heads ->
-    // first -> ... -> last -> the old head, with one exchange and one raise (atomics on one address
-    // serialize).
-    const uint row = gl_WorkGroupSize.x;
-    uint lane = gl_LocalInvocationIndex;
-    uint x = gl_LocalInvocationID.x;
-    uint key = count != 0u ? texel0 : 0xffffffffu;
-    run_texel[lane] = key;
-    run_depth_bits[lane] = depth_bits(node_depth);
-    barrier();
-    if (count != 0u && (x == 0u || run_texel[lane - 1u] != key)) {
-      uint highest = run_depth_bits[lane];
-      for (uint i = lane + 1u; i % row != 0u && run_texel[i] == key; ++i) highest = max(highest, run_depth_bits[i]);
-      run_old_head[lane] = atomicExchange(heads[texel0], index);
-      if (highest > farthest[texel0]) atomicMax(farthest[texel0], highest);
-    }
-    barrier();
-    if (count != 0u) {
-      uint next = index + 1u;  // the next pixel of the row (a node's index is its pixel's)
-      if (x == row - 1u || run_texel[lane + 1u] != key) {
-        uint first = lane;
-        while (first % row != 0u && run_texel[first - 1u] == key) --first;
-        next = run_old_head[first];
+    if (izb_flag(IZB_FLAG_ROW_RUNS)) {
+      // Neighbours along a row often share a texel: each run of them enters its list at once, heads ->
+      // first -> ... -> last -> the old head, with one exchange and one raise (atomics on one address
+      // serialize).
+      const uint row = gl_WorkGroupSize.x;
+      uint lane = gl_LocalInvocationIndex;
+      uint x = gl_LocalInvocationID.x;
+      uint key = count != 0u ? texel0 : 0xffffffffu;
+      run_texel[lane] = key;
+      run_depth_bits[lane] = depth_bits(node_depth);
+      barrier();
+      if (count != 0u && (x == 0u || run_texel[lane - 1u] != key)) {
+        uint highest = run_depth_bits[lane];
+        for (uint i = lane + 1u; i % row != 0u && run_texel[i] == key; ++i) highest = max(highest, run_depth_bits[i]);
+        run_old_head[lane] = atomicExchange(heads[texel0], index);
+        if (highest > farthest[texel0]) atomicMax(farthest[texel0], highest);
       }
-      nodes[index] = uvec2(next, index);  // whole nodes: a half-written one costs more than its bytes
+      barrier();
+      if (count != 0u) {
+        uint next = index + 1u;  // the next pixel of the row (a node's index is its pixel's)
+        if (x == row - 1u || run_texel[lane + 1u] != key) {
+          uint first = lane;
+          while (first % row != 0u && run_texel[first - 1u] == key) --first;
+          next = run_old_head[first];
+        }
+        nodes[index] = uvec2(next, index);  // whole nodes: a half-written one costs more than its bytes
+      }
+    } else if (count != 0u) {
+      nodes[index] = uvec2(atomicExchange(heads[texel0], index), index);
+      uint bits = depth_bits(node_depth);
+      if (bits > farthest[texel0]) atomicMax(farthest[texel0], bits);
     }
     raise_tiles_farthest(texel0, node_depth, count != 0u);
     if (izb_flag(IZB_FLAG_STATS)) {

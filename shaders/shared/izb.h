@@ -41,6 +41,9 @@ SHARED_CONST uint IZB_FLAG_LIT = 2048u;          // the build culls points the l
 // 1 spp, the sun, no hybrid nor debug view: the build writes every pixel's term and the trace darkens
 // each pixel it finds shadowed, so no resolve pass reads every pixel again.
 SHARED_CONST uint IZB_FLAG_DIRECT_TERM = 4096u;
+// With IZB_FLAG_DIRECT_NODES on a GPU: each run of a workgroup row's pixels sharing a texel enters
+// its list with one exchange (a CPU device pays more for the workgroup barriers than it saves).
+SHARED_CONST uint IZB_FLAG_ROW_RUNS = 8192u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted

@@ -741,6 +741,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (hybrid && soft_distance > 0.0f) flags |= gpu_shared::IZB_FLAG_GAPS;
   if (m.samples == 1 && !sorted && m.pool_size >= uint64_t(frame.view.extent.width) * frame.view.extent.height)
     flags |= gpu_shared::IZB_FLAG_DIRECT_NODES;
+  if ((flags & gpu_shared::IZB_FLAG_DIRECT_NODES) && m.ctx.properties().deviceType != VK_PHYSICAL_DEVICE_TYPE_CPU)
+    flags |= gpu_shared::IZB_FLAG_ROW_RUNS;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
