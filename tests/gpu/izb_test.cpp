@@ -58,6 +58,29 @@ class IzbTest : public GpuTest {
     return s;
   }
 
+  // Renders `frames` frames of `scene` view 0 with `settings`, each expected to match `expected`, and
+  // checks that the probe whose choice `which` names timed both of its ways (`ways`), each seen in
+  // some frame, and kept one by measurement. The module stays installed for further checks.
+  void expect_probe_times_both(const std::string& scene, const shadows::Settings& settings,
+                               const std::vector<float>& expected, int frames,
+                               shadows::Stats::BackendChoice shadows::Stats::*which,
+                               std::array<const char*, 2> ways) {
+    auto& r = make_renderer(scene, 0, kSize, kSize);
+    module_ = shadows::install(r, settings);
+    std::vector<std::string> seen;
+    for (int i = 0; i < frames; ++i) {
+      r.render_frame(0.0f);
+      EXPECT_EQ(module_->read_visibility(), expected) << "frame " << i;
+      seen.push_back((module_->stats().*which).backend);
+    }
+    const auto& choice = module_->stats().*which;
+    EXPECT_EQ(choice.reason.rfind("auto: ", 0), 0u) << choice.reason;
+    EXPECT_TRUE(choice.backend == ways[0] || choice.backend == ways[1]) << choice.backend;
+    EXPECT_GT(choice.raster_ms, 0.0) << ways[0];
+    EXPECT_GT(choice.compute_ms, 0.0) << ways[1];
+    for (const char* way : ways) EXPECT_NE(std::find(seen.begin(), seen.end(), way), seen.end()) << way;
+  }
+
   void TearDown() override {
     module_.reset();  // before the context goes
     GpuTest::TearDown();
@@ -574,22 +597,9 @@ TEST_F(IzbTest, AutomaticLitCullingTimesBothAndKeepsOne) {
   auto s = izb(1);
   s.izb.lit_culling = shadows::LitCulling::Auto;
   const auto off = render("contact", 0, izb(1), false);
-  auto& r = make_renderer("contact", 0, kSize, kSize);
-  module_ = shadows::install(r, s);
-  std::vector<std::string> seen;
-  for (int i = 0; i < 16; ++i) {
-    r.render_frame(0.0f);
-    EXPECT_EQ(module_->read_visibility(), off.visibility) << "frame " << i;
-    seen.push_back(module_->stats().lit_choice.backend);
-  }
-  const auto& choice = module_->stats().lit_choice;
-  EXPECT_EQ(choice.reason.rfind("auto: ", 0), 0u) << choice.reason;
-  EXPECT_TRUE(choice.backend == "on" || choice.backend == "off") << choice.backend;
-  EXPECT_GT(choice.raster_ms, 0.0);   // with the lit map
-  EXPECT_GT(choice.compute_ms, 0.0);  // without
-  EXPECT_NE(std::find(seen.begin(), seen.end(), "on"), seen.end());
-  EXPECT_NE(std::find(seen.begin(), seen.end(), "off"), seen.end());
-  EXPECT_EQ(module_->stats().lit_culled > 0, choice.backend == "on");
+  // "on": with the lit map (the probe's raster slot), "off": without.
+  expect_probe_times_both("contact", s, off.visibility, 16, &shadows::Stats::lit_choice, {"on", "off"});
+  EXPECT_EQ(module_->stats().lit_culled > 0, module_->stats().lit_choice.backend == "on");
 }
 
 // IzbSettings::csm_timed: the automatic CSM is timed against no prepass and the faster kept, with
@@ -599,26 +609,12 @@ TEST_F(IzbTest, TimedCsmTimesBothAndKeepsOne) {
   const auto reference = render("atrium", 0, plain, false);
   auto s = izb(1, true);
   s.izb.csm_timed = true;
-  auto& r = make_renderer("atrium", 0, kSize, kSize);
-  module_ = shadows::install(r, s);
-  std::vector<std::string> seen;
-  for (int i = 0; i < 16; ++i) {
-    r.render_frame(0.0f);
-    EXPECT_EQ(module_->read_visibility(), reference.visibility) << "frame " << i;
-    seen.push_back(module_->stats().csm_run_choice.backend);
-  }
+  expect_probe_times_both("atrium", s, reference.visibility, 16, &shadows::Stats::csm_run_choice, {"run", "skip"});
   const auto& st = module_->stats();
-  const auto& choice = st.csm_run_choice;
-  EXPECT_EQ(choice.reason.rfind("auto: ", 0), 0u) << choice.reason;
-  EXPECT_GT(choice.raster_ms, 0.0);   // with the prepass
-  EXPECT_GT(choice.compute_ms, 0.0);  // without
-  EXPECT_NE(std::find(seen.begin(), seen.end(), "run"), seen.end());
-  EXPECT_NE(std::find(seen.begin(), seen.end(), "skip"), seen.end());
-  if (choice.backend == "skip") {
+  if (st.csm_run_choice.backend == "skip") {
     EXPECT_EQ(st.csm_status.rfind("skipped: the IZB's passes timed faster", 0), 0u) << st.csm_status;
     EXPECT_EQ(st.csm_culled, 0u);
   } else {
-    EXPECT_EQ(choice.backend, "run");
     EXPECT_EQ(st.csm_status, "ran");
     EXPECT_GT(st.csm_culled, 0u);
   }
@@ -642,24 +638,17 @@ TEST_F(IzbTest, StepOneShapeIsTimedOnAGpu) {
   s.izb.trace = shadows::PassBackend::Compute;
   s.izb.csm_backend = shadows::PassBackend::Compute;
   const auto first = render("atrium", 0, s, false);
-  auto& r = make_renderer("atrium", 0, kSize, kSize);
-  module_ = shadows::install(r, s);
-  std::vector<std::string> seen;
-  for (int i = 0; i < 12; ++i) {
-    r.render_frame(0.0f);
-    EXPECT_EQ(module_->read_visibility(), first.visibility) << "frame " << i;
-    seen.push_back(module_->stats().tile_work_choice.backend);
-  }
-  const auto& choice = module_->stats().tile_work_choice;
-  if (ctx_->properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) {
-    EXPECT_TRUE(choice.backend.empty()) << choice.backend;
+  if (ctx_->properties().deviceType != VK_PHYSICAL_DEVICE_TYPE_CPU) {
+    expect_probe_times_both("atrium", s, first.visibility, 12, &shadows::Stats::tile_work_choice, {"wide", "narrow"});
     return;
   }
-  EXPECT_EQ(choice.reason.rfind("auto: ", 0), 0u) << choice.reason;
-  EXPECT_NE(std::find(seen.begin(), seen.end(), "wide"), seen.end());
-  EXPECT_NE(std::find(seen.begin(), seen.end(), "narrow"), seen.end());
-  EXPECT_GT(choice.raster_ms, 0.0);
-  EXPECT_GT(choice.compute_ms, 0.0);
+  auto& r = make_renderer("atrium", 0, kSize, kSize);
+  module_ = shadows::install(r, s);
+  for (int i = 0; i < 6; ++i) {
+    r.render_frame(0.0f);
+    EXPECT_EQ(module_->read_visibility(), first.visibility) << "frame " << i;
+    EXPECT_TRUE(module_->stats().tile_work_choice.backend.empty()) << module_->stats().tile_work_choice.backend;
+  }
 }
 
 // Every first-step shape (a GPU's two, forced here so that a CPU device runs them too, and a CPU
