@@ -6,8 +6,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
 
-// A node per pixel (IZB_FLAG_DIRECT_NODES): the workgroup's texels (none: 0xffffffff), node depths and
-// the list heads its runs replaced (see main).
+// IZB_FLAG_ROW_RUNS: the workgroup's texels (none: 0xffffffff), node depths and the list heads its
+// runs replaced (see main).
 shared uint run_texel[8 * 8];
 shared uint run_depth_bits[8 * 8];
 shared uint run_old_head[8 * 8];

@@ -16,6 +16,9 @@ layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_
 // the build for the compute trace's tile-level cull.
 layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest { uint tile_farthest[]; };
 uint tiles_per_side() { return params.capacities.y; }
+// This frame's shape of the compute work's step 1 (izb.h, kIzbStepOne*).
+uint step_one_triangles() { return params.capacities.w & 0xffffu; }
+uint step_one_texel_bound() { return params.capacities.w >> 16u; }
 layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer Quads { float quads[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Casters { IzbCasterTriangle casters[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };

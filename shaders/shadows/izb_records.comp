@@ -36,7 +36,7 @@ uint walk_owner(uint j, bool rows) {
 // for the next frame.
 void main() {
   // The workgroup's triangles, a thread each; the other threads only help walk.
-  uint per_group = params.capacities.w & 0xffffu;  // this frame's shape (kIzbStepOne*)
+  uint per_group = step_one_triangles();
   uint index = row_dispatch_index(gl_WorkGroupID, gl_LocalInvocationIndex, per_group);
   bool in_range = gl_LocalInvocationIndex < per_group && index < listed_triangle_count();
   uint t = in_range ? listed_triangle(index) : 0u;
@@ -59,7 +59,7 @@ void main() {
       float last = float(izb_resolution()) - 1.0;
       vec2 lo = clamp(floor(min(min(a.xy, b.xy), c.xy) - slack), vec2(0.0), vec2(last + 1.0));
       vec2 hi = clamp(floor(max(max(a.xy, b.xy), c.xy) + slack), vec2(-1.0), vec2(last));
-      if ((hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) <= float(params.capacities.w >> 16u)) {
+      if ((hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) <= float(step_one_texel_bound())) {
         direct = ivec4(lo, hi);
         rows = ivec2(0, -1);
       }

@@ -150,7 +150,7 @@ void cull_draws(mat4 light_view_projection) {
     counters[IZB_COUNTER_FRUSTUM_DRAWS] = running[0];
     counters[IZB_COUNTER_FRUSTUM_TRIANGLES] = running[1];
     write_row_dispatch(IZB_COUNTER_GRID_SETUP_DISPATCH, (running[1] + 63u) / 64u);
-    uint per_group = params.capacities.w & 0xffffu;  // step 1's shape
+    uint per_group = step_one_triangles();
     write_row_dispatch(IZB_COUNTER_STEP_ONE_DISPATCH, (running[1] + per_group - 1u) / per_group);
   }
 }

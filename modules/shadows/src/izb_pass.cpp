@@ -133,17 +133,15 @@ struct IzbPass::Impl {
   BackendProbe csm_probe{"csm"};
   // Known-lit culling under LitCulling::Auto: the IZB's own passes timed with the lit map ("on", the
   // probe's raster slot) and without ("off", its compute slot: the choice without timestamps).
-  BackendProbe lit_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"},
-                         {"on", "off"}};
+  static std::vector<std::string> izb_regions() {
+    return {"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"};
+  }
+  BackendProbe lit_probe{izb_regions(), {"on", "off"}};
   // Step 1's shape on a GPU (izb.h): the same passes timed "wide" (the raster slot) and "narrow".
-  BackendProbe shape_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback",
-                            "izb_resolve"},
-                           {"wide", "narrow"}};
+  BackendProbe shape_probe{izb_regions(), {"wide", "narrow"}};
   // IzbSettings::csm_timed: the same passes timed with the automatic CSM prepass ("run", the raster
   // slot) and without it ("skip").
-  BackendProbe csm_run_probe{{"light_frustum", "lit_map", "csm", "izb_build", "frustum_trace", "izb_fallback",
-                              "izb_resolve"},
-                             {"run", "skip"}};
+  BackendProbe csm_run_probe{izb_regions(), {"run", "skip"}};
   bool used_compute_trace = false;
   bool used_compute_csm = false;
   bool last_used_lit = false;
@@ -203,6 +201,8 @@ struct IzbPass::Impl {
     return ctx.features().conservative_rasterization && ctx.features().geometry_shader;
   }
   bool raster_trace_available() const { return ctx.features().geometry_shader; }
+  // A CPU device (lavapipe) pays for every workgroup, idle lane and barrier: it takes other shapes.
+  bool cpu_device() const { return ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; }
 
   // The pipelines for `samples` and `flags`, made on first use and kept.
   Pipelines& pipelines(uint32_t samples_per_pixel, uint32_t flags) {
@@ -226,7 +226,7 @@ struct IzbPass::Impl {
     ps.scan = compute("izb_scan.comp");
     ps.scatter = compute("izb_scatter.comp");
     // Workgroup shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
-    const bool cpu = ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    const bool cpu = cpu_device();
     const std::vector<SpecializationConstant> shape = {
         {0, cpu ? 8u : 32u * gpu_shared::kIzbTileStepRecordsGpu},
         {1, cpu ? gpu_shared::kIzbRecordsPerGroupCpu : gpu_shared::kIzbRecordsPerGroupGpu},
@@ -645,7 +645,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   uint32_t step_one_shape = gpu_shared::kIzbStepOneWide;
   if (settings.step_one_shape != StepOneShape::Auto) {
     if (settings.step_one_shape == StepOneShape::Narrow) step_one_shape = gpu_shared::kIzbStepOneNarrow;
-  } else if (m.ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+  } else if (m.cpu_device()) {
     step_one_shape = gpu_shared::kIzbStepOneCpu;
   } else if (backends_chosen && (use_compute_trace || use_compute_csm) &&
              m.shape_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Compute) {
@@ -681,8 +681,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (!spot) {
     if (settings.lit_culling == LitCulling::On) {
       lit = true;
-    } else if (settings.lit_culling == LitCulling::Auto && !m.trace_probe.probing() &&
-               !(run_csm && m.csm_probe.probing()) && !m.shape_probe.probing() && !m.csm_run_probe.probing()) {
+    } else if (settings.lit_culling == LitCulling::Auto && backends_chosen && !m.shape_probe.probing() &&
+               !m.csm_run_probe.probing()) {
       lit = m.lit_probe.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Raster;
     }
   }
@@ -741,7 +741,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (hybrid && soft_distance > 0.0f) flags |= gpu_shared::IZB_FLAG_GAPS;
   if (m.samples == 1 && !sorted && m.pool_size >= uint64_t(frame.view.extent.width) * frame.view.extent.height)
     flags |= gpu_shared::IZB_FLAG_DIRECT_NODES;
-  if ((flags & gpu_shared::IZB_FLAG_DIRECT_NODES) && m.ctx.properties().deviceType != VK_PHYSICAL_DEVICE_TYPE_CPU)
+  if ((flags & gpu_shared::IZB_FLAG_DIRECT_NODES) && !m.cpu_device())
     flags |= gpu_shared::IZB_FLAG_ROW_RUNS;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
