@@ -1,16 +1,24 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+// The grid's transform as the last workgroup fits it (izb_setup.glsl): to_grid reads this copy.
+shared mat4 fitted_light_view_projection;
+#define IZB_GRID_TRANSFORM fitted_light_view_projection
 #include "shadows/izb_prelude.glsl"
 #include "shadows/izb_pixel.glsl"
 layout(local_size_x = 16, local_size_y = 16) in;  // each thread 2x2 pixels: a 32x32 block
 
-layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) buffer BoundsPartials { vec4 bounds_partials[]; };
+layout(push_constant) uniform Push { IzbComputePush push; };
+// Coherent: the last workgroup reads every other workgroup's.
+layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) coherent buffer BoundsPartials { vec4 bounds_partials[]; };
+#include "shadows/izb_triangles.glsl"
+#include "shadows/izb_setup.glsl"
 
-shared vec4 subgroup_bounds[256];
+shared bool last_workgroup;
 
 // Light frustum fit, step 1: light-view x/y bounds of every lit candidate's ray origin (and, at 32
-// spp, its μQuad corners), reduced over the workgroup's 32x32 pixels and written once per workgroup: no atomics,
-// so no contention on a handful of addresses (izb_setup.comp reduces the partials).
+// spp, its μQuad corners), reduced over the workgroup's 32x32 pixels and written once per workgroup:
+// no atomics on a handful of addresses. The last workgroup to finish reduces the partials, fits the
+// grid and culls the casters (izb_setup.glsl).
 void main() {
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
   float reach = izb_reach();
@@ -52,5 +60,12 @@ void main() {
     vec4 b = subgroup_bounds[0];
     for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
     bounds_partials[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = b;
+    memoryBarrierBuffer();  // the partial is visible before the count says so
+    uint done = atomicAdd(counters[IZB_COUNTER_FIT_GROUPS_DONE], 1u);
+    last_workgroup = done + 1u == gl_NumWorkGroups.x * gl_NumWorkGroups.y;
   }
+  barrier();
+  if (!last_workgroup) return;
+  memoryBarrierBuffer();  // every partial, counted before this workgroup's, is read after the count
+  set_up_frustum();
 }

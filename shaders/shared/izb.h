@@ -44,6 +44,10 @@ SHARED_CONST uint IZB_FLAG_DIRECT_TERM = 4096u;
 // With IZB_FLAG_DIRECT_NODES on a GPU: each run of a workgroup row's pixels sharing a texel enters
 // its list with one exchange (a CPU device pays more for the workgroup barriers than it saves).
 SHARED_CONST uint IZB_FLAG_ROW_RUNS = 8192u;
+// At most kIzbInlineTriangles caster triangles: the fit's last workgroup sets them up, not a dispatch
+// of their own (izb_setup.glsl).
+SHARED_CONST uint IZB_FLAG_INLINE_TRIANGLES = 16384u;
+SHARED_CONST uint kIzbInlineTriangles = 2048u;  // a multiple of the fit's 256 invocations, at most 32 of them
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted
@@ -86,6 +90,7 @@ SHARED_CONST uint IZB_COUNTER_HYBRID = 36u;
 SHARED_CONST uint IZB_COUNTER_LISTED_TRIANGLES = 40u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_DRAWS = 41u;
 SHARED_CONST uint IZB_COUNTER_FRUSTUM_TRIANGLES = 42u;
+SHARED_CONST uint IZB_COUNTER_FIT_GROUPS_DONE = 43u;  // the fit's workgroups finished: the last fits the grid
 SHARED_CONST uint IZB_COUNTER_GRID_SETUP_DISPATCH = 44u;
 // 3 uints: step 1's indirect dispatch over the same triangles, in workgroups of its shape's
 // (kIzbStepOne*).

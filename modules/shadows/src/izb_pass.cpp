@@ -79,7 +79,7 @@ struct IzbPass::Impl {
     Pipeline software, hardware, count_software, count_hardware;
   };
   struct Pipelines {
-    Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
+    Pipeline fit, build, fallback, list_stats, grid_setup, scan, scatter;
     // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use (tile_work_for()) with the
     // set's constants.
     struct TileWork {
@@ -218,7 +218,6 @@ struct IzbPass::Impl {
       return factory.compute({shader, bindings, push, constants});
     };
     ps.fit = compute("izb_fit.comp");
-    ps.setup = compute("izb_setup.comp");
     ps.build = compute("izb_build.comp");
     ps.fallback = compute("izb_fallback.comp");
     ps.list_stats = compute("izb_list_stats.comp");
@@ -743,6 +742,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     flags |= gpu_shared::IZB_FLAG_DIRECT_NODES;
   if ((flags & gpu_shared::IZB_FLAG_DIRECT_NODES) && !m.cpu_device())
     flags |= gpu_shared::IZB_FLAG_ROW_RUNS;
+  const bool inline_triangles = m.triangle_count <= gpu_shared::kIzbInlineTriangles;
+  if (inline_triangles) flags |= gpu_shared::IZB_FLAG_INLINE_TRIANGLES;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
@@ -776,19 +777,17 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
     {
+      // The last of its workgroups also fits the grid and lists the caster draws whose bounds reach
+      // it; where the casters are few, it sets up their triangles too.
       OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_fit");
       m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
     }
-    pass_barrier(frame.ctx, cmd);
-    {
-      OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_cull");
-      m.dispatch(cmd, frame, m.p->setup, push, 1);  // also lists the caster draws whose bounds reach the grid
-    }
-    pass_barrier(frame.ctx, cmd);
-    // Their triangles into grid space, listed where they reach it.
-    OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_triangles");
-    if (m.triangle_count > 0)
+    if (!inline_triangles && m.triangle_count > 0) {
+      pass_barrier(frame.ctx, cmd);
+      // The listed draws' triangles into grid space, listed where they reach it.
+      OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_triangles");
       m.dispatch_indirect(cmd, frame, m.p->grid_setup, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
+    }
   }
   pass_barrier(frame.ctx, cmd);
   const VkDeviceSize grid_bytes = VkDeviceSize(m.resolution) * m.resolution * 4;

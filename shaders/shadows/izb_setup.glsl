@@ -1,16 +1,33 @@
-#version 460
-#extension GL_GOOGLE_include_directive : require
-#include "shadows/izb_prelude.glsl"
-layout(local_size_x = 256) in;
+// The light frustum's fit (its second step) and the cull of the casters against it, run by the
+// fit's last workgroup (izb_fit.comp) once every workgroup's bounds are in: one dispatch, not one
+// for the fit and one for this single workgroup after it. Include after izb_prelude.glsl, the push
+// constants and izb_triangles.glsl, in a shader of kSetupThreads invocations that declares
+// `bounds_partials` and `fitted_light_view_projection`.
 
-layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) readonly buffer BoundsPartials { vec4 bounds_partials[]; };
-
-layout(push_constant) uniform Push { IzbComputePush push; };
-
+const uint kSetupThreads = 256u;
 shared vec4 subgroup_bounds[256];
-shared mat4 fitted_light_view_projection;
 shared uint subgroup_sums[2 * 256];  // any subgroup size
 shared uint running[2];
+
+// Exclusive prefix sums of `v` over the workgroup (in the subgroup, then over the subgroups' sums);
+// `total` gets the sums over every invocation. Every invocation calls it, in uniform control flow.
+uvec2 workgroup_exclusive_add(uvec2 v, out uvec2 total) {
+  uvec2 before = subgroupExclusiveAdd(v);
+  uvec2 sums = subgroupAdd(v);
+  if (subgroupElect()) {
+    subgroup_sums[2u * gl_SubgroupID] = sums.x;
+    subgroup_sums[2u * gl_SubgroupID + 1u] = sums.y;
+  }
+  barrier();
+  total = uvec2(0u);
+  for (uint s = 0u; s < gl_NumSubgroups; ++s) {
+    uvec2 w = uvec2(subgroup_sums[2u * s], subgroup_sums[2u * s + 1u]);
+    if (s < gl_SubgroupID) before += w;
+    total += w;
+  }
+  barrier();  // every invocation has read subgroup_sums[]
+  return before;
+}
 
 // Thread 0: the grid from the reduced bounds (izb.light_view_projection, izb.grid; also in
 // fitted_light_view_projection for the workgroup).
@@ -100,7 +117,7 @@ const uint kDrawsPerThread = 4u;  // fewer rounds of the workgroup's scan
 // search), and writes the dispatch over those triangles. The passes after it touch only them: the
 // frame's cost follows the casters near the view, not the scene's size.
 void cull_draws(mat4 light_view_projection) {
-  for (uint first = 0u; first < caster_draw_count(); first += gl_WorkGroupSize.x * kDrawsPerThread) {
+  for (uint first = 0u; first < caster_draw_count(); first += kSetupThreads * kDrawsPerThread) {
     uint draw0 = first + gl_LocalInvocationIndex * kDrawsPerThread;
     uint kept = 0u, triangles = 0u, kept_bits = 0u;
     uint first_triangle[kDrawsPerThread], draw_triangles[kDrawsPerThread];
@@ -116,21 +133,9 @@ void cull_draws(mat4 light_view_projection) {
       ++kept;
       triangles += draw_triangles[k];
     }
-    // Exclusive prefix sums over the workgroup: in the subgroup, then over the subgroups' sums.
-    uvec2 before = uvec2(subgroupExclusiveAdd(kept), subgroupExclusiveAdd(triangles));
-    uvec2 sums = uvec2(subgroupAdd(kept), subgroupAdd(triangles));
-    if (subgroupElect()) {
-      subgroup_sums[2u * gl_SubgroupID] = sums.x;
-      subgroup_sums[2u * gl_SubgroupID + 1u] = sums.y;
-    }
-    barrier();
     uvec2 base = uvec2(running[0], running[1]);
-    uvec2 total = uvec2(0u);
-    for (uint s = 0u; s < gl_NumSubgroups; ++s) {
-      uvec2 v = uvec2(subgroup_sums[2u * s], subgroup_sums[2u * s + 1u]);
-      if (s < gl_SubgroupID) before += v;
-      total += v;
-    }
+    uvec2 total;
+    uvec2 before = workgroup_exclusive_add(uvec2(kept, triangles), total);
     uvec2 at = base + before;  // this thread's first slot and first triangle slot
     for (uint k = 0u; k < kDrawsPerThread; ++k) {
       if ((kept_bits & (1u << k)) == 0u) continue;
@@ -139,8 +144,7 @@ void cull_draws(mat4 light_view_projection) {
       caster_draw_words[w + 1u] = at.y;
       at += uvec2(1u, draw_triangles[k]);
     }
-    barrier();  // every thread has read running[] and subgroup_sums[]
-    if (gl_LocalInvocationIndex == 0u) {
+    if (gl_LocalInvocationIndex == 0u) {  // (every invocation read running[] before the scan's last barrier)
       running[0] = base.x + total.x;
       running[1] = base.y + total.y;
     }
@@ -155,14 +159,35 @@ void cull_draws(mat4 light_view_projection) {
   }
 }
 
+// IZB_FLAG_INLINE_TRIANGLES (a scene of at most kIzbInlineTriangles caster triangles): this workgroup
+// sets up every caster triangle too, where a dispatch of their own (and its barrier) would cost more
+// than the few rounds here. A draw the cull left out has no triangle reaching the grid, so listing
+// those that reach it lists the same triangles; the listed count sizes step 1's dispatch.
+void set_up_every_triangle() {
+  uint listed_bits = 0u;
+  for (uint k = 0u; k < kIzbInlineTriangles / kSetupThreads; ++k) {
+    uint t = k * kSetupThreads + gl_LocalInvocationIndex;
+    if (t < push.triangle_count && set_up_triangle(t)) listed_bits |= 1u << k;
+  }
+  uvec2 total;
+  uint at = workgroup_exclusive_add(uvec2(bitCount(listed_bits), 0u), total).x;
+  for (uint k = 0u; k < kIzbInlineTriangles / kSetupThreads; ++k)
+    if ((listed_bits & (1u << k)) != 0u) caster_draw_words[listed_triangle_word(at++)] = k * kSetupThreads + gl_LocalInvocationIndex;
+  if (gl_LocalInvocationIndex == 0u) {
+    counters[IZB_COUNTER_LISTED_TRIANGLES] = total.x;
+    uint per_group = step_one_triangles();
+    write_row_dispatch(IZB_COUNTER_STEP_ONE_DISPATCH, (total.x + per_group - 1u) / per_group);
+  }
+}
+
 // Light frustum fit, step 2, and the cull of the casters against it: reduces the fit's per-workgroup
 // bounds, builds an orthographic projection whose x/y window covers them plus a border (so no point
 // sits on the grid's edge), and whose depth range spans the casters (from the CPU, which knows their
-// bounds); then lists the caster draws whose bounds reach the grid.
-void main() {
+// bounds); then lists the caster draws whose bounds reach the grid. The fit's last workgroup runs it.
+void set_up_frustum() {
   uint partials = ((params.extent.x + 31u) / 32u) * ((params.extent.y + 31u) / 32u);
   vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
-  for (uint i = gl_LocalInvocationIndex; i < partials; i += gl_WorkGroupSize.x) {
+  for (uint i = gl_LocalInvocationIndex; i < partials; i += kSetupThreads) {
     vec4 p = bounds_partials[i];
     b = vec4(min(b.xy, p.xy), max(b.zw, p.zw));
   }
@@ -176,4 +201,5 @@ void main() {
   }
   barrier();  // the grid's transform, in shared memory, for every thread
   cull_draws(fitted_light_view_projection);
+  if (izb_flag(IZB_FLAG_INLINE_TRIANGLES)) set_up_every_triangle();
 }
