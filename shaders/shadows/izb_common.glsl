@@ -48,12 +48,8 @@ bool spot_light() { return params.light_position.w > 0.0; }
 // World position -> (grid x, grid y, light depth): grid in texels of the IZB, depth in [0,1]. A spot
 // light's points lie in front of it (w > 0: the build takes only points it reaches, and caster
 // triangles reaching behind its near plane are traced apart, izb_triangles.comp).
-// The grid's transform: the frame's, or in the pass that fits it, that pass's copy.
-#ifndef IZB_GRID_TRANSFORM
-#define IZB_GRID_TRANSFORM izb.light_view_projection
-#endif
 vec3 to_grid(vec3 world) {
-  vec4 clip = IZB_GRID_TRANSFORM * vec4(world, 1.0);
+  vec4 clip = izb.light_view_projection * vec4(world, 1.0);
   if (spot_light()) clip.xyz /= clip.w;
   float res = float(izb_resolution());
   return vec3((clip.xy * 0.5 + 0.5) * res, clip.z);

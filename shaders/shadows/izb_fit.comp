@@ -1,8 +1,5 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// The grid's transform as the last workgroup fits it (izb_setup.glsl): to_grid reads this copy.
-shared mat4 fitted_light_view_projection;
-#define IZB_GRID_TRANSFORM fitted_light_view_projection
 #include "shadows/izb_prelude.glsl"
 #include "shadows/izb_pixel.glsl"
 layout(local_size_x = 16, local_size_y = 16) in;  // each thread 2x2 pixels: a 32x32 block
@@ -10,7 +7,6 @@ layout(local_size_x = 16, local_size_y = 16) in;  // each thread 2x2 pixels: a 3
 layout(push_constant) uniform Push { IzbComputePush push; };
 // Coherent: the last workgroup reads every other workgroup's.
 layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) coherent buffer BoundsPartials { vec4 bounds_partials[]; };
-#include "shadows/izb_triangles.glsl"
 #include "shadows/izb_setup.glsl"
 
 shared bool last_workgroup;
@@ -22,20 +18,25 @@ shared bool last_workgroup;
 void main() {
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
   float reach = izb_reach();
-  for (uint k = 0u; k < 4u; ++k) {
-    ivec2 pixel = ivec2(gl_WorkGroupID.xy * 32u + gl_LocalInvocationID.xy * 2u + uvec2(k & 1u, k >> 1u));
-    if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;
-    if (izb_samples() == 1u) {
-      // Every covered point in range bounds the candidates among them (a superset: the window only
-      // needs to hold every node), and a ray origin lies within the normal offset of its point. So
-      // one image load instead of the candidate test's three.
-      vec4 position = imageLoad(world_position_image, pixel);
-      if (position.w <= 0.5 || distance(position.xyz, params.camera_position.xyz) > reach) continue;
-      vec2 v = (params.light_view * vec4(position.xyz, 1.0)).xy;
+  if (izb_samples() == 1u) {
+    // Every covered point in range bounds the candidates among them (a superset: the window only
+    // needs to hold every node), and a ray origin lies within the normal offset of its point. So
+    // one image load instead of the candidate test's three; the four issued before any is used.
+    vec4 position[4];
+    for (uint k = 0u; k < 4u; ++k) {
+      ivec2 pixel = ivec2(gl_WorkGroupID.xy * 32u + gl_LocalInvocationID.xy * 2u + uvec2(k & 1u, k >> 1u));
+      position[k] = all(lessThan(uvec2(pixel), params.extent.xy)) ? imageLoad(world_position_image, pixel) : vec4(0.0);
+    }
+    for (uint k = 0u; k < 4u; ++k) {
+      if (position[k].w <= 0.5 || distance(position[k].xyz, params.camera_position.xyz) > reach) continue;
+      vec2 v = (params.light_view * vec4(position[k].xyz, 1.0)).xy;
       lo = min(lo, v - kShadowNormalOffset);
       hi = max(hi, v + kShadowNormalOffset);
-      continue;
     }
+  }
+  for (uint k = 0u; k < 4u && izb_samples() != 1u; ++k) {
+    ivec2 pixel = ivec2(gl_WorkGroupID.xy * 32u + gl_LocalInvocationID.xy * 2u + uvec2(k & 1u, k >> 1u));
+    if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;
     PixelPoint p = load_pixel(pixel);
     if (!p.candidate) continue;
     if (izb_samples() == 32u) {

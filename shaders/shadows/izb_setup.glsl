@@ -1,11 +1,11 @@
 // The light frustum's fit (its second step) and the cull of the casters against it, run by the
 // fit's last workgroup (izb_fit.comp) once every workgroup's bounds are in: one dispatch, not one
 // for the fit and one for this single workgroup after it. Include after izb_prelude.glsl, the push
-// constants and izb_triangles.glsl, in a shader of kSetupThreads invocations that declares
-// `bounds_partials` and `fitted_light_view_projection`.
+// constants, in a shader of kSetupThreads invocations that declares `bounds_partials`.
 
 const uint kSetupThreads = 256u;
 shared vec4 subgroup_bounds[256];
+shared mat4 fitted_light_view_projection;
 shared uint subgroup_sums[2 * 256];  // any subgroup size
 shared uint running[2];
 
@@ -159,27 +159,6 @@ void cull_draws(mat4 light_view_projection) {
   }
 }
 
-// IZB_FLAG_INLINE_TRIANGLES (a scene of at most kIzbInlineTriangles caster triangles): this workgroup
-// sets up every caster triangle too, where a dispatch of their own (and its barrier) would cost more
-// than the few rounds here. A draw the cull left out has no triangle reaching the grid, so listing
-// those that reach it lists the same triangles; the listed count sizes step 1's dispatch.
-void set_up_every_triangle() {
-  uint listed_bits = 0u;
-  for (uint k = 0u; k < kIzbInlineTriangles / kSetupThreads; ++k) {
-    uint t = k * kSetupThreads + gl_LocalInvocationIndex;
-    if (t < push.triangle_count && set_up_triangle(t)) listed_bits |= 1u << k;
-  }
-  uvec2 total;
-  uint at = workgroup_exclusive_add(uvec2(bitCount(listed_bits), 0u), total).x;
-  for (uint k = 0u; k < kIzbInlineTriangles / kSetupThreads; ++k)
-    if ((listed_bits & (1u << k)) != 0u) caster_draw_words[listed_triangle_word(at++)] = k * kSetupThreads + gl_LocalInvocationIndex;
-  if (gl_LocalInvocationIndex == 0u) {
-    counters[IZB_COUNTER_LISTED_TRIANGLES] = total.x;
-    uint per_group = step_one_triangles();
-    write_row_dispatch(IZB_COUNTER_STEP_ONE_DISPATCH, (total.x + per_group - 1u) / per_group);
-  }
-}
-
 // Light frustum fit, step 2, and the cull of the casters against it: reduces the fit's per-workgroup
 // bounds, builds an orthographic projection whose x/y window covers them plus a border (so no point
 // sits on the grid's edge), and whose depth range spans the casters (from the CPU, which knows their
@@ -200,6 +179,6 @@ void set_up_frustum() {
     running[1] = 0u;
   }
   barrier();  // the grid's transform, in shared memory, for every thread
-  cull_draws(fitted_light_view_projection);
-  if (izb_flag(IZB_FLAG_INLINE_TRIANGLES)) set_up_every_triangle();
+  // With every caster triangle set up (IZB_FLAG_ALL_TRIANGLES), nothing reads the frustum's draws.
+  if (!izb_flag(IZB_FLAG_ALL_TRIANGLES)) cull_draws(fitted_light_view_projection);
 }

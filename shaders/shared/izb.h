@@ -44,10 +44,11 @@ SHARED_CONST uint IZB_FLAG_DIRECT_TERM = 4096u;
 // With IZB_FLAG_DIRECT_NODES on a GPU: each run of a workgroup row's pixels sharing a texel enters
 // its list with one exchange (a CPU device pays more for the workgroup barriers than it saves).
 SHARED_CONST uint IZB_FLAG_ROW_RUNS = 8192u;
-// At most kIzbInlineTriangles caster triangles: the fit's last workgroup sets them up, not a dispatch
-// of their own (izb_setup.glsl).
-SHARED_CONST uint IZB_FLAG_INLINE_TRIANGLES = 16384u;
-SHARED_CONST uint kIzbInlineTriangles = 2048u;  // a multiple of the fit's 256 invocations, at most 32 of them
+// At most kIzbAllTrianglesLimit caster triangles: every one is set up (izb_triangles.comp), in a
+// dispatch sized on the CPU, with no cull of the caster draws before it (izb_setup.glsl): that cull's
+// serial step costs more than setting up a few triangles it would skip.
+SHARED_CONST uint IZB_FLAG_ALL_TRIANGLES = 16384u;
+SHARED_CONST uint kIzbAllTrianglesLimit = 8192u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted

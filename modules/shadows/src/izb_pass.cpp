@@ -742,8 +742,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     flags |= gpu_shared::IZB_FLAG_DIRECT_NODES;
   if ((flags & gpu_shared::IZB_FLAG_DIRECT_NODES) && !m.cpu_device())
     flags |= gpu_shared::IZB_FLAG_ROW_RUNS;
-  const bool inline_triangles = m.triangle_count <= gpu_shared::kIzbInlineTriangles;
-  if (inline_triangles) flags |= gpu_shared::IZB_FLAG_INLINE_TRIANGLES;
+  const bool all_triangles = m.triangle_count <= gpu_shared::kIzbAllTrianglesLimit;
+  if (all_triangles) flags |= gpu_shared::IZB_FLAG_ALL_TRIANGLES;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
@@ -777,15 +777,19 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
     {
-      // The last of its workgroups also fits the grid and lists the caster draws whose bounds reach
-      // it; where the casters are few, it sets up their triangles too.
+      // The last of its workgroups also fits the grid and (with many casters) lists the caster draws
+      // whose bounds reach it.
       OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_fit");
       m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
     }
-    if (!inline_triangles && m.triangle_count > 0) {
-      pass_barrier(frame.ctx, cmd);
-      // The listed draws' triangles into grid space, listed where they reach it.
-      OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_triangles");
+    pass_barrier(frame.ctx, cmd);
+    // The triangles into grid space, listed where they reach it: those of the listed draws, or with
+    // few casters every one.
+    OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_triangles");
+    if (all_triangles) {
+      const uint32_t groups = (m.triangle_count + 63) / 64;
+      if (groups > 0) m.dispatch(cmd, frame, m.p->grid_setup, push, groups);
+    } else {
       m.dispatch_indirect(cmd, frame, m.p->grid_setup, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
     }
   }

@@ -99,8 +99,7 @@ struct IzbSettings {
   // in the CSM by CsmChoice::On keeps it running.
   bool csm_timed = false;
   // Times each step of the light frustum ("light_frustum_fit", which also fits the grid and culls
-  // the casters, and "light_frustum_triangles" where more than 2048 caster triangles
-  // take a dispatch of their own) and of the compute trace, CSM and lit map ("<work>_records",
+  // the caster draws, and "light_frustum_triangles") and of the compute trace, CSM and lit map ("<work>_records",
   // "_tiles", "_texels", "trace_pairs") inside their pass's region. Each region's timestamps wait for the work
   // before them, a few µs per step on a GPU, so it is off where the frame's time matters.
   bool step_timings = false;
