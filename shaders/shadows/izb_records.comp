@@ -11,10 +11,12 @@ layout(push_constant) uniform Push { IzbComputePush push; };
 // (a rectangle) and its first tile row, and where its texels and its rows start (exclusive prefix sums;
 // [64] holds the totals).
 shared uint walk_triangle[64];
+shared vec4 walk_a[64], walk_b[64], walk_c[64];  // its grid-space vertices (w of a: the signed area), read here once
 shared ivec4 walk_direct[64];
 shared int walk_first_row[64];
 shared uint walk_texel_start[65];
 shared uint walk_row_start[65];
+shared uvec2 walk_subgroup_sums[64];
 
 // Item j's thread: the last whose items start at or before it.
 uint walk_owner(uint j, bool rows) {
@@ -67,46 +69,58 @@ void main() {
   }
   uint lane = gl_LocalInvocationIndex;
   walk_triangle[lane] = t;
+  walk_a[lane] = vec4(a, area);
+  walk_b[lane] = vec4(b, 0.0);
+  walk_c[lane] = vec4(c, 0.0);
   walk_direct[lane] = direct;
   walk_first_row[lane] = rows.x;
-  walk_texel_start[lane + 1u] = direct.x <= direct.z ? uint((direct.z - direct.x + 1) * (direct.w - direct.y + 1)) : 0u;
-  walk_row_start[lane + 1u] = rows.x <= rows.y ? uint(rows.y - rows.x + 1) : 0u;
+  // Where each thread's texels and rows start: inclusive sums in the subgroup, plus the subgroups'
+  // before it (subgroups of any size that divides 64).
+  uvec2 items = uvec2(direct.x <= direct.z ? uint((direct.z - direct.x + 1) * (direct.w - direct.y + 1)) : 0u,
+                      rows.x <= rows.y ? uint(rows.y - rows.x + 1) : 0u);
+  uvec2 through = subgroupInclusiveAdd(items);
+  if (gl_SubgroupInvocationID == gl_SubgroupSize - 1u) walk_subgroup_sums[gl_SubgroupID] = through;
   barrier();
+  for (uint s = 0u; s < gl_SubgroupID; ++s) through += walk_subgroup_sums[s];
+  walk_texel_start[lane + 1u] = through.x;
+  walk_row_start[lane + 1u] = through.y;
   if (lane == 0u) {
     walk_texel_start[0] = 0u;
     walk_row_start[0] = 0u;
-    for (uint i = 1u; i <= 64u; ++i) {
-      walk_texel_start[i] += walk_texel_start[i - 1u];
-      walk_row_start[i] += walk_row_start[i - 1u];
-    }
   }
   barrier();
 
   // The small triangles' texels: the lit map and CSM write them, the trace lists its pairs for step 4
   // (counted first, so that the workgroup reserves them with one atomic, then written).
+  // (The count's outcomes of a thread's first 32 texels are kept for the write, as bits.)
   uint total_texels = walk_texel_start[64];
-  uint kept_total = 0u, fragments = 0u;
+  uint kept_total = 0u, fragments = 0u, kept_bits = 0u;
   for (uint pass = (mode == IZB_WORK_TRACE ? 0u : 1u); pass < 2u; ++pass) {  // trace: count, then write
     uint slot = 0u;
     if (pass == 1u && mode == IZB_WORK_TRACE)
       slot = reserve_group_slots(IZB_COUNTER_PAIRS, kept_total, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
-    for (uint j = lane; j < total_texels; j += 64u) {
+    for (uint j = lane, round = 0u; j < total_texels; j += 64u, ++round) {
       uint owner = walk_owner(j, false);
       uint texel_triangle = walk_triangle[owner];
       ivec4 d = walk_direct[owner];
       uint i = j - walk_texel_start[owner];
       uint width = uint(d.z - d.x + 1);
       ivec2 texel = d.xy + ivec2(i % width, i / width);
-      load_grid_triangle(texel_triangle, a, b, c);
-      area = edge_fn(c.xy, a.xy, b.xy);
+      a = walk_a[owner].xyz;
+      b = walk_b[owner].xyz;
+      c = walk_c[owner].xyz;
+      area = walk_a[owner].w;
       if (mode != IZB_WORK_TRACE) {
         work_texel_here(texel, texel_triangle, a, b, c, area, mode);
         continue;
       }
-      uint outcome = trace_pair_outcome(texel, a, b, c, area);
+      uint outcome;
+      if (pass == 1u && round < 32u) outcome = (kept_bits & (1u << round)) != 0u ? IZB_PAIR_KEPT : IZB_PAIR_CULLED;
+      else outcome = trace_pair_outcome(texel, a, b, c, area);
       if (pass == 0u) {
         kept_total += outcome == IZB_PAIR_KEPT ? 1u : 0u;
         fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
+        if (outcome == IZB_PAIR_KEPT && round < 32u) kept_bits |= 1u << round;
         continue;
       }
       if (outcome != IZB_PAIR_KEPT) continue;
@@ -132,8 +146,10 @@ void main() {
       uint owner = walk_owner(j, true);
       uint row_triangle = walk_triangle[owner];
       int r = walk_first_row[owner] + int(j - walk_row_start[owner]);
-      load_grid_triangle(row_triangle, a, b, c);
-      area = edge_fn(c.xy, a.xy, b.xy);
+      a = walk_a[owner].xyz;
+      b = walk_b[owner].xyz;
+      c = walk_c[owner].xyz;
+      area = walk_a[owner].w;
       ivec2 span = triangle_tile_span(a, b, c, r, walk_slack(a, b, c, mode));
       if (span.x > span.y) continue;
       if (pass == 0u) {
