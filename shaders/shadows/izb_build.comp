@@ -4,9 +4,7 @@
 #include "shadows/izb_pixel.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
-#include "shadows/izb_triangles.glsl"
 
 // IZB_FLAG_ROW_RUNS: the workgroup's texels (none: 0xffffffff), node depths and the list heads its
 // runs replaced (see main).
@@ -52,12 +50,6 @@ bool csm_proves_shadowed(vec3 g) {
 }
 
 void main() {
-  uint pixel_rows = (params.extent.y + 7u) / 8u;
-  if (izb_flag(IZB_FLAG_TRIANGLES_IN_BUILD) && gl_WorkGroupID.y >= pixel_rows) {  // uniform per workgroup
-    set_up_triangle_slot(((gl_WorkGroupID.y - pixel_rows) * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u +
-                         gl_LocalInvocationIndex);
-    return;
-  }
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   uint covered = 0u, candidate = 0u, culled = 0u, lit_culled = 0u;

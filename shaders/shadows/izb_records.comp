@@ -6,6 +6,7 @@
 layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
+#include "shadows/izb_triangles.glsl"
 
 // The workgroup's work laid end to end, a thread per item: each thread's triangle, its direct texels
 // (a rectangle) and its first tile row, and where its texels and its rows start (exclusive prefix sums;
@@ -40,15 +41,30 @@ void main() {
   // The workgroup's triangles, a thread each; the other threads only help walk.
   uint per_group = step_one_triangles();
   uint index = row_dispatch_index(gl_WorkGroupID, gl_LocalInvocationIndex, per_group);
-  bool in_range = gl_LocalInvocationIndex < per_group && index < listed_triangle_count();
-  uint t = in_range ? listed_triangle(index) : 0u;
   uint mode = kIzbWork;
   vec3 a = vec3(0.0), b = vec3(0.0), c = vec3(0.0);
+  bool in_range;
+  uint t;
+  if (izb_flag(IZB_FLAG_TRIANGLES_IN_TRACE) && mode == IZB_WORK_TRACE) {
+    // Every caster triangle, set up and listed here (IZB_FLAG_TRIANGLES_IN_TRACE); those that do not
+    // reach the grid are left.
+    in_range = gl_LocalInvocationIndex < per_group && index < push.triangle_count;
+    t = in_range ? index : 0u;
+    vec3 grid[3];
+    if (in_range) in_range = set_up_triangle(t, grid);
+    list_triangle(in_range, t);
+    a = grid[0];
+    b = grid[1];
+    c = grid[2];
+  } else {
+    in_range = gl_LocalInvocationIndex < per_group && index < listed_triangle_count();
+    t = in_range ? listed_triangle(index) : 0u;
+    if (in_range && triangle_wanted(t, mode)) load_grid_triangle(t, a, b, c);
+  }
   float area = 0.0;
   ivec2 rows = ivec2(0, -1);
   ivec4 direct = ivec4(0, 0, -1, -1);  // texels [xy, zw] worked here (the trace: its pairs listed)
   if (in_range && triangle_wanted(t, mode)) {
-    load_grid_triangle(t, a, b, c);
     area = edge_fn(c.xy, a.xy, b.xy);
     bool useful = !is_csm_work(mode) || triangle_can_cover_a_texel(a, b, c, area);
     // (Edge-on to the light, |area| <= 1e-10: no trace tests it, so the lit map needs it neither.)

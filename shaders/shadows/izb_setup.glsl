@@ -181,4 +181,9 @@ void set_up_frustum() {
   barrier();  // the grid's transform, in shared memory, for every thread
   // With every caster triangle set up (IZB_FLAG_ALL_TRIANGLES), nothing reads the frustum's draws.
   if (!izb_flag(IZB_FLAG_ALL_TRIANGLES)) cull_draws(fitted_light_view_projection);
+  // The trace's step 1 sets up every caster triangle itself (IZB_FLAG_TRIANGLES_IN_TRACE).
+  if (izb_flag(IZB_FLAG_TRIANGLES_IN_TRACE) && gl_LocalInvocationIndex == 0u) {
+    uint per_group = step_one_triangles();
+    write_row_dispatch(IZB_COUNTER_STEP_ONE_DISPATCH, (push.triangle_count + per_group - 1u) / per_group);
+  }
 }

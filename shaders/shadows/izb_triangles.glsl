@@ -2,8 +2,8 @@
 // light depth) once per frame, or with IZB_FLAG_ALL_TRIANGLES (few casters) every caster triangle,
 // with no cull of the draws before; the CSM, both traces and the fallback read these. Those that reach
 // the grid are listed: the compute passes and the fallback walk only the listed triangles. Run by
-// izb_triangles.comp, or with IZB_FLAG_TRIANGLES_IN_BUILD by the build's extra workgroups. Include
-// after izb_prelude.glsl and the push constants.
+// izb_triangles.comp, or with IZB_FLAG_TRIANGLES_IN_TRACE by the compute trace's step 1
+// (izb_records.comp). Include after izb_prelude.glsl and the push constants.
 // A spot light: a triangle reaching behind its near plane (where the projection folds over) or within
 // twice the light's radius of it is left out of the grid (degenerate, far outside it: every pass skips
 // it) and listed after the grid triangles, from 3 * triangle_count on; the resolve ray-tests it in
@@ -49,11 +49,13 @@ bool reaches_grid(vec4 g0, vec4 g1, vec4 g2) {
   return all(greaterThanEqual(hi, vec2(-kIzbCullMargin))) && all(lessThanEqual(lo, vec2(res + kIzbCullMargin)));
 }
 
-// Writes triangle t's grid-space vertices; whether it is to be listed.
-bool set_up_triangle(uint t) {
+// Writes triangle t's grid-space vertices (also left in `grid`); whether it is to be listed.
+bool set_up_triangle(uint t, out vec3 grid[3]) {
+  grid = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
   vec3 v[3] = vec3[3](casters[t].p0.xyz, casters[t].p1.xyz, casters[t].p2.xyz);
   vec3 inv_w = vec3(1.0);
-  if (spot_light()) {
+  // (Trace step 1's copy leaves the spot light's code out: it sets up the sun's alone.)
+  if (!izb_flag(IZB_FLAG_TRIANGLES_IN_TRACE) && spot_light()) {
     bool apart = false, behind = true;
     float depth[3];
     for (int i = 0; i < 3; ++i) {
@@ -83,6 +85,7 @@ bool set_up_triangle(uint t) {
   for (uint i = 0u; i < 3u; ++i) {
     g[i] = vec4(to_grid(v[i]), inv_w[i]);
     grid_triangles[3u * t + i] = g[i];
+    grid[i] = g[i].xyz;
   }
   return reaches_grid(g[0], g[1], g[2]);
 }
@@ -104,7 +107,7 @@ uint frustum_triangle(uint slot) {
 // it touches no texel, so no pass would find work in it. With every triangle set up (no cull wrote
 // step 1's dispatch over the frustum's), step 1's dispatch is raised over the listed ones here.
 void list_triangle(bool listed, uint t) {
-  bool raise = izb_flag(IZB_FLAG_ALL_TRIANGLES);
+  bool raise = izb_flag(IZB_FLAG_ALL_TRIANGLES) && !izb_flag(IZB_FLAG_TRIANGLES_IN_TRACE);
   uint slot = reserve_slots_raising(IZB_COUNTER_LISTED_TRIANGLES, listed ? 1u : 0u, raise,
                                     IZB_COUNTER_STEP_ONE_DISPATCH, 0xffffffffu, step_one_triangles());
   if (listed) caster_draw_words[listed_triangle_word(slot)] = t;
@@ -119,6 +122,7 @@ void set_up_triangle_slot(uint slot) {
   bool in_range = slot < (all ? push.triangle_count : counters[IZB_COUNTER_FRUSTUM_TRIANGLES]);
   uint t = in_range ? (all ? slot : frustum_triangle(slot)) : 0u;
   bool listed = false;
-  if (in_range) listed = set_up_triangle(t);
+  vec3 grid[3];
+  if (in_range) listed = set_up_triangle(t, grid);
   list_triangle(listed, t);
 }

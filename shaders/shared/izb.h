@@ -49,10 +49,10 @@ SHARED_CONST uint IZB_FLAG_ROW_RUNS = 8192u;
 // serial step costs more than setting up a few triangles it would skip.
 SHARED_CONST uint IZB_FLAG_ALL_TRIANGLES = 16384u;
 SHARED_CONST uint kIzbAllTrianglesLimit = 8192u;
-// With IZB_FLAG_ALL_TRIANGLES where nothing between the light frustum and the build reads the
-// triangles (no CSM, no lit map): the build's dispatch sets them up in workgroups of its own, after
-// its pixels' rows, beside the pixels' work instead of in a pass before it.
-SHARED_CONST uint IZB_FLAG_TRIANGLES_IN_BUILD = 32768u;
+// With IZB_FLAG_ALL_TRIANGLES, the sun and the compute trace, where nothing before the trace reads the
+// triangles (no CSM, no lit map): the trace's step 1 sets up its triangles itself (izb_records.comp),
+// reading the casters' vertices where it would read the grid triangles, so no pass of their own.
+SHARED_CONST uint IZB_FLAG_TRIANGLES_IN_TRACE = 32768u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted

@@ -702,8 +702,8 @@ TEST_F(IzbTest, StepTimingsOnlyWhenAsked) {
     EXPECT_TRUE(has("frustum_trace"));
     for (const char* step : {"light_frustum_fit", "trace_records", "trace_tiles", "trace_texels", "trace_pairs"})
       EXPECT_EQ(has(step), steps) << step;
-    // Contact's few caster triangles are set up in the build's dispatch (no CSM nor lit map reads
-    // them before it): no step of their own.
+    // Contact's few caster triangles are set up by the trace's step 1 (no CSM nor lit map reads them
+    // before it): no step of their own.
     EXPECT_FALSE(has("light_frustum_triangles"));
     EXPECT_EQ(module_->stats().trace_choice.backend, "compute");
     module_.reset();

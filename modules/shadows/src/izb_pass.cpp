@@ -744,8 +744,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     flags |= gpu_shared::IZB_FLAG_ROW_RUNS;
   const bool all_triangles = m.triangle_count <= gpu_shared::kIzbAllTrianglesLimit;
   if (all_triangles) flags |= gpu_shared::IZB_FLAG_ALL_TRIANGLES;
-  const bool triangles_in_build = all_triangles && !run_csm && !lit;
-  if (triangles_in_build) flags |= gpu_shared::IZB_FLAG_TRIANGLES_IN_BUILD;
+  const bool triangles_in_trace = all_triangles && use_compute_trace && !run_csm && !lit && !spot;
+  if (triangles_in_trace) flags |= gpu_shared::IZB_FLAG_TRIANGLES_IN_TRACE;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
@@ -785,8 +785,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
       m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
     }
     // The triangles into grid space, listed where they reach it: those of the listed draws, or with
-    // few casters every one (where nothing before the build reads them, in the build's dispatch).
-    if (!triangles_in_build) {
+    // few casters every one (where nothing before the compute trace reads them, in its step 1).
+    if (!triangles_in_trace) {
       pass_barrier(frame.ctx, cmd);
       OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_triangles");
       if (all_triangles) {
@@ -828,14 +828,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
-    if (triangles_in_build) {
-      // Rows of workgroups after the pixels' for the triangles (IZB_FLAG_TRIANGLES_IN_BUILD).
-      const uint32_t columns = (frame.view.extent.width + 7) / 8;
-      const uint32_t triangle_rows = (m.triangle_count + 64 * columns - 1) / (64 * columns);
-      m.dispatch(cmd, frame, m.p->build, push, columns, (frame.view.extent.height + 7) / 8 + triangle_rows);
-    } else {
-      m.dispatch_pixels(cmd, frame, m.p->build, push);
-    }
+    m.dispatch_pixels(cmd, frame, m.p->build, push);
     if (sorted) {
       // Counting sort: counts (above) -> prefix sum -> scatter into contiguous ranges.
       const uint32_t blocks = uint32_t(m.scan_blocks.size() / 4);
