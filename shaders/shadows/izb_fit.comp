@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
 #include "shadows/izb_pixel.glsl"
-layout(local_size_x = 16, local_size_y = 16) in;  // each thread 2x2 pixels: a 32x32 block
+layout(local_size_x = 16, local_size_y = 16) in;  // a block of kIzbFitBlockWidth x kIzbFitBlockHeight pixels
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 // Coherent: the last workgroup reads every other workgroup's.
@@ -11,8 +11,16 @@ layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) coherent buffer B
 
 shared bool last_workgroup;
 
+// The invocation's k-th pixel: neighbouring invocations read neighbouring pixels at each k.
+const uint kFitColumns = kIzbFitBlockWidth / 16u;
+const uint kFitPixels = kFitColumns * (kIzbFitBlockHeight / 16u);
+ivec2 fit_pixel(uint k) {
+  uvec2 block = gl_WorkGroupID.xy * uvec2(kIzbFitBlockWidth, kIzbFitBlockHeight);
+  return ivec2(block + gl_LocalInvocationID.xy + 16u * uvec2(k % kFitColumns, k / kFitColumns));
+}
+
 // Light frustum fit, step 1: light-view x/y bounds of every lit candidate's ray origin (and, at 32
-// spp, its μQuad corners), reduced over the workgroup's 32x32 pixels and written once per workgroup:
+// spp, its μQuad corners), reduced over the workgroup's block of pixels and written once per workgroup:
 // no atomics on a handful of addresses. The last workgroup to finish reduces the partials, fits the
 // grid and culls the casters (izb_setup.glsl).
 void main() {
@@ -21,21 +29,21 @@ void main() {
   if (izb_samples() == 1u) {
     // Every covered point in range bounds the candidates among them (a superset: the window only
     // needs to hold every node), and a ray origin lies within the normal offset of its point. So
-    // one image load instead of the candidate test's three; the four issued before any is used.
-    vec4 position[4];
-    for (uint k = 0u; k < 4u; ++k) {
-      ivec2 pixel = ivec2(gl_WorkGroupID.xy * 32u + gl_LocalInvocationID.xy * 2u + uvec2(k & 1u, k >> 1u));
+    // one image load instead of the candidate test's three; all issued before any is used.
+    vec4 position[kFitPixels];
+    for (uint k = 0u; k < kFitPixels; ++k) {
+      ivec2 pixel = fit_pixel(k);
       position[k] = all(lessThan(uvec2(pixel), params.extent.xy)) ? imageLoad(world_position_image, pixel) : vec4(0.0);
     }
-    for (uint k = 0u; k < 4u; ++k) {
+    for (uint k = 0u; k < kFitPixels; ++k) {
       if (position[k].w <= 0.5 || distance(position[k].xyz, params.camera_position.xyz) > reach) continue;
       vec2 v = (params.light_view * vec4(position[k].xyz, 1.0)).xy;
       lo = min(lo, v - kShadowNormalOffset);
       hi = max(hi, v + kShadowNormalOffset);
     }
   }
-  for (uint k = 0u; k < 4u && izb_samples() != 1u; ++k) {
-    ivec2 pixel = ivec2(gl_WorkGroupID.xy * 32u + gl_LocalInvocationID.xy * 2u + uvec2(k & 1u, k >> 1u));
+  for (uint k = 0u; k < kFitPixels && izb_samples() != 1u; ++k) {
+    ivec2 pixel = fit_pixel(k);
     if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;
     PixelPoint p = load_pixel(pixel);
     if (!p.candidate) continue;

@@ -164,7 +164,7 @@ void cull_draws(mat4 light_view_projection) {
 // sits on the grid's edge), and whose depth range spans the casters (from the CPU, which knows their
 // bounds); then lists the caster draws whose bounds reach the grid. The fit's last workgroup runs it.
 void set_up_frustum() {
-  uint partials = ((params.extent.x + 31u) / 32u) * ((params.extent.y + 31u) / 32u);
+  uint partials = gl_NumWorkGroups.x * gl_NumWorkGroups.y;  // one per fit workgroup
   vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
   for (uint i = gl_LocalInvocationIndex; i < partials; i += kSetupThreads) {
     vec4 p = bounds_partials[i];

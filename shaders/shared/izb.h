@@ -138,6 +138,10 @@ SHARED_CONST uint kIzbTilePairsPerGroupGpu = 1u;
 SHARED_CONST uint kIzbTileStepRecordsGpu = 4u;  // step 2's records side by side on a GPU
 SHARED_CONST uint kIzbTilePairsPerGroupCpu = 16u;
 SHARED_CONST uint kIzbDispatchRow = 32768u;
+// The light frustum fit's workgroup (16x16 invocations) covers a block of this many pixels, so each
+// invocation (kIzbFitBlockWidth / 16) x (kIzbFitBlockHeight / 16), with its loads in flight together.
+SHARED_CONST uint kIzbFitBlockWidth = 32u;
+SHARED_CONST uint kIzbFitBlockHeight = 64u;
 SHARED_CONST uint kIzbPairGroup = 64u;             // pairs per workgroup of the compute trace
 
 // Per-pixel state bits beside the visibility mask.

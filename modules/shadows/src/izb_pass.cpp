@@ -59,6 +59,10 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_SCAN_BLOCKS, storage}};
 }
 
+// The light frustum fit's workgroups over the view (izb_fit.comp).
+uint32_t fit_columns(uint32_t width) { return (width + gpu_shared::kIzbFitBlockWidth - 1) / gpu_shared::kIzbFitBlockWidth; }
+uint32_t fit_rows(uint32_t height) { return (height + gpu_shared::kIzbFitBlockHeight - 1) / gpu_shared::kIzbFitBlockHeight; }
+
 uint32_t debug_code(DebugView debug) {
   switch (debug) {
     case DebugView::VisibilityMask: return 1;
@@ -319,7 +323,7 @@ struct IzbPass::Impl {
       pixel_state = Buffer(ctx, pixels * 4, usage, false, "izb pixel state");
       overflow_list = Buffer(ctx, pixels * 4, usage, false, "izb overflow pixels");
       occluder_distance = Buffer(ctx, pixels * 4, usage, false, "izb nearest occluder distance");
-      const VkDeviceSize fit_groups = VkDeviceSize((e.width + 31) / 32) * ((e.height + 31) / 32);
+      const VkDeviceSize fit_groups = VkDeviceSize(fit_columns(e.width)) * fit_rows(e.height);
       bounds_partials = Buffer(ctx, fit_groups * 16, usage, false, "izb fit bounds per workgroup");
       const uint32_t stride = spp == 32 ? gpu_shared::kIzbQuadFloats32 : gpu_shared::kIzbQuadFloats1;
       quads = Buffer(ctx, pixels * stride * 4, usage, false, "izb pixel light-space data");
@@ -782,7 +786,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
       // The last of its workgroups also fits the grid and (with many casters) lists the caster draws
       // whose bounds reach it.
       OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_fit");
-      m.dispatch(cmd, frame, m.p->fit, push, (frame.view.extent.width + 31) / 32, (frame.view.extent.height + 31) / 32);
+      m.dispatch(cmd, frame, m.p->fit, push, fit_columns(frame.view.extent.width), fit_rows(frame.view.extent.height));
     }
     // The triangles into grid space, listed where they reach it: those of the listed draws, or with
     // few casters every one (where nothing before the compute trace reads them, in its step 1).
