@@ -9,8 +9,10 @@ layout(local_size_x = kIzbPairGroup) in;
 void main() {
   uint index = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * kIzbPairGroup + gl_LocalInvocationID.x;
   uint tests = 0u;
+  // The pair is loaded beside the count (within the buffer, a stale one is read and left): one round
+  // trip to memory before the walk, not two.
+  uvec2 pair = index < params.limits.w ? pairs[index] : uvec2(0u);
   if (index < min(counters[IZB_COUNTER_PAIRS], params.limits.w)) {
-    uvec2 pair = pairs[index];
     vec3 a, b, c;
     load_grid_triangle(pair.x, a, b, c);
     tests = trace_texel_list(pair.y, pair.x, a, b, c, 1.0 / edge_fn(c.xy, a.xy, b.xy));
