@@ -7,15 +7,40 @@ layout(local_size_x = kIzbTile, local_size_y = kIzbTile) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
+// The CSM: kIzbCsmPairsPerRound pairs side by side, an invocation per 2x2 texels of its pair's tile
+// (a texel's corners are its neighbours': evaluated once).
+void csm_pairs(uint group, uint mode, uint count) {
+  uint per_group = tile_pairs_per_group(mode);
+  uint lanes = kIzbTile * kIzbTile / 4u;
+  uint unit = gl_LocalInvocationIndex / lanes, lane = gl_LocalInvocationIndex % lanes;
+  ivec2 offset = 2 * ivec2(lane % (kIzbTile / 2u), lane / (kIzbTile / 2u));
+  for (uint k = 0u; k < per_group; k += kIzbCsmPairsPerRound) {
+    if (group * per_group + k >= count) break;  // uniform over the workgroup
+    uint index = group * per_group + k + unit;
+    if (index >= count) break;
+    uvec2 pair = tile_pairs[index];
+    vec3 a, b, c;
+    load_grid_triangle(pair.x, a, b, c);
+    float area = edge_fn(c.xy, a.xy, b.xy);
+    uvec2 tile = uvec2(pair.y % tiles_per_side(), pair.y / tiles_per_side());
+    csm_texel_quad(ivec2(tile * kIzbTile) + offset, a, b, c, area, mode);
+  }
+}
+
 // Compute trace / compute CSM, step 3 (see izb.h): a thread per texel of kIzbTilePairsPerGroup
-// (triangle, tile) pairs. The CSM writes fully covered texels' depth bounds, the lit map touched
-// texels' nearest-depth bounds; the trace keeps the
-// (triangle, texel) pairs that touch and survive the texel's farthest-node cull, appended densely so
-// the list walks of step 4 fill every lane. A pair that does not fit the buffer is traced here.
+// (triangle, tile) pairs (the CSM: per 2x2 texels of tile_pairs_per_group pairs). The CSM writes
+// fully covered texels' depth bounds, the lit map touched texels' nearest-depth bounds; the trace
+// keeps the (triangle, texel) pairs that touch and survive the texel's farthest-node cull, appended
+// densely so the list walks of step 4 fill every lane. A pair that does not fit the buffer is traced
+// here.
 void main() {
   uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
   uint mode = kIzbWork;
   uint count = tile_pair_count(mode);
+  if (is_csm_work(mode)) {  // a specialization constant
+    csm_pairs(group, mode, count);
+    return;
+  }
   uint fragments = 0u, kept = 0u;
   for (uint k = 0u; k < kIzbTilePairsPerGroup; ++k) {
     uint index = group * kIzbTilePairsPerGroup + k;
@@ -29,10 +54,6 @@ void main() {
     bool inside = all(lessThan(uvec2(texel), uvec2(izb_resolution())));
     if (mode == IZB_WORK_LIT) {
       if (inside) lit_texel(texel, a, b, c, area);
-      continue;
-    }
-    if (mode != IZB_WORK_TRACE) {
-      if (inside) csm_texel(texel, a, b, c, area, mode);
       continue;
     }
     uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;

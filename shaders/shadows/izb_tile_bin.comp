@@ -31,7 +31,7 @@ void main() {
       uvec2 tile = uvec2(rec.z + x0 + lane, rec.y);
       bool keep = tile.x <= rec.w && tile_survives(tile, a, b, c, area, mode);
       uint slot = reserve_group_slots(slot_counter, keep ? 1u : 0u, tile_pair_dispatch_at(mode), params.capacities.x,
-                                      kIzbTilePairsPerGroup);
+                                      tile_pairs_per_group(mode));
       if (keep) {
         if (slot < params.capacities.x) tile_pairs[slot] = uvec2(rec.x, tile.y * tiles_per_side() + tile.x);
         else work_tile_here(tile, rec.x, a, b, c, area, mode);

@@ -30,6 +30,12 @@ uint record_dispatch_at(uint mode) { return izb_step_dispatch_at(mode); }
 uint tile_pair_dispatch_at(uint mode) { return izb_step_dispatch_at(mode) + 3u; }
 uint record_count(uint mode) { return min(counters[record_counter(mode)], params.limits.z); }
 uint tile_pair_count(uint mode) { return min(counters[tile_pair_counter(mode)], params.capacities.x); }
+// Step 3's (triangle, tile) pairs per workgroup: the CSM works kIzbCsmPairsPerRound side by side, an
+// invocation per 2x2 texels (izb_texel_bin.comp).
+const uint kIzbCsmPairsPerRound = 4u;
+uint tile_pairs_per_group(uint mode) {
+  return is_csm_work(mode) ? max(kIzbTilePairsPerGroup, kIzbCsmPairsPerRound) : kIzbTilePairsPerGroup;
+}
 
 // The lit map takes every caster; the CSM those chosen for it this frame.
 bool triangle_wanted(uint t, uint mode) {
@@ -132,35 +138,70 @@ uint trace_pair_outcome(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   return IZB_PAIR_KEPT;
 }
 
-// CSM: where the triangle fully covers the texel (Hertel's or the barycentric test, the same
-// arithmetic as csm.frag), the nearest bound so far of its farthest depth over the texel.
-void csm_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint test) {
-  vec2 lo = vec2(texel);
-  vec2 corners[4] = vec2[4](lo, lo + vec2(1, 0), lo + vec2(0, 1), lo + vec2(1, 1));
-  if (test == IZB_WORK_CSM_HERTEL) {
-    vec2 centre = lo + 0.5;
-    vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
-    for (int i = 0; i < 3; ++i) {
-      vec2 e0 = p[i];
-      vec2 e1 = p[(i + 1) % 3];
-      float distance_in = sign(area) * edge_fn(centre, e0, e1) / length(e1 - e0);
-      if (distance_in < 0.70710678 + kCsmDistanceSlack) return;
-    }
+// CSM at one corner of a texel: its barycentric weights (each against the test's slack: true when the
+// corner is inside) and the triangle's plane depth there.
+bool csm_corner(vec2 corner, vec3 a, vec3 b, vec3 c, float area, out float depth) {
+  float w0 = edge_fn(corner, b.xy, c.xy) / area;
+  float w1 = edge_fn(corner, c.xy, a.xy) / area;
+  float w2 = 1.0 - w0 - w1;
+  depth = w0 * a.z + w1 * b.z + w2 * c.z;
+  return !(w0 < kCsmBarycentricSlack || w1 < kCsmBarycentricSlack || w2 < kCsmBarycentricSlack);
+}
+
+// CSM, Hertel's test: whether the texel's centre lies far enough inside every edge.
+bool csm_hertel_covers(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
+  vec2 centre = vec2(texel) + 0.5;
+  vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
+  for (int i = 0; i < 3; ++i) {
+    vec2 e0 = p[i];
+    vec2 e1 = p[(i + 1) % 3];
+    float distance_in = sign(area) * edge_fn(centre, e0, e1) / length(e1 - e0);
+    if (distance_in < 0.70710678 + kCsmDistanceSlack) return false;
   }
-  float far_depth = -1.0e30;
-  for (int i = 0; i < 4; ++i) {
-    float w0 = edge_fn(corners[i], b.xy, c.xy) / area;
-    float w1 = edge_fn(corners[i], c.xy, a.xy) / area;
-    float w2 = 1.0 - w0 - w1;
-    if (test == IZB_WORK_CSM_BARYCENTRIC &&
-        (w0 < kCsmBarycentricSlack || w1 < kCsmBarycentricSlack || w2 < kCsmBarycentricSlack))
-      return;
-    far_depth = max(far_depth, w0 * a.z + w1 * b.z + w2 * c.z);
-  }
-  // Depths in [0,1]: float order is bit order.
+  return true;
+}
+
+// CSM: lowers the texel's stored bound to `far_depth` (depths in [0,1]: float order is bit order).
+void csm_store(ivec2 texel, float far_depth) {
   uint bits = floatBitsToUint(clamp(far_depth, 0.0, 1.0));
   uint index = texel_index(texel);
   if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+}
+
+// CSM: where the triangle fully covers the texel (Hertel's or the barycentric test, the same
+// arithmetic as csm.frag), the nearest bound so far of its farthest depth over the texel.
+void csm_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint test) {
+  if (test == IZB_WORK_CSM_HERTEL && !csm_hertel_covers(texel, a, b, c, area)) return;
+  float far_depth = -1.0e30;
+  for (int i = 0; i < 4; ++i) {
+    float depth;
+    bool inside = csm_corner(vec2(texel + ivec2(i & 1, i >> 1)), a, b, c, area, depth);
+    if (test == IZB_WORK_CSM_BARYCENTRIC && !inside) return;
+    far_depth = max(far_depth, depth);
+  }
+  csm_store(texel, far_depth);
+}
+
+// csm_texel over the 2x2 texels from `first` (those inside the grid), each of their 9 corners
+// evaluated once: the same arithmetic per corner, so the same bounds.
+void csm_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area, uint test) {
+  float depth[9];
+  bool inside[9];
+  for (int i = 0; i < 9; ++i) inside[i] = csm_corner(vec2(first + ivec2(i % 3, i / 3)), a, b, c, area, depth[i]);
+  for (int k = 0; k < 4; ++k) {
+    ivec2 texel = first + ivec2(k & 1, k >> 1);
+    if (any(greaterThanEqual(uvec2(texel), uvec2(izb_resolution())))) continue;
+    int corner = (k >> 1) * 3 + (k & 1);  // its lower-left corner among the 9
+    int corners[4] = int[4](corner, corner + 1, corner + 3, corner + 4);
+    if (test == IZB_WORK_CSM_HERTEL && !csm_hertel_covers(texel, a, b, c, area)) continue;
+    bool covered = true;
+    float far_depth = -1.0e30;
+    for (int i = 0; i < 4; ++i) {
+      covered = covered && (test != IZB_WORK_CSM_BARYCENTRIC || inside[corners[i]]);
+      far_depth = max(far_depth, depth[corners[i]]);
+    }
+    if (covered) csm_store(texel, far_depth);
+  }
 }
 
 // Lit map: where the triangle touches the widened texel, lowers the texel's bound to the triangle's.
