@@ -383,22 +383,33 @@ uint lit_corner_index(ivec2 corner) {
 // Lowers the four corners of `texel` to a lower bound of the triangle's plane there as the node test
 // computes depths (the same margins as lit_nearest_depth, plus the rounding of the plane's own
 // evaluation, and of its slopes, whose numerators cancel for a triangle nearly edge-on).
-void lower_lit_corners(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
+struct LitPlane {
+  float dzdx, dzdy;                    // plane_slopes
+  float slope_error_x, slope_error_y;  // their rounding, per texel of run
+  float rounding;                      // lit_barycentric_rounding
+};
+LitPlane lit_plane(vec3 a, vec3 b, vec3 c, float area) {
+  LitPlane q;
   vec2 slope = plane_slopes(a, b, c, area);
-  float dzdx = slope.x, dzdy = slope.y;
-  float slope_error_x = 1.0e-6 * (abs((b.z - a.z) * (c.y - a.y)) + abs((c.z - a.z) * (b.y - a.y))) / abs(area);
-  float slope_error_y = 1.0e-6 * (abs((c.z - a.z) * (b.x - a.x)) + abs((b.z - a.z) * (c.x - a.x))) / abs(area);
-  float rounding = lit_barycentric_rounding(a, b, c, area);
-  for (int k = 0; k < 4; ++k) {
-    ivec2 corner = texel + ivec2(k & 1, k >> 1);
-    vec2 run = abs(vec2(corner) - a.xy);
-    float plane = a.z + dzdx * (float(corner.x) - a.x) + dzdy * (float(corner.y) - a.y);
-    float bound = plane - 1.0e-6 - 1.0e-6 * (abs(plane) + abs(a.z) + abs(dzdx) * run.x + abs(dzdy) * run.y) -
-                  slope_error_x * run.x - slope_error_y * run.y - rounding;
-    uint bits = ordered_depth_bits(abs(bound) < 3.0e38 ? bound : -3.0e38);
-    uint index = lit_corner_index(corner);
-    if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
-  }
+  q.dzdx = slope.x;
+  q.dzdy = slope.y;
+  q.slope_error_x = 1.0e-6 * (abs((b.z - a.z) * (c.y - a.y)) + abs((c.z - a.z) * (b.y - a.y))) / abs(area);
+  q.slope_error_y = 1.0e-6 * (abs((c.z - a.z) * (b.x - a.x)) + abs((b.z - a.z) * (c.x - a.x))) / abs(area);
+  q.rounding = lit_barycentric_rounding(a, b, c, area);
+  return q;
+}
+void lower_lit_corner(ivec2 corner, vec3 a, LitPlane q) {
+  vec2 run = abs(vec2(corner) - a.xy);
+  float plane = a.z + q.dzdx * (float(corner.x) - a.x) + q.dzdy * (float(corner.y) - a.y);
+  float bound = plane - 1.0e-6 - 1.0e-6 * (abs(plane) + abs(a.z) + abs(q.dzdx) * run.x + abs(q.dzdy) * run.y) -
+                q.slope_error_x * run.x - q.slope_error_y * run.y - q.rounding;
+  uint bits = ordered_depth_bits(abs(bound) < 3.0e38 ? bound : -3.0e38);
+  uint index = lit_corner_index(corner);
+  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+}
+void lower_lit_corners(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
+  LitPlane q = lit_plane(a, b, c, area);
+  for (int k = 0; k < 4; ++k) lower_lit_corner(texel + ivec2(k & 1, k >> 1), a, q);
 }
 // Whether grid point `g` is proved lit: inside the grid (outside it the texel clamp would compare it
 // with a texel that is not its own) and no farther than its texel's bound, or than the blend of its

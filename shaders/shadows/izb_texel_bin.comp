@@ -7,14 +7,14 @@ layout(local_size_x = kIzbTile, local_size_y = kIzbTile) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
-// The CSM: kIzbCsmPairsPerRound pairs side by side, an invocation per 2x2 texels of its pair's tile
-// (a texel's corners are its neighbours': evaluated once).
-void csm_pairs(uint group, uint mode, uint count) {
+// The CSM and lit map: kIzbQuadPairsPerRound pairs side by side, an invocation per 2x2 texels of its
+// pair's tile (a texel's corners are its neighbours': evaluated once).
+void quad_pairs(uint group, uint mode, uint count) {
   uint per_group = tile_pairs_per_group(mode);
   uint lanes = kIzbTile * kIzbTile / 4u;
   uint unit = gl_LocalInvocationIndex / lanes, lane = gl_LocalInvocationIndex % lanes;
   ivec2 offset = 2 * ivec2(lane % (kIzbTile / 2u), lane / (kIzbTile / 2u));
-  for (uint k = 0u; k < per_group; k += kIzbCsmPairsPerRound) {
+  for (uint k = 0u; k < per_group; k += kIzbQuadPairsPerRound) {
     if (group * per_group + k >= count) break;  // uniform over the workgroup
     uint index = group * per_group + k + unit;
     if (index >= count) break;
@@ -23,12 +23,14 @@ void csm_pairs(uint group, uint mode, uint count) {
     load_grid_triangle(pair.x, a, b, c);
     float area = edge_fn(c.xy, a.xy, b.xy);
     uvec2 tile = uvec2(pair.y % tiles_per_side(), pair.y / tiles_per_side());
-    csm_texel_quad(ivec2(tile * kIzbTile) + offset, a, b, c, area, mode);
+    ivec2 first = ivec2(tile * kIzbTile) + offset;
+    if (mode == IZB_WORK_LIT) lit_texel_quad(first, a, b, c, area);
+    else csm_texel_quad(first, a, b, c, area, mode);
   }
 }
 
 // Compute trace / compute CSM, step 3 (see izb.h): a thread per texel of kIzbTilePairsPerGroup
-// (triangle, tile) pairs (the CSM: per 2x2 texels of tile_pairs_per_group pairs). The CSM writes
+// (triangle, tile) pairs (the CSM and lit map: per 2x2 texels of tile_pairs_per_group pairs). The CSM writes
 // fully covered texels' depth bounds, the lit map touched texels' nearest-depth bounds; the trace
 // keeps the (triangle, texel) pairs that touch and survive the texel's farthest-node cull, appended
 // densely so the list walks of step 4 fill every lane. A pair that does not fit the buffer is traced
@@ -37,8 +39,8 @@ void main() {
   uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
   uint mode = kIzbWork;
   uint count = tile_pair_count(mode);
-  if (is_csm_work(mode)) {  // a specialization constant
-    csm_pairs(group, mode, count);
+  if (works_texel_quads(mode)) {  // a specialization constant
+    quad_pairs(group, mode, count);
     return;
   }
   uint fragments = 0u, kept = 0u;
@@ -52,10 +54,6 @@ void main() {
     uvec2 tile = uvec2(pair.y % tiles_per_side(), pair.y / tiles_per_side());
     ivec2 texel = ivec2(tile * kIzbTile + gl_LocalInvocationID.xy);
     bool inside = all(lessThan(uvec2(texel), uvec2(izb_resolution())));
-    if (mode == IZB_WORK_LIT) {
-      if (inside) lit_texel(texel, a, b, c, area);
-      continue;
-    }
     uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;
     bool keep = outcome == IZB_PAIR_KEPT;
     uint want = keep ? 1u : 0u;

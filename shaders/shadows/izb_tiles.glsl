@@ -30,11 +30,12 @@ uint record_dispatch_at(uint mode) { return izb_step_dispatch_at(mode); }
 uint tile_pair_dispatch_at(uint mode) { return izb_step_dispatch_at(mode) + 3u; }
 uint record_count(uint mode) { return min(counters[record_counter(mode)], params.limits.z); }
 uint tile_pair_count(uint mode) { return min(counters[tile_pair_counter(mode)], params.capacities.x); }
-// Step 3's (triangle, tile) pairs per workgroup: the CSM works kIzbCsmPairsPerRound side by side, an
-// invocation per 2x2 texels (izb_texel_bin.comp).
-const uint kIzbCsmPairsPerRound = 4u;
+// Step 3's (triangle, tile) pairs per workgroup: the CSM and lit map work kIzbQuadPairsPerRound side
+// by side, an invocation per 2x2 texels (izb_texel_bin.comp).
+const uint kIzbQuadPairsPerRound = 4u;
+bool works_texel_quads(uint mode) { return mode != IZB_WORK_TRACE; }
 uint tile_pairs_per_group(uint mode) {
-  return is_csm_work(mode) ? max(kIzbTilePairsPerGroup, kIzbCsmPairsPerRound) : kIzbTilePairsPerGroup;
+  return works_texel_quads(mode) ? max(kIzbTilePairsPerGroup, kIzbQuadPairsPerRound) : kIzbTilePairsPerGroup;
 }
 
 // The lit map takes every caster; the CSM those chosen for it this frame.
@@ -213,6 +214,32 @@ void lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   uint index = lit_map_index(texel_index(texel));
   if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
   lower_lit_corners(texel, a, b, c, area);
+}
+
+// lit_texel over the 2x2 texels from `first` (those inside the grid): each of their 9 corners is
+// lowered once where a touched texel of the four has it, to the same bound.
+void lit_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area) {
+  float slack = lit_slack(a, b, c);
+  uint touched = 0u;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 texel = first + ivec2(k & 1, k >> 1);
+    if (any(greaterThanEqual(uvec2(texel), uvec2(izb_resolution())))) continue;
+    vec2 lo = vec2(texel);
+    if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) continue;
+    touched |= 1u << k;
+    uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
+    uint index = lit_map_index(texel_index(texel));
+    if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  }
+  if (touched == 0u) return;
+  LitPlane q = lit_plane(a, b, c, area);
+  for (int corner = 0; corner < 9; ++corner) {
+    int i = corner % 3, j = corner / 3;
+    uint adjacent = 0u;  // the texels of the four that have this corner
+    for (int k = 0; k < 4; ++k)
+      if ((k & 1) <= i && i <= (k & 1) + 1 && (k >> 1) <= j && j <= (k >> 1) + 1) adjacent |= 1u << k;
+    if ((touched & adjacent) != 0u) lower_lit_corner(first + ivec2(i, j), a, q);
+  }
 }
 
 // Step 3 for one texel of a kept tile, done serially where a buffer overflowed.
