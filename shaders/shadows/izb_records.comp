@@ -108,60 +108,42 @@ void main() {
 
   // The small triangles' texels: the lit map and CSM write them, the trace lists its pairs for step 4
   // (counted first, so that the workgroup reserves them with one atomic, then written).
+  // (The count's outcomes of a thread's first 32 texels are kept for the write, as bits.)
   uint total_texels = walk_texel_start[64];
   uint kept_total = 0u, fragments = 0u, kept_bits = 0u;
-  if (mode == IZB_WORK_TRACE) {
-    // The trace counts its pairs first, kIzbCountBatch texels a round with their farthest-node loads
-    // issued together (each round otherwise waits for one load). The outcomes of a thread's first 32
-    // texels are kept for the write, as bits.
-    const uint kIzbCountBatch = 4u;
-    for (uint j0 = lane, round = 0u; j0 < total_texels; j0 += 64u * kIzbCountBatch, round += kIzbCountBatch) {
-      ivec2 texel[kIzbCountBatch];
-      uint owner[kIzbCountBatch];
-      float farthest_node[kIzbCountBatch];
-      for (uint u = 0u; u < kIzbCountBatch; ++u) {
-        uint j = min(j0 + 64u * u, total_texels - 1u);  // (a repeat past the end is not counted)
-        owner[u] = walk_owner(j, false);
-        ivec4 d = walk_direct[owner[u]];
-        uint i = j - walk_texel_start[owner[u]];
-        uint width = uint(d.z - d.x + 1);
-        texel[u] = d.xy + ivec2(i % width, i / width);
-        farthest_node[u] = texel_farthest_node(texel[u]);
+  for (uint pass = (mode == IZB_WORK_TRACE ? 0u : 1u); pass < 2u; ++pass) {  // trace: count, then write
+    uint slot = 0u;
+    if (pass == 1u && mode == IZB_WORK_TRACE)
+      slot = reserve_group_slots(IZB_COUNTER_PAIRS, kept_total, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
+    for (uint j = lane, round = 0u; j < total_texels; j += 64u, ++round) {
+      uint owner = walk_owner(j, false);
+      uint texel_triangle = walk_triangle[owner];
+      ivec4 d = walk_direct[owner];
+      uint i = j - walk_texel_start[owner];
+      uint width = uint(d.z - d.x + 1);
+      ivec2 texel = d.xy + ivec2(i % width, i / width);
+      a = walk_a[owner].xyz;
+      b = walk_b[owner].xyz;
+      c = walk_c[owner].xyz;
+      area = walk_a[owner].w;
+      if (mode != IZB_WORK_TRACE) {
+        work_texel_here(texel, texel_triangle, a, b, c, area, mode);
+        continue;
       }
-      for (uint u = 0u; u < kIzbCountBatch && j0 + 64u * u < total_texels; ++u) {
-        uint outcome = trace_pair_outcome_with(texel[u], farthest_node[u], walk_a[owner[u]].xyz, walk_b[owner[u]].xyz,
-                                               walk_c[owner[u]].xyz, walk_a[owner[u]].w);
+      uint outcome;
+      if (pass == 1u && round < 32u) outcome = (kept_bits & (1u << round)) != 0u ? IZB_PAIR_KEPT : IZB_PAIR_CULLED;
+      else outcome = trace_pair_outcome(texel, a, b, c, area);
+      if (pass == 0u) {
         kept_total += outcome == IZB_PAIR_KEPT ? 1u : 0u;
         fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
-        if (outcome == IZB_PAIR_KEPT && round + u < 32u) kept_bits |= 1u << (round + u);
+        if (outcome == IZB_PAIR_KEPT && round < 32u) kept_bits |= 1u << round;
+        continue;
       }
+      if (outcome != IZB_PAIR_KEPT) continue;
+      if (slot < params.limits.w) pairs[slot] = uvec2(texel_triangle, texel_index(texel));
+      else trace_texel_list(texel_index(texel), texel_triangle, a, b, c, 1.0 / area);
+      ++slot;
     }
-  }
-  // The lit map and CSM work the texels; the trace writes the pairs it counted.
-  uint slot = 0u;
-  if (mode == IZB_WORK_TRACE)
-    slot = reserve_group_slots(IZB_COUNTER_PAIRS, kept_total, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
-  for (uint j = lane, round = 0u; j < total_texels; j += 64u, ++round) {
-    uint owner = walk_owner(j, false);
-    uint texel_triangle = walk_triangle[owner];
-    ivec4 d = walk_direct[owner];
-    uint i = j - walk_texel_start[owner];
-    uint width = uint(d.z - d.x + 1);
-    ivec2 texel = d.xy + ivec2(i % width, i / width);
-    a = walk_a[owner].xyz;
-    b = walk_b[owner].xyz;
-    c = walk_c[owner].xyz;
-    area = walk_a[owner].w;
-    if (mode != IZB_WORK_TRACE) {
-      work_texel_here(texel, texel_triangle, a, b, c, area, mode);
-      continue;
-    }
-    uint outcome = round < 32u ? ((kept_bits & (1u << round)) != 0u ? IZB_PAIR_KEPT : IZB_PAIR_CULLED)
-                               : trace_pair_outcome(texel, a, b, c, area);
-    if (outcome != IZB_PAIR_KEPT) continue;
-    if (slot < params.limits.w) pairs[slot] = uvec2(texel_triangle, texel_index(texel));
-    else trace_texel_list(texel_index(texel), texel_triangle, a, b, c, 1.0 / area);
-    ++slot;
   }
   if (izb_flag(IZB_FLAG_STATS) && mode == IZB_WORK_TRACE) {
     add_sharded(IZB_COUNTER_FRAGMENTS, fragments, IZB_SHARD_SEED);

@@ -126,24 +126,17 @@ bool tile_survives(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
 const uint IZB_PAIR_OUTSIDE = 0u;  // the triangle does not touch the texel
 const uint IZB_PAIR_CULLED = 1u;   // touches, but lies behind every node of the texel
 const uint IZB_PAIR_KEPT = 2u;
-// The texel's farthest node depth as the cull reads it (unread without the depth cull).
-float texel_farthest_node(ivec2 texel) {
-  return izb_flag(IZB_FLAG_NO_DEPTH_CULL) ? 0.0 : uintBitsToFloat(farthest[texel_index(texel)]);
-}
-// trace_pair_outcome with the texel's farthest node depth already read (texel_farthest_node).
-uint trace_pair_outcome_with(ivec2 texel, float farthest_node, vec3 a, vec3 b, vec3 c, float area) {
+uint trace_pair_outcome(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   vec2 lo = vec2(texel);
   bool counting = izb_flag(IZB_FLAG_STATS);
   if (counting && !rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
   if (!izb_flag(IZB_FLAG_NO_DEPTH_CULL)) {
+    float farthest_node = uintBitsToFloat(farthest[texel_index(texel)]);
     if (farthest_node <= 0.0 || triangle_nearest_depth(lo, lo + 1.0, a, b, c, area) >= farthest_node)
       return IZB_PAIR_CULLED;
   }
   if (!counting && !rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
   return IZB_PAIR_KEPT;
-}
-uint trace_pair_outcome(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
-  return trace_pair_outcome_with(texel, texel_farthest_node(texel), a, b, c, area);
 }
 
 // CSM at one corner of a texel: its barycentric weights (each against the test's slack: true when the
