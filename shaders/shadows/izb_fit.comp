@@ -20,9 +20,9 @@ ivec2 fit_pixel(uint k) {
 }
 
 // Light frustum fit, step 1: light-view x/y bounds of every lit candidate's ray origin (and, at 32
-// spp, its μQuad corners), reduced over the workgroup's block of pixels and written once per workgroup:
-// no atomics on a handful of addresses. The last workgroup to finish reduces the partials, fits the
-// grid and culls the casters (izb_setup.glsl).
+// spp, its μQuad corners), reduced over the workgroup's block of pixels and written once per
+// workgroup, not by atomics on the bounds' four addresses. One count per workgroup finds the last to
+// finish, which reduces the partials, fits the grid and culls the casters (izb_setup.glsl).
 void main() {
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
   float reach = izb_reach();
@@ -69,10 +69,13 @@ void main() {
     vec4 b = subgroup_bounds[0];
     for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
     bounds_partials[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = b;
-    memoryBarrierBuffer();  // the partial is visible before the count says so
-    uint done = atomicAdd(counters[IZB_COUNTER_FIT_GROUPS_DONE], 1u);
-    last_workgroup = done + 1u == gl_NumWorkGroups.x * gl_NumWorkGroups.y;
+    if (!izb_flag(IZB_FLAG_SETUP_APART)) {
+      memoryBarrierBuffer();  // the partial is visible before the count says so
+      uint done = atomicAdd(counters[IZB_COUNTER_FIT_GROUPS_DONE], 1u);
+      last_workgroup = done + 1u == gl_NumWorkGroups.x * gl_NumWorkGroups.y;
+    }
   }
+  if (izb_flag(IZB_FLAG_SETUP_APART)) return;  // a CPU device: izb_setup.comp runs the second step
   barrier();
   if (!last_workgroup) return;
   memoryBarrierBuffer();  // every partial, counted before this workgroup's, is read after the count

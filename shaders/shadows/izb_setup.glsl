@@ -1,7 +1,7 @@
 // The light frustum's fit (its second step) and the cull of the casters against it, run by the
 // fit's last workgroup (izb_fit.comp) once every workgroup's bounds are in: one dispatch, not one
-// for the fit and one for this single workgroup after it. Include after izb_prelude.glsl, the push
-// constants, in a shader of kSetupThreads invocations that declares `bounds_partials`.
+// for the fit and one for this single workgroup after it (on a CPU device, izb_setup.comp). Include after izb_prelude.glsl and the
+// push constants, in a shader of kSetupThreads invocations that declares `bounds_partials`.
 
 const uint kSetupThreads = 256u;
 shared vec4 subgroup_bounds[256];
@@ -164,7 +164,9 @@ void cull_draws(mat4 light_view_projection) {
 // sits on the grid's edge), and whose depth range spans the casters (from the CPU, which knows their
 // bounds); then lists the caster draws whose bounds reach the grid. The fit's last workgroup runs it.
 void set_up_frustum() {
-  uint partials = gl_NumWorkGroups.x * gl_NumWorkGroups.y;  // one per fit workgroup
+  // One per fit workgroup.
+  uint partials = ((params.extent.x + kIzbFitBlockWidth - 1u) / kIzbFitBlockWidth) *
+                  ((params.extent.y + kIzbFitBlockHeight - 1u) / kIzbFitBlockHeight);
   vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
   for (uint i = gl_LocalInvocationIndex; i < partials; i += kSetupThreads) {
     vec4 p = bounds_partials[i];

@@ -53,6 +53,10 @@ SHARED_CONST uint kIzbAllTrianglesLimit = 8192u;
 // triangles (no CSM, no lit map): the trace's step 1 sets up its triangles itself (izb_records.comp),
 // reading the casters' vertices where it would read the grid triangles, so no pass of their own.
 SHARED_CONST uint IZB_FLAG_TRIANGLES_IN_TRACE = 32768u;
+// A CPU device: the fit's second step (izb_setup.glsl) runs as a single-workgroup dispatch of its own
+// after the fit, not in the fit's last workgroup: the barrier that finds the last one in every
+// workgroup costs a CPU driver more than the dispatch.
+SHARED_CONST uint IZB_FLAG_SETUP_APART = 65536u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted

@@ -83,7 +83,7 @@ struct IzbPass::Impl {
     Pipeline software, hardware, count_software, count_hardware;
   };
   struct Pipelines {
-    Pipeline fit, build, fallback, list_stats, grid_setup, scan, scatter;
+    Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
     // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use (tile_work_for()) with the
     // set's constants.
     struct TileWork {
@@ -222,6 +222,7 @@ struct IzbPass::Impl {
       return factory.compute({shader, bindings, push, constants});
     };
     ps.fit = compute("izb_fit.comp");
+    if (cpu_device()) ps.setup = compute("izb_setup.comp");  // IZB_FLAG_SETUP_APART
     ps.build = compute("izb_build.comp");
     ps.fallback = compute("izb_fallback.comp");
     ps.list_stats = compute("izb_list_stats.comp");
@@ -750,6 +751,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (all_triangles) flags |= gpu_shared::IZB_FLAG_ALL_TRIANGLES;
   const bool triangles_in_trace = all_triangles && use_compute_trace && !run_csm && !lit && !spot;
   if (triangles_in_trace) flags |= gpu_shared::IZB_FLAG_TRIANGLES_IN_TRACE;
+  const bool setup_apart = m.cpu_device();
+  if (setup_apart) flags |= gpu_shared::IZB_FLAG_SETUP_APART;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
@@ -784,9 +787,14 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
     {
       // The last of its workgroups also fits the grid and (with many casters) lists the caster draws
-      // whose bounds reach it.
+      // whose bounds reach it; on a CPU device a dispatch of its own does (IZB_FLAG_SETUP_APART).
       OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_fit");
       m.dispatch(cmd, frame, m.p->fit, push, fit_columns(frame.view.extent.width), fit_rows(frame.view.extent.height));
+    }
+    if (setup_apart) {
+      pass_barrier(frame.ctx, cmd);
+      OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_cull");
+      m.dispatch(cmd, frame, m.p->setup, push, 1);
     }
     // The triangles into grid space, listed where they reach it: those of the listed draws, or with
     // few casters every one (where nothing before the compute trace reads them, in its step 1).

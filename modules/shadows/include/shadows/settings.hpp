@@ -99,8 +99,9 @@ struct IzbSettings {
   // in the CSM by CsmChoice::On keeps it running.
   bool csm_timed = false;
   // Times each step of the light frustum ("light_frustum_fit", which also fits the grid and culls
-  // the caster draws; "light_frustum_triangles", absent where the compute trace's first step sets up
-  // a scene's few caster triangles itself) and of the compute trace, CSM and lit map
+  // the caster draws, on a CPU device in a step of its own, "light_frustum_cull";
+  // "light_frustum_triangles", absent where the compute trace's first step sets up a scene's few
+  // caster triangles itself) and of the compute trace, CSM and lit map
   // ("<work>_records", "_tiles", "_texels", "trace_pairs") inside their pass's region. Each region's
   // timestamps wait for the work before them, a few µs per step on a GPU, so it is off where the
   // frame's time matters.
