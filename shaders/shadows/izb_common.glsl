@@ -380,9 +380,7 @@ float lit_nearest_depth(vec2 lo, vec2 hi, vec3 a, vec3 b, vec3 c, float area, fl
 uint lit_corner_index(ivec2 corner) {
   return 2u * izb_resolution() * izb_resolution() + uint(corner.y) * (izb_resolution() + 1u) + uint(corner.x);
 }
-// Lowers the four corners of `texel` to a lower bound of the triangle's plane there as the node test
-// computes depths (the same margins as lit_nearest_depth, plus the rounding of the plane's own
-// evaluation, and of its slopes, whose numerators cancel for a triangle nearly edge-on).
+// The triangle's plane as the lit map's corners bound it (lit_plane, lower_lit_corner).
 struct LitPlane {
   float dzdx, dzdy;                    // plane_slopes
   float slope_error_x, slope_error_y;  // their rounding, per texel of run
@@ -398,6 +396,9 @@ LitPlane lit_plane(vec3 a, vec3 b, vec3 c, float area) {
   q.rounding = lit_barycentric_rounding(a, b, c, area);
   return q;
 }
+// Lowers `corner` to a lower bound of the triangle's plane there as the node test computes depths
+// (the same margins as lit_nearest_depth, plus the rounding of the plane's own evaluation, and of its
+// slopes, whose numerators cancel for a triangle nearly edge-on).
 void lower_lit_corner(ivec2 corner, vec3 a, LitPlane q) {
   vec2 run = abs(vec2(corner) - a.xy);
   float plane = a.z + q.dzdx * (float(corner.x) - a.x) + q.dzdy * (float(corner.y) - a.y);
@@ -407,6 +408,7 @@ void lower_lit_corner(ivec2 corner, vec3 a, LitPlane q) {
   uint index = lit_corner_index(corner);
   if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
 }
+// Lowers each of the four corners of `texel` (lower_lit_corner).
 void lower_lit_corners(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   LitPlane q = lit_plane(a, b, c, area);
   for (int k = 0; k < 4; ++k) lower_lit_corner(texel + ivec2(k & 1, k >> 1), a, q);

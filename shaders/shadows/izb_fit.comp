@@ -41,24 +41,26 @@ void main() {
       lo = min(lo, v - kShadowNormalOffset);
       hi = max(hi, v + kShadowNormalOffset);
     }
-  }
-  for (uint k = 0u; k < kFitPixels && izb_samples() != 1u; ++k) {
-    ivec2 pixel = fit_pixel(k);
-    if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;
-    PixelPoint p = load_pixel(pixel);
-    if (!p.candidate) continue;
-    if (izb_samples() == 32u) {
-      vec3 c[4];
-      micro_quad_corners(pixel, p, c);
-      for (int i = 0; i < 4; ++i) {
-        vec2 v = (params.light_view * vec4(c[i], 1.0)).xy;
+  } else {
+    // Every candidate's μQuad corners (32 spp) or ray origin.
+    for (uint k = 0u; k < kFitPixels; ++k) {
+      ivec2 pixel = fit_pixel(k);
+      if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;
+      PixelPoint p = load_pixel(pixel);
+      if (!p.candidate) continue;
+      if (izb_samples() == 32u) {
+        vec3 c[4];
+        micro_quad_corners(pixel, p, c);
+        for (int i = 0; i < 4; ++i) {
+          vec2 v = (params.light_view * vec4(c[i], 1.0)).xy;
+          lo = min(lo, v);
+          hi = max(hi, v);
+        }
+      } else {
+        vec2 v = (params.light_view * vec4(shadow_ray_origin(p.position, p.normal), 1.0)).xy;
         lo = min(lo, v);
         hi = max(hi, v);
       }
-    } else {
-      vec2 v = (params.light_view * vec4(shadow_ray_origin(p.position, p.normal), 1.0)).xy;
-      lo = min(lo, v);
-      hi = max(hi, v);
     }
   }
   lo = subgroupMin(lo);

@@ -19,6 +19,14 @@ shared uint walk_texel_start[65];
 shared uint walk_row_start[65];
 shared uvec2 walk_subgroup_sums[64];
 
+// Thread `owner`'s triangle, from shared memory.
+void walked_triangle(uint owner, out vec3 a, out vec3 b, out vec3 c, out float area) {
+  a = walk_a[owner].xyz;
+  b = walk_b[owner].xyz;
+  c = walk_c[owner].xyz;
+  area = walk_a[owner].w;
+}
+
 // Item j's thread: the last whose items start at or before it.
 uint walk_owner(uint j, bool rows) {
   uint lo = 0u, hi = 63u;
@@ -50,7 +58,7 @@ void main() {
     // reach the grid are left.
     in_range = gl_LocalInvocationIndex < per_group && index < push.triangle_count;
     t = in_range ? index : 0u;
-    vec3 grid[3];
+    vec3 grid[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
     if (in_range) in_range = set_up_triangle(t, grid);
     list_triangle(in_range, t);
     a = grid[0];
@@ -122,10 +130,7 @@ void main() {
       uint i = j - walk_texel_start[owner];
       uint width = uint(d.z - d.x + 1);
       ivec2 texel = d.xy + ivec2(i % width, i / width);
-      a = walk_a[owner].xyz;
-      b = walk_b[owner].xyz;
-      c = walk_c[owner].xyz;
-      area = walk_a[owner].w;
+      walked_triangle(owner, a, b, c, area);
       if (mode != IZB_WORK_TRACE) {
         work_texel_here(texel, texel_triangle, a, b, c, area, mode);
         continue;
@@ -162,10 +167,7 @@ void main() {
       uint owner = walk_owner(j, true);
       uint row_triangle = walk_triangle[owner];
       int r = walk_first_row[owner] + int(j - walk_row_start[owner]);
-      a = walk_a[owner].xyz;
-      b = walk_b[owner].xyz;
-      c = walk_c[owner].xyz;
-      area = walk_a[owner].w;
+      walked_triangle(owner, a, b, c, area);
       ivec2 span = triangle_tile_span(a, b, c, r, walk_slack(a, b, c, mode));
       if (span.x > span.y) continue;
       if (pass == 0u) {

@@ -170,17 +170,24 @@ void csm_store(ivec2 texel, float far_depth) {
 }
 
 // CSM: where the triangle fully covers the texel (Hertel's or the barycentric test, the same
-// arithmetic as csm.frag), the nearest bound so far of its farthest depth over the texel.
-void csm_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint test) {
+// arithmetic as csm.frag), the nearest bound so far of its farthest depth over the texel, from its
+// four corners' csm_corner (in the order (0,0), (1,0), (0,1), (1,1)).
+void csm_texel_from_corners(ivec2 texel, bool inside[4], float depth[4], vec3 a, vec3 b, vec3 c, float area,
+                            uint test) {
   if (test == IZB_WORK_CSM_HERTEL && !csm_hertel_covers(texel, a, b, c, area)) return;
   float far_depth = -1.0e30;
   for (int i = 0; i < 4; ++i) {
-    float depth;
-    bool inside = csm_corner(vec2(texel + ivec2(i & 1, i >> 1)), a, b, c, area, depth);
-    if (test == IZB_WORK_CSM_BARYCENTRIC && !inside) return;
-    far_depth = max(far_depth, depth);
+    if (test == IZB_WORK_CSM_BARYCENTRIC && !inside[i]) return;
+    far_depth = max(far_depth, depth[i]);
   }
   csm_store(texel, far_depth);
+}
+
+void csm_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, uint test) {
+  bool inside[4];
+  float depth[4];
+  for (int i = 0; i < 4; ++i) inside[i] = csm_corner(vec2(texel + ivec2(i & 1, i >> 1)), a, b, c, area, depth[i]);
+  csm_texel_from_corners(texel, inside, depth, a, b, c, area, test);
 }
 
 // csm_texel over the 2x2 texels from `first` (those inside the grid), each of their 9 corners
@@ -194,26 +201,31 @@ void csm_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area, uint test) 
     if (any(greaterThanEqual(uvec2(texel), uvec2(izb_resolution())))) continue;
     int corner = (k >> 1) * 3 + (k & 1);  // its lower-left corner among the 9
     int corners[4] = int[4](corner, corner + 1, corner + 3, corner + 4);
-    if (test == IZB_WORK_CSM_HERTEL && !csm_hertel_covers(texel, a, b, c, area)) continue;
-    bool covered = true;
-    float far_depth = -1.0e30;
+    bool texel_inside[4];
+    float texel_depth[4];
     for (int i = 0; i < 4; ++i) {
-      covered = covered && (test != IZB_WORK_CSM_BARYCENTRIC || inside[corners[i]]);
-      far_depth = max(far_depth, depth[corners[i]]);
+      texel_inside[i] = inside[corners[i]];
+      texel_depth[i] = depth[corners[i]];
     }
-    if (covered) csm_store(texel, far_depth);
+    csm_texel_from_corners(texel, texel_inside, texel_depth, a, b, c, area, test);
   }
 }
 
-// Lit map: where the triangle touches the widened texel, lowers the texel's bound to the triangle's.
-void lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
+// Lit map: where the triangle touches the texel widened by `slack` (lit_slack), lowers the texel's
+// bound to the triangle's; whether it touched.
+bool lower_lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, float slack) {
   vec2 lo = vec2(texel);
-  float slack = lit_slack(a, b, c);
-  if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) return;
+  if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) return false;
   uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
   uint index = lit_map_index(texel_index(texel));
   if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
-  lower_lit_corners(texel, a, b, c, area);
+  return true;
+}
+
+// Lit map: where the triangle touches the widened texel, lowers the texel's bound and its corners'
+// planes to the triangle's.
+void lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
+  if (lower_lit_texel(texel, a, b, c, area, lit_slack(a, b, c))) lower_lit_corners(texel, a, b, c, area);
 }
 
 // lit_texel over the 2x2 texels from `first` (those inside the grid): each of their 9 corners is
@@ -223,13 +235,8 @@ void lit_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area) {
   uint touched = 0u;
   for (int k = 0; k < 4; ++k) {
     ivec2 texel = first + ivec2(k & 1, k >> 1);
-    if (any(greaterThanEqual(uvec2(texel), uvec2(izb_resolution())))) continue;
-    vec2 lo = vec2(texel);
-    if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) continue;
-    touched |= 1u << k;
-    uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
-    uint index = lit_map_index(texel_index(texel));
-    if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+    if (all(lessThan(uvec2(texel), uvec2(izb_resolution()))) && lower_lit_texel(texel, a, b, c, area, slack))
+      touched |= 1u << k;
   }
   if (touched == 0u) return;
   LitPlane q = lit_plane(a, b, c, area);

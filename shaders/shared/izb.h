@@ -60,9 +60,10 @@ SHARED_CONST uint IZB_FLAG_SETUP_APART = 65536u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted
-// lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous nodes (.x unused). Each pixel's light-space data lives once in the
-// "quads" buffer: 1 spp: its ray origin (grid x, grid y, light depth); 32 spp: the four μQuad corners
-// (c00, c10, c01, c11) as 12 floats, from which the trace rebuilds every sample.
+// lists (counting sort): heads[texel] is the first of list_counts[texel] contiguous nodes (.x
+// unused). Each pixel's light-space data lives once in the "quads" buffer: 1 spp: its ray origin
+// (grid x, grid y, light depth); 32 spp: the four μQuad corners (c00, c10, c01, c11) as 12 floats,
+// from which the trace rebuilds every sample.
 SHARED_CONST uint kIzbQuadFloats1 = 4u;
 SHARED_CONST uint kIzbQuadFloats32 = 12u;
 

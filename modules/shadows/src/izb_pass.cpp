@@ -222,7 +222,7 @@ struct IzbPass::Impl {
       return factory.compute({shader, bindings, push, constants});
     };
     ps.fit = compute("izb_fit.comp");
-    if (cpu_device()) ps.setup = compute("izb_setup.comp");  // IZB_FLAG_SETUP_APART
+    if (flags & gpu_shared::IZB_FLAG_SETUP_APART) ps.setup = compute("izb_setup.comp");
     ps.build = compute("izb_build.comp");
     ps.fallback = compute("izb_fallback.comp");
     ps.list_stats = compute("izb_list_stats.comp");
