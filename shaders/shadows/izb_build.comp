@@ -4,7 +4,9 @@
 #include "shadows/izb_pixel.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 
+layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
+layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) writeonly buffer ResolveList { uint resolve_list[]; };
 
 // IZB_FLAG_ROW_RUNS: the workgroup's texels (none: 0xffffffff), node depths and the list heads its
 // runs replaced (see main).
@@ -60,8 +62,10 @@ void main() {
   uint texel0 = 0u;
   uint count = 0u;
   float node_depth = 0.0;
+  vec3 position = vec3(0.0);
   if (inside) {
     PixelPoint p = load_pixel(pixel);
+    position = p.position;
     covered = p.covered ? 1u : 0u;
     if (p.covered) {
       state = IZB_PIXEL_COVERED | (p.facing ? IZB_PIXEL_FACING : 0u);
@@ -201,22 +205,34 @@ void main() {
       overflow_pixels[slot] = index;
       atomicMax(counters[IZB_COUNTER_DISPATCH], slot / 64u + 1u);
     }
-    // Only the resolve and the sorted lists' scatter read the state. With the term written here and in
-    // the trace, the mask is read only by the scatter, the fallback (a pixel past the pool) and the
-    // progressive removal (a pixel with a node).
+    // Only the resolve and the sorted lists' scatter read the state (a listed resolve: of the pixels
+    // with nodes). With the term written here and in the trace, the mask is read only by the scatter,
+    // the fallback (a pixel past the pool) and the progressive removal (a pixel with a node).
     bool direct_term = izb_flag(IZB_FLAG_DIRECT_TERM);
-    if (!direct_term || sorted_lists()) pixel_state[index] = state;
+    bool listed_resolve = izb_flag(IZB_FLAG_LISTED_RESOLVE);
+    if ((!direct_term && (!listed_resolve || count != 0u)) || sorted_lists()) pixel_state[index] = state;
     // What izb_resolve.comp would write before the trace: candidates lit unless the CSM settled them,
     // surfaces facing away shadowed, the others lit; beyond the range the term already there stays.
     bool facing = (state & IZB_PIXEL_FACING) != 0u;
     if (direct_term && covered != 0u && (candidate != 0u || !facing || (state & IZB_PIXEL_BEYOND) == 0u))
       imageStore(shadow_term, pixel, vec4(candidate != 0u ? (mask != 0u ? 0.0 : 1.0) : (facing ? 1.0 : 0.0)));
-    bool mask_read = !direct_term || sorted_lists() ||
-                     (count != 0u && (izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));
+    bool mask_read = (!direct_term && !listed_resolve) || sorted_lists() ||
+                     (count != 0u && (listed_resolve || izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));
     if (candidate != 0u && mask_read) {  // only candidates' are read
       if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
       visibility_mask[index] = mask;
     }
+  }
+  if (izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
+    // A pixel without a node is settled here (no occluder distance: only the trace finds one); the
+    // others, the fallback's too, are the resolve's.
+    bool written;
+    write_pixel_term(pixel, inside && count == 0u, state, mask, position, floatBitsToUint(1.0e30),
+                     izb_flag(IZB_FLAG_HYBRID), push.soft_distance, written);
+    bool has_nodes = inside && count != 0u;
+    uint slot = reserve_slots_raising(IZB_COUNTER_RESOLVE_LIST, has_nodes ? 1u : 0u, true, IZB_COUNTER_RESOLVE_LIST + 1u,
+                                      params.extent.x * params.extent.y, 64u);
+    if (has_nodes) resolve_list[slot] = index;
   }
   // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.
   if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) return;

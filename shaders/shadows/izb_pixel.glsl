@@ -58,3 +58,68 @@ void micro_quad_corners(ivec2 pixel, PixelPoint p, out vec3 c[4]) {
   c[2] = shadow_ray_origin(micro_quad_corner(base + vec2(0, 1), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
   c[3] = shadow_ray_origin(micro_quad_corner(base + vec2(1, 1), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
 }
+
+// Hybrid: the pixels that take any of the cascades' term, with their two weights (izb_resolve.comp).
+layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList { uvec4 hybrid_list[]; };
+
+// The shadow term of a classified pixel (`state`, IZB_PIXEL_*) from its visibility mask, written where
+// it applies; returns the visibility. With `hybrid` the term blends toward the cascades' by occluder
+// distance (`gap_bits`: the occluder distance buffer's value, in light depth) and over the last tenth
+// of the IZB's range, and beyond it is the cascades' alone: the pixels that take any of the cascades'
+// term are listed with their two weights, so that the cascades filter only those (a CPU device pays
+// every pixel of a full-screen pass) and izb_hybrid_blend.comp mixes them. Called by every lane of
+// the subgroup (the list takes one atomic per subgroup); `has_pixel` false for a lane with none.
+float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 position, uint gap_bits, bool hybrid,
+                       float soft_distance, out bool written) {
+  written = false;
+  bool covered = has_pixel && (state & IZB_PIXEL_COVERED) != 0u;
+  bool candidate = (state & IZB_PIXEL_CANDIDATE) != 0u;
+  bool facing = (state & IZB_PIXEL_FACING) != 0u;
+  bool beyond = false;  // past the IZB's range: the cascades' term alone
+  float visibility = 1.0;
+  if (candidate) {
+    visibility = 1.0 - float(bitCount(mask)) / float(izb_samples());
+  } else if (!facing) {
+    visibility = 0.0;
+  } else if ((state & IZB_PIXEL_BEYOND) != 0u) {
+    beyond = true;
+    visibility = 0.0;
+  }  // else: does not receive shadows, lit
+  if (hybrid) {
+    // The farther the nearest occluder sits above the point (in world units along the light), the
+    // more the cascades' filtered term takes over; near the IZB's range limit they take over fully.
+    // Surfaces facing away are 0 in both terms, so they need no blend.
+    // IZB_FLAG_GAPS is set only with a positive soft distance.
+    float gap_world = izb_flag(IZB_FLAG_GAPS) ? uintBitsToFloat(gap_bits) * (params.depth_range.y - params.depth_range.x)
+                                              : 1.0e30;
+    bool occluded = candidate && mask != 0u && gap_world < 1.0e20;
+    float gap_weight = occluded ? clamp(gap_world / soft_distance, 0.0, 1.0) : 0.0;
+    // (Unlimited range: reach is huge and the fade 0.)
+    float reach = izb_reach();
+    float dist = distance(position, params.camera_position.xyz);
+    float fade = beyond ? 1.0 : clamp((dist - 0.9 * reach) / (0.1 * reach), 0.0, 1.0);
+    bool listed = covered && facing && (gap_weight > 0.0 || fade > 0.0);
+    // One atomic per subgroup; the dispatch over the list grows with it.
+    uint total = subgroupAdd(listed ? 1u : 0u);
+    uint slot = subgroupExclusiveAdd(listed ? 1u : 0u);
+    uint base = 0u;
+    if (subgroupElect() && total != 0u) {
+      base = atomicAdd(counters[IZB_COUNTER_HYBRID], total);
+      atomicMax(counters[IZB_COUNTER_HYBRID + 1u], (base + total + kIzbHybridEntriesPerGroup - 1u) / kIzbHybridEntriesPerGroup);
+    }
+    base = subgroupBroadcastFirst(base);
+    if (listed)
+      hybrid_list[base + slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
+                                       floatBitsToUint(fade), 0u);
+  }
+  if (!covered) return visibility;
+  if (beyond && !hybrid) return visibility;  // beyond the IZB: the term already there stays
+  // One face of a point light (six overlapping cones that cover every direction): only the points in
+  // its cone are this pass's; the others keep what the other faces write.
+  if (params.light_cone.z > 0.0 && dot(position - params.light_position.xyz, params.light_direction.xyz) <
+                                       params.light_cone.x * length(position - params.light_position.xyz))
+    return visibility;
+  imageStore(shadow_term, pixel, vec4(visibility));
+  written = true;
+  return visibility;
+}

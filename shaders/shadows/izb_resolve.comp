@@ -6,7 +6,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_OVERLAY, rgba8) uniform image2D overlay;
-layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList { uvec4 hybrid_list[]; };
+layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) readonly buffer ResolveList { uint resolve_list[]; };
 
 const uint kDebugVisibility = 1u;
 const uint kDebugListLength = 2u;
@@ -71,14 +71,11 @@ uint straddler_samples(ivec2 pixel, PixelPoint p) {
 layout(constant_id = 12) const uint kDebug = 0u;
 layout(constant_id = 13) const uint kHybrid = 0u;
 
-// Visibility mask -> shadow term. kHybrid: the term blends toward the cascades' by occluder distance
-// and over the last tenth of the IZB's range, and beyond it is the cascades' alone. The resolve runs
-// before the cascades then: it writes the hard term and lists the pixels that take any of the
-// cascades' term, with their two weights, so that the cascades filter only those (a CPU device pays
-// every pixel of a full-screen pass) and izb_hybrid_blend.comp mixes them.
-void main() {
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-  bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
+// Visibility mask -> shadow term (write_pixel_term). With kHybrid the resolve runs before the
+// cascades: it writes the hard term and lists the pixels that blend toward the cascades' term. With
+// IZB_FLAG_LISTED_RESOLVE the build has written every pixel without a node and listed the others, one
+// a thread; otherwise one thread per pixel of the frame.
+void resolve(ivec2 pixel, bool inside) {
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
   // The build classified every pixel (IZB_PIXEL_*). The surface itself is read only where the blend's
   // distance or a local light's rays need it.
@@ -87,55 +84,12 @@ void main() {
   bool surface = covered && (kHybrid != 0u || spot_light());
   PixelPoint p = surface ? load_surface(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
   uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
-  float visibility = 1.0;
-  bool facing = (state & IZB_PIXEL_FACING) != 0u;
-  float reach = izb_reach();
-  bool beyond = false;  // past the IZB's range: the cascades' term alone
-  if ((state & IZB_PIXEL_CANDIDATE) != 0u) {
-    if (spot_light() && mask != full_mask()) mask |= straddler_samples(pixel, p);
-    visibility = 1.0 - float(bitCount(mask)) / float(izb_samples());
-  } else if (!facing) {
-    visibility = 0.0;
-  } else if ((state & IZB_PIXEL_BEYOND) != 0u) {
-    beyond = true;
-    visibility = 0.0;
-  } else {
-    visibility = 1.0;  // does not receive shadows
-  }
-  if (kHybrid != 0u) {
-    // The farther the nearest occluder sits above the point (in world units along the light), the
-    // more the cascades' filtered term takes over; near the IZB's range limit they take over fully.
-    // Surfaces facing away are 0 in both terms, so they need no blend.
-    // IZB_FLAG_GAPS is set only with a positive soft distance.
-    float gap_world = izb_flag(IZB_FLAG_GAPS) ? uintBitsToFloat(occluder_distance[index]) * (params.depth_range.y - params.depth_range.x)
-                                              : 1.0e30;
-    bool occluded = (state & IZB_PIXEL_CANDIDATE) != 0u && mask != 0u && gap_world < 1.0e20;
-    float gap_weight = occluded ? clamp(gap_world / push.soft_distance, 0.0, 1.0) : 0.0;
-    // (Unlimited range: reach is huge and the fade 0.)
-    float dist = distance(p.position, params.camera_position.xyz);
-    float fade = beyond ? 1.0 : clamp((dist - 0.9 * reach) / (0.1 * reach), 0.0, 1.0);
-    bool listed = covered && facing && (gap_weight > 0.0 || fade > 0.0);
-    // One atomic per subgroup; the dispatch over the list grows with it.
-    uint total = subgroupAdd(listed ? 1u : 0u);
-    uint slot = subgroupExclusiveAdd(listed ? 1u : 0u);
-    uint base = 0u;
-    if (subgroupElect() && total != 0u) {
-      base = atomicAdd(counters[IZB_COUNTER_HYBRID], total);
-      atomicMax(counters[IZB_COUNTER_HYBRID + 1u], (base + total + kIzbHybridEntriesPerGroup - 1u) / kIzbHybridEntriesPerGroup);
-    }
-    base = subgroupBroadcastFirst(base);
-    if (listed)
-      hybrid_list[base + slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
-                                       floatBitsToUint(fade), 0u);
-  }
-  if (!covered) return;
-  if (beyond && kHybrid == 0u) return;  // beyond the IZB: the term already there stays
-  // One face of a point light (six overlapping cones that cover every direction): only the points in
-  // its cone are this pass's; the others keep what the other faces write.
-  if (params.light_cone.z > 0.0 && dot(p.position - params.light_position.xyz, params.light_direction.xyz) <
-                                       params.light_cone.x * length(p.position - params.light_position.xyz))
-    return;
-  imageStore(shadow_term, pixel, vec4(visibility));
+  if ((state & IZB_PIXEL_CANDIDATE) != 0u && spot_light() && mask != full_mask()) mask |= straddler_samples(pixel, p);
+  uint gap_bits = kHybrid != 0u && izb_flag(IZB_FLAG_GAPS) && inside ? occluder_distance[index] : 0u;
+  bool written;
+  float visibility = write_pixel_term(pixel, inside, state, mask, p.position, gap_bits, kHybrid != 0u,
+                                      push.soft_distance, written);
+  if (!written) return;
 
   if (kDebug == kDebugVisibility && (state & IZB_PIXEL_CANDIDATE) != 0u) {
     imageStore(overlay, pixel, vec4(mix(vec3(1.0, 0.2, 0.1), vec3(0.1, 1.0, 0.2), visibility), 0.6));
@@ -147,4 +101,16 @@ void main() {
   } else if (kDebug == kDebugCsm && (state & IZB_PIXEL_CSM_CULLED) != 0u) {
     imageStore(overlay, pixel, vec4(0.1, 0.4, 1.0, 0.6));
   }
+}
+
+void main() {
+  if (!izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    resolve(pixel, all(lessThan(uvec2(pixel), params.extent.xy)));
+    return;
+  }
+  uint entry = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
+  bool listed = entry < counters[IZB_COUNTER_RESOLVE_LIST];
+  uint index = listed ? resolve_list[entry] : 0u;
+  resolve(ivec2(index % params.extent.x, index / params.extent.x), listed);
 }

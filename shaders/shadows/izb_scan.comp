@@ -4,7 +4,6 @@
 layout(local_size_x = 256) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
-layout(set = 0, binding = IZB_BINDING_SCAN_BLOCKS, std430) buffer ScanBlocks { uint block_sums[]; };
 
 shared uint subgroup_sums[256];
 
@@ -25,7 +24,8 @@ uint workgroup_exclusive_add(uint value, out uint total) {
 
 // Sorted lists (counting sort), step 2: the exclusive prefix sum of the texels' node counts, in blocks
 // of kIzbScanBlock texels (push.mode 0: within blocks, 1: over block sums in one workgroup, 2: block
-// offsets added), leaving each list's first node in heads and a copy in the fill cursors.
+// offsets added), leaving each list's first node in heads and a copy in the fill cursors. The block
+// sums live in the fill cursors' buffer after its texels (izb.h).
 void main() {
   uint texels = izb_resolution() * izb_resolution();
   uint blocks = (texels + kIzbScanBlock - 1u) / kIzbScanBlock;
@@ -34,12 +34,12 @@ void main() {
     uint per_thread = (blocks + 255u) / 256u;
     uint first = lane * per_thread, last = min(first + per_thread, blocks);
     uint sum = 0u;
-    for (uint b = first; b < last; ++b) sum += block_sums[b];
+    for (uint b = first; b < last; ++b) sum += list_cursor[texels + b];
     uint total;
     uint running = workgroup_exclusive_add(sum, total);
     for (uint b = first; b < last; ++b) {
-      uint value = block_sums[b];
-      block_sums[b] = running;
+      uint value = list_cursor[texels + b];
+      list_cursor[texels + b] = running;
       running += value;
     }
     return;
@@ -60,10 +60,10 @@ void main() {
       if (base + k < texels) heads[base + k] = running;
       running += v[k];
     }
-    if (lane == 0u) block_sums[block] = total;
+    if (lane == 0u) list_cursor[texels + block] = total;
     return;
   }
-  uint offset = block_sums[block];
+  uint offset = list_cursor[texels + block];
   for (uint k = 0u; k < 4u; ++k) {
     if (base + k >= texels) break;
     uint first = heads[base + k] + offset;

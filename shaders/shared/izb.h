@@ -57,6 +57,11 @@ SHARED_CONST uint IZB_FLAG_TRIANGLES_IN_TRACE = 32768u;
 // after the fit, not in the fit's last workgroup: the barrier that finds the last one in every
 // workgroup costs a CPU driver more than the dispatch.
 SHARED_CONST uint IZB_FLAG_SETUP_APART = 65536u;
+// Where a resolve runs (hybrid, 32 spp) with no debug view and the sun: the build writes the term (and
+// the hybrid's list entry) of every pixel it settles, which is every pixel without a node, and lists
+// the pixels with nodes; the resolve reads only those, in a dispatch sized by the list, not the frame.
+SHARED_CONST uint IZB_FLAG_LISTED_RESOLVE = 131072u;
+SHARED_CONST uint IZB_FLAG_HYBRID = 262144u;  // the hybrid technique (its blend's list, with IZB_FLAG_LISTED_RESOLVE)
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted
@@ -89,6 +94,9 @@ SHARED_CONST uint IZB_COUNTER_LIT_RECORDS = 18u;   // lit map: tile-row records 
 SHARED_CONST uint IZB_COUNTER_LIT_TILE_PAIRS = 19u;// lit map: (triangle, tile) pairs requested
 SHARED_CONST uint IZB_COUNTER_DISPATCH = 20u;      // 3 uints: indirect dispatch of the fallback
 SHARED_CONST uint IZB_COUNTER_STRADDLERS = 23u;     // spot light: caster triangles across the near plane
+// IZB_FLAG_LISTED_RESOLVE: the pixels listed for the resolve, then 3 uints: its indirect dispatch, one
+// entry a thread in rows of kIzbDispatchRow workgroups (raise_row_dispatch).
+SHARED_CONST uint IZB_COUNTER_RESOLVE_LIST = 24u;
 SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel pairs
 // Hybrid: the pixels the resolve listed for the cascades, then 3 uints: indirect dispatch over them in
 // workgroups of kIzbHybridEntriesPerGroup entries.
@@ -199,10 +207,12 @@ SHARED_CONST uint IZB_BINDING_CASTER_DRAWS = 25u;
 SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;
 SHARED_CONST uint IZB_BINDING_TILE_PAIRS = 27u;         // uvec2 {triangle, tile}
 SHARED_CONST uint IZB_BINDING_TILE_FARTHEST = 28u;      // per tile: its farthest node depth (float bits)
-// Sorted lists (counting sort): per texel its node count, and a fill cursor; per scan block a sum.
+// Sorted lists (counting sort): per texel its node count, and a fill cursor; after the cursors, per
+// scan block a sum (one binding for both, since push descriptors allow no more than 32).
 SHARED_CONST uint IZB_BINDING_LIST_COUNTS = 29u;
 SHARED_CONST uint IZB_BINDING_LIST_CURSOR = 30u;
-SHARED_CONST uint IZB_BINDING_SCAN_BLOCKS = 31u;
+// IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the resolve alone reads.
+SHARED_CONST uint IZB_BINDING_RESOLVE_LIST = 31u;
 SHARED_CONST uint kIzbScanBlock = 1024u;  // texels per block of the prefix sum (256 threads x 4)
 SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per workgroup (64 threads x 4)
 

@@ -56,7 +56,7 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_TILE_FARTHEST, storage},
           {gpu_shared::IZB_BINDING_LIST_COUNTS, storage},
           {gpu_shared::IZB_BINDING_LIST_CURSOR, storage},
-          {gpu_shared::IZB_BINDING_SCAN_BLOCKS, storage}};
+          {gpu_shared::IZB_BINDING_RESOLVE_LIST, storage}};
 }
 
 // The light frustum fit's workgroups over the view (izb_fit.comp).
@@ -106,7 +106,10 @@ struct IzbPass::Impl {
                                   {{10, samples_per_pixel}, {11, flags}, {12, debug}, {13, hybrid ? 1u : 0u}}});
     return pipeline;
   }
-  Buffer list_counts, list_cursor, scan_blocks;
+  Buffer list_counts, list_cursor;  // the cursors' buffer also holds the prefix sum's block sums
+  uint32_t scan_blocks = 0;
+  // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (frame-sized where it is on, else a placeholder).
+  Buffer resolve_list;
   // Hybrid: the cascades' term and the pixels that blend toward it (frame-sized only in hybrid).
   Image soft_term;
   Buffer hybrid_list;
@@ -197,6 +200,13 @@ struct IzbPass::Impl {
     pass_barrier(ctx, cmd);
     hybrid_list = Buffer(ctx, VkDeviceSize(want.width) * want.height * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
                          "izb hybrid pixel list");
+  }
+
+  // Frame-sized where the resolve is listed; otherwise a placeholder keeps the binding valid.
+  void ensure_resolve_list(VkExtent2D e, bool listed) {
+    const VkDeviceSize want = listed ? VkDeviceSize(e.width) * e.height * 4 : 4;
+    if (resolve_list.valid() && resolve_list.size() >= want) return;
+    resolve_list = Buffer(ctx, want, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb resolve pixel list");
   }
 
   // The trace's fragment shader reads gl_PrimitiveID, which SPIR-V puts under the Geometry capability:
@@ -299,9 +309,8 @@ struct IzbPass::Impl {
       const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
       heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
       list_counts = Buffer(ctx, texels * 4, usage, false, "izb sorted list counts");
-      list_cursor = Buffer(ctx, texels * 4, usage, false, "izb sorted list fill cursors");
-      const VkDeviceSize blocks = (texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock;
-      scan_blocks = Buffer(ctx, blocks * 4, usage, false, "izb prefix-sum blocks");
+      scan_blocks = uint32_t((texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock);
+      list_cursor = Buffer(ctx, (texels + scan_blocks) * 4, usage, false, "izb sorted list fill cursors and block sums");
       // The compute CSM's depths, then the lit map's texels and corners (izb.h: one binding for all).
       const VkDeviceSize corners = VkDeviceSize(resolution + 1) * (resolution + 1);
       csm_texels = Buffer(ctx, (2 * texels + corners) * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
@@ -512,7 +521,7 @@ struct IzbPass::Impl {
         .storage_buffer(gpu_shared::IZB_BINDING_TILE_FARTHEST, tile_farthest.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_LIST_COUNTS, list_counts.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_LIST_CURSOR, list_cursor.handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_SCAN_BLOCKS, scan_blocks.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_RESOLVE_LIST, resolve_list.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, bounds_partials.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_MATERIAL_TEXTURES, frame.geometry.textures().handle())
         .storage_buffer(gpu_shared::IZB_BINDING_CASTER_DRAWS, caster_draw_words.handle())
@@ -757,6 +766,12 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
   if (direct_term) flags |= gpu_shared::IZB_FLAG_DIRECT_TERM;
+  // Otherwise, for the sun with no debug view, the build settles every pixel without a node and the
+  // resolve reads only the others.
+  const bool listed_resolve = !direct_term && debug_code(debug) == 0 && !spot;
+  if (listed_resolve) flags |= gpu_shared::IZB_FLAG_LISTED_RESOLVE;
+  if (hybrid) flags |= gpu_shared::IZB_FLAG_HYBRID;
+  m.ensure_resolve_list(frame.view.extent, listed_resolve);
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
   p.light_view = light_view;
@@ -843,7 +858,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     m.dispatch_pixels(cmd, frame, m.p->build, push);
     if (sorted) {
       // Counting sort: counts (above) -> prefix sum -> scatter into contiguous ranges.
-      const uint32_t blocks = uint32_t(m.scan_blocks.size() / 4);
+      const uint32_t blocks = m.scan_blocks;
       for (uint32_t step = 0; step < 3; ++step) {
         pass_barrier(frame.ctx, cmd);
         gpu_shared::IzbComputePush scan_push = push;
@@ -931,7 +946,9 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   }
   if (!direct_term) {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_resolve");
-    m.dispatch_pixels(cmd, frame, m.resolve_pipeline(m.samples, flags, debug_code(debug), hybrid), push);
+    const Pipeline& resolve = m.resolve_pipeline(m.samples, flags, debug_code(debug), hybrid);
+    if (listed_resolve) m.dispatch_indirect(cmd, frame, resolve, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
+    else m.dispatch_pixels(cmd, frame, resolve, push);
     pass_barrier(frame.ctx, cmd);
   }
   if (collect_stats) {
