@@ -396,38 +396,69 @@ LitPlane lit_plane(vec3 a, vec3 b, vec3 c, float area) {
   q.rounding = lit_barycentric_rounding(a, b, c, area);
   return q;
 }
-// Lowers `corner` to a lower bound of the triangle's plane there as the node test computes depths
-// (the same margins as lit_nearest_depth, plus the rounding of the plane's own evaluation, and of its
-// slopes, whose numerators cancel for a triangle nearly edge-on).
-void lower_lit_corner(ivec2 corner, vec3 a, LitPlane q) {
-  vec2 run = abs(vec2(corner) - a.xy);
-  float plane = a.z + q.dzdx * (float(corner.x) - a.x) + q.dzdy * (float(corner.y) - a.y);
+// Lowers the bound at `index` to a lower bound of the triangle's plane at `point` as the node test
+// computes depths (the same margins as lit_nearest_depth, plus the rounding of the plane's own
+// evaluation, and of its slopes, whose numerators cancel for a triangle nearly edge-on).
+void lower_lit_plane_at(vec2 point, uint index, vec3 a, LitPlane q) {
+  vec2 run = abs(point - a.xy);
+  float plane = a.z + q.dzdx * (point.x - a.x) + q.dzdy * (point.y - a.y);
   float bound = plane - 1.0e-6 - 1.0e-6 * (abs(plane) + abs(a.z) + abs(q.dzdx) * run.x + abs(q.dzdy) * run.y) -
                 q.slope_error_x * run.x - q.slope_error_y * run.y - q.rounding;
   uint bits = ordered_depth_bits(abs(bound) < 3.0e38 ? bound : -3.0e38);
-  uint index = lit_corner_index(corner);
   if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
 }
+void lower_lit_corner(ivec2 corner, vec3 a, LitPlane q) { lower_lit_plane_at(vec2(corner), lit_corner_index(corner), a, q); }
+
+// The lit map's tile level, after the texel corners: per tile of kIzbTile² texels a bound, then per
+// tile corner ((tiles + 1)²) a plane bound, as the texel level's. A caster triangle that covers a
+// whole tile lowers these (izb_tile_bin.comp) instead of its kIzbTile² texels and their corners. Any
+// caster touching the tile would be sound there (its nearest point over the tile bounds it over each
+// texel, and the blend of its plane from the tile's corners is the plane itself); the whole-tile test
+// keeps at the texel level the casters that touch part of a tile, whose planes would otherwise bound
+// the rest of it. A point is proved lit where both levels prove it, each against its own casters.
+uint lit_tile_index(uvec2 tile) {
+  uint res = izb_resolution();
+  return 2u * res * res + (res + 1u) * (res + 1u) + tile.y * tiles_per_side() + tile.x;
+}
+uint lit_tile_corner_index(uvec2 corner) {
+  uint res = izb_resolution(), tiles = tiles_per_side();
+  return 2u * res * res + (res + 1u) * (res + 1u) + tiles * tiles + corner.y * (tiles + 1u) + corner.x;
+}
+// A tile corner's grid position (the last tiles end at the grid's edge).
+vec2 lit_tile_corner_point(uvec2 corner) { return min(vec2(corner * kIzbTile), vec2(float(izb_resolution()))); }
+
 // Lowers each of the four corners of `texel` (lower_lit_corner).
 void lower_lit_corners(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   LitPlane q = lit_plane(a, b, c, area);
   for (int k = 0; k < 4; ++k) lower_lit_corner(texel + ivec2(k & 1, k >> 1), a, q);
 }
+// Whether `g` lies no farther than a level's bound over its cell [lo, hi], or than the bilinear blend
+// of the plane bounds at the cell's corners (less that blend's own rounding).
+bool lit_cell_proves(vec3 g, uint bound, uint c00, uint c10, uint c01, uint c11, vec2 lo, vec2 hi) {
+  if (g.z <= ordered_depth(csm_texels[bound])) return true;
+  float d00 = ordered_depth(csm_texels[c00]);
+  float d10 = ordered_depth(csm_texels[c10]);
+  float d01 = ordered_depth(csm_texels[c01]);
+  float d11 = ordered_depth(csm_texels[c11]);
+  vec2 f = clamp((g.xy - lo) / (hi - lo), vec2(0.0), vec2(1.0));
+  float blend = mix(mix(d00, d10, f.x), mix(d01, d11, f.x), f.y);
+  float largest = max(max(abs(d00), abs(d10)), max(abs(d01), abs(d11)));
+  return g.z <= blend - 1.0e-6 * largest;  // false for NaN (an empty corner: inf - inf)
+}
 // Whether grid point `g` is proved lit: inside the grid (outside it the texel clamp would compare it
-// with a texel that is not its own) and no farther than its texel's bound, or than the blend of its
-// texel's corner planes (less that blend's own rounding).
+// with a texel that is not its own) and proved by its texel's cell and by its tile's.
 bool lit_map_proves_lit(vec3 g) {
   if (!(all(greaterThanEqual(g.xy, vec2(0.0))) && all(lessThan(g.xy, vec2(float(izb_resolution())))))) return false;
   ivec2 texel = grid_texel(g);
-  if (g.z <= ordered_depth(csm_texels[lit_map_index(texel_index(texel))])) return true;
-  float c00 = ordered_depth(csm_texels[lit_corner_index(texel)]);
-  float c10 = ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 0))]);
-  float c01 = ordered_depth(csm_texels[lit_corner_index(texel + ivec2(0, 1))]);
-  float c11 = ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 1))]);
-  vec2 f = clamp(g.xy - vec2(texel), vec2(0.0), vec2(1.0));
-  float blend = mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
-  float largest = max(max(abs(c00), abs(c10)), max(abs(c01), abs(c11)));
-  return g.z <= blend - 1.0e-6 * largest;  // false for NaN (an empty corner: inf - inf)
+  bool texel_level = lit_cell_proves(g, lit_map_index(texel_index(texel)), lit_corner_index(texel),
+                                     lit_corner_index(texel + ivec2(1, 0)), lit_corner_index(texel + ivec2(0, 1)),
+                                     lit_corner_index(texel + ivec2(1, 1)), vec2(texel), vec2(texel + 1));
+  uvec2 tile = uvec2(texel) / kIzbTile;
+  bool tile_level = lit_cell_proves(g, lit_tile_index(tile), lit_tile_corner_index(tile),
+                                    lit_tile_corner_index(tile + uvec2(1, 0)), lit_tile_corner_index(tile + uvec2(0, 1)),
+                                    lit_tile_corner_index(tile + uvec2(1, 1)), lit_tile_corner_point(tile),
+                                    lit_tile_corner_point(tile + 1u));
+  return texel_level && tile_level;
 }
 
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its

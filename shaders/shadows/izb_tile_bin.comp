@@ -9,8 +9,9 @@ layout(push_constant) uniform Push { IzbComputePush push; };
 
 // Compute trace / compute CSM, step 2 (see izb.h): kIzbTileStepRecords records side by side, a thread
 // per tile (kIzbRecordsPerGroup such rounds per workgroup), keeps the (triangle, tile) pairs the
-// triangle touches (the lit map: within its widened footprint) and, for the trace, is not behind
-// every node of. A pair that does not fit the buffer is worked here.
+// triangle touches (the lit map: within its widened footprint, less the tiles it covers whole, which
+// it bounds at once: lower_lit_tile) and, for the trace, is not behind every node of. A pair that
+// does not fit the buffer is worked here.
 void main() {
   uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
   uint mode = kIzbWork;
@@ -30,6 +31,11 @@ void main() {
       if (kIzbTileStepRecords == 1u && rec.z + x0 > rec.w) break;  // uniform: one record
       uvec2 tile = uvec2(rec.z + x0 + lane, rec.y);
       bool keep = tile.x <= rec.w && tile_survives(tile, a, b, c, area, mode);
+      // The lit map takes a triangle covering the whole tile at the tile level: no texel work.
+      if (mode == IZB_WORK_LIT && keep && lit_covers_tile(tile, a, b, c, area)) {
+        lower_lit_tile(tile, a, b, c, area);
+        keep = false;
+      }
       uint slot = reserve_group_slots(slot_counter, keep ? 1u : 0u, tile_pair_dispatch_at(mode), params.capacities.x,
                                       tile_pairs_per_group(mode));
       if (keep) {

@@ -249,6 +249,36 @@ void lit_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area) {
   }
 }
 
+// Lit map, step 2: whether the triangle covers all of the tile (its four corners inside every edge).
+// Rounding may err either way; that only moves the triangle between the map's two levels, both sound.
+bool lit_covers_tile(uvec2 tile, vec3 a, vec3 b, vec3 c, float area) {
+  vec2 lo, hi;
+  tile_rect(tile, lo, hi);
+  float orientation = sign(area);
+  for (int k = 0; k < 4; ++k) {
+    vec2 p = vec2((k & 1) != 0 ? hi.x : lo.x, (k & 2) != 0 ? hi.y : lo.y);
+    if (orientation * edge_fn(p, a.xy, b.xy) < 0.0 || orientation * edge_fn(p, b.xy, c.xy) < 0.0 ||
+        orientation * edge_fn(p, c.xy, a.xy) < 0.0)
+      return false;
+  }
+  return true;
+}
+
+// Lit map, tile level (lit_tile_index): lowers the tile's bound and its four corners' planes to the
+// triangle's, as lower_lit_texel and lower_lit_corner do for a texel.
+void lower_lit_tile(uvec2 tile, vec3 a, vec3 b, vec3 c, float area) {
+  vec2 lo, hi;
+  tile_rect(tile, lo, hi);
+  uint bits = ordered_depth_bits(lit_nearest_depth(lo, hi, a, b, c, area, lit_slack(a, b, c)));
+  uint index = lit_tile_index(tile);
+  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  LitPlane q = lit_plane(a, b, c, area);
+  for (uint k = 0u; k < 4u; ++k) {
+    uvec2 corner = tile + uvec2(k & 1u, k >> 1u);
+    lower_lit_plane_at(lit_tile_corner_point(corner), lit_tile_corner_index(corner), a, q);
+  }
+}
+
 // Step 3 for one texel of a kept tile, done serially where a buffer overflowed.
 void work_texel_here(ivec2 texel, uint t, vec3 a, vec3 b, vec3 c, float area, uint mode) {
   if (any(greaterThanEqual(uvec2(texel), uvec2(izb_resolution())))) return;

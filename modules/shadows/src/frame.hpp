@@ -90,6 +90,11 @@ struct LitMapSnapshot {
   uint32_t resolution = 0;
   std::vector<float> depth;         // row-major, resolution^2
   std::vector<float> corner_depth;  // the texels' corners' plane bounds, row-major, (resolution + 1)^2
+  // The tile level (izb_common.glsl, lit_tile_index): casters covering a whole tile of `tile`^2
+  // texels are bounded there, not at its texels.
+  uint32_t tile = 0, tiles_per_side = 0;
+  std::vector<float> tile_depth;         // row-major, tiles_per_side^2
+  std::vector<float> tile_corner_depth;  // row-major, (tiles_per_side + 1)^2; corner i at min(i * tile, resolution)
   glm::mat4 light_view_projection{1.0f};
 };
 

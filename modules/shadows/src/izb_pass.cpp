@@ -311,11 +311,14 @@ struct IzbPass::Impl {
       list_counts = Buffer(ctx, texels * 4, usage, false, "izb sorted list counts");
       scan_blocks = uint32_t((texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock);
       list_cursor = Buffer(ctx, (texels + scan_blocks) * 4, usage, false, "izb sorted list fill cursors and block sums");
-      // The compute CSM's depths, then the lit map's texels and corners (izb.h: one binding for all).
-      const VkDeviceSize corners = VkDeviceSize(resolution + 1) * (resolution + 1);
-      csm_texels = Buffer(ctx, (2 * texels + corners) * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
-                          "csm compute depths and lit map");
       tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
+      // The compute CSM's depths, then the lit map's texels, texel corners, tiles and tile corners
+      // (izb.h: one binding for all).
+      const VkDeviceSize corners = VkDeviceSize(resolution + 1) * (resolution + 1);
+      const VkDeviceSize tile_cells = VkDeviceSize(tiles_per_side) * tiles_per_side +
+                                      VkDeviceSize(tiles_per_side + 1) * (tiles_per_side + 1);
+      csm_texels = Buffer(ctx, (2 * texels + corners + tile_cells) * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
+                          "csm compute depths and lit map");
       tile_farthest = Buffer(ctx, VkDeviceSize(tiles_per_side) * tiles_per_side * 4, usage, false,
                              "izb farthest node depth per tile");
       farthest = Buffer(ctx, texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb farthest node depth");
@@ -1022,7 +1025,13 @@ LitMapSnapshot IzbPass::read_lit_map() {
   };
   const size_t texels = size_t(m.resolution) * m.resolution;
   snapshot.depth = decode(texels, texels);
-  snapshot.corner_depth = decode(2 * texels, size_t(m.resolution + 1) * (m.resolution + 1));
+  const size_t corners = size_t(m.resolution + 1) * (m.resolution + 1);
+  snapshot.corner_depth = decode(2 * texels, corners);
+  snapshot.tile = gpu_shared::kIzbTile;
+  snapshot.tiles_per_side = m.tiles_per_side;
+  const size_t tiles = size_t(m.tiles_per_side) * m.tiles_per_side;
+  snapshot.tile_depth = decode(2 * texels + corners, tiles);
+  snapshot.tile_corner_depth = decode(2 * texels + corners + tiles, size_t(m.tiles_per_side + 1) * (m.tiles_per_side + 1));
   const auto frame_bytes = read_buffer(m.ctx, m.frame_data);
   gpu_shared::IzbFrame frame;
   std::memcpy(&frame, frame_bytes.data(), sizeof(frame));

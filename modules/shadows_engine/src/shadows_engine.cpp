@@ -184,7 +184,9 @@ class EngineShadowModule final : public ShadowModule {
 
   CsmSnapshot read_lit_map() override {
     detail::LitMapSnapshot s = context_->read_lit_map();
-    return {s.resolution, std::move(s.depth), s.light_view_projection, std::move(s.corner_depth)};
+    return {s.resolution,        std::move(s.depth),      s.light_view_projection,
+            std::move(s.corner_depth), s.tile,              s.tiles_per_side,
+            std::move(s.tile_depth),   std::move(s.tile_corner_depth)};
   }
 
  private:

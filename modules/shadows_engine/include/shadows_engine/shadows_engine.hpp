@@ -39,11 +39,16 @@ class ShadowModule : public engine::RenderFeature {
     std::vector<float> depth;
     glm::mat4 light_view_projection{1.0f};
     std::vector<float> corner_depth;  // the lit map's alone: its texel corners' plane bounds, (resolution + 1)^2
+    // The lit map's alone, its tile level: casters that cover a whole tile of `tile`^2 texels are
+    // bounded there instead (a bound per tile, tiles_per_side^2, and plane bounds at the tiles'
+    // corners, (tiles_per_side + 1)^2, corner i at min(i * tile, resolution)).
+    uint32_t tile = 0, tiles_per_side = 0;
+    std::vector<float> tile_depth, tile_corner_depth;
   };
   virtual CsmSnapshot read_csm() = 0;
   // The last frame's lit map (IzbSettings::lit_culling; row-major, resolution^2 depths, +infinity
-  // where no caster touches the texel; and the corners' plane bounds) and the transform it was built
-  // with. Empty when it did not run.
+  // where no caster touches the texel; the corners' plane bounds; the tile level) and the transform
+  // it was built with. Empty when it did not run.
   virtual CsmSnapshot read_lit_map() = 0;
   // The host-API context the adapter drives.
   virtual Context& context() = 0;
