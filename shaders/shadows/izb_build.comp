@@ -29,11 +29,12 @@ void raise_farthest(uint texel, float depth) {
   if (bits > tile_farthest[tile]) atomicMax(tile_farthest[tile], bits);
 }
 // 1 spp: every lane of the subgroup together (`has`: the lane's pixel has a node in `texel`). The
-// lanes' pixels neighbour one another, so mostly one tile takes one atomic.
+// lanes' pixels neighbour one another, so mostly one tile takes one atomic (on a GPU; a CPU device
+// takes the lanes' atomics, IZB_FLAG_LANE_ATOMICS).
 void raise_tiles_farthest(uint texel, float depth, bool has) {
   uint tile = has ? tile_of(texel) : 0xffffffffu;
   uint bits = has ? depth_bits(depth) : 0u;
-  if (subgroupMin(tile) == subgroupMax(tile)) {  // (arithmetic subgroup operations only)
+  if (!izb_flag(IZB_FLAG_LANE_ATOMICS) && subgroupMin(tile) == subgroupMax(tile)) {  // (arithmetic subgroup operations only)
     uint highest = subgroupMax(bits);
     if (subgroupElect() && has && highest > tile_farthest[tile]) atomicMax(tile_farthest[tile], highest);
   } else if (has && bits > tile_farthest[tile]) {

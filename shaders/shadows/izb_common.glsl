@@ -43,7 +43,7 @@ bool izb_flag(uint flag) { return (kIzbFlags & flag) != 0u; }
 
 // A spot light (else the sun): its grid is a perspective one from its position (izb_setup.comp), in
 // which rays toward the light run along the depth axis as the sun's do in its orthographic grid.
-bool spot_light() { return params.light_position.w > 0.0; }
+bool spot_light() { return izb_flag(IZB_FLAG_SPOT); }
 
 // World position -> (grid x, grid y, light depth): grid in texels of the IZB, depth in [0,1]. A spot
 // light's points lie in front of it (w > 0: the build takes only points it reaches, and caster
@@ -123,6 +123,16 @@ void raise_row_dispatch(uint at, uint items, uint per_group) {
 // of the subgroup calls it together. With `raise`, also raises the indirect dispatch at `dispatch_at`
 // over the counter's items (at most `capacity`) in workgroups of `per_group`.
 uint reserve_slots_raising(uint counter, uint count, bool raise, uint dispatch_at, uint capacity, uint per_group) {
+  if (izb_flag(IZB_FLAG_LANE_ATOMICS)) {
+    uint first = 0u;
+    if (count > 0u) {
+      first = atomicAdd(counters[counter], count);
+      // The lane whose slots take a workgroup's first raises the dispatch to hold it.
+      uint next_group_start = (first + per_group - 1u) / per_group * per_group;
+      if (raise && next_group_start < first + count) raise_row_dispatch(dispatch_at, min(first + count, capacity), per_group);
+    }
+    return first;
+  }
   uint offset = subgroupExclusiveAdd(count);
   uint total = subgroupAdd(count);
   uint base = 0u;

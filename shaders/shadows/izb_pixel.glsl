@@ -68,7 +68,7 @@ layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList {
 // of the IZB's range, and beyond it is the cascades' alone: the pixels that take any of the cascades'
 // term are listed with their two weights, so that the cascades filter only those (a CPU device pays
 // every pixel of a full-screen pass) and izb_hybrid_blend.comp mixes them. Called by every lane of
-// the subgroup (the list takes one atomic per subgroup); `has_pixel` false for a lane with none.
+// the subgroup (the list takes one atomic per subgroup on a GPU); `has_pixel` false for a lane with none.
 float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 position, uint gap_bits, bool hybrid,
                        float soft_distance, out bool written) {
   written = false;
@@ -99,17 +99,25 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
     float dist = distance(position, params.camera_position.xyz);
     float fade = beyond ? 1.0 : clamp((dist - 0.9 * reach) / (0.1 * reach), 0.0, 1.0);
     bool listed = covered && facing && (gap_weight > 0.0 || fade > 0.0);
-    // One atomic per subgroup; the dispatch over the list grows with it.
-    uint total = subgroupAdd(listed ? 1u : 0u);
-    uint slot = subgroupExclusiveAdd(listed ? 1u : 0u);
-    uint base = 0u;
-    if (subgroupElect() && total != 0u) {
-      base = atomicAdd(counters[IZB_COUNTER_HYBRID], total);
-      atomicMax(counters[IZB_COUNTER_HYBRID + 1u], (base + total + kIzbHybridEntriesPerGroup - 1u) / kIzbHybridEntriesPerGroup);
+    // One atomic per subgroup (a CPU device: per lane); the dispatch over the list grows with it.
+    uint slot = 0u;
+    if (izb_flag(IZB_FLAG_LANE_ATOMICS)) {
+      if (listed) {
+        slot = atomicAdd(counters[IZB_COUNTER_HYBRID], 1u);
+        if (slot % kIzbHybridEntriesPerGroup == 0u)
+          atomicMax(counters[IZB_COUNTER_HYBRID + 1u], slot / kIzbHybridEntriesPerGroup + 1u);
+      }
+    } else {
+      uint total = subgroupAdd(listed ? 1u : 0u);
+      uint base = 0u;
+      if (subgroupElect() && total != 0u) {
+        base = atomicAdd(counters[IZB_COUNTER_HYBRID], total);
+        atomicMax(counters[IZB_COUNTER_HYBRID + 1u], (base + total + kIzbHybridEntriesPerGroup - 1u) / kIzbHybridEntriesPerGroup);
+      }
+      slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(listed ? 1u : 0u);
     }
-    base = subgroupBroadcastFirst(base);
     if (listed)
-      hybrid_list[base + slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
+      hybrid_list[slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
                                        floatBitsToUint(fade), 0u);
   }
   if (!covered) return visibility;

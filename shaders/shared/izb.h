@@ -62,6 +62,10 @@ SHARED_CONST uint IZB_FLAG_SETUP_APART = 65536u;
 // the pixels with nodes; the resolve reads only those, in a dispatch sized by the list, not the frame.
 SHARED_CONST uint IZB_FLAG_LISTED_RESOLVE = 131072u;
 SHARED_CONST uint IZB_FLAG_HYBRID = 262144u;  // the hybrid technique (its blend's list, with IZB_FLAG_LISTED_RESOLVE)
+SHARED_CONST uint IZB_FLAG_SPOT = 524288u;    // a spot light, or a face of a point light (params.light_position)
+// A CPU device: appends to a list take an atomic a lane, not a subgroup's scan and one atomic (a CPU
+// driver runs subgroup operations as loops over the lanes, and every branch of a shader).
+SHARED_CONST uint IZB_FLAG_LANE_ATOMICS = 1048576u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted

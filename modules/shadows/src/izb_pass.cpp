@@ -774,6 +774,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   const bool listed_resolve = !direct_term && debug_code(debug) == 0 && !spot;
   if (listed_resolve) flags |= gpu_shared::IZB_FLAG_LISTED_RESOLVE;
   if (hybrid) flags |= gpu_shared::IZB_FLAG_HYBRID;
+  if (spot) flags |= gpu_shared::IZB_FLAG_SPOT;
+  if (m.cpu_device()) flags |= gpu_shared::IZB_FLAG_LANE_ATOMICS;
   m.ensure_resolve_list(frame.view.extent, listed_resolve);
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
