@@ -83,15 +83,17 @@ struct IzbSettings {
   bool csm = false;                   // conservative shadow map z-prepass culls certainly shadowed points
   // Known-lit culling, the CSM's dual (the sun's IZB; a local light's runs without): a compute pass
   // keeps per grid texel the nearest light depth of every caster touching it (alpha-tested ones
-  // included) and per texel corner the nearest of their planes there; a point no farther from the
-  // light than its texel's bound or the blend of its corners' planes (at 32 spp: every sample, each
-  // in its own texel) is lit for certain and enters no list. Exact: the answer is the same with it
-  // off. It proves most open ground lit (a floor's own plane passes through its points), but the map
-  // visits every texel every caster touches: it pays where much of the view is lit ground under
-  // few casters and costs where many large casters overlap (tests/bench/BENCHMARKS.md, "Known-lit
-  // culling"). Auto times the IZB's passes with it off and on for two frames each, once the trace's
-  // and the CSM's own choices are made, and keeps the faster per configuration (Stats::lit_choice).
-  LitCulling lit_culling = LitCulling::Off;
+  // included) and per texel corner the nearest of their planes there (a caster covering a whole
+  // tile of 16x16 texels: the same per tile and tile corner); a point no farther from the light than
+  // its texel's bound or the blend of its corners' planes, and likewise for its tile (at 32 spp:
+  // every sample, each in its own texel) is lit for certain and enters no list. Exact: the answer is
+  // the same with it off. It proves most open ground lit (a floor's own plane passes through its
+  // points), but the map visits every texel the casters touch short of whole tiles: it pays where
+  // much of the view is lit ground under few casters and costs where many casters overlap
+  // (tests/bench/BENCHMARKS.md, "Known-lit culling"). Auto (the default) times the IZB's passes with
+  // it off and on for two frames each, once the trace's and the CSM's own choices are made, and keeps
+  // the faster per configuration (Stats::lit_choice).
+  LitCulling lit_culling = LitCulling::Auto;
   // With csm: where every caster in the CSM was chosen automatically (CsmChoice::Auto), also time the
   // IZB's passes with the prepass and without it (two frames each, once the trace's and the CSM's
   // backends are chosen, before the lit culling's probe) and skip it where it costs more than the
