@@ -25,6 +25,7 @@ uint tile_of(uint texel) {
 void raise_farthest(uint texel, float depth) {
   uint bits = depth_bits(depth);
   if (bits > farthest[texel]) atomicMax(farthest[texel], bits);  // most nodes are not their texel's farthest
+  if (!izb_flag(IZB_FLAG_TILE_FARTHEST)) return;
   uint tile = tile_of(texel);
   if (bits > tile_farthest[tile]) atomicMax(tile_farthest[tile], bits);
 }
@@ -32,6 +33,7 @@ void raise_farthest(uint texel, float depth) {
 // lanes' pixels neighbour one another, so mostly one tile takes one atomic (on a GPU; a CPU device
 // takes the lanes' atomics, IZB_FLAG_LANE_ATOMICS).
 void raise_tiles_farthest(uint texel, float depth, bool has) {
+  if (!izb_flag(IZB_FLAG_TILE_FARTHEST)) return;
   uint tile = has ? tile_of(texel) : 0xffffffffu;
   uint bits = has ? depth_bits(depth) : 0u;
   if (!izb_flag(IZB_FLAG_LANE_ATOMICS) && subgroupMin(tile) == subgroupMax(tile)) {  // (arithmetic subgroup operations only)
@@ -231,8 +233,8 @@ void main() {
     write_pixel_term(pixel, inside && count == 0u, state, mask, position, floatBitsToUint(1.0e30),
                      izb_flag(IZB_FLAG_HYBRID), push.soft_distance, written);
     bool has_nodes = inside && count != 0u;
-    uint slot = reserve_slots_raising(IZB_COUNTER_RESOLVE_LIST, has_nodes ? 1u : 0u, true, IZB_COUNTER_RESOLVE_LIST + 1u,
-                                      params.extent.x * params.extent.y, 64u);
+    uint slot = reserve_slots_raising(IZB_COUNTER_RESOLVE_LIST, has_nodes ? 1u : 0u, !izb_flag(IZB_FLAG_LANE_ATOMICS),
+                                      IZB_COUNTER_RESOLVE_LIST + 1u, params.extent.x * params.extent.y, 64u);
     if (has_nodes) resolve_list[slot] = index;
   }
   // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.

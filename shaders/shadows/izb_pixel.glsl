@@ -99,14 +99,11 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
     float dist = distance(position, params.camera_position.xyz);
     float fade = beyond ? 1.0 : clamp((dist - 0.9 * reach) / (0.1 * reach), 0.0, 1.0);
     bool listed = covered && facing && (gap_weight > 0.0 || fade > 0.0);
-    // One atomic per subgroup (a CPU device: per lane); the dispatch over the list grows with it.
+    // One atomic per subgroup; the dispatch over the list grows with it. A CPU device: an atomic per
+    // lane, and the dispatch after the resolve (izb_list_dispatch.comp).
     uint slot = 0u;
     if (izb_flag(IZB_FLAG_LANE_ATOMICS)) {
-      if (listed) {
-        slot = atomicAdd(counters[IZB_COUNTER_HYBRID], 1u);
-        if (slot % kIzbHybridEntriesPerGroup == 0u)
-          atomicMax(counters[IZB_COUNTER_HYBRID + 1u], slot / kIzbHybridEntriesPerGroup + 1u);
-      }
+      if (listed) slot = atomicAdd(counters[IZB_COUNTER_HYBRID], 1u);
     } else {
       uint total = subgroupAdd(listed ? 1u : 0u);
       uint base = 0u;

@@ -64,8 +64,12 @@ SHARED_CONST uint IZB_FLAG_LISTED_RESOLVE = 131072u;
 SHARED_CONST uint IZB_FLAG_HYBRID = 262144u;  // the hybrid technique (its blend's list, with IZB_FLAG_LISTED_RESOLVE)
 SHARED_CONST uint IZB_FLAG_SPOT = 524288u;    // a spot light, or a face of a point light (params.light_position)
 // A CPU device: appends to a list take an atomic a lane, not a subgroup's scan and one atomic (a CPU
-// driver runs subgroup operations as loops over the lanes, and every branch of a shader).
+// driver runs subgroup operations as loops over the lanes, and every branch of a shader); the
+// per-pixel passes leave their lists' dispatches to izb_list_dispatch.comp.
 SHARED_CONST uint IZB_FLAG_LANE_ATOMICS = 1048576u;
+// The compute trace runs: the build raises each light-space tile's farthest node depth, which its
+// tile cull reads (the raster trace reads only the texels').
+SHARED_CONST uint IZB_FLAG_TILE_FARTHEST = 2097152u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted

@@ -83,7 +83,7 @@ struct IzbPass::Impl {
     Pipeline software, hardware, count_software, count_hardware;
   };
   struct Pipelines {
-    Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter;
+    Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter, list_dispatch;
     // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use (tile_work_for()) with the
     // set's constants.
     struct TileWork {
@@ -233,6 +233,7 @@ struct IzbPass::Impl {
     };
     ps.fit = compute("izb_fit.comp");
     if (flags & gpu_shared::IZB_FLAG_SETUP_APART) ps.setup = compute("izb_setup.comp");
+    if (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS) ps.list_dispatch = compute("izb_list_dispatch.comp");
     ps.build = compute("izb_build.comp");
     ps.fallback = compute("izb_fallback.comp");
     ps.list_stats = compute("izb_list_stats.comp");
@@ -776,6 +777,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (hybrid) flags |= gpu_shared::IZB_FLAG_HYBRID;
   if (spot) flags |= gpu_shared::IZB_FLAG_SPOT;
   if (m.cpu_device()) flags |= gpu_shared::IZB_FLAG_LANE_ATOMICS;
+  if (use_compute_trace) flags |= gpu_shared::IZB_FLAG_TILE_FARTHEST;
   m.ensure_resolve_list(frame.view.extent, listed_resolve);
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
@@ -877,6 +879,14 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     }
   }
   pass_barrier(frame.ctx, cmd);
+  // A CPU device sizes the lists' dispatches in a pass of their own (izb_list_dispatch.comp).
+  const bool lists_sized_apart = (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS) != 0;
+  if (listed_resolve && lists_sized_apart) {
+    gpu_shared::IzbComputePush list_push = push;
+    list_push.mode = 0;
+    m.dispatch(cmd, frame, m.p->list_dispatch, list_push, 1);
+    pass_barrier(frame.ctx, cmd);
+  }
   // Light-space box around every point that can hold a node (the view, up to the IZB's range,
   // within the scene): a caster wholly beside it shadows none of them.
   const glm::mat4 receiver_region = [&] {
@@ -955,6 +965,12 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (listed_resolve) m.dispatch_indirect(cmd, frame, resolve, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
     else m.dispatch_pixels(cmd, frame, resolve, push);
     pass_barrier(frame.ctx, cmd);
+    if (hybrid && lists_sized_apart) {
+      gpu_shared::IzbComputePush list_push = push;
+      list_push.mode = 1;
+      m.dispatch(cmd, frame, m.p->list_dispatch, list_push, 1);
+      pass_barrier(frame.ctx, cmd);
+    }
   }
   if (collect_stats) {
     // Statistics only (excluded from the technique's total): fragments before depth culling.
