@@ -6,7 +6,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
-layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) writeonly buffer ResolveList { uint resolve_list[]; };
+layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
 
 // IZB_FLAG_ROW_RUNS: the workgroup's texels (none: 0xffffffff), node depths and the list heads its
 // runs replaced (see main).
@@ -54,9 +54,26 @@ bool csm_proves_shadowed(vec3 g) {
   return g.z > stored;
 }
 
+// A CPU device with one node a pixel and a listed resolve builds in two steps, specialized apart (it
+// runs every branch of a shader): kBuildClassify, over the frame, classifies every pixel, settles
+// those without a node and lists the others; kBuildInsert, over that list, classifies its pixels
+// again (the same arithmetic: the same answer) and inserts their nodes. kBuildWhole does both at once.
+const uint kBuildWhole = 0u;
+const uint kBuildClassify = 1u;
+const uint kBuildInsert = 2u;
+layout(constant_id = 14) const uint kBuildStep = kBuildWhole;
+
 void main() {
+  const bool inserts = kBuildStep != kBuildClassify;
+  const bool settles = kBuildStep != kBuildInsert;
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
+  if (kBuildStep == kBuildInsert) {  // one listed pixel a thread, in rows of kIzbDispatchRow workgroups
+    uint entry = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
+    inside = entry < counters[IZB_COUNTER_RESOLVE_LIST];
+    uint listed = inside ? resolve_list[entry] : 0u;
+    pixel = ivec2(listed % params.extent.x, listed / params.extent.x);
+  }
   uint covered = 0u, candidate = 0u, culled = 0u, lit_culled = 0u;
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
   uint state = 0u;
@@ -125,12 +142,17 @@ void main() {
         count = lit ? 0u : node_texels(g, mask, texels);
       }
       // Only a pixel with nodes is read again (by the trace, and the sorted lists' scatter).
-      if (count != 0u)
+      if (count != 0u && inserts)
         for (uint i = 0u; i < (izb_samples() == 1u ? 1u : 4u); ++i) store_quad_point(index, i, g[i]);
     }
   }
   uint refused = 0u;  // nodes past the pool
-  if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
+  if (izb_flag(IZB_FLAG_DIRECT_NODES) && !inserts) {
+    if (izb_flag(IZB_FLAG_STATS)) {
+      uint requested = subgroupAdd(count);
+      if (subgroupElect() && requested > 0u) atomicAdd(counters[IZB_COUNTER_NODES], requested);
+    }
+  } else if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
     // A pixel has at most one node and the pool holds one per pixel: no allocation, no overflow (a
     // CPU device would otherwise run every atomic of the general path below for every pixel).
     if (izb_flag(IZB_FLAG_ROW_RUNS)) {
@@ -166,7 +188,7 @@ void main() {
       if (bits > farthest[texel0]) atomicMax(farthest[texel0], bits);
     }
     raise_tiles_farthest(texel0, node_depth, count != 0u);
-    if (izb_flag(IZB_FLAG_STATS)) {
+    if (izb_flag(IZB_FLAG_STATS) && settles) {
       uint requested = subgroupAdd(count);
       if (subgroupElect() && requested > 0u) atomicAdd(counters[IZB_COUNTER_NODES], requested);
     }
@@ -199,7 +221,7 @@ void main() {
       }
     }
   }
-  if (inside) {
+  if (inside && inserts) {  // (with kBuildClassify: every pixel this writes has a node)
     if (refused > 0u) {
       // The fallback pass resolves this pixel exactly by testing every caster triangle.
       state |= IZB_PIXEL_OVERFLOW;
@@ -226,7 +248,7 @@ void main() {
       visibility_mask[index] = mask;
     }
   }
-  if (izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
+  if (izb_flag(IZB_FLAG_LISTED_RESOLVE) && settles) {
     // A pixel without a node is settled here (no occluder distance: only the trace finds one); the
     // others, the fallback's too, are the resolve's.
     bool written;
@@ -238,7 +260,7 @@ void main() {
     if (has_nodes) resolve_list[slot] = index;
   }
   // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.
-  if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) return;
+  if ((!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) || !settles) return;
   uint seed = IZB_SHARD_SEED;
   add_sharded(IZB_COUNTER_SHADING_POINTS, covered, seed);
   add_sharded(IZB_COUNTER_CANDIDATES, candidate, seed);

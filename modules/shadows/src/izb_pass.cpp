@@ -84,6 +84,7 @@ struct IzbPass::Impl {
   };
   struct Pipelines {
     Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter, list_dispatch;
+    Pipeline build_insert;  // valid where the build runs in two steps (izb_build.comp, kBuildStep)
     // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use (tile_work_for()) with the
     // set's constants.
     struct TileWork {
@@ -234,7 +235,12 @@ struct IzbPass::Impl {
     ps.fit = compute("izb_fit.comp");
     if (flags & gpu_shared::IZB_FLAG_SETUP_APART) ps.setup = compute("izb_setup.comp");
     if (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS) ps.list_dispatch = compute("izb_list_dispatch.comp");
-    ps.build = compute("izb_build.comp");
+    // A CPU device with one node a pixel and a listed resolve: the build classifies every pixel, then
+    // inserts the listed ones' nodes in a dispatch over the list (izb_build.comp, kBuildStep).
+    const bool build_apart = cpu_device() && (flags & gpu_shared::IZB_FLAG_DIRECT_NODES) &&
+                             (flags & gpu_shared::IZB_FLAG_LISTED_RESOLVE) && (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS);
+    ps.build = compute("izb_build.comp", {{14, build_apart ? 1u : 0u}});
+    if (build_apart) ps.build_insert = compute("izb_build.comp", {{14, 2u}});
     ps.fallback = compute("izb_fallback.comp");
     ps.list_stats = compute("izb_list_stats.comp");
     ps.grid_setup = compute("izb_triangles.comp");
@@ -860,6 +866,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     }
     pass_barrier(frame.ctx, cmd);
   }
+  const bool lists_sized_apart = (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS) != 0;
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
     m.dispatch_pixels(cmd, frame, m.p->build, push);
@@ -877,15 +884,19 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
       pass_barrier(frame.ctx, cmd);
       m.dispatch_pixels(cmd, frame, m.p->scatter, push);
     }
-  }
-  pass_barrier(frame.ctx, cmd);
-  // A CPU device sizes the lists' dispatches in a pass of their own (izb_list_dispatch.comp).
-  const bool lists_sized_apart = (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS) != 0;
-  if (listed_resolve && lists_sized_apart) {
-    gpu_shared::IzbComputePush list_push = push;
-    list_push.mode = 0;
-    m.dispatch(cmd, frame, m.p->list_dispatch, list_push, 1);
     pass_barrier(frame.ctx, cmd);
+    // A CPU device sizes the lists' dispatches in a pass of their own (izb_list_dispatch.comp), then
+    // inserts the listed pixels' nodes where the build runs in two steps.
+    if (listed_resolve && lists_sized_apart) {
+      gpu_shared::IzbComputePush list_push = push;
+      list_push.mode = 0;
+      m.dispatch(cmd, frame, m.p->list_dispatch, list_push, 1);
+      pass_barrier(frame.ctx, cmd);
+      if (m.p->build_insert.valid()) {
+        m.dispatch_indirect(cmd, frame, m.p->build_insert, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
+        pass_barrier(frame.ctx, cmd);
+      }
+    }
   }
   // Light-space box around every point that can hold a node (the view, up to the IZB's range,
   // within the scene): a caster wholly beside it shadows none of them.
