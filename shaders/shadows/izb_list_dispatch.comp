@@ -13,11 +13,11 @@ void write_args(uint at, uvec3 groups) {
 
 // A CPU device (IZB_FLAG_LANE_ATOMICS): the per-pixel passes append to their lists with an atomic a
 // lane and leave the dispatches over them to this pass, since raising them in every lane's code costs
-// a CPU driver more than a dispatch of one invocation. push.mode 0, after the build: the resolve's,
-// one entry a thread in rows of kIzbDispatchRow workgroups of 64; 1, after the resolve: the hybrid
-// list's, kIzbHybridEntriesPerGroup entries a workgroup.
+// a CPU driver more than a dispatch of one invocation. push.mode IZB_LIST_RESOLVE, after the build:
+// the resolve's, one entry a thread in rows of kIzbDispatchRow workgroups of 64; IZB_LIST_HYBRID,
+// after the resolve: the hybrid list's, kIzbHybridEntriesPerGroup entries a workgroup.
 void main() {
-  if (push.mode == 0u) {
+  if (push.mode == IZB_LIST_RESOLVE) {
     uint groups = (counters[IZB_COUNTER_RESOLVE_LIST] + 63u) / 64u;
     write_args(IZB_COUNTER_RESOLVE_LIST + 1u,
                uvec3(min(groups, kIzbDispatchRow), (groups + kIzbDispatchRow - 1u) / kIzbDispatchRow, 1u));

@@ -105,6 +105,9 @@ SHARED_CONST uint IZB_COUNTER_STRADDLERS = 23u;     // spot light: caster triang
 // IZB_FLAG_LISTED_RESOLVE: the pixels listed for the resolve, then 3 uints: its indirect dispatch, one
 // entry a thread in rows of kIzbDispatchRow workgroups (raise_row_dispatch).
 SHARED_CONST uint IZB_COUNTER_RESOLVE_LIST = 24u;
+// izb_list_dispatch.comp's push.mode: which list's dispatch it sizes.
+SHARED_CONST uint IZB_LIST_RESOLVE = 0u;
+SHARED_CONST uint IZB_LIST_HYBRID = 1u;
 SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel pairs
 // Hybrid: the pixels the resolve listed for the cascades, then 3 uints: indirect dispatch over them in
 // workgroups of kIzbHybridEntriesPerGroup entries.

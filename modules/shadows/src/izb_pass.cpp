@@ -558,6 +558,13 @@ struct IzbPass::Impl {
     dispatch(cmd, frame, p, push, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8);
   }
 
+  // A CPU device: the dispatch over list `which` (IZB_LIST_*) from its length, visible to what follows.
+  void size_list_dispatch(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push, uint32_t which) {
+    push.mode = which;
+    dispatch(cmd, frame, p->list_dispatch, push, 1);
+    pass_barrier(frame.ctx, cmd);
+  }
+
   void dispatch_indirect(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p,
                          gpu_shared::IzbComputePush push, uint32_t counter) {
     bind_compute(cmd, frame, p, push);
@@ -888,10 +895,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     // A CPU device sizes the lists' dispatches in a pass of their own (izb_list_dispatch.comp), then
     // inserts the listed pixels' nodes where the build runs in two steps.
     if (listed_resolve && lists_sized_apart) {
-      gpu_shared::IzbComputePush list_push = push;
-      list_push.mode = 0;
-      m.dispatch(cmd, frame, m.p->list_dispatch, list_push, 1);
-      pass_barrier(frame.ctx, cmd);
+      m.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_RESOLVE);
       if (m.p->build_insert.valid()) {
         m.dispatch_indirect(cmd, frame, m.p->build_insert, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
         pass_barrier(frame.ctx, cmd);
@@ -976,12 +980,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (listed_resolve) m.dispatch_indirect(cmd, frame, resolve, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
     else m.dispatch_pixels(cmd, frame, resolve, push);
     pass_barrier(frame.ctx, cmd);
-    if (hybrid && lists_sized_apart) {
-      gpu_shared::IzbComputePush list_push = push;
-      list_push.mode = 1;
-      m.dispatch(cmd, frame, m.p->list_dispatch, list_push, 1);
-      pass_barrier(frame.ctx, cmd);
-    }
+    if (hybrid && lists_sized_apart) m.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_HYBRID);
   }
   if (collect_stats) {
     // Statistics only (excluded from the technique's total): fragments before depth culling.
