@@ -56,24 +56,36 @@ bool csm_proves_shadowed(vec3 g) {
 
 // A CPU device with one node a pixel and a listed resolve builds in two steps, specialized apart (it
 // runs every branch of a shader): kBuildClassify, over the frame, classifies every pixel, settles
-// those without a node and lists the others; kBuildInsert, over that list, classifies its pixels
-// again (the same arithmetic: the same answer) and inserts their nodes. kBuildWhole does both at once.
+// those without a node, and lists the others with their grid points and states; kBuildInsert, over
+// that list, inserts their nodes from what the first step stored (not classifying again, so both
+// steps agree whatever the compiler makes of the arithmetic). kBuildWhole does both at once.
 const uint kBuildWhole = 0u;
 const uint kBuildClassify = 1u;
 const uint kBuildInsert = 2u;
 layout(constant_id = 14) const uint kBuildStep = kBuildWhole;
 
+// kBuildInsert: one listed pixel a thread, in rows of kIzbDispatchRow workgroups of 64.
+void insert_listed_node() {
+  uint entry = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
+  if (entry >= counters[IZB_COUNTER_RESOLVE_LIST]) return;
+  uint index = resolve_list[entry];
+  vec3 g = quad_point(index, 0u);
+  uint texel = texel_index(grid_texel(g));
+  nodes[index] = uvec2(atomicExchange(heads[texel], index), index);
+  raise_farthest(texel, g.z);
+  // What the whole build leaves for a pixel with a node: no sample settled, no occluder found yet.
+  if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
+  visibility_mask[index] = 0u;
+}
+
 void main() {
+  if (kBuildStep == kBuildInsert) {
+    insert_listed_node();
+    return;
+  }
   const bool inserts = kBuildStep != kBuildClassify;
-  const bool settles = kBuildStep != kBuildInsert;
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
-  if (kBuildStep == kBuildInsert) {  // one listed pixel a thread, in rows of kIzbDispatchRow workgroups
-    uint entry = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
-    inside = entry < counters[IZB_COUNTER_RESOLVE_LIST];
-    uint listed = inside ? resolve_list[entry] : 0u;
-    pixel = ivec2(listed % params.extent.x, listed / params.extent.x);
-  }
   uint covered = 0u, candidate = 0u, culled = 0u, lit_culled = 0u;
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
   uint state = 0u;
@@ -142,7 +154,7 @@ void main() {
         count = lit ? 0u : node_texels(g, mask, texels);
       }
       // Only a pixel with nodes is read again (by the trace, and the sorted lists' scatter).
-      if (count != 0u && inserts)
+      if (count != 0u)
         for (uint i = 0u; i < (izb_samples() == 1u ? 1u : 4u); ++i) store_quad_point(index, i, g[i]);
     }
   }
@@ -188,7 +200,7 @@ void main() {
       if (bits > farthest[texel0]) atomicMax(farthest[texel0], bits);
     }
     raise_tiles_farthest(texel0, node_depth, count != 0u);
-    if (izb_flag(IZB_FLAG_STATS) && settles) {
+    if (izb_flag(IZB_FLAG_STATS)) {
       uint requested = subgroupAdd(count);
       if (subgroupElect() && requested > 0u) atomicAdd(counters[IZB_COUNTER_NODES], requested);
     }
@@ -221,7 +233,7 @@ void main() {
       }
     }
   }
-  if (inside && inserts) {  // (with kBuildClassify: every pixel this writes has a node)
+  if (inside) {
     if (refused > 0u) {
       // The fallback pass resolves this pixel exactly by testing every caster triangle.
       state |= IZB_PIXEL_OVERFLOW;
@@ -243,12 +255,13 @@ void main() {
       imageStore(shadow_term, pixel, vec4(candidate != 0u ? (mask != 0u ? 0.0 : 1.0) : (facing ? 1.0 : 0.0)));
     bool mask_read = (!direct_term && !listed_resolve) || sorted_lists() ||
                      (count != 0u && (listed_resolve || izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));
-    if (candidate != 0u && mask_read) {  // only candidates' are read
+    // (kBuildClassify: kBuildInsert writes them, for pixels with a node.)
+    if (candidate != 0u && mask_read && inserts) {  // only candidates' are read
       if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
       visibility_mask[index] = mask;
     }
   }
-  if (izb_flag(IZB_FLAG_LISTED_RESOLVE) && settles) {
+  if (izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
     // A pixel without a node is settled here (no occluder distance: only the trace finds one); the
     // others, the fallback's too, are the resolve's.
     bool written;
@@ -260,7 +273,7 @@ void main() {
     if (has_nodes) resolve_list[slot] = index;
   }
   // Counts for the statistics and for the adaptive CSM's yield: skipped in a frame that needs neither.
-  if ((!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) || !settles) return;
+  if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_CSM)) return;
   uint seed = IZB_SHARD_SEED;
   add_sharded(IZB_COUNTER_SHADING_POINTS, covered, seed);
   add_sharded(IZB_COUNTER_CANDIDATES, candidate, seed);
