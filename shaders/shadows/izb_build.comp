@@ -160,6 +160,7 @@ void main() {
   }
   uint refused = 0u;  // nodes past the pool
   if (izb_flag(IZB_FLAG_DIRECT_NODES) && !inserts) {
+    // kBuildClassify: the nodes are kBuildInsert's; the statistics count them here.
     if (izb_flag(IZB_FLAG_STATS)) {
       uint requested = subgroupAdd(count);
       if (subgroupElect() && requested > 0u) atomicAdd(counters[IZB_COUNTER_NODES], requested);
