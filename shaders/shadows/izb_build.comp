@@ -6,7 +6,6 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
-layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
 
 // IZB_FLAG_ROW_RUNS: the workgroup's texels (none: 0xffffffff), node depths and the list heads its
 // runs replaced (see main).
@@ -31,12 +30,12 @@ void raise_farthest(uint texel, float depth) {
 }
 // 1 spp: every lane of the subgroup together (`has`: the lane's pixel has a node in `texel`). The
 // lanes' pixels neighbour one another, so mostly one tile takes one atomic (on a GPU; a CPU device
-// takes the lanes' atomics, IZB_FLAG_LANE_ATOMICS).
+// takes the lanes' atomics, IZB_FLAG_CPU_DEVICE).
 void raise_tiles_farthest(uint texel, float depth, bool has) {
   if (!izb_flag(IZB_FLAG_TILE_FARTHEST)) return;
   uint tile = has ? tile_of(texel) : 0xffffffffu;
   uint bits = has ? depth_bits(depth) : 0u;
-  if (!izb_flag(IZB_FLAG_LANE_ATOMICS) && subgroupMin(tile) == subgroupMax(tile)) {  // (arithmetic subgroup operations only)
+  if (!izb_flag(IZB_FLAG_CPU_DEVICE) && subgroupMin(tile) == subgroupMax(tile)) {  // (arithmetic subgroup operations only)
     uint highest = subgroupMax(bits);
     if (subgroupElect() && has && highest > tile_farthest[tile]) atomicMax(tile_farthest[tile], highest);
   } else if (has && bits > tile_farthest[tile]) {
@@ -64,11 +63,10 @@ const uint kBuildClassify = 1u;
 const uint kBuildInsert = 2u;
 layout(constant_id = 14) const uint kBuildStep = kBuildWhole;
 
-// kBuildInsert: one listed pixel a thread, in rows of kIzbDispatchRow workgroups of 64.
+// kBuildInsert: one listed pixel a thread.
 void insert_listed_node() {
-  uint entry = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
-  if (entry >= counters[IZB_COUNTER_RESOLVE_LIST]) return;
-  uint index = resolve_list[entry];
+  uint index;
+  if (!listed_pixel(index)) return;
   vec3 g = quad_point(index, 0u);
   uint texel = texel_index(grid_texel(g));
   nodes[index] = uvec2(atomicExchange(heads[texel], index), index);
@@ -269,7 +267,7 @@ void main() {
     write_pixel_term(pixel, inside && count == 0u, state, mask, position, floatBitsToUint(1.0e30),
                      izb_flag(IZB_FLAG_HYBRID), push.soft_distance, written);
     bool has_nodes = inside && count != 0u;
-    uint slot = reserve_slots_raising(IZB_COUNTER_RESOLVE_LIST, has_nodes ? 1u : 0u, !izb_flag(IZB_FLAG_LANE_ATOMICS),
+    uint slot = reserve_slots_raising(IZB_COUNTER_RESOLVE_LIST, has_nodes ? 1u : 0u, !izb_flag(IZB_FLAG_CPU_DEVICE),
                                       IZB_COUNTER_RESOLVE_LIST + 1u, params.extent.x * params.extent.y, 64u);
     if (has_nodes) resolve_list[slot] = index;
   }

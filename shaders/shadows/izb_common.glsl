@@ -123,7 +123,7 @@ void raise_row_dispatch(uint at, uint items, uint per_group) {
 // of the subgroup calls it together. With `raise`, also raises the indirect dispatch at `dispatch_at`
 // over the counter's items (at most `capacity`) in workgroups of `per_group`.
 uint reserve_slots_raising(uint counter, uint count, bool raise, uint dispatch_at, uint capacity, uint per_group) {
-  if (izb_flag(IZB_FLAG_LANE_ATOMICS)) {
+  if (izb_flag(IZB_FLAG_CPU_DEVICE)) {
     uint first = 0u;
     if (count > 0u) {
       first = atomicAdd(counters[counter], count);
@@ -153,6 +153,9 @@ void add_sharded(uint counter, uint value, uint seed) {
 }
 // A compute invocation's shard seed.
 #define IZB_SHARD_SEED (gl_WorkGroupID.x * 7u + gl_WorkGroupID.y * 13u + gl_SubgroupID)
+// A compute invocation's workgroup in a dispatch laid out in rows of kIzbDispatchRow workgroups
+// (raise_row_dispatch).
+#define IZB_ROW_DISPATCH_GROUP (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x)
 
 
 CasterAlpha load_caster_alpha(uint t) {

@@ -71,13 +71,13 @@ void main() {
     vec4 b = subgroup_bounds[0];
     for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
     bounds_partials[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = b;
-    if (!izb_flag(IZB_FLAG_SETUP_APART)) {
+    if (!izb_flag(IZB_FLAG_CPU_DEVICE)) {
       memoryBarrierBuffer();  // the partial is visible before the count says so
       uint done = atomicAdd(counters[IZB_COUNTER_FIT_GROUPS_DONE], 1u);
       last_workgroup = done + 1u == gl_NumWorkGroups.x * gl_NumWorkGroups.y;
     }
   }
-  if (izb_flag(IZB_FLAG_SETUP_APART)) return;  // a CPU device: izb_setup.comp runs the second step
+  if (izb_flag(IZB_FLAG_CPU_DEVICE)) return;  // a CPU device: izb_setup.comp runs the second step
   barrier();
   if (!last_workgroup) return;
   memoryBarrierBuffer();  // every partial, counted before this workgroup's, is read after the count

@@ -11,7 +11,7 @@ void write_args(uint at, uvec3 groups) {
   counters[at + 2u] = groups.z;
 }
 
-// A CPU device (IZB_FLAG_LANE_ATOMICS): the per-pixel passes append to their lists with an atomic a
+// A CPU device (IZB_FLAG_CPU_DEVICE): the per-pixel passes append to their lists with an atomic a
 // lane and leave the dispatches over them to this pass, since raising them in every lane's code costs
 // a CPU driver more than a dispatch of one invocation. push.mode IZB_LIST_RESOLVE, after the build:
 // the resolve's, one entry a thread in rows of kIzbDispatchRow workgroups of 64; IZB_LIST_HYBRID,

@@ -59,6 +59,17 @@ void micro_quad_corners(ivec2 pixel, PixelPoint p, out vec3 c[4]) {
   c[3] = shadow_ray_origin(micro_quad_corner(base + vec2(1, 1), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
 }
 
+// IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the build lists.
+layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
+// The resolve list's pixel of this invocation (one a thread, in rows of kIzbDispatchRow workgroups of
+// 64: IZB_COUNTER_RESOLVE_LIST's dispatch); false past the list's end.
+bool listed_pixel(out uint index) {
+  uint entry = IZB_ROW_DISPATCH_GROUP * 64u + gl_LocalInvocationIndex;
+  bool listed = entry < counters[IZB_COUNTER_RESOLVE_LIST];
+  index = listed ? resolve_list[entry] : 0u;
+  return listed;
+}
+
 // Hybrid: the pixels that take any of the cascades' term, with their two weights (izb_resolve.comp).
 layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList { uvec4 hybrid_list[]; };
 
@@ -102,7 +113,7 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
     // One atomic per subgroup; the dispatch over the list grows with it. A CPU device: an atomic per
     // lane, and the dispatch after the resolve (izb_list_dispatch.comp).
     uint slot = 0u;
-    if (izb_flag(IZB_FLAG_LANE_ATOMICS)) {
+    if (izb_flag(IZB_FLAG_CPU_DEVICE)) {
       if (listed) slot = atomicAdd(counters[IZB_COUNTER_HYBRID], 1u);
     } else {
       uint total = subgroupAdd(listed ? 1u : 0u);

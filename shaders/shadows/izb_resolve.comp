@@ -6,7 +6,6 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_OVERLAY, rgba8) uniform image2D overlay;
-layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) readonly buffer ResolveList { uint resolve_list[]; };
 
 const uint kDebugVisibility = 1u;
 const uint kDebugListLength = 2u;
@@ -109,8 +108,7 @@ void main() {
     resolve(pixel, all(lessThan(uvec2(pixel), params.extent.xy)));
     return;
   }
-  uint entry = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * 64u + gl_LocalInvocationIndex;
-  bool listed = entry < counters[IZB_COUNTER_RESOLVE_LIST];
-  uint index = listed ? resolve_list[entry] : 0u;
+  uint index;
+  bool listed = listed_pixel(index);
   resolve(ivec2(index % params.extent.x, index / params.extent.x), listed);
 }

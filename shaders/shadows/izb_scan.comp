@@ -44,7 +44,7 @@ void main() {
     }
     return;
   }
-  uint block = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
+  uint block = IZB_ROW_DISPATCH_GROUP;
   if (block >= blocks) return;  // uniform over the workgroup
   uint base = block * kIzbScanBlock + lane * 4u;
   if (push.mode == 0u) {

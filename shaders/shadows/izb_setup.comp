@@ -7,5 +7,5 @@ layout(push_constant) uniform Push { IzbComputePush push; };
 layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) readonly buffer BoundsPartials { vec4 bounds_partials[]; };
 #include "shadows/izb_setup.glsl"
 
-// IZB_FLAG_SETUP_APART (a CPU device): the light frustum's second step as a dispatch of its own.
+// IZB_FLAG_CPU_DEVICE: the light frustum's second step as a dispatch of its own.
 void main() { set_up_frustum(); }

@@ -36,7 +36,7 @@ void quad_pairs(uint group, uint mode, uint count) {
 // densely so the list walks of step 4 fill every lane. A pair that does not fit the buffer is traced
 // here.
 void main() {
-  uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
+  uint group = IZB_ROW_DISPATCH_GROUP;
   uint mode = kIzbWork;
   uint count = tile_pair_count(mode);
   if (works_texel_quads(mode)) {  // a specialization constant

@@ -13,7 +13,7 @@ layout(push_constant) uniform Push { IzbComputePush push; };
 // it bounds at once: lower_lit_tile) and, for the trace, is not behind every node of. A pair that
 // does not fit the buffer is worked here.
 void main() {
-  uint group = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
+  uint group = IZB_ROW_DISPATCH_GROUP;
   uint mode = kIzbWork;
   uint count = record_count(mode);
   uint slot_counter = tile_pair_counter(mode);

@@ -7,7 +7,7 @@ layout(local_size_x = kIzbPairGroup) in;
 // Compute trace, step 3: one thread per surviving (triangle, texel) pair walks the texel's list with
 // the same exact node test as the raster trace.
 void main() {
-  uint index = (gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x) * kIzbPairGroup + gl_LocalInvocationID.x;
+  uint index = IZB_ROW_DISPATCH_GROUP * kIzbPairGroup + gl_LocalInvocationID.x;
   uint tests = 0u;
   // The pair is loaded beside the count (within the buffer, a stale one is read and left): one round
   // trip to memory before the walk, not two.

@@ -53,20 +53,20 @@ SHARED_CONST uint kIzbAllTrianglesLimit = 8192u;
 // triangles (no CSM, no lit map): the trace's step 1 sets up its triangles itself (izb_records.comp),
 // reading the casters' vertices where it would read the grid triangles, so no pass of their own.
 SHARED_CONST uint IZB_FLAG_TRIANGLES_IN_TRACE = 32768u;
-// A CPU device: the fit's second step (izb_setup.glsl) runs as a single-workgroup dispatch of its own
-// after the fit, not in the fit's last workgroup: the barrier that finds the last one in every
-// workgroup costs a CPU driver more than the dispatch.
-SHARED_CONST uint IZB_FLAG_SETUP_APART = 65536u;
+// A CPU device, which runs every branch of a shader and runs subgroup operations as loops over the
+// lanes:
+//  - the fit's second step (izb_setup.glsl) runs as a single-workgroup dispatch of its own after the
+//    fit, not in the fit's last workgroup: the barrier that finds the last one in every workgroup
+//    costs a CPU driver more than the dispatch;
+//  - appends to a list take an atomic a lane, not a subgroup's scan and one atomic, and the per-pixel
+//    passes leave their lists' dispatches to izb_list_dispatch.comp.
+SHARED_CONST uint IZB_FLAG_CPU_DEVICE = 65536u;
 // Where a resolve runs (hybrid, 32 spp) with no debug view and the sun: the build writes the term (and
 // the hybrid's list entry) of every pixel it settles, which is every pixel without a node, and lists
 // the pixels with nodes; the resolve reads only those, in a dispatch sized by the list, not the frame.
 SHARED_CONST uint IZB_FLAG_LISTED_RESOLVE = 131072u;
 SHARED_CONST uint IZB_FLAG_HYBRID = 262144u;  // the hybrid technique (its blend's list, with IZB_FLAG_LISTED_RESOLVE)
 SHARED_CONST uint IZB_FLAG_SPOT = 524288u;    // a spot light, or a face of a point light (params.light_position)
-// A CPU device: appends to a list take an atomic a lane, not a subgroup's scan and one atomic (a CPU
-// driver runs subgroup operations as loops over the lanes, and every branch of a shader); the
-// per-pixel passes leave their lists' dispatches to izb_list_dispatch.comp.
-SHARED_CONST uint IZB_FLAG_LANE_ATOMICS = 1048576u;
 // The compute trace runs: the build raises each light-space tile's farthest node depth, which its
 // tile cull reads (the raster trace reads only the texels').
 SHARED_CONST uint IZB_FLAG_TILE_FARTHEST = 2097152u;

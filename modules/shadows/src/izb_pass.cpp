@@ -233,12 +233,14 @@ struct IzbPass::Impl {
       return factory.compute({shader, bindings, push, constants});
     };
     ps.fit = compute("izb_fit.comp");
-    if (flags & gpu_shared::IZB_FLAG_SETUP_APART) ps.setup = compute("izb_setup.comp");
-    if (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS) ps.list_dispatch = compute("izb_list_dispatch.comp");
+    if (flags & gpu_shared::IZB_FLAG_CPU_DEVICE) {
+      ps.setup = compute("izb_setup.comp");
+      ps.list_dispatch = compute("izb_list_dispatch.comp");
+    }
     // A CPU device with one node a pixel and a listed resolve: the build classifies every pixel, then
     // inserts the listed ones' nodes in a dispatch over the list (izb_build.comp, kBuildStep).
-    const bool build_apart = cpu_device() && (flags & gpu_shared::IZB_FLAG_DIRECT_NODES) &&
-                             (flags & gpu_shared::IZB_FLAG_LISTED_RESOLVE) && (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS);
+    const bool build_apart = (flags & gpu_shared::IZB_FLAG_CPU_DEVICE) && (flags & gpu_shared::IZB_FLAG_DIRECT_NODES) &&
+                             (flags & gpu_shared::IZB_FLAG_LISTED_RESOLVE);
     ps.build = compute("izb_build.comp", {{14, build_apart ? 1u : 0u}});
     if (build_apart) ps.build_insert = compute("izb_build.comp", {{14, 2u}});
     ps.fallback = compute("izb_fallback.comp");
@@ -777,8 +779,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (all_triangles) flags |= gpu_shared::IZB_FLAG_ALL_TRIANGLES;
   const bool triangles_in_trace = all_triangles && use_compute_trace && !run_csm && !lit && !spot;
   if (triangles_in_trace) flags |= gpu_shared::IZB_FLAG_TRIANGLES_IN_TRACE;
-  const bool setup_apart = m.cpu_device();
-  if (setup_apart) flags |= gpu_shared::IZB_FLAG_SETUP_APART;
+  const bool cpu = m.cpu_device();
+  if (cpu) flags |= gpu_shared::IZB_FLAG_CPU_DEVICE;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
@@ -789,7 +791,6 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (listed_resolve) flags |= gpu_shared::IZB_FLAG_LISTED_RESOLVE;
   if (hybrid) flags |= gpu_shared::IZB_FLAG_HYBRID;
   if (spot) flags |= gpu_shared::IZB_FLAG_SPOT;
-  if (m.cpu_device()) flags |= gpu_shared::IZB_FLAG_LANE_ATOMICS;
   if (use_compute_trace) flags |= gpu_shared::IZB_FLAG_TILE_FARTHEST;
   m.ensure_resolve_list(frame.view.extent, listed_resolve);
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
@@ -822,11 +823,11 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
     {
       // The last of its workgroups also fits the grid and (with many casters) lists the caster draws
-      // whose bounds reach it; on a CPU device a dispatch of its own does (IZB_FLAG_SETUP_APART).
+      // whose bounds reach it; on a CPU device a dispatch of its own does (IZB_FLAG_CPU_DEVICE).
       OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_fit");
       m.dispatch(cmd, frame, m.p->fit, push, fit_columns(frame.view.extent.width), fit_rows(frame.view.extent.height));
     }
-    if (setup_apart) {
+    if (cpu) {
       pass_barrier(frame.ctx, cmd);
       OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "light_frustum_cull");
       m.dispatch(cmd, frame, m.p->setup, push, 1);
@@ -873,7 +874,6 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     }
     pass_barrier(frame.ctx, cmd);
   }
-  const bool lists_sized_apart = (flags & gpu_shared::IZB_FLAG_LANE_ATOMICS) != 0;
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
     m.dispatch_pixels(cmd, frame, m.p->build, push);
@@ -894,7 +894,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     pass_barrier(frame.ctx, cmd);
     // A CPU device sizes the lists' dispatches in a pass of their own (izb_list_dispatch.comp), then
     // inserts the listed pixels' nodes where the build runs in two steps.
-    if (listed_resolve && lists_sized_apart) {
+    if (listed_resolve && cpu) {
       m.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_RESOLVE);
       if (m.p->build_insert.valid()) {
         m.dispatch_indirect(cmd, frame, m.p->build_insert, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
@@ -980,7 +980,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (listed_resolve) m.dispatch_indirect(cmd, frame, resolve, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
     else m.dispatch_pixels(cmd, frame, resolve, push);
     pass_barrier(frame.ctx, cmd);
-    if (hybrid && lists_sized_apart) m.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_HYBRID);
+    if (hybrid && cpu) m.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_HYBRID);
   }
   if (collect_stats) {
     // Statistics only (excluded from the technique's total): fragments before depth culling.
