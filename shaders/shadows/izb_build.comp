@@ -46,11 +46,67 @@ void raise_tiles_farthest(uint texel, float depth, bool has) {
 // The CSM holds, where one triangle fully covers a texel, a depth no nearer the light than that
 // triangle anywhere over the texel: a point beyond it (plus the shared offset already in `g`) is
 // certainly shadowed.
-bool csm_proves_shadowed(vec3 g) {
+bool csm_proves_shadowed_in(vec3 g, ivec2 texel) {
   if (!izb_flag(IZB_FLAG_CSM)) return false;
-  float stored = izb_flag(IZB_FLAG_CSM_BUFFER) ? uintBitsToFloat(csm_texels[texel_index(grid_texel(g))])
-                                              : texelFetch(csm_depth, grid_texel(g), 0).r;
+  float stored = izb_flag(IZB_FLAG_CSM_BUFFER) ? uintBitsToFloat(csm_texels[texel_index(texel)])
+                                              : texelFetch(csm_depth, texel, 0).r;
   return g.z > stored;
+}
+bool csm_proves_shadowed(vec3 g) { return csm_proves_shadowed_in(g, grid_texel(g)); }
+
+// 32 spp: the CSM's verdict on all of a μQuad's samples at once, where its corners' bounds, widened
+// past any rounding of a sample's blend, span at most 2x2 texels: kCsmAllShadowed if even its nearest
+// corner lies beyond every one of those texels' depths, kCsmNoneShadowed if even its farthest lies in
+// front of all of them, else kCsmPerSample. Each sample, a convex blend of the corners in its own
+// texel, would decide the same (so most shadowed pixels take four fetches, not 32).
+const uint kCsmPerSample = 0u;
+const uint kCsmAllShadowed = 1u;
+const uint kCsmNoneShadowed = 2u;
+const float kBlendSlackTexels = 1.0 / 64.0;  // a blend of grid coordinates (< 2^14) rounds by a few ulps
+uint csm_quad_verdict(vec3 g[4]) {
+  if (!izb_flag(IZB_FLAG_CSM)) return kCsmNoneShadowed;
+  vec2 lowest = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels;
+  vec2 highest = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels;
+  ivec2 first = grid_texel(vec3(lowest, 0.0));
+  ivec2 last = grid_texel(vec3(highest, 0.0));
+  if (any(greaterThan(last - first, ivec2(1)))) return kCsmPerSample;
+  float nearest = 1.0e30, farthest = -1.0e30;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 texel = min(first + ivec2(k & 1, k >> 1), last);
+    float stored = izb_flag(IZB_FLAG_CSM_BUFFER) ? uintBitsToFloat(csm_texels[texel_index(texel)])
+                                                : texelFetch(csm_depth, texel, 0).r;
+    nearest = min(nearest, stored);
+    farthest = max(farthest, stored);
+  }
+  float z_lowest = min(min(g[0].z, g[1].z), min(g[2].z, g[3].z));
+  float z_highest = max(max(g[0].z, g[1].z), max(g[2].z, g[3].z));
+  float slack = 1.0e-5 * (1.0 + max(abs(z_lowest), abs(z_highest)));  // the same for depth
+  if (z_lowest - slack > farthest) return kCsmAllShadowed;
+  if (z_highest + slack <= nearest) return kCsmNoneShadowed;
+  return kCsmPerSample;
+}
+
+// 32 spp: a pixel's node texels as bits of the kSampleWindow x kSampleWindow texels from `origin` (bit
+// x + kSampleWindow * y), which holds every sample of a μQuad up to about two texels wide; the list
+// node_texels makes (local memory) only for a sample outside it.
+const int kSampleWindow = 4;
+ivec2 sample_window_origin(vec3 g[4]) {
+  vec2 lowest = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy));
+  return max(grid_texel(vec3(lowest, 0.0)) - 1, ivec2(0));  // a blend may round across a texel border
+}
+uint sample_window_bit(ivec2 origin, ivec2 texel, inout bool outside) {
+  ivec2 offset = texel - origin;
+  if (any(lessThan(offset, ivec2(0))) || any(greaterThanEqual(offset, ivec2(kSampleWindow)))) {
+    outside = true;
+    return 0u;
+  }
+  return 1u << uint(offset.x + kSampleWindow * offset.y);
+}
+// The lowest texel left in `cells` (sample_window_bit's bits), which it clears.
+uint take_window_texel(ivec2 origin, inout uint cells) {
+  int cell = findLSB(cells);
+  cells &= cells - 1u;
+  return texel_index(origin + ivec2(cell % kSampleWindow, cell / kSampleWindow));
 }
 
 // A CPU device with one node a pixel and a listed resolve builds in two steps, specialized apart (it
@@ -88,7 +144,10 @@ void main() {
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
   uint state = 0u;
   uint mask = 0u;  // samples the CSM settled (shadowed)
-  uint texels[32];
+  uint texels[32];  // 32 spp, only for a sample outside the window
+  ivec2 window = ivec2(0);
+  uint window_cells = 0u;  // the window's texels holding samples the CSM did not settle
+  bool outside_window = false;
   uint texel0 = 0u;
   uint count = 0u;
   float node_depth = 0.0;
@@ -117,8 +176,21 @@ void main() {
           g[i] = to_grid(c[i]);
           node_depth = max(node_depth, g[i].z);
         }
-        for (uint s = 0u; s < 32u; ++s)
-          if (csm_proves_shadowed(micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]))) mask |= 1u << s;
+        // Each sample's point and texel once, for the CSM and for the node's texels.
+        window = sample_window_origin(g);
+        uint verdict = csm_quad_verdict(g);
+        if (verdict == kCsmAllShadowed) {
+          mask = full_mask();
+        } else {
+          for (uint s = 0u; s < 32u; ++s) {
+            vec3 q = micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]);
+            ivec2 texel = grid_texel(q);
+            if (verdict == kCsmPerSample && csm_proves_shadowed_in(q, texel))
+              mask |= 1u << s;
+            else
+              window_cells |= sample_window_bit(window, texel, outside_window);
+          }
+        }
       }
       if (mask == full_mask()) {
         state |= IZB_PIXEL_CSM_CULLED;
@@ -149,7 +221,7 @@ void main() {
         count = mask == 0u && !lit ? 1u : 0u;
         texel0 = texel_index(grid_texel(g[0]));
       } else {
-        count = lit ? 0u : node_texels(g, mask, texels);
+        count = lit ? 0u : outside_window ? node_texels(g, mask, texels) : bitCount(window_cells);
       }
       // Only a pixel with nodes is read again (by the trace, and the sorted lists' scatter).
       if (count != 0u)
@@ -212,7 +284,7 @@ void main() {
       // prefix sum). A pixel takes all its nodes or, past the pool, none.
       if (base + count <= params.limits.x) {
         for (uint k = 0u; k < count; ++k) {
-          uint texel = izb_samples() == 1u ? texel0 : texels[k];
+          uint texel = izb_samples() == 1u ? texel0 : outside_window ? texels[k] : take_window_texel(window, window_cells);
           atomicAdd(list_counts[texel], 1u);
           raise_farthest(texel, node_depth);
         }
@@ -222,11 +294,11 @@ void main() {
     } else {
       for (uint k = 0u; k < count; ++k) {
         uint node = base + k;
+        uint texel = izb_samples() == 1u ? texel0 : outside_window ? texels[k] : take_window_texel(window, window_cells);
         if (node >= params.limits.x) {
           ++refused;
           continue;
         }
-        uint texel = izb_samples() == 1u ? texel0 : texels[k];
         nodes[node] = uvec2(atomicExchange(heads[texel], node), index);
         raise_farthest(texel, node_depth);
       }

@@ -20,6 +20,8 @@ uint tiles_per_side() { return params.capacities.y; }
 uint step_one_triangles() { return params.capacities.w & 0xffffu; }
 uint step_one_texel_bound() { return params.capacities.w >> 16u; }
 layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer Quads { float quads[]; };
+// The same buffer read a vec4 at a time by the traces (a pixel's points are 4 or 12 floats, whole vec4s).
+layout(set = 0, binding = IZB_BINDING_QUADS, std430) readonly buffer QuadVectors { vec4 quad_vectors[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Casters { IzbCasterTriangle casters[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
 layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };
@@ -219,11 +221,13 @@ bool shadows_point(vec3 s, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_are
 }
 
 uint occluded_samples(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
-  if (izb_samples() == 1u) return shadows_point(quad_point(pixel, 0u), ca, a, b, c, inv_area, gap) ? 1u : 0u;
-  vec3 c00 = quad_point(pixel, 0u);
-  vec3 c10 = quad_point(pixel, 1u);
-  vec3 c01 = quad_point(pixel, 2u);
-  vec3 c11 = quad_point(pixel, 3u);
+  if (izb_samples() == 1u) return shadows_point(quad_vectors[pixel].xyz, ca, a, b, c, inv_area, gap) ? 1u : 0u;
+  // The four corners (quad_point's layout) in three loads.
+  vec4 q0 = quad_vectors[3u * pixel], q1 = quad_vectors[3u * pixel + 1u], q2 = quad_vectors[3u * pixel + 2u];
+  vec3 c00 = q0.xyz;
+  vec3 c10 = vec3(q0.w, q1.xy);
+  vec3 c01 = vec3(q1.zw, q2.x);
+  vec3 c11 = q2.yzw;
   // Whole-quad reject: no sample can be inside if the quad's bounds miss the triangle's bounds.
   vec2 qmin = min(min(c00.xy, c10.xy), min(c01.xy, c11.xy));
   vec2 qmax = max(max(c00.xy, c10.xy), max(c01.xy, c11.xy));
@@ -250,11 +254,41 @@ uint occluded_samples(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float 
     nearest_gap = min(nearest_gap, corner_gap[k]);
   }
   if (any(greaterThan(outside_all, vec3(0.5)))) return 0u;
+  bool all_front = true;  // no corner behind: no sample is (a blend of values <= 0 with weights >= 0 is <= 0)
+  for (int k = 0; k < 4; ++k) all_front = all_front && corner_gap[k] <= 0.0;
+  if (all_front) return 0u;
   if (all(greaterThan(inside_all, vec3(0.5))) && all_behind && ca.threshold == 0u) {
     gap = min(gap, nearest_gap);
     return 0xffffffffu;
   }
   // Otherwise each sample's barycentrics and depth gap are the same bilinear blend of the corners'.
+  // (Not on a CPU device: it runs every lane through every function anyway, and Mesa 22.3's lavapipe
+  // has given the brute-force fallback lane-dependent bits from this loop.)
+  if (ca.threshold == 0u && !izb_flag(IZB_FLAG_GAPS) && !izb_flag(IZB_FLAG_CPU_DEVICE)) {
+    // Neither the sample's barycentrics (alpha) nor its gap (occluder distance) is read: only the
+    // four signs. A function no corner has below zero (the gap: at or below) has no sample there
+    // either, by the same argument, so only the edges and gap the quad straddles are blended, each
+    // as the full loop would blend it (blend1 is blend3's arithmetic on one component): the same
+    // bits, a quarter to a half of the work.
+    uint straddled = (inside_all.x > 0.5 ? 0u : 1u) | (inside_all.y > 0.5 ? 0u : 2u) | (inside_all.z > 0.5 ? 0u : 4u) |
+                     (all_behind ? 0u : 8u);
+    uint bits = 0xffffffffu;
+    for (int f = 0; f < 4; ++f) {
+      if ((straddled & (1u << uint(f))) == 0u) continue;
+      vec4 v = vec4(corner_gap[0], corner_gap[1], corner_gap[2], corner_gap[3]);
+      if (f == 0) v = vec4(w[0].x, w[1].x, w[2].x, w[3].x);
+      if (f == 1) v = vec4(w[0].y, w[1].y, w[2].y, w[3].y);
+      if (f == 2) v = vec4(w[0].z, w[1].z, w[2].z, w[3].z);
+      uint side = 0u;
+      for (uint i = 0u; i < 32u; ++i) {
+        vec2 o = kSamplePattern[i];
+        precise float s = blend1(blend1(v.x, v.y, o.x), blend1(v.z, v.w, o.x), o.y);
+        if (f == 3 ? s > 0.0 : s >= 0.0) side |= 1u << i;
+      }
+      bits &= side;
+    }
+    return bits;
+  }
   uint bits = 0u;
   for (uint i = 0u; i < 32u; ++i) {
     vec2 o = kSamplePattern[i];
