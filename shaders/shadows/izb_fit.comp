@@ -1,6 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
+#define IZB_RAY_BLOCK 16u  // the workgroup's pixels at each k of fit_pixel
 #include "shadows/izb_pixel.glsl"
 layout(local_size_x = 16, local_size_y = 16) in;  // a block of kIzbFitBlockWidth x kIzbFitBlockHeight pixels
 
@@ -45,12 +46,14 @@ void main() {
     // Every candidate's μQuad corners (32 spp) or ray origin.
     for (uint k = 0u; k < kFitPixels; ++k) {
       ivec2 pixel = fit_pixel(k);
+      ivec2 block = pixel - ivec2(gl_LocalInvocationID.xy);
+      if (izb_samples() == 32u) make_block_rays(block);  // (uniform: every invocation, every k)
       if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) continue;
       PixelPoint p = load_pixel(pixel);
       if (!p.candidate) continue;
       if (izb_samples() == 32u) {
         vec3 c[4];
-        micro_quad_corners(pixel, p, c);
+        block_micro_quad_corners(pixel, block, p, c);
         for (int i = 0; i < 4; ++i) {
           vec2 v = (params.light_view * vec4(c[i], 1.0)).xy;
           lo = min(lo, v);

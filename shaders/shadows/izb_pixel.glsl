@@ -59,6 +59,42 @@ void micro_quad_corners(ivec2 pixel, PixelPoint p, out vec3 c[4]) {
   c[3] = shadow_ray_origin(micro_quad_corner(base + vec2(1, 1), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
 }
 
+#ifdef IZB_RAY_BLOCK
+// 32 spp: the camera rays through the corners of a block of IZB_RAY_BLOCK x IZB_RAY_BLOCK pixels (one
+// an invocation), each made once for the workgroup, not once for each of the four pixels around it (a
+// ray takes eight of shared_divide's exact quotients). The same arithmetic as micro_quad_corners, so
+// the same corners.
+const uint kRayBlockSide = IZB_RAY_BLOCK + 1u;
+shared vec3 block_ray_origin[kRayBlockSide * kRayBlockSide];
+shared vec3 block_ray_direction[kRayBlockSide * kRayBlockSide];
+// Every invocation calls it, in uniform control flow; the barriers order the previous block's reads
+// before these writes, and these writes before the reads.
+void make_block_rays(ivec2 block_origin) {
+  barrier();
+  vec2 viewport = vec2(params.extent.xy);
+  // (Included before the shader's local size is declared: its IZB_RAY_BLOCK x IZB_RAY_BLOCK
+  // invocations, not gl_WorkGroupSize.)
+  for (uint i = gl_LocalInvocationIndex; i < kRayBlockSide * kRayBlockSide; i += IZB_RAY_BLOCK * IZB_RAY_BLOCK) {
+    CameraRay ray = pixel_corner_ray(vec2(block_origin + ivec2(i % kRayBlockSide, i / kRayBlockSide)), viewport,
+                                     params.inverse_view_projection);
+    block_ray_origin[i] = ray.origin;
+    block_ray_direction[i] = ray.direction;
+  }
+  barrier();
+}
+// micro_quad_corners for a pixel of the block make_block_rays last made.
+void block_micro_quad_corners(ivec2 pixel, ivec2 block_origin, PixelPoint p, out vec3 c[4]) {
+  ivec2 local = pixel - block_origin;
+  for (int k = 0; k < 4; ++k) {
+    uint i = uint(local.y + (k >> 1)) * kRayBlockSide + uint(local.x + (k & 1));
+    CameraRay ray;
+    ray.origin = block_ray_origin[i];
+    ray.direction = block_ray_direction[i];
+    c[k] = shadow_ray_origin(micro_quad_corner_on(ray, p.position, p.normal), p.normal);
+  }
+}
+#endif
+
 // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the build lists.
 layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
 // The resolve list's pixel of this invocation (one a thread, in rows of kIzbDispatchRow workgroups of

@@ -50,20 +50,38 @@ const vec2 kSamplePattern[32] = vec2[32](
 // [0,1]^2 of the pixel) is the bilinear blend of those corners, so a trace pass can rebuild all 32
 // samples from the corners alone. `inv_view_proj` maps NDC (Vulkan, y down, reversed depth in [0,1])
 // to world; `viewport` is the render size in pixels.
-SHARED_INLINE vec3 micro_quad_corner(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
-                                     SHARED_IN(mat4) inv_view_proj, SHARED_IN(vec3) plane_point,
-                                     SHARED_IN(vec3) plane_normal) {
+// A μQuad corner in two steps: the camera ray through a pixel corner (its origin on the near plane,
+// its direction toward a point farther along, not normalized), which the four pixels around the corner
+// share, and where that ray meets the pixel's tangent plane.
+struct CameraRay {
+  vec3 origin;
+  vec3 direction;
+};
+SHARED_INLINE CameraRay pixel_corner_ray(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
+                                         SHARED_IN(mat4) inv_view_proj) {
   SHARED_PRECISE vec2 ndc = shared_divide(pixel_corner, viewport) * 2.0f - 1.0f;
   SHARED_PRECISE vec4 near_h = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 1.0f, 1.0f));  // reversed depth: 1 is near
   SHARED_PRECISE vec4 far_h = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 0.5f, 1.0f));
   SHARED_PRECISE vec3 ray_origin = shared_divide(vec3(near_h), near_h.w);
   SHARED_PRECISE vec3 ray_dir = shared_divide(vec3(far_h), far_h.w) - ray_origin;
-  SHARED_PRECISE float denom = shared_dot(plane_normal, ray_dir);
+  CameraRay ray;
+  ray.origin = ray_origin;
+  ray.direction = ray_dir;
+  return ray;
+}
+SHARED_INLINE vec3 micro_quad_corner_on(SHARED_IN(CameraRay) ray, SHARED_IN(vec3) plane_point,
+                                        SHARED_IN(vec3) plane_normal) {
+  SHARED_PRECISE float denom = shared_dot(plane_normal, ray.direction);
   // A plane seen edge-on: keep the shading point rather than shoot to infinity.
   if (abs(denom) < 1.0e-12f) return plane_point;
-  SHARED_PRECISE float t = shared_divide(shared_dot(plane_normal, plane_point - ray_origin), denom);
-  SHARED_PRECISE vec3 corner = ray_origin + ray_dir * t;
+  SHARED_PRECISE float t = shared_divide(shared_dot(plane_normal, plane_point - ray.origin), denom);
+  SHARED_PRECISE vec3 corner = ray.origin + ray.direction * t;
   return corner;
+}
+SHARED_INLINE vec3 micro_quad_corner(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
+                                     SHARED_IN(mat4) inv_view_proj, SHARED_IN(vec3) plane_point,
+                                     SHARED_IN(vec3) plane_normal) {
+  return micro_quad_corner_on(pixel_corner_ray(pixel_corner, viewport, inv_view_proj), plane_point, plane_normal);
 }
 
 SHARED_INLINE vec3 micro_quad_blend(SHARED_IN(vec3) c00, SHARED_IN(vec3) c10, SHARED_IN(vec3) c01,
