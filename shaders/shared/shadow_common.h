@@ -62,8 +62,12 @@ SHARED_INLINE CameraRay pixel_corner_ray(SHARED_IN(vec2) pixel_corner, SHARED_IN
   SHARED_PRECISE vec2 ndc = shared_divide(pixel_corner, viewport) * 2.0f - 1.0f;
   SHARED_PRECISE vec4 near_h = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 1.0f, 1.0f));  // reversed depth: 1 is near
   SHARED_PRECISE vec4 far_h = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 0.5f, 1.0f));
-  SHARED_PRECISE vec3 ray_origin = shared_divide(vec3(near_h), near_h.w);
-  SHARED_PRECISE vec3 ray_dir = shared_divide(vec3(far_h), far_h.w) - ray_origin;
+  // One exact quotient a homogeneous point, then products (correctly rounded on CPU and GPU alike):
+  // five of shared_divide's corrected quotients a corner, not nine.
+  SHARED_PRECISE float near_scale = shared_divide(1.0f, near_h.w);
+  SHARED_PRECISE float far_scale = shared_divide(1.0f, far_h.w);
+  SHARED_PRECISE vec3 ray_origin = vec3(near_h) * near_scale;
+  SHARED_PRECISE vec3 ray_dir = vec3(far_h) * far_scale - ray_origin;
   CameraRay ray;
   ray.origin = ray_origin;
   ray.direction = ray_dir;

@@ -115,7 +115,8 @@ struct IzbSettings {
   PassBackend csm_backend = PassBackend::Auto;  // CSM (hertel/bary only; the hardware tests are raster)
   ListLayout lists = ListLayout::Linked;
   bool depth_cull = true;             // cull trace fragments behind the farthest node of their texel
-  bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed
+  bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed (at 32 spp also
+                                      // when false, unless the hybrid blends by occluder distance)
   float node_pool_factor = 1.25f;     // pool size = factor * pixels * (1 or expected texels per μQuad)
   uint32_t node_pool_override = 0;    // nonzero: fixed pool size in nodes (tests of overflow)
   // Validation path: no lists at all; every candidate is tested against every caster triangle by the
