@@ -63,12 +63,14 @@ const uint kCsmPerSample = 0u;
 const uint kCsmAllShadowed = 1u;
 const uint kCsmNoneShadowed = 2u;
 const float kBlendSlackTexels = 1.0 / 64.0;  // a blend of grid coordinates (< 2^14) rounds by a few ulps
-uint csm_quad_verdict(vec3 g[4]) {
+// The texels [first, last] of the μQuad corners' bounds, widened past any rounding of a sample's
+// blend: every sample lies in one of them.
+void quad_texel_bounds(vec3 g[4], out ivec2 first, out ivec2 last) {
+  first = grid_texel(vec3(min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels, 0.0));
+  last = grid_texel(vec3(max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels, 0.0));
+}
+uint csm_quad_verdict(vec3 g[4], ivec2 first, ivec2 last) {
   if (!izb_flag(IZB_FLAG_CSM)) return kCsmNoneShadowed;
-  vec2 lowest = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels;
-  vec2 highest = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels;
-  ivec2 first = grid_texel(vec3(lowest, 0.0));
-  ivec2 last = grid_texel(vec3(highest, 0.0));
   if (any(greaterThan(last - first, ivec2(1)))) return kCsmPerSample;
   float nearest = 1.0e30, farthest = -1.0e30;
   for (int k = 0; k < 4; ++k) {
@@ -178,9 +180,13 @@ void main() {
         }
         // Each sample's point and texel once, for the CSM and for the node's texels.
         window = sample_window_origin(g);
-        uint verdict = csm_quad_verdict(g);
+        ivec2 first, last;
+        quad_texel_bounds(g, first, last);
+        uint verdict = csm_quad_verdict(g, first, last);
         if (verdict == kCsmAllShadowed) {
           mask = full_mask();
+        } else if (verdict == kCsmNoneShadowed && first == last) {
+          window_cells = sample_window_bit(window, first, outside_window);  // every sample in one texel
         } else {
           for (uint s = 0u; s < 32u; ++s) {
             vec3 q = micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]);
@@ -224,8 +230,15 @@ void main() {
         count = lit ? 0u : outside_window ? node_texels(g, mask, texels) : bitCount(window_cells);
       }
       // Only a pixel with nodes is read again (by the trace, and the sorted lists' scatter).
-      if (count != 0u)
-        for (uint i = 0u; i < (izb_samples() == 1u ? 1u : 4u); ++i) store_quad_point(index, i, g[i]);
+      if (count != 0u) {  // (quad_point's layout, in whole vec4s)
+        if (izb_samples() == 1u) {
+          quad_vectors[index] = vec4(g[0], 0.0);
+        } else {
+          quad_vectors[3u * index] = vec4(g[0], g[1].x);
+          quad_vectors[3u * index + 1u] = vec4(g[1].yz, g[2].xy);
+          quad_vectors[3u * index + 2u] = vec4(g[2].z, g[3]);
+        }
+      }
     }
   }
   uint refused = 0u;  // nodes past the pool

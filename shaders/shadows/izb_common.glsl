@@ -20,8 +20,9 @@ uint tiles_per_side() { return params.capacities.y; }
 uint step_one_triangles() { return params.capacities.w & 0xffffu; }
 uint step_one_texel_bound() { return params.capacities.w >> 16u; }
 layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer Quads { float quads[]; };
-// The same buffer read a vec4 at a time by the traces (a pixel's points are 4 or 12 floats, whole vec4s).
-layout(set = 0, binding = IZB_BINDING_QUADS, std430) readonly buffer QuadVectors { vec4 quad_vectors[]; };
+// The same buffer a vec4 at a time, for the build's stores and the traces' loads (a pixel's points are 4
+// or 12 floats, whole vec4s).
+layout(set = 0, binding = IZB_BINDING_QUADS, std430) buffer QuadVectors { vec4 quad_vectors[]; };
 layout(set = 0, binding = IZB_BINDING_TRIANGLES, std430) readonly buffer Casters { IzbCasterTriangle casters[]; };
 layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList { uint overflow_pixels[]; };
 layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };
@@ -65,15 +66,11 @@ ivec2 grid_texel(vec3 g) {
 uint texel_index(ivec2 t) { return uint(t.y) * izb_resolution() + uint(t.x); }
 
 uint quad_stride() { return izb_samples() == 32u ? kIzbQuadFloats32 : kIzbQuadFloats1; }
+// A candidate's grid point (1 spp) or μQuad corner `corner` (32 spp: 00, 10, 01, 11), stored by the
+// build (a vec4 at a time through quad_vectors below).
 vec3 quad_point(uint pixel, uint corner) {
   uint base = pixel * quad_stride() + corner * 3u;
   return vec3(quads[base], quads[base + 1u], quads[base + 2u]);
-}
-void store_quad_point(uint pixel, uint corner, vec3 v) {
-  uint base = pixel * quad_stride() + corner * 3u;
-  quads[base] = v.x;
-  quads[base + 1u] = v.y;
-  quads[base + 2u] = v.z;
 }
 
 // What a node test needs to alpha-test a caster triangle: its material's threshold (0: not
