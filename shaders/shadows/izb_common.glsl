@@ -67,7 +67,7 @@ uint texel_index(ivec2 t) { return uint(t.y) * izb_resolution() + uint(t.x); }
 
 uint quad_stride() { return izb_samples() == 32u ? kIzbQuadFloats32 : kIzbQuadFloats1; }
 // A candidate's grid point (1 spp) or μQuad corner `corner` (32 spp: 00, 10, 01, 11), stored by the
-// build (a vec4 at a time through quad_vectors below).
+// build (a vec4 at a time, through quad_vectors).
 vec3 quad_point(uint pixel, uint corner) {
   uint base = pixel * quad_stride() + corner * 3u;
   return vec3(quads[base], quads[base + 1u], quads[base + 2u]);
