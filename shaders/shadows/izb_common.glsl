@@ -387,6 +387,11 @@ uint ordered_depth_bits(float d) {
 float ordered_depth(uint bits) {
   return uintBitsToFloat((bits & 0x80000000u) != 0u ? (bits & 0x7fffffffu) : ~bits);
 }
+// Lowers the CSM's or lit map's word at `index` to `bits` (an order-preserving encoding); the read
+// first, since most writes would not lower it.
+void lower_stored_bits(uint index, uint bits) {
+  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+}
 float lit_quad_reach() { return izb_samples() == 32u ? kIzbLitQuadReach : 0.0; }
 // A bound of the triangle's extent (sum of its bounds' sides: at least any edge, at least the distance
 // between any two of its points).
@@ -448,8 +453,7 @@ void lower_lit_plane_at(vec2 point, uint index, vec3 a, LitPlane q) {
   float plane = a.z + q.dzdx * (point.x - a.x) + q.dzdy * (point.y - a.y);
   float bound = plane - 1.0e-6 - 1.0e-6 * (abs(plane) + abs(a.z) + abs(q.dzdx) * run.x + abs(q.dzdy) * run.y) -
                 q.slope_error_x * run.x - q.slope_error_y * run.y - q.rounding;
-  uint bits = ordered_depth_bits(abs(bound) < 3.0e38 ? bound : -3.0e38);
-  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  lower_stored_bits(index, ordered_depth_bits(abs(bound) < 3.0e38 ? bound : -3.0e38));
 }
 void lower_lit_corner(ivec2 corner, vec3 a, LitPlane q) { lower_lit_plane_at(vec2(corner), lit_corner_index(corner), a, q); }
 

@@ -164,9 +164,7 @@ bool csm_hertel_covers(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
 
 // CSM: lowers the texel's stored bound to `far_depth` (depths in [0,1]: float order is bit order).
 void csm_store(ivec2 texel, float far_depth) {
-  uint bits = floatBitsToUint(clamp(far_depth, 0.0, 1.0));
-  uint index = texel_index(texel);
-  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  lower_stored_bits(texel_index(texel), floatBitsToUint(clamp(far_depth, 0.0, 1.0)));
 }
 
 // CSM: where the triangle fully covers the texel (Hertel's or the barycentric test, the same
@@ -216,9 +214,8 @@ void csm_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area, uint test) 
 bool lower_lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, float slack) {
   vec2 lo = vec2(texel);
   if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) return false;
-  uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
-  uint index = lit_map_index(texel_index(texel));
-  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  lower_stored_bits(lit_map_index(texel_index(texel)),
+                    ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack)));
   return true;
 }
 
@@ -269,9 +266,8 @@ bool lit_covers_tile(uvec2 tile, vec3 a, vec3 b, vec3 c, float area) {
 void lower_lit_tile(uvec2 tile, vec3 a, vec3 b, vec3 c, float area) {
   vec2 lo, hi;
   tile_rect(tile, lo, hi);
-  uint bits = ordered_depth_bits(lit_nearest_depth(lo, hi, a, b, c, area, lit_slack(a, b, c)));
-  uint index = lit_tile_index(tile);
-  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  lower_stored_bits(lit_tile_index(tile),
+                    ordered_depth_bits(lit_nearest_depth(lo, hi, a, b, c, area, lit_slack(a, b, c))));
   LitPlane q = lit_plane(a, b, c, area);
   for (uint k = 0u; k < 4u; ++k) {
     uvec2 corner = tile + uvec2(k & 1u, k >> 1u);
