@@ -46,12 +46,10 @@ void raise_tiles_farthest(uint texel, float depth, bool has) {
 // The CSM holds, where one triangle fully covers a texel, a depth no nearer the light than that
 // triangle anywhere over the texel: a point beyond it (plus the shared offset already in `g`) is
 // certainly shadowed.
-bool csm_proves_shadowed_in(vec3 g, ivec2 texel) {
-  if (!izb_flag(IZB_FLAG_CSM)) return false;
-  float stored = izb_flag(IZB_FLAG_CSM_BUFFER) ? uintBitsToFloat(csm_texels[texel_index(texel)])
-                                              : texelFetch(csm_depth, texel, 0).r;
-  return g.z > stored;
+float csm_stored_depth(ivec2 texel) {
+  return izb_flag(IZB_FLAG_CSM_BUFFER) ? uintBitsToFloat(csm_texels[texel_index(texel)]) : texelFetch(csm_depth, texel, 0).r;
 }
+bool csm_proves_shadowed_in(vec3 g, ivec2 texel) { return izb_flag(IZB_FLAG_CSM) && g.z > csm_stored_depth(texel); }
 bool csm_proves_shadowed(vec3 g) { return csm_proves_shadowed_in(g, grid_texel(g)); }
 
 // 32 spp: the CSM's verdict on all of a μQuad's samples at once, where its corners' bounds, widened
@@ -74,9 +72,7 @@ uint csm_quad_verdict(vec3 g[4], ivec2 first, ivec2 last) {
   if (any(greaterThan(last - first, ivec2(1)))) return kCsmPerSample;
   float nearest = 1.0e30, farthest = -1.0e30;
   for (int k = 0; k < 4; ++k) {
-    ivec2 texel = min(first + ivec2(k & 1, k >> 1), last);
-    float stored = izb_flag(IZB_FLAG_CSM_BUFFER) ? uintBitsToFloat(csm_texels[texel_index(texel)])
-                                                : texelFetch(csm_depth, texel, 0).r;
+    float stored = csm_stored_depth(min(first + ivec2(k & 1, k >> 1), last));
     nearest = min(nearest, stored);
     farthest = max(farthest, stored);
   }
@@ -178,7 +174,8 @@ void main() {
           g[i] = to_grid(c[i]);
           node_depth = max(node_depth, g[i].z);
         }
-        // Each sample's point and texel once, for the CSM and for the node's texels.
+        // The CSM's verdict on the whole quad, else each sample's point and texel once, for the CSM
+        // and for the node's texels.
         window = sample_window_origin(g);
         ivec2 first, last;
         quad_texel_bounds(g, first, last);
