@@ -175,8 +175,15 @@ void count(uint counter, bool flag) {
   if (subgroupElect() && total != 0u) atomicAdd(counters[counter], total);
 }
 
-// One pixel of the classify stage; returns its counts, packed as in classify().
-uint classify_pixel(ivec2 pixel) {
+// Masking off: every evaluated pixel takes the kernel, so the classify stage filters it in its one
+// cascade itself rather than list it for the kernel stage, which would load and probe it again (a CPU
+// device pays every stage's loads for every listed pixel). Band pixels still go to the band stage.
+const bool kKernelInClassify = kMasking == CASCADE_MASKING_OFF;
+
+// One pixel of the classify stage; returns its counts, packed as in classify(): x the facing count
+// (low 16 bits) and the band list's (high), y the kernel list's or, with kKernelInClassify, the blur
+// list's (low), and the pixels filtered here with the kernel (high).
+uvec2 classify_pixel(ivec2 pixel) {
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   vec4 p = inside ? imageLoad(world_position, pixel) : vec4(0.0);
   vec4 normal = inside ? imageLoad(geometric_normal, pixel) : vec4(0.0);
@@ -187,16 +194,21 @@ uint classify_pixel(ivec2 pixel) {
   Choice ch = choose(dot(p.xyz - params.camera_position.xyz, params.camera_forward.xyz));
   bool evaluated = facing && ch.in_range;
   Probe pr = probe(ch.cascade, p.xyz, n);
-  float visibility = float(tap(ch.cascade, pr, vec2(0.0)));
+  // (The kernel stage's arithmetic, so the same term.)
+  uint lit = kKernelInClassify ? kernel(ch.cascade, pr, pixel) : 0u;
+  float visibility = kKernelInClassify ? float(lit) / float(kPoissonTaps) : float(tap(ch.cascade, pr, vec2(0.0)));
   // The last cascade fades to lit over its band.
   if (ch.band) visibility = mix(visibility, 1.0, ch.w);
   visibility = evaluated ? visibility : (facing ? 1.0 : 0.0);
   bool band = evaluated && ch.two;
-  bool deferred = evaluated && (band || pr.expensive);
+  bool filtered_here = kKernelInClassify && evaluated && !band;
+  bool deferred = evaluated && (band || (pr.expensive && !kKernelInClassify));
   if (covered && !deferred) imageStore(shadow_term, pixel, vec4(visibility));
-  if (kDebug != CASCADE_DEBUG_NONE && covered && !deferred) write_overlay(pixel, evaluated ? ch.cascade : -1, false);
+  if (kDebug != CASCADE_DEBUG_NONE && covered && !deferred) write_overlay(pixel, evaluated ? ch.cascade : -1, filtered_here);
   bool kernel_only = deferred && !band;
-  return (facing ? 1u : 0u) | (kernel_only ? 1u << 10u : 0u) | (band ? 1u << 20u : 0u);
+  bool blur = filtered_here && lit != 0u && lit != kPoissonTaps && params.mode.y != 0u;
+  return uvec2((facing ? 1u : 0u) | (band ? 1u << 16u : 0u),
+               (kernel_only || blur ? 1u : 0u) | (filtered_here ? 1u << 16u : 0u));
 }
 
 // Each invocation takes a 2x2 quad (or four consecutive input-list entries), so the subgroup scan and
@@ -213,28 +225,35 @@ void classify() {
       pixels[k] = ivec2(gl_GlobalInvocationID.xy) * 2 + ivec2(k & 1, k >> 1);
     }
   }
-  // Counts in 10-bit fields (facing, kernel list, band list): at most 4 x 128 per subgroup.
-  uint flags = 0u, kernel_bits = 0u, band_bits = 0u;
+  // Counts in 16-bit fields (classify_pixel): at most 4 x 128 per subgroup.
+  uvec2 flags = uvec2(0u);
+  uint listed_bits = 0u, band_bits = 0u;
   for (int k = 0; k < 4; ++k) {
-    uint f = classify_pixel(pixels[k]);
+    uvec2 f = classify_pixel(pixels[k]);
     flags += f;
-    kernel_bits |= ((f >> 10u) & 1u) << k;
-    band_bits |= (f >> 20u) << k;
+    listed_bits |= (f.y & 1u) << k;
+    band_bits |= (f.x >> 16u) << k;
   }
-  uint total = subgroupAdd(flags);
-  uint prefix = subgroupExclusiveAdd(flags);
+  uvec2 total = subgroupAdd(flags);
+  uvec2 prefix = subgroupExclusiveAdd(flags);
+  // The second list: the kernel stage's, or with kKernelInClassify the blur's.
+  uint listed_counter = kKernelInClassify ? CASCADE_COUNTER_BLUR : CASCADE_COUNTER_KERNEL;
   uvec2 base = uvec2(0u);
   if (subgroupElect()) {
-    if ((total & 0x3ffu) != 0u) atomicAdd(counters[CASCADE_COUNTER_FACING], total & 0x3ffu);
-    if (((total >> 10u) & 0x3ffu) != 0u) base.x = atomicAdd(counters[CASCADE_COUNTER_KERNEL], (total >> 10u) & 0x3ffu);
-    if ((total >> 20u) != 0u) base.y = atomicAdd(counters[CASCADE_COUNTER_BAND], total >> 20u);
+    if ((total.x & 0xffffu) != 0u) atomicAdd(counters[CASCADE_COUNTER_FACING], total.x & 0xffffu);
+    if ((total.y & 0xffffu) != 0u) base.x = atomicAdd(counters[listed_counter], total.y & 0xffffu);
+    if ((total.x >> 16u) != 0u) base.y = atomicAdd(counters[CASCADE_COUNTER_BAND], total.x >> 16u);
+    if ((total.y >> 16u) != 0u) atomicAdd(counters[CASCADE_COUNTER_EXPENSIVE], total.y >> 16u);
   }
   base = subgroupBroadcastFirst(base);
-  uint kernel_slot = base.x + ((prefix >> 10u) & 0x3ffu);
-  uint band_slot = params.extent.x * params.extent.y - 1u - (base.y + (prefix >> 20u));
+  uint listed_slot = base.x + (prefix.y & 0xffffu);
+  uint band_slot = params.extent.x * params.extent.y - 1u - (base.y + (prefix.x >> 16u));
   for (int k = 0; k < 4; ++k) {
     uint packed_pixel = pack_pixel(pixels[k]);
-    if ((kernel_bits & (1u << k)) != 0u) work_list[kernel_slot++] = packed_pixel;
+    if ((listed_bits & (1u << k)) != 0u) {
+      if (kKernelInClassify) blur_list[listed_slot++] = packed_pixel;
+      else work_list[listed_slot++] = packed_pixel;
+    }
     if ((band_bits & (1u << k)) != 0u) work_list[band_slot--] = packed_pixel;
   }
 }

@@ -35,7 +35,8 @@ SHARED_CONST uint CASCADE_DEBUG_CASCADES = 1u;
 SHARED_CONST uint CASCADE_DEBUG_EXPENSIVE = 2u;
 
 // Counters in the host-readable stats buffer (uint indices), followed by indirect dispatch arguments.
-SHARED_CONST uint CASCADE_COUNTER_EXPENSIVE = 0u;  // band-list pixels that took the 12-tap path
+SHARED_CONST uint CASCADE_COUNTER_EXPENSIVE = 0u;  // pixels that took the 12-tap path outside the kernel list (band
+                                                   // stage; the classify stage where masking is off)
 SHARED_CONST uint CASCADE_COUNTER_BLUR = 1u;       // flagged pixels appended to the blur list
 SHARED_CONST uint CASCADE_COUNTER_FACING = 2u;     // covered pixels facing the light
 SHARED_CONST uint CASCADE_COUNTER_KERNEL = 3u;     // pixels listed for the kernel in one cascade

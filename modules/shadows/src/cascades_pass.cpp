@@ -3,7 +3,8 @@
 // mask level over its receivers' rectangle, then combined over each texel's 2x2 neighbourhoods) ->
 // cascade_filter (rotated 12-tap Poisson PCF or one tap, per pixel: a classify stage over the frame
 // takes the one tap where the mask allows and lists the pixels that need the kernel or lie in a
-// blend band; two stages over those lists, with indirect dispatches, finish them) -> cascade_blur
+// blend band; two stages over those lists, with indirect dispatches, finish them; with masking off
+// the classify stage takes the kernel itself and lists only the band) -> cascade_blur
 // (5x5 on pixels whose taps disagreed, over a compacted list, into a side buffer that a second
 // dispatch writes back).
 //
