@@ -49,14 +49,21 @@ PixelPoint load_pixel(ivec2 pixel) {
   return p;
 }
 
+// pixel_corner_ray (shadow_common.h) for this frame's camera. Where the inverse view-projection's w
+// ignores x and y (IZB_FLAG_CONSTANT_RAY_W: any projection without a perspective shear), every ray's
+// two points have the same w, whose reciprocals the CPU divides once (params.ray_scales): the same
+// correctly rounded quotients, without two of shared_divide's corrections a ray.
+CameraRay corner_ray(vec2 pixel_corner) {
+  HomogeneousRay h = pixel_corner_points(pixel_corner, vec2(params.extent.xy), params.inverse_view_projection);
+  if (izb_flag(IZB_FLAG_CONSTANT_RAY_W)) return camera_ray_scaled(h, params.ray_scales.x, params.ray_scales.y);
+  return camera_ray_scaled(h, shared_divide(1.0, h.near_point.w), shared_divide(1.0, h.far_point.w));
+}
+
 // The μQuad corners of `pixel` with the shadow-ray offset applied (world space).
 void micro_quad_corners(ivec2 pixel, PixelPoint p, out vec3 c[4]) {
-  vec2 viewport = vec2(params.extent.xy);
-  vec2 base = vec2(pixel);
-  c[0] = shadow_ray_origin(micro_quad_corner(base, viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
-  c[1] = shadow_ray_origin(micro_quad_corner(base + vec2(1, 0), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
-  c[2] = shadow_ray_origin(micro_quad_corner(base + vec2(0, 1), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
-  c[3] = shadow_ray_origin(micro_quad_corner(base + vec2(1, 1), viewport, params.inverse_view_projection, p.position, p.normal), p.normal);
+  for (int k = 0; k < 4; ++k)
+    c[k] = shadow_ray_origin(micro_quad_corner_on(corner_ray(vec2(pixel + ivec2(k & 1, k >> 1))), p.position, p.normal),
+                             p.normal);
 }
 
 #ifdef IZB_RAY_BLOCK
@@ -71,12 +78,10 @@ shared vec3 block_ray_direction[kRayBlockSide * kRayBlockSide];
 // before these writes, and these writes before the reads.
 void make_block_rays(ivec2 block_origin) {
   barrier();
-  vec2 viewport = vec2(params.extent.xy);
   // (Included before the shader's local size is declared: its IZB_RAY_BLOCK x IZB_RAY_BLOCK
   // invocations, not gl_WorkGroupSize.)
   for (uint i = gl_LocalInvocationIndex; i < kRayBlockSide * kRayBlockSide; i += IZB_RAY_BLOCK * IZB_RAY_BLOCK) {
-    CameraRay ray = pixel_corner_ray(vec2(block_origin + ivec2(i % kRayBlockSide, i / kRayBlockSide)), viewport,
-                                     params.inverse_view_projection);
+    CameraRay ray = corner_ray(vec2(block_origin + ivec2(i % kRayBlockSide, i / kRayBlockSide)));
     block_ray_origin[i] = ray.origin;
     block_ray_direction[i] = ray.direction;
   }

@@ -25,6 +25,7 @@ struct IzbParams {
   uvec4 capacities;          // x: tile pair capacity; y: tiles per side; z: caster draws; w: step 1's shape (kIzbStepOne*)
   vec4 light_position;       // a spot light: xyz its position, w its range (0: the sun)
   vec4 light_cone;           // a spot light: x cosine of its outer cone, y tangent of its grid's half angle; z 1: a face of a point light
+  vec4 ray_scales;           // IZB_FLAG_CONSTANT_RAY_W: x, y 1 / w of every camera ray's near and far point (pixel_corner_points)
 };
 
 // (For the raster trace, depth culling and the rasterizer choice are pipeline state.)
@@ -70,6 +71,9 @@ SHARED_CONST uint IZB_FLAG_SPOT = 524288u;    // a spot light, or a face of a po
 // The compute trace runs: the build raises each light-space tile's farthest node depth, which its
 // tile cull reads (the raster trace reads only the texels').
 SHARED_CONST uint IZB_FLAG_TILE_FARTHEST = 2097152u;
+// The inverse view-projection's w row ignores x and y (exact zeros), so every camera ray's near and far
+// points have one w each, whose reciprocals the CPU divides once (IzbParams::ray_scales).
+SHARED_CONST uint IZB_FLAG_CONSTANT_RAY_W = 1048576u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted
@@ -321,7 +325,7 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::IzbFrame) == 80);
-static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 2 * 16);
+static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 3 * 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterTriangle) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterDraw) == 96);

@@ -57,21 +57,35 @@ struct CameraRay {
   vec3 origin;
   vec3 direction;
 };
-SHARED_INLINE CameraRay pixel_corner_ray(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
-                                         SHARED_IN(mat4) inv_view_proj) {
+// The ray's two homogeneous points, before their divide.
+struct HomogeneousRay {
+  vec4 near_point;
+  vec4 far_point;
+};
+SHARED_INLINE HomogeneousRay pixel_corner_points(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
+                                                 SHARED_IN(mat4) inv_view_proj) {
   SHARED_PRECISE vec2 ndc = shared_divide(pixel_corner, viewport) * 2.0f - 1.0f;
-  SHARED_PRECISE vec4 near_h = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 1.0f, 1.0f));  // reversed depth: 1 is near
-  SHARED_PRECISE vec4 far_h = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 0.5f, 1.0f));
-  // One exact quotient a homogeneous point, then products (correctly rounded on CPU and GPU alike):
-  // five of shared_divide's corrected quotients a corner, not nine.
-  SHARED_PRECISE float near_scale = shared_divide(1.0f, near_h.w);
-  SHARED_PRECISE float far_scale = shared_divide(1.0f, far_h.w);
-  SHARED_PRECISE vec3 ray_origin = vec3(near_h) * near_scale;
-  SHARED_PRECISE vec3 ray_dir = vec3(far_h) * far_scale - ray_origin;
+  HomogeneousRay h;
+  h.near_point = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 1.0f, 1.0f));  // reversed depth: 1 is near
+  h.far_point = shared_transform(inv_view_proj, vec4(ndc.x, ndc.y, 0.5f, 1.0f));
+  return h;
+}
+// The ray from its points and their reciprocal w (`near_scale` = 1 / near_point.w, correctly rounded,
+// and `far_scale` likewise): products alone, correctly rounded on CPU and GPU alike.
+SHARED_INLINE CameraRay camera_ray_scaled(SHARED_IN(HomogeneousRay) h, float near_scale, float far_scale) {
+  SHARED_PRECISE vec3 ray_origin = vec3(h.near_point) * near_scale;
+  SHARED_PRECISE vec3 ray_dir = vec3(h.far_point) * far_scale - ray_origin;
   CameraRay ray;
   ray.origin = ray_origin;
   ray.direction = ray_dir;
   return ray;
+}
+// One exact quotient a homogeneous point, then products: five of shared_divide's corrected quotients a
+// corner, not nine.
+SHARED_INLINE CameraRay pixel_corner_ray(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
+                                         SHARED_IN(mat4) inv_view_proj) {
+  HomogeneousRay h = pixel_corner_points(pixel_corner, viewport, inv_view_proj);
+  return camera_ray_scaled(h, shared_divide(1.0f, h.near_point.w), shared_divide(1.0f, h.far_point.w));
 }
 SHARED_INLINE vec3 micro_quad_corner_on(SHARED_IN(CameraRay) ray, SHARED_IN(vec3) plane_point,
                                         SHARED_IN(vec3) plane_normal) {

@@ -15,6 +15,7 @@
 #include "shared/frame.h"
 #include "shared/izb.h"
 #include "shared/local_light.h"
+#include "shared/shadow_common.h"
 
 namespace shadows::detail {
 
@@ -796,6 +797,11 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (hybrid) flags |= gpu_shared::IZB_FLAG_HYBRID;
   if (spot) flags |= gpu_shared::IZB_FLAG_SPOT;
   if (use_compute_trace) flags |= gpu_shared::IZB_FLAG_TILE_FARTHEST;
+  // Every camera ray's points share their w where the inverse view-projection's w row ignores x and y
+  // (exactly: then its products with them add zeros), so the μQuad corners take 1 / w from here.
+  const glm::mat4& inverse_vp = frame.view.inverse_view_projection;
+  const bool constant_ray_w = inverse_vp[0][3] == 0.0f && inverse_vp[1][3] == 0.0f;
+  if (constant_ray_w) flags |= gpu_shared::IZB_FLAG_CONSTANT_RAY_W;
   m.ensure_resolve_list(frame.view.extent, listed_resolve);
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};
@@ -812,6 +818,11 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (spot) {
     p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
     p.light_cone = glm::vec4(frame.view.light_cos_outer, tan_half, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
+  }
+  if (constant_ray_w) {
+    // The same arithmetic as pixel_corner_points at any pixel corner (its x and y terms are zeros).
+    const gpu_shared::HomogeneousRay h = gpu_shared::pixel_corner_points(glm::vec2(0.0f), glm::vec2(1.0f), inverse_vp);
+    p.ray_scales = glm::vec4(1.0f / h.near_point.w, 1.0f / h.far_point.w, 0.0f, 0.0f);
   }
   record_update(m.ctx, cmd, m.params, &p, sizeof(p));
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, soft_distance};
