@@ -46,7 +46,7 @@ SHARED_CONST uint HOST_OUTPUT_BINDING_TERM = 0u;
 SHARED_CONST uint HOST_OUTPUT_BINDING_OVERLAY = 1u;
 SHARED_CONST uint HOST_OUTPUT_BINDING_OUT = 2u;
 SHARED_CONST uint HOST_OUTPUT_BINDING_OVERLAY_OUT = 3u;
-// The output pass's push constant z: what it writes besides nothing.
+// The output pass's specialization constant 0: what it writes besides the term.
 SHARED_CONST uint HOST_OUTPUT_COPY_OVERLAY = 1u;   // the host's overlay from the module's
 SHARED_CONST uint HOST_OUTPUT_ZERO_OVERLAY = 2u;   // the host's overlay as 0 (no debug view drew)
 SHARED_CONST uint HOST_OUTPUT_ALL_LIT = 4u;        // the host's output as 1 (no technique ran)

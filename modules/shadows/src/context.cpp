@@ -161,13 +161,8 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
                     sampled(gs::HOST_INPUTS_BINDING_RECEIVER), storage(gs::HOST_INPUTS_BINDING_WORLD_POSITION),
                     storage(gs::HOST_INPUTS_BINDING_GEOMETRIC_OUT), storage(gs::HOST_INPUTS_BINDING_ALBEDO_OUT),
                     storage(gs::HOST_INPUTS_BINDING_TERM_OUT), storage(gs::HOST_INPUTS_BINDING_OVERLAY_OUT)}});
-  const char* output_shaders[3] = {"host_output_r8.comp", "host_output_r16f.comp", "host_output_r32f.comp"};
-  for (int i = 0; i < 3; ++i)
-    output_pipelines_[i] = engine::gpu::PipelineFactory(ctx).compute(
-        {.shader = output_shaders[i],
-         .bindings = {storage(gs::HOST_OUTPUT_BINDING_TERM), storage(gs::HOST_OUTPUT_BINDING_OVERLAY),
-                      storage(gs::HOST_OUTPUT_BINDING_OUT), storage(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT)},
-         .push_constant_size = 16});
+  // The output pass for a frame without a debug view, made here, not in the first frame.
+  (void)output_pipeline(0, 0u);
   // The passes' one-off set-up (uploads that wait for the queue) happens here, at creation, not in a
   // frame. A pass the device cannot run is left out; using its technique then fails in one line.
   try {
@@ -404,25 +399,42 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
                  pass_shader_stages(*gpu_), kStorageReadWrite);
 }
 
+const engine::gpu::Pipeline& ContextImpl::output_pipeline(int format, uint32_t what) {
+  engine::gpu::Pipeline& pipeline = output_pipelines_[format][what & 7u];
+  if (pipeline.valid()) return pipeline;
+  namespace gs = gpu_shared;
+  const auto storage = [](uint32_t binding) {
+    return engine::gpu::Binding{binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE};
+  };
+  const char* shaders[3] = {"host_output_r8.comp", "host_output_r16f.comp", "host_output_r32f.comp"};
+  pipeline = engine::gpu::PipelineFactory(*gpu_).compute(
+      {.shader = shaders[format],
+       .bindings = {storage(gs::HOST_OUTPUT_BINDING_TERM), storage(gs::HOST_OUTPUT_BINDING_OVERLAY),
+                    storage(gs::HOST_OUTPUT_BINDING_OUT), storage(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT)},
+       .push_constant_size = 16,
+       .specialization = {{0, what & 7u}}});
+  return pipeline;
+}
+
 void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool with_overlay) {
   // Every pass's writes of the term and overlay, visible to the copy into the host's images.
   memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-  const int which = output.format == VK_FORMAT_R8_UNORM ? 0 : output.format == VK_FORMAT_R16_SFLOAT ? 1 : 2;
-  const engine::gpu::Pipeline& p = output_pipelines_[which];
-  p.bind(cmd);
   namespace gs = gpu_shared;
+  uint32_t what = settings_.technique == Technique::Off ? gs::HOST_OUTPUT_ALL_LIT : 0u;
+  // The overlay is FrameDesc::overlay_light's (the other lights leave the host's overlay alone).
+  if (f.overlay.present() && with_overlay)
+    what |= settings_.debug != DebugView::None ? gs::HOST_OUTPUT_COPY_OVERLAY : gs::HOST_OUTPUT_ZERO_OVERLAY;
+  const int which = output.format == VK_FORMAT_R8_UNORM ? 0 : output.format == VK_FORMAT_R16_SFLOAT ? 1 : 2;
+  const engine::gpu::Pipeline& p = output_pipeline(which, what);
+  p.bind(cmd);
   DescriptorWriter()
       .storage_image(gs::HOST_OUTPUT_BINDING_TERM, shadow_term_.view())
       .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY, overlay_.view())
       .storage_image(gs::HOST_OUTPUT_BINDING_OUT, output.view)
       .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT, f.overlay.present() ? f.overlay.view : overlay_.view())
       .push(*gpu_, cmd, p);
-  uint32_t what = settings_.technique == Technique::Off ? gs::HOST_OUTPUT_ALL_LIT : 0u;
-  // The overlay is FrameDesc::overlay_light's (the other lights leave the host's overlay alone).
-  if (f.overlay.present() && with_overlay)
-    what |= settings_.debug != DebugView::None ? gs::HOST_OUTPUT_COPY_OVERLAY : gs::HOST_OUTPUT_ZERO_OVERLAY;
-  const glm::uvec4 push(extent_.width, extent_.height, what, 0u);
+  const glm::uvec4 push(extent_.width, extent_.height, 0u, 0u);
   p.push_constants(cmd, push);
   vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
 }
