@@ -56,7 +56,7 @@ PixelPoint load_pixel(ivec2 pixel) {
 CameraRay corner_ray(vec2 pixel_corner) {
   HomogeneousRay h = pixel_corner_points(pixel_corner, vec2(params.extent.xy), params.inverse_view_projection);
   if (izb_flag(IZB_FLAG_CONSTANT_RAY_W)) return camera_ray_scaled(h, params.ray_scales.x, params.ray_scales.y);
-  return camera_ray_scaled(h, shared_divide(1.0, h.near_point.w), shared_divide(1.0, h.far_point.w));
+  return camera_ray(h);
 }
 
 // The μQuad corners of `pixel` with the shadow-ray offset applied (world space).

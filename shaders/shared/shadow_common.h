@@ -82,10 +82,12 @@ SHARED_INLINE CameraRay camera_ray_scaled(SHARED_IN(HomogeneousRay) h, float nea
 }
 // One exact quotient a homogeneous point, then products: five of shared_divide's corrected quotients a
 // corner, not nine.
+SHARED_INLINE CameraRay camera_ray(SHARED_IN(HomogeneousRay) h) {
+  return camera_ray_scaled(h, shared_divide(1.0f, h.near_point.w), shared_divide(1.0f, h.far_point.w));
+}
 SHARED_INLINE CameraRay pixel_corner_ray(SHARED_IN(vec2) pixel_corner, SHARED_IN(vec2) viewport,
                                          SHARED_IN(mat4) inv_view_proj) {
-  HomogeneousRay h = pixel_corner_points(pixel_corner, viewport, inv_view_proj);
-  return camera_ray_scaled(h, shared_divide(1.0f, h.near_point.w), shared_divide(1.0f, h.far_point.w));
+  return camera_ray(pixel_corner_points(pixel_corner, viewport, inv_view_proj));
 }
 SHARED_INLINE vec3 micro_quad_corner_on(SHARED_IN(CameraRay) ray, SHARED_IN(vec3) plane_point,
                                         SHARED_IN(vec3) plane_normal) {

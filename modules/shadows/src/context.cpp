@@ -42,6 +42,8 @@ bool is_integer_format(VkFormat f) {
   }
 }
 
+engine::gpu::Binding storage_image_binding(uint32_t binding) { return {binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}; }
+
 constexpr VkAccessFlags2 kStorageReadWrite = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
                                              VK_ACCESS_2_SHADER_SAMPLED_READ_BIT;
 
@@ -151,7 +153,7 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
                          VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "shadows input params");
   using engine::gpu::Binding;
   auto sampled = [](uint32_t b) { return Binding{b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}; };
-  auto storage = [](uint32_t b) { return Binding{b, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}; };
+  const auto storage = storage_image_binding;
   namespace gs = gpu_shared;
   inputs_pipeline_ = engine::gpu::PipelineFactory(ctx).compute(
       {.shader = "host_inputs.comp",
@@ -161,7 +163,8 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
                     sampled(gs::HOST_INPUTS_BINDING_RECEIVER), storage(gs::HOST_INPUTS_BINDING_WORLD_POSITION),
                     storage(gs::HOST_INPUTS_BINDING_GEOMETRIC_OUT), storage(gs::HOST_INPUTS_BINDING_ALBEDO_OUT),
                     storage(gs::HOST_INPUTS_BINDING_TERM_OUT), storage(gs::HOST_INPUTS_BINDING_OVERLAY_OUT)}});
-  // The output pass for a frame without a debug view, made here, not in the first frame.
+  // The output pass into an R8 output with no overlay, made here rather than in the first frame; the
+  // other formats and overlay choices are made on first use.
   (void)output_pipeline(0, 0u);
   // The passes' one-off set-up (uploads that wait for the queue) happens here, at creation, not in a
   // frame. A pass the device cannot run is left out; using its technique then fails in one line.
@@ -400,19 +403,17 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
 }
 
 const engine::gpu::Pipeline& ContextImpl::output_pipeline(int format, uint32_t what) {
-  engine::gpu::Pipeline& pipeline = output_pipelines_[format][what & 7u];
+  engine::gpu::Pipeline& pipeline = output_pipelines_[format][what];
   if (pipeline.valid()) return pipeline;
   namespace gs = gpu_shared;
-  const auto storage = [](uint32_t binding) {
-    return engine::gpu::Binding{binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE};
-  };
+  const auto storage = storage_image_binding;
   const char* shaders[3] = {"host_output_r8.comp", "host_output_r16f.comp", "host_output_r32f.comp"};
   pipeline = engine::gpu::PipelineFactory(*gpu_).compute(
       {.shader = shaders[format],
        .bindings = {storage(gs::HOST_OUTPUT_BINDING_TERM), storage(gs::HOST_OUTPUT_BINDING_OVERLAY),
                     storage(gs::HOST_OUTPUT_BINDING_OUT), storage(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT)},
        .push_constant_size = 16,
-       .specialization = {{0, what & 7u}}});
+       .specialization = {{0, what}}});
   return pipeline;
 }
 

@@ -95,7 +95,7 @@ class ContextImpl final : public Context {
   engine::gpu::Buffer input_params_;  // HostInputs, written in the command buffer each frame
   engine::gpu::Sampler nearest_;
   engine::gpu::Pipeline inputs_pipeline_;
-  // [R8, R16F, R32F][HOST_OUTPUT_* bits], made on first use (output_pipeline).
+  // [R8, R16F, R32F][HOST_OUTPUT_* bits, at most 7], made on first use (output_pipeline).
   engine::gpu::Pipeline output_pipelines_[3][8];
   const engine::gpu::Pipeline& output_pipeline(int format, uint32_t what);
   engine::gpu::Image dummy_input_;              // bound where an optional input is absent

@@ -820,9 +820,10 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     p.light_cone = glm::vec4(frame.view.light_cos_outer, tan_half, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
   }
   if (constant_ray_w) {
-    // The same arithmetic as pixel_corner_points at any pixel corner (its x and y terms are zeros).
+    // The same arithmetic as camera_ray at any pixel corner (pixel_corner_points' x and y terms are zeros).
     const gpu_shared::HomogeneousRay h = gpu_shared::pixel_corner_points(glm::vec2(0.0f), glm::vec2(1.0f), inverse_vp);
-    p.ray_scales = glm::vec4(1.0f / h.near_point.w, 1.0f / h.far_point.w, 0.0f, 0.0f);
+    p.ray_scales = glm::vec4(gpu_shared::shared_divide(1.0f, h.near_point.w),
+                             gpu_shared::shared_divide(1.0f, h.far_point.w), 0.0f, 0.0f);
   }
   record_update(m.ctx, cmd, m.params, &p, sizeof(p));
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, debug_code(debug), m.triangle_count, soft_distance};
