@@ -332,8 +332,9 @@ void main() {
     // What izb_resolve.comp would write before the trace: candidates lit unless the CSM settled them,
     // surfaces facing away shadowed, the others lit; beyond the range the term already there stays.
     bool facing = (state & IZB_PIXEL_FACING) != 0u;
-    if (direct_term && covered != 0u && (candidate != 0u || !facing || (state & IZB_PIXEL_BEYOND) == 0u))
-      imageStore(shadow_term, pixel, vec4(candidate != 0u ? (mask != 0u ? 0.0 : 1.0) : (facing ? 1.0 : 0.0)));
+    // Only its zeros: the sun's term starts lit (write_pixel_term).
+    bool shadowed = candidate != 0u ? mask != 0u : !facing;
+    if (direct_term && covered != 0u && shadowed) imageStore(shadow_term, pixel, vec4(0.0));
     bool mask_read = (!direct_term && !listed_resolve) || sorted_lists() ||
                      (count != 0u && (listed_resolve || izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));
     // (kBuildClassify: kBuildInsert writes them, for pixels with a node.)

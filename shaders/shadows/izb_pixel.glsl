@@ -176,7 +176,11 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
   if (params.light_cone.z > 0.0 && dot(position - params.light_position.xyz, params.light_direction.xyz) <
                                        params.light_cone.x * length(position - params.light_position.xyz))
     return visibility;
-  imageStore(shadow_term, pixel, vec4(visibility));
   written = true;
+  // The sun's term starts lit (ContextImpl::clear_term_and_overlay, host_inputs.comp) and only the IZB
+  // writes it before the trace and resolve: storing a lit pixel's 1 would rewrite what is there (a
+  // CPU device pays for every store it makes, a GPU for the bandwidth). A light's cone faces overlap,
+  // so each keeps writing all of its points.
+  if (visibility < 1.0 || spot_light()) imageStore(shadow_term, pixel, vec4(visibility));
   return visibility;
 }
