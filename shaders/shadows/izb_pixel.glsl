@@ -173,7 +173,7 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
   if (beyond && !hybrid) return visibility;  // beyond the IZB: the term already there stays
   // One face of a point light (six overlapping cones that cover every direction): only the points in
   // its cone are this pass's; the others keep what the other faces write.
-  if (params.light_cone.z > 0.0 && dot(position - params.light_position.xyz, params.light_direction.xyz) <
+  if (spot_light() && params.light_cone.z > 0.0 && dot(position - params.light_position.xyz, params.light_direction.xyz) <
                                        params.light_cone.x * length(position - params.light_position.xyz))
     return visibility;
   written = true;
