@@ -481,14 +481,16 @@ void lower_lit_corners(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   for (int k = 0; k < 4; ++k) lower_lit_corner(texel + ivec2(k & 1, k >> 1), a, q);
 }
 // Whether `g` lies no farther than a level's bound over its cell [lo, hi], or than the bilinear blend
-// of the plane bounds at the cell's corners (less that blend's own rounding).
-bool lit_cell_proves(vec3 g, uint bound, uint c00, uint c10, uint c01, uint c11, vec2 lo, vec2 hi) {
+// of the plane bounds at the cell's corners (less that blend's own rounding). `texel_cell`: hi - lo is
+// exactly 1, so the division that places g in the cell is left out (the same quotient; a CPU device
+// pays for every division of every pixel).
+bool lit_cell_proves(vec3 g, uint bound, uint c00, uint c10, uint c01, uint c11, vec2 lo, vec2 hi, bool texel_cell) {
   if (g.z <= ordered_depth(csm_texels[bound])) return true;
   float d00 = ordered_depth(csm_texels[c00]);
   float d10 = ordered_depth(csm_texels[c10]);
   float d01 = ordered_depth(csm_texels[c01]);
   float d11 = ordered_depth(csm_texels[c11]);
-  vec2 f = clamp((g.xy - lo) / (hi - lo), vec2(0.0), vec2(1.0));
+  vec2 f = clamp(texel_cell ? g.xy - lo : (g.xy - lo) / (hi - lo), vec2(0.0), vec2(1.0));
   float blend = mix(mix(d00, d10, f.x), mix(d01, d11, f.x), f.y);
   float largest = max(max(abs(d00), abs(d10)), max(abs(d01), abs(d11)));
   return g.z <= blend - 1.0e-6 * largest;  // false for NaN (an empty corner: inf - inf)
@@ -500,13 +502,14 @@ bool lit_map_proves_lit(vec3 g) {
   ivec2 texel = grid_texel(g);
   bool texel_level = lit_cell_proves(g, lit_map_index(texel_index(texel)), lit_corner_index(texel),
                                      lit_corner_index(texel + ivec2(1, 0)), lit_corner_index(texel + ivec2(0, 1)),
-                                     lit_corner_index(texel + ivec2(1, 1)), vec2(texel), vec2(texel + 1));
+                                     lit_corner_index(texel + ivec2(1, 1)), vec2(texel), vec2(texel + 1), true);
+  if (!texel_level) return false;
   uvec2 tile = uvec2(texel) / kIzbTile;
   bool tile_level = lit_cell_proves(g, lit_tile_index(tile), lit_tile_corner_index(tile),
                                     lit_tile_corner_index(tile + uvec2(1, 0)), lit_tile_corner_index(tile + uvec2(0, 1)),
                                     lit_tile_corner_index(tile + uvec2(1, 1)), lit_tile_corner_point(tile),
-                                    lit_tile_corner_point(tile + 1u));
-  return texel_level && tile_level;
+                                    lit_tile_corner_point(tile + 1u), false);
+  return tile_level;
 }
 
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its
