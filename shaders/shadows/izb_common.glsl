@@ -505,11 +505,10 @@ bool lit_map_proves_lit(vec3 g) {
                                      lit_corner_index(texel + ivec2(1, 1)), vec2(texel), vec2(texel + 1), true);
   if (!texel_level) return false;
   uvec2 tile = uvec2(texel) / kIzbTile;
-  bool tile_level = lit_cell_proves(g, lit_tile_index(tile), lit_tile_corner_index(tile),
-                                    lit_tile_corner_index(tile + uvec2(1, 0)), lit_tile_corner_index(tile + uvec2(0, 1)),
-                                    lit_tile_corner_index(tile + uvec2(1, 1)), lit_tile_corner_point(tile),
-                                    lit_tile_corner_point(tile + 1u), false);
-  return tile_level;
+  return lit_cell_proves(g, lit_tile_index(tile), lit_tile_corner_index(tile),
+                         lit_tile_corner_index(tile + uvec2(1, 0)), lit_tile_corner_index(tile + uvec2(0, 1)),
+                         lit_tile_corner_index(tile + uvec2(1, 1)), lit_tile_corner_point(tile),
+                         lit_tile_corner_point(tile + 1u), false);
 }
 
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its

@@ -179,8 +179,9 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
   written = true;
   // The sun's term starts lit (ContextImpl::clear_term_and_overlay, host_inputs.comp) and only the IZB
   // writes it before the trace and resolve: storing a lit pixel's 1 would rewrite what is there (a
-  // CPU device pays for every store it makes, a GPU for the bandwidth). A light's cone faces overlap,
-  // so each keeps writing all of its points.
+  // CPU device pays for every store it makes, a GPU for the bandwidth). Spot lights and point-light
+  // faces (IZB_FLAG_SPOT) store every point: a point light's faces overlap, and a later face's lit
+  // point must overwrite an earlier face's term.
   if (visibility < 1.0 || spot_light()) imageStore(shadow_term, pixel, vec4(visibility));
   return visibility;
 }
