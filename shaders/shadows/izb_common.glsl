@@ -4,7 +4,7 @@
 #extension GL_KHR_shader_subgroup_ballot : require
 
 layout(set = 0, binding = IZB_BINDING_PARAMS) uniform Params { IzbParams params; };
-layout(set = 0, binding = IZB_BINDING_FRAME, std430) buffer FrameBuffer { IzbFrame izb; };
+layout(set = 0, binding = IZB_BINDING_FRAME, std140) uniform FrameBuffer { IzbFrame izb; };  // (the same offsets as std430)
 layout(set = 0, binding = IZB_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
 layout(set = 0, binding = IZB_BINDING_HEADS, std430) buffer Heads { uint heads[]; };
 layout(set = 0, binding = IZB_BINDING_FARTHEST, std430) buffer Farthest { uint farthest[]; };

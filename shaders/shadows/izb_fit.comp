@@ -73,7 +73,7 @@ void main() {
   if (gl_LocalInvocationIndex == 0u) {
     vec4 b = subgroup_bounds[0];
     for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
-    bounds_partials[gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = b;
+    bounds_partials[kIzbPartialsAt + gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x] = b;
     if (!izb_flag(IZB_FLAG_CPU_DEVICE)) {
       memoryBarrierBuffer();  // the partial is visible before the count says so
       uint done = atomicAdd(counters[IZB_COUNTER_FIT_GROUPS_DONE], 1u);

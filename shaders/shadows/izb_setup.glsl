@@ -29,8 +29,8 @@ uvec2 workgroup_exclusive_add(uvec2 v, out uvec2 total) {
   return before;
 }
 
-// Thread 0: the grid from the reduced bounds (izb.light_view_projection, izb.grid; also in
-// fitted_light_view_projection for the workgroup).
+// Thread 0: the grid from the reduced bounds (the frame's IzbFrame, at the partials' buffer's start;
+// also in fitted_light_view_projection for the workgroup).
 void fit_grid(vec4 b) {
   for (uint i = 1u; i < gl_NumSubgroups; ++i) b = vec4(min(b.xy, subgroup_bounds[i].xy), max(b.zw, subgroup_bounds[i].zw));
   float lo_x = b.x;
@@ -59,7 +59,7 @@ void fit_grid(vec4 b) {
   ortho[2][2] = -1.0 / (far_d - near_d);
   ortho[3][2] = -near_d / (far_d - near_d);
   fitted_light_view_projection = ortho * params.light_view;
-  izb.grid = vec4(res, 1.0 / res, size / res, empty ? 0.0 : 1.0);
+  vec4 grid = vec4(res, 1.0 / res, size / res, empty ? 0.0 : 1.0);
   if (spot_light()) {
     // A spot light: a square perspective grid over its cone (x, y / depth within the tangent in
     // params.light_cone.y); depth 0 at the near plane, 1 at its range, and w the light-view depth, so
@@ -72,14 +72,16 @@ void fit_grid(vec4 b) {
     perspective[2][3] = -1.0;
     perspective[3][2] = -far_d * near_d / (far_d - near_d);
     fitted_light_view_projection = perspective * params.light_view;
-    izb.grid = vec4(res, 1.0 / res, 2.0 * t / res, empty ? 0.0 : 1.0);
+    grid = vec4(res, 1.0 / res, 2.0 * t / res, empty ? 0.0 : 1.0);
   }
   // The overflow fallback's indirect dispatch: the build pass raises x as pixels overflow.
   counters[IZB_COUNTER_DISPATCH + 1u] = 1u;
   counters[IZB_COUNTER_DISPATCH + 2u] = 1u;
   counters[IZB_COUNTER_HYBRID + 2u] = 1u;
   counters[IZB_COUNTER_HYBRID + 3u] = 1u;
-  izb.light_view_projection = fitted_light_view_projection;
+  // The frame opens the partials' buffer (izb.h, IzbFrame): its matrix's columns, then the grid.
+  for (int i = 0; i < 4; ++i) bounds_partials[i] = fitted_light_view_projection[i];
+  bounds_partials[4] = grid;
 }
 
 // Whether a caster draw's world bounds reach the fitted grid (widened by kIzbCullMargin texels). A
@@ -169,7 +171,7 @@ void set_up_frustum() {
                   ((params.extent.y + kIzbFitBlockHeight - 1u) / kIzbFitBlockHeight);
   vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
   for (uint i = gl_LocalInvocationIndex; i < partials; i += kSetupThreads) {
-    vec4 p = bounds_partials[i];
+    vec4 p = bounds_partials[kIzbPartialsAt + i];
     b = vec4(min(b.xy, p.xy), max(b.zw, p.zw));
   }
   b = vec4(subgroupMin(b.xy), subgroupMax(b.zw));

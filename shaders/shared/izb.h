@@ -7,7 +7,11 @@ SHARED_BEGIN
 
 SHARED_CONST uint kIzbEndOfList = 0xffffffffu;
 
-// Written on the GPU by the light-frustum pass each frame; read by every later IZB pass.
+// Written on the GPU by the light-frustum pass each frame; read by every later IZB pass. It opens the
+// buffer of the fit's per-workgroup bounds (kIzbPartialsAt): the fit writes it there, through
+// IZB_BINDING_BOUNDS_PARTIALS, and the passes after it read it as a uniform buffer (IZB_BINDING_FRAME),
+// which a CPU device loads once per invocation batch, not a lane at a time as it does a storage
+// buffer's words.
 struct IzbFrame {
   mat4 light_view_projection;  // world -> light clip space (orthographic, depth 0 nearest the light)
   vec4 grid;                   // x: resolution (texels per side), y: 1/resolution, z: world size of a texel, w: points found (as float)
@@ -209,7 +213,9 @@ SHARED_CONST uint IZB_BINDING_OCCLUDER_DISTANCE = 19u;  // per pixel: nearest oc
 SHARED_CONST uint IZB_BINDING_GRID_TRIANGLES = 20u;     // per caster triangle: 3 vec4 (grid x, grid y, light depth, -)
 SHARED_CONST uint IZB_BINDING_RECORDS = 21u;             // uvec4 records {triangle, tile row, first tile, last tile}
 SHARED_CONST uint IZB_BINDING_PAIRS = 22u;              // uvec2 {triangle, texel} surviving the depth cull
-SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;    // per fit workgroup: vec4 (min x, min y, max x, max y)
+// The frame's IzbFrame (vec4s 0-4), then from vec4 kIzbPartialsAt per fit workgroup: vec4 (min x, min y, max x, max y).
+SHARED_CONST uint IZB_BINDING_BOUNDS_PARTIALS = 23u;
+SHARED_CONST uint kIzbPartialsAt = 16u;  // vec4s (256 bytes) after the buffer's start
 SHARED_CONST uint IZB_BINDING_MATERIAL_TEXTURES = 24u;  // the scene's material textures (shared/material.h)
 // Per caster draw, in caster-draw order, as 32-bit words (D caster draws, capacities.z; T caster
 // triangles): [0, D) its IZB_DRAW_* bits for this frame; [D, 9D) IzbDrawBounds; [9D, 11D) the draws

@@ -27,7 +27,7 @@ std::vector<Binding> izb_bindings() {
   using gpu_shared::uint;
   const VkDescriptorType storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
   return {{gpu_shared::IZB_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-          {gpu_shared::IZB_BINDING_FRAME, storage},
+          {gpu_shared::IZB_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},  // the frame, at the partials' start
           {gpu_shared::IZB_BINDING_COUNTERS, storage},
           {gpu_shared::IZB_BINDING_HEADS, storage},
           {gpu_shared::IZB_BINDING_FARTHEST, storage},
@@ -118,10 +118,19 @@ struct IzbPass::Impl {
   VkExtent2D hybrid_extent{};
   Pipeline hybrid_blend;
   Image trace_depth;
-  Buffer params, frame_data, counters;
+  Buffer params, counters;
+  // The frame the fit writes (IzbFrame), then its per-workgroup bounds from vec4 kIzbPartialsAt on
+  // (izb.h): storage for the fit, a uniform buffer's range for the passes after it.
+  Buffer frame_data;
+  void make_frame_data(VkDeviceSize fit_groups) {
+    frame_data = Buffer(ctx, (gpu_shared::kIzbPartialsAt + fit_groups) * 16,
+                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
+                            VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                        false, "izb frame and fit bounds per workgroup");
+  }
   ReadbackRing counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
-  Buffer grid_triangles, caster_draw_words, bounds_partials, csm_texels, tile_farthest;
+  Buffer grid_triangles, caster_draw_words, csm_texels, tile_farthest;
   size_t triangle_capacity = 0;
   uint64_t caster_draw_word_capacity = 0;
   std::vector<uint32_t> first_triangle;  // per frame draw: its first caster triangle (casters only)
@@ -173,8 +182,7 @@ struct IzbPass::Impl {
       throw VulkanError("the IZB trace needs the depthClamp feature, which " + c.device_name() + " lacks");
     params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                     false, "izb params");
-    frame_data = Buffer(c, sizeof(gpu_shared::IzbFrame),
-                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb frame");
+    make_frame_data(0);
     const VkDeviceSize counter_bytes = gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t);
     counters = Buffer(c, counter_bytes,
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
@@ -346,8 +354,7 @@ struct IzbPass::Impl {
       pixel_state = Buffer(ctx, pixels * 4, usage, false, "izb pixel state");
       overflow_list = Buffer(ctx, pixels * 4, usage, false, "izb overflow pixels");
       occluder_distance = Buffer(ctx, pixels * 4, usage, false, "izb nearest occluder distance");
-      const VkDeviceSize fit_groups = VkDeviceSize(fit_columns(e.width)) * fit_rows(e.height);
-      bounds_partials = Buffer(ctx, fit_groups * 16, usage, false, "izb fit bounds per workgroup");
+      make_frame_data(VkDeviceSize(fit_columns(e.width)) * fit_rows(e.height));
       const uint32_t stride = spp == 32 ? gpu_shared::kIzbQuadFloats32 : gpu_shared::kIzbQuadFloats1;
       quads = Buffer(ctx, pixels * stride * 4, usage, false, "izb pixel light-space data");
       pool_size = 0;
@@ -509,7 +516,7 @@ struct IzbPass::Impl {
   void push_all(VkCommandBuffer cmd, const Frame& frame, const Pipeline& p) {
     DescriptorWriter()
         .uniform_buffer(gpu_shared::IZB_BINDING_PARAMS, params.handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_FRAME, frame_data.handle())
+        .uniform_buffer(gpu_shared::IZB_BINDING_FRAME, frame_data.handle(), 0, sizeof(gpu_shared::IzbFrame))
         .storage_buffer(gpu_shared::IZB_BINDING_COUNTERS, counters.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_HEADS, heads.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_FARTHEST, farthest.handle())
@@ -535,7 +542,7 @@ struct IzbPass::Impl {
         .storage_buffer(gpu_shared::IZB_BINDING_LIST_COUNTS, list_counts.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_LIST_CURSOR, list_cursor.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_RESOLVE_LIST, resolve_list.handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, bounds_partials.handle())
+        .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, frame_data.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_MATERIAL_TEXTURES, frame.geometry.textures().handle())
         .storage_buffer(gpu_shared::IZB_BINDING_CASTER_DRAWS, caster_draw_words.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_CSM_TEXELS, csm_texels.handle())
