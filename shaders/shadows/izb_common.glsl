@@ -472,6 +472,15 @@ uint lit_tile_corner_index(uvec2 corner) {
   uint res = izb_resolution(), tiles = tiles_per_side();
   return 2u * res * res + (res + 1u) * (res + 1u) + tiles * tiles + corner.y * (tiles + 1u) + corner.x;
 }
+// Per tile, after the tile corners: the least of its texels' bounds (lit_map_index), lowered with them.
+// A point no farther than it is proved at the texel level by its texel's bound, without loading it:
+// where a tile's texels hold no caster (open ground under the sun, its floor at the tile level) the
+// texel level is answered from this small array (a CPU device otherwise waits on every pixel's load
+// from the texels' megabytes).
+uint lit_tile_least_index(uvec2 tile) {
+  uint res = izb_resolution(), tiles = tiles_per_side();
+  return 2u * res * res + (res + 1u) * (res + 1u) + tiles * tiles + (tiles + 1u) * (tiles + 1u) + tile.y * tiles + tile.x;
+}
 // A tile corner's grid position (the last tiles end at the grid's edge).
 vec2 lit_tile_corner_point(uvec2 corner) { return min(vec2(corner * kIzbTile), vec2(float(izb_resolution()))); }
 
@@ -500,11 +509,12 @@ bool lit_cell_proves(vec3 g, uint bound, uint c00, uint c10, uint c01, uint c11,
 bool lit_map_proves_lit(vec3 g) {
   if (!(all(greaterThanEqual(g.xy, vec2(0.0))) && all(lessThan(g.xy, vec2(float(izb_resolution())))))) return false;
   ivec2 texel = grid_texel(g);
-  bool texel_level = lit_cell_proves(g, lit_map_index(texel_index(texel)), lit_corner_index(texel),
+  uvec2 tile = uvec2(texel) / kIzbTile;
+  bool texel_level = g.z <= ordered_depth(csm_texels[lit_tile_least_index(tile)]) ||
+                     lit_cell_proves(g, lit_map_index(texel_index(texel)), lit_corner_index(texel),
                                      lit_corner_index(texel + ivec2(1, 0)), lit_corner_index(texel + ivec2(0, 1)),
                                      lit_corner_index(texel + ivec2(1, 1)), vec2(texel), vec2(texel + 1), true);
   if (!texel_level) return false;
-  uvec2 tile = uvec2(texel) / kIzbTile;
   return lit_cell_proves(g, lit_tile_index(tile), lit_tile_corner_index(tile),
                          lit_tile_corner_index(tile + uvec2(1, 0)), lit_tile_corner_index(tile + uvec2(0, 1)),
                          lit_tile_corner_index(tile + uvec2(1, 1)), lit_tile_corner_point(tile),

@@ -214,8 +214,9 @@ void csm_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area, uint test) 
 bool lower_lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, float slack) {
   vec2 lo = vec2(texel);
   if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) return false;
-  lower_stored_bits(lit_map_index(texel_index(texel)),
-                    ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack)));
+  uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
+  lower_stored_bits(lit_map_index(texel_index(texel)), bits);
+  lower_stored_bits(lit_tile_least_index(uvec2(texel) / kIzbTile), bits);
   return true;
 }
 

@@ -440,6 +440,18 @@ TEST_P(IzbSceneTest, LitMapHoldsNoFartherThanEveryTouchingTriangle) {
     ASSERT_EQ(map.tiles_per_side, (kGrid + map.tile - 1) / map.tile);
     ASSERT_EQ(map.tile_depth.size(), size_t(map.tiles_per_side) * map.tiles_per_side);
     ASSERT_EQ(map.tile_corner_depth.size(), size_t(map.tiles_per_side + 1) * (map.tiles_per_side + 1));
+    // Each tile's least bound, which proves the texel level without the texel's own: no farther than
+    // any of its texels' (then every check below of a texel's bound holds for it too).
+    ASSERT_EQ(map.tile_least_depth.size(), map.tile_depth.size());
+    size_t least_finite = 0;
+    for (uint32_t y = 0; y < kGrid; ++y) {
+      for (uint32_t x = 0; x < kGrid; ++x) {
+        const float least = map.tile_least_depth[size_t(y / map.tile) * map.tiles_per_side + x / map.tile];
+        ASSERT_LE(least, map.depth[size_t(y) * kGrid + x]) << scene << " texel " << x << "," << y;
+      }
+    }
+    for (const float least : map.tile_least_depth) least_finite += std::isfinite(least) ? 1 : 0;
+    EXPECT_GT(least_finite, 0u) << scene;  // some tile holds a caster at the texel level
     size_t triangles = 0, texels = 0, tile_bounded = 0;
     for (const auto& d : r.draws()) {
       if (!d.shadow.casts_shadow) continue;

@@ -95,6 +95,7 @@ struct LitMapSnapshot {
   uint32_t tile = 0, tiles_per_side = 0;
   std::vector<float> tile_depth;         // row-major, tiles_per_side^2
   std::vector<float> tile_corner_depth;  // row-major, (tiles_per_side + 1)^2; corner i at min(i * tile, resolution)
+  std::vector<float> tile_least_depth;   // row-major, tiles_per_side^2: no farther than any of the tile's texels' `depth`
   glm::mat4 light_view_projection{1.0f};
 };
 

@@ -330,10 +330,10 @@ struct IzbPass::Impl {
       scan_blocks = uint32_t((texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock);
       list_cursor = Buffer(ctx, (texels + scan_blocks) * 4, usage, false, "izb sorted list fill cursors and block sums");
       tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
-      // The compute CSM's depths, then the lit map's texels, texel corners, tiles and tile corners
-      // (izb.h: one binding for all).
+      // The compute CSM's depths, then the lit map's texels, texel corners, tiles, tile corners and
+      // each tile's least texel bound (izb_common.glsl; one binding for all).
       const VkDeviceSize corners = VkDeviceSize(resolution + 1) * (resolution + 1);
-      const VkDeviceSize tile_cells = VkDeviceSize(tiles_per_side) * tiles_per_side +
+      const VkDeviceSize tile_cells = 2 * VkDeviceSize(tiles_per_side) * tiles_per_side +
                                       VkDeviceSize(tiles_per_side + 1) * (tiles_per_side + 1);
       csm_texels = Buffer(ctx, (2 * texels + corners + tile_cells) * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
                           "csm compute depths and lit map");
@@ -1082,7 +1082,9 @@ LitMapSnapshot IzbPass::read_lit_map() {
   snapshot.tiles_per_side = m.tiles_per_side;
   const size_t tiles = size_t(m.tiles_per_side) * m.tiles_per_side;
   snapshot.tile_depth = decode(2 * texels + corners, tiles);
-  snapshot.tile_corner_depth = decode(2 * texels + corners + tiles, size_t(m.tiles_per_side + 1) * (m.tiles_per_side + 1));
+  const size_t tile_corners = size_t(m.tiles_per_side + 1) * (m.tiles_per_side + 1);
+  snapshot.tile_corner_depth = decode(2 * texels + corners + tiles, tile_corners);
+  snapshot.tile_least_depth = decode(2 * texels + corners + tiles + tile_corners, tiles);
   const auto frame_bytes = read_buffer(m.ctx, m.frame_data);
   gpu_shared::IzbFrame frame;
   std::memcpy(&frame, frame_bytes.data(), sizeof(frame));

@@ -186,7 +186,7 @@ class EngineShadowModule final : public ShadowModule {
     detail::LitMapSnapshot s = context_->read_lit_map();
     return {s.resolution,        std::move(s.depth),      s.light_view_projection,
             std::move(s.corner_depth), s.tile,              s.tiles_per_side,
-            std::move(s.tile_depth),   std::move(s.tile_corner_depth)};
+            std::move(s.tile_depth),   std::move(s.tile_corner_depth), std::move(s.tile_least_depth)};
   }
 
  private:

@@ -44,6 +44,8 @@ class ShadowModule : public engine::RenderFeature {
     // corners, (tiles_per_side + 1)^2, corner i at min(i * tile, resolution)).
     uint32_t tile = 0, tiles_per_side = 0;
     std::vector<float> tile_depth, tile_corner_depth;
+    // The lit map's alone: per tile, no farther than any of its texels' `depth` (tiles_per_side^2).
+    std::vector<float> tile_least_depth;
   };
   virtual CsmSnapshot read_csm() = 0;
   // The last frame's lit map (IzbSettings::lit_culling; row-major, resolution^2 depths, +infinity
