@@ -28,6 +28,8 @@ layout(set = 0, binding = IZB_BINDING_OVERFLOW_LIST, std430) buffer OverflowList
 layout(set = 0, binding = IZB_BINDING_OCCLUDER_DISTANCE, std430) buffer OccluderDistance { uint occluder_distance[]; };
 layout(set = 0, binding = IZB_BINDING_GRID_TRIANGLES, std430) buffer GridTriangles { vec4 grid_triangles[]; };
 layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
+// The same buffer four words a load: the lit map's tile records (lit_tile_record).
+layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) readonly buffer LitTileWords { uvec4 lit_tile_words[]; };
 layout(set = 0, binding = IZB_BINDING_LIST_COUNTS, std430) buffer ListCounts { uint list_counts[]; };
 layout(set = 0, binding = IZB_BINDING_LIST_CURSOR, std430) buffer ListCursor { uint list_cursor[]; };
 layout(set = 0, binding = IZB_BINDING_CASTER_DRAWS, std430) buffer CasterDraws { uint caster_draw_words[]; };
@@ -457,29 +459,23 @@ void lower_lit_plane_at(vec2 point, uint index, vec3 a, LitPlane q) {
 }
 void lower_lit_corner(ivec2 corner, vec3 a, LitPlane q) { lower_lit_plane_at(vec2(corner), lit_corner_index(corner), a, q); }
 
-// The lit map's tile level, after the texel corners: per tile of kIzbTile² texels a bound, then per
-// tile corner ((tiles + 1)²) a plane bound, as the texel level's. A caster triangle that covers a
-// whole tile lowers these (izb_tile_bin.comp) instead of its kIzbTile² texels and their corners. Any
-// caster touching the tile would be sound there (its nearest point over the tile bounds it over each
-// texel, and the blend of its plane from the tile's corners is the plane itself); the whole-tile test
-// keeps at the texel level the casters that touch part of a tile, whose planes would otherwise bound
-// the rest of it. A point is proved lit where both levels prove it, each against its own casters.
-uint lit_tile_index(uvec2 tile) {
-  uint res = izb_resolution();
-  return 2u * res * res + (res + 1u) * (res + 1u) + tile.y * tiles_per_side() + tile.x;
-}
-uint lit_tile_corner_index(uvec2 corner) {
-  uint res = izb_resolution(), tiles = tiles_per_side();
-  return 2u * res * res + (res + 1u) * (res + 1u) + tiles * tiles + corner.y * (tiles + 1u) + corner.x;
-}
-// Per tile, after the tile corners: the least of its texels' bounds (lit_map_index), lowered with them.
-// A point no farther than it is proved at the texel level by its texel's bound, without loading it:
-// where a tile's texels hold no caster (open ground under the sun, its floor at the tile level) the
-// texel level is answered from this small array (a CPU device otherwise waits on every pixel's load
-// from the texels' megabytes).
-uint lit_tile_least_index(uvec2 tile) {
-  uint res = izb_resolution(), tiles = tiles_per_side();
-  return 2u * res * res + (res + 1u) * (res + 1u) + tiles * tiles + (tiles + 1u) * (tiles + 1u) + tile.y * tiles + tile.x;
+// The lit map's tile level, after the texel corners: per tile of kIzbTile² texels a record of eight
+// words (izb.h, izb_lit_tile_records_at), read in two loads: the least of its texels' bounds (below),
+// its own bound, its own four corners' plane bounds (c00, c10, c01, c11), as the texel level's but
+// over the tile. A caster triangle that covers a whole tile lowers the tile's (izb_tile_bin.comp)
+// instead of its kIzbTile² texels and their corners. Any caster touching the tile would be sound there
+// (its nearest point over the tile bounds it over each texel, and the blend of its plane from the
+// tile's corners is the plane itself); the whole-tile test keeps at the texel level the casters that
+// touch part of a tile, whose planes would otherwise bound the rest of it. A point is proved lit where
+// both levels prove it, each against its own casters.
+//
+// The least of the tile's texels' bounds (lit_map_index) is lowered with them. A point no farther than
+// it is proved at the texel level by its texel's bound without loading it: where a tile's texels hold
+// no caster (open ground under the sun, its floor at the tile level) the texel level is answered from
+// the small tile records (a CPU device otherwise waits on every pixel's load from the texels' megabytes).
+const uint kLitTileLeast = 0u, kLitTileBound = 1u, kLitTileCorners = 2u;  // word offsets in the record
+uint lit_tile_record(uvec2 tile) {
+  return izb_lit_tile_records_at(izb_resolution()) + 8u * (tile.y * tiles_per_side() + tile.x);
 }
 // A tile corner's grid position (the last tiles end at the grid's edge).
 vec2 lit_tile_corner_point(uvec2 corner) { return min(vec2(corner * kIzbTile), vec2(float(izb_resolution()))); }
@@ -489,36 +485,37 @@ void lower_lit_corners(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   LitPlane q = lit_plane(a, b, c, area);
   for (int k = 0; k < 4; ++k) lower_lit_corner(texel + ivec2(k & 1, k >> 1), a, q);
 }
-// Whether `g` lies no farther than a level's bound over its cell [lo, hi], or than the bilinear blend
-// of the plane bounds at the cell's corners (less that blend's own rounding). `texel_cell`: hi - lo is
-// exactly 1, so the division that places g in the cell is left out (the same quotient; a CPU device
-// pays for every division of every pixel).
-bool lit_cell_proves(vec3 g, uint bound, uint c00, uint c10, uint c01, uint c11, vec2 lo, vec2 hi, bool texel_cell) {
-  if (g.z <= ordered_depth(csm_texels[bound])) return true;
-  float d00 = ordered_depth(csm_texels[c00]);
-  float d10 = ordered_depth(csm_texels[c10]);
-  float d01 = ordered_depth(csm_texels[c01]);
-  float d11 = ordered_depth(csm_texels[c11]);
+// Whether `g` lies no farther than the bilinear blend of a cell's corners' plane bounds (`d`: c00,
+// c10, c01, c11 over [lo, hi]; less that blend's own rounding). `texel_cell`: hi - lo is exactly 1, so
+// the division that places g in the cell is left out (the same quotient; a CPU device pays for every
+// division of every pixel).
+bool lit_planes_prove(vec3 g, vec4 d, vec2 lo, vec2 hi, bool texel_cell) {
   vec2 f = clamp(texel_cell ? g.xy - lo : (g.xy - lo) / (hi - lo), vec2(0.0), vec2(1.0));
-  float blend = mix(mix(d00, d10, f.x), mix(d01, d11, f.x), f.y);
-  float largest = max(max(abs(d00), abs(d10)), max(abs(d01), abs(d11)));
+  float blend = mix(mix(d.x, d.y, f.x), mix(d.z, d.w, f.x), f.y);
+  float largest = max(max(abs(d.x), abs(d.y)), max(abs(d.z), abs(d.w)));
   return g.z <= blend - 1.0e-6 * largest;  // false for NaN (an empty corner: inf - inf)
 }
 // Whether grid point `g` is proved lit: inside the grid (outside it the texel clamp would compare it
-// with a texel that is not its own) and proved by its texel's cell and by its tile's.
+// with a texel that is not its own) and proved at both levels, each by its bound (g no farther) or its
+// corners' planes. Each load waits until the tests before it have failed (a CPU device then loads for
+// fewer lanes).
 bool lit_map_proves_lit(vec3 g) {
   if (!(all(greaterThanEqual(g.xy, vec2(0.0))) && all(lessThan(g.xy, vec2(float(izb_resolution())))))) return false;
   ivec2 texel = grid_texel(g);
   uvec2 tile = uvec2(texel) / kIzbTile;
-  bool texel_level = g.z <= ordered_depth(csm_texels[lit_tile_least_index(tile)]) ||
-                     lit_cell_proves(g, lit_map_index(texel_index(texel)), lit_corner_index(texel),
-                                     lit_corner_index(texel + ivec2(1, 0)), lit_corner_index(texel + ivec2(0, 1)),
-                                     lit_corner_index(texel + ivec2(1, 1)), vec2(texel), vec2(texel + 1), true);
-  if (!texel_level) return false;
-  return lit_cell_proves(g, lit_tile_index(tile), lit_tile_corner_index(tile),
-                         lit_tile_corner_index(tile + uvec2(1, 0)), lit_tile_corner_index(tile + uvec2(0, 1)),
-                         lit_tile_corner_index(tile + uvec2(1, 1)), lit_tile_corner_point(tile),
-                         lit_tile_corner_point(tile + 1u), false);
+  uint record = lit_tile_record(tile);
+  uvec4 head = lit_tile_words[record / 4u];  // least texel bound, tile bound, c00, c10
+  if (!(g.z <= ordered_depth(head.x) || g.z <= ordered_depth(csm_texels[lit_map_index(texel_index(texel))]))) {
+    vec4 d = vec4(ordered_depth(csm_texels[lit_corner_index(texel)]),
+                  ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 0))]),
+                  ordered_depth(csm_texels[lit_corner_index(texel + ivec2(0, 1))]),
+                  ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 1))]));
+    if (!lit_planes_prove(g, d, vec2(texel), vec2(texel + 1), true)) return false;
+  }
+  if (g.z <= ordered_depth(head.y)) return true;
+  uvec2 tail = lit_tile_words[record / 4u + 1u].xy;  // c01, c11
+  vec4 d = vec4(ordered_depth(head.z), ordered_depth(head.w), ordered_depth(tail.x), ordered_depth(tail.y));
+  return lit_planes_prove(g, d, lit_tile_corner_point(tile), lit_tile_corner_point(tile + 1u), false);
 }
 
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its

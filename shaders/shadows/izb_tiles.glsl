@@ -216,7 +216,7 @@ bool lower_lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, float slac
   if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) return false;
   uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
   lower_stored_bits(lit_map_index(texel_index(texel)), bits);
-  lower_stored_bits(lit_tile_least_index(uvec2(texel) / kIzbTile), bits);
+  lower_stored_bits(lit_tile_record(uvec2(texel) / kIzbTile) + kLitTileLeast, bits);
   return true;
 }
 
@@ -262,17 +262,18 @@ bool lit_covers_tile(uvec2 tile, vec3 a, vec3 b, vec3 c, float area) {
   return true;
 }
 
-// Lit map, tile level (lit_tile_index): lowers the tile's bound and its four corners' planes to the
+// Lit map, tile level (lit_tile_record): lowers the tile's bound and its own four corners' planes to the
 // triangle's, as lower_lit_texel and lower_lit_corner do for a texel.
 void lower_lit_tile(uvec2 tile, vec3 a, vec3 b, vec3 c, float area) {
   vec2 lo, hi;
   tile_rect(tile, lo, hi);
-  lower_stored_bits(lit_tile_index(tile),
+  uint record = lit_tile_record(tile);
+  lower_stored_bits(record + kLitTileBound,
                     ordered_depth_bits(lit_nearest_depth(lo, hi, a, b, c, area, lit_slack(a, b, c))));
   LitPlane q = lit_plane(a, b, c, area);
   for (uint k = 0u; k < 4u; ++k) {
     uvec2 corner = tile + uvec2(k & 1u, k >> 1u);
-    lower_lit_plane_at(lit_tile_corner_point(corner), lit_tile_corner_index(corner), a, q);
+    lower_lit_plane_at(lit_tile_corner_point(corner), record + kLitTileCorners + k, a, q);
   }
 }
 

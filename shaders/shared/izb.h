@@ -299,6 +299,11 @@ SHARED_INLINE uint izb_step_dispatch_at(uint mode) {
   return IZB_COUNTER_STEP_DISPATCH + 6u * (mode == IZB_WORK_TRACE ? 0u : (mode == IZB_WORK_LIT ? 2u : 1u));
 }
 
+// The lit map's layout in the compute CSM's buffer (IZB_BINDING_CSM_TEXELS), in words: after the CSM's
+// res² depths, each texel's bound (res²), the texel corners' plane bounds ((res + 1)²), then from a
+// multiple of 4 (one load of four words) each tile's record of 8 words (izb_common.glsl, lit_tile_record).
+SHARED_INLINE uint izb_lit_tile_records_at(uint res) { return (2u * res * res + (res + 1u) * (res + 1u) + 3u) & ~3u; }
+
 // Lit map: an empty texel (no caster touches it) holds the ordered bits of +infinity.
 SHARED_CONST uint kIzbLitEmpty = 0xff800000u;
 // A 32 spp point is lit-culled only when its μQuad spans at most this many texels per axis: the

@@ -439,7 +439,7 @@ TEST_P(IzbSceneTest, LitMapHoldsNoFartherThanEveryTouchingTriangle) {
     ASSERT_EQ(map.corner_depth.size(), size_t(kGrid + 1) * (kGrid + 1));
     ASSERT_EQ(map.tiles_per_side, (kGrid + map.tile - 1) / map.tile);
     ASSERT_EQ(map.tile_depth.size(), size_t(map.tiles_per_side) * map.tiles_per_side);
-    ASSERT_EQ(map.tile_corner_depth.size(), size_t(map.tiles_per_side + 1) * (map.tiles_per_side + 1));
+    ASSERT_EQ(map.tile_corner_depth.size(), size_t(map.tiles_per_side) * map.tiles_per_side * 4);
     // Each tile's least bound, which proves the texel level without the texel's own: no farther than
     // any of its texels' (then every check below of a texel's bound holds for it too).
     ASSERT_EQ(map.tile_least_depth.size(), map.tile_depth.size());
@@ -536,7 +536,7 @@ TEST_P(IzbSceneTest, LitMapHoldsNoFartherThanEveryTouchingTriangle) {
             bool tile_level = tile_nearest && double(map.tile_depth[size_t(ty) * map.tiles_per_side + tx]) <= *tile_nearest + 1e-6;
             for (uint32_t k = 0; k < 4 && tile_level; ++k) {
               const uint32_t cx = tx + (k & 1), cy = ty + (k >> 1);
-              tile_level = plane_bound_holds(map.tile_corner_depth[size_t(cy) * (map.tiles_per_side + 1) + cx],
+              tile_level = plane_bound_holds(map.tile_corner_depth[(size_t(ty) * map.tiles_per_side + tx) * 4 + k],
                                              {corner_point(cx), corner_point(cy)});
             }
             ASSERT_TRUE(tile_level) << scene << " texel " << x << "," << y << ": bounded at neither level";

@@ -94,7 +94,9 @@ struct LitMapSnapshot {
   // texels are bounded there, not at its texels.
   uint32_t tile = 0, tiles_per_side = 0;
   std::vector<float> tile_depth;         // row-major, tiles_per_side^2
-  std::vector<float> tile_corner_depth;  // row-major, (tiles_per_side + 1)^2; corner i at min(i * tile, resolution)
+  // Each tile's own four corners' plane bounds (c00, c10, c01, c11 at the tile's corners (x, y),
+  // (x + 1, y), (x, y + 1), (x + 1, y + 1); corner i at grid min(i * tile, resolution)), 4 a tile.
+  std::vector<float> tile_corner_depth;
   std::vector<float> tile_least_depth;   // row-major, tiles_per_side^2: no farther than any of the tile's texels' `depth`
   glm::mat4 light_view_projection{1.0f};
 };

@@ -330,13 +330,11 @@ struct IzbPass::Impl {
       scan_blocks = uint32_t((texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock);
       list_cursor = Buffer(ctx, (texels + scan_blocks) * 4, usage, false, "izb sorted list fill cursors and block sums");
       tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
-      // The compute CSM's depths, then the lit map's texels, texel corners, tiles, tile corners and
-      // each tile's least texel bound (izb_common.glsl; one binding for all).
-      const VkDeviceSize corners = VkDeviceSize(resolution + 1) * (resolution + 1);
-      const VkDeviceSize tile_cells = 2 * VkDeviceSize(tiles_per_side) * tiles_per_side +
-                                      VkDeviceSize(tiles_per_side + 1) * (tiles_per_side + 1);
-      csm_texels = Buffer(ctx, (2 * texels + corners + tile_cells) * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
-                          "csm compute depths and lit map");
+      // The compute CSM's depths, then the lit map's texels, texel corners and tile records (izb.h;
+      // one binding for all).
+      const VkDeviceSize tile_words = 8 * VkDeviceSize(tiles_per_side) * tiles_per_side;
+      csm_texels = Buffer(ctx, (gpu_shared::izb_lit_tile_records_at(resolution) + tile_words) * 4,
+                          usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "csm compute depths and lit map");
       tile_farthest = Buffer(ctx, VkDeviceSize(tiles_per_side) * tiles_per_side * 4, usage, false,
                              "izb farthest node depth per tile");
       farthest = Buffer(ctx, texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb farthest node depth");
@@ -1081,10 +1079,13 @@ LitMapSnapshot IzbPass::read_lit_map() {
   snapshot.tile = gpu_shared::kIzbTile;
   snapshot.tiles_per_side = m.tiles_per_side;
   const size_t tiles = size_t(m.tiles_per_side) * m.tiles_per_side;
-  snapshot.tile_depth = decode(2 * texels + corners, tiles);
-  const size_t tile_corners = size_t(m.tiles_per_side + 1) * (m.tiles_per_side + 1);
-  snapshot.tile_corner_depth = decode(2 * texels + corners + tiles, tile_corners);
-  snapshot.tile_least_depth = decode(2 * texels + corners + tiles + tile_corners, tiles);
+  // Each tile's record (izb_common.glsl, lit_tile_record): least texel bound, bound, c00, c10, c01, c11.
+  const std::vector<float> records = decode(gpu_shared::izb_lit_tile_records_at(m.resolution), 8 * tiles);
+  for (size_t t = 0; t < tiles; ++t) {
+    snapshot.tile_least_depth.push_back(records[8 * t]);
+    snapshot.tile_depth.push_back(records[8 * t + 1]);
+    snapshot.tile_corner_depth.insert(snapshot.tile_corner_depth.end(), records.begin() + 8 * t + 2, records.begin() + 8 * t + 6);
+  }
   const auto frame_bytes = read_buffer(m.ctx, m.frame_data);
   gpu_shared::IzbFrame frame;
   std::memcpy(&frame, frame_bytes.data(), sizeof(frame));

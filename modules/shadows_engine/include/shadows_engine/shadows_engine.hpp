@@ -40,8 +40,9 @@ class ShadowModule : public engine::RenderFeature {
     glm::mat4 light_view_projection{1.0f};
     std::vector<float> corner_depth;  // the lit map's alone: its texel corners' plane bounds, (resolution + 1)^2
     // The lit map's alone, its tile level: casters that cover a whole tile of `tile`^2 texels are
-    // bounded there instead (a bound per tile, tiles_per_side^2, and plane bounds at the tiles'
-    // corners, (tiles_per_side + 1)^2, corner i at min(i * tile, resolution)).
+    // bounded there instead (a bound per tile, tiles_per_side^2, row-major, and each tile's own four
+    // corners' plane bounds, c00, c10, c01, c11, 4 * tiles_per_side^2; corner i at min(i * tile,
+    // resolution)).
     uint32_t tile = 0, tiles_per_side = 0;
     std::vector<float> tile_depth, tile_corner_depth;
     // The lit map's alone: per tile, no farther than any of its texels' `depth` (tiles_per_side^2).
