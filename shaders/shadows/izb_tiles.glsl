@@ -210,33 +210,39 @@ void csm_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area, uint test) 
 }
 
 // Lit map: where the triangle touches the texel widened by `slack` (lit_slack), lowers the texel's
-// bound to the triangle's; whether it touched.
-bool lower_lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, float slack) {
+// bound to the triangle's and `least` with it (its tile's least texel bound is the caller's to lower);
+// whether it touched.
+bool lower_lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area, float slack, inout uint least) {
   vec2 lo = vec2(texel);
   if (!rect_touches_triangle_within(lo, lo + 1.0, a, b, c, sign(area), slack)) return false;
   uint bits = ordered_depth_bits(lit_nearest_depth(lo, lo + 1.0, a, b, c, area, slack));
   lower_stored_bits(lit_map_index(texel_index(texel)), bits);
-  lower_stored_bits(lit_tile_record(uvec2(texel) / kIzbTile) + kLitTileLeast, bits);
+  least = min(least, bits);
   return true;
 }
 
-// Lit map: where the triangle touches the widened texel, lowers the texel's bound and its corners'
-// planes to the triangle's.
+// Lit map: where the triangle touches the widened texel, lowers the texel's bound, its tile's least
+// and its corners' planes to the triangle's.
 void lit_texel(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
-  if (lower_lit_texel(texel, a, b, c, area, lit_slack(a, b, c))) lower_lit_corners(texel, a, b, c, area);
+  uint least = 0xffffffffu;
+  if (!lower_lit_texel(texel, a, b, c, area, lit_slack(a, b, c), least)) return;
+  lower_stored_bits(lit_tile_record(uvec2(texel) / kIzbTile) + kLitTileLeast, least);
+  lower_lit_corners(texel, a, b, c, area);
 }
 
-// lit_texel over the 2x2 texels from `first` (those inside the grid): each of their 9 corners is
-// lowered once where a touched texel of the four has it, to the same bound.
+// lit_texel over the 2x2 texels from `first` (those inside the grid; `first` even, so all four lie
+// in one tile, whose least bound is lowered once): each of their 9 corners is lowered once where a
+// touched texel of the four has it, to the same bound.
 void lit_texel_quad(ivec2 first, vec3 a, vec3 b, vec3 c, float area) {
   float slack = lit_slack(a, b, c);
-  uint touched = 0u;
+  uint touched = 0u, least = 0xffffffffu;
   for (int k = 0; k < 4; ++k) {
     ivec2 texel = first + ivec2(k & 1, k >> 1);
-    if (all(lessThan(uvec2(texel), uvec2(izb_resolution()))) && lower_lit_texel(texel, a, b, c, area, slack))
+    if (all(lessThan(uvec2(texel), uvec2(izb_resolution()))) && lower_lit_texel(texel, a, b, c, area, slack, least))
       touched |= 1u << k;
   }
   if (touched == 0u) return;
+  lower_stored_bits(lit_tile_record(uvec2(first) / kIzbTile) + kLitTileLeast, least);
   LitPlane q = lit_plane(a, b, c, area);
   for (int corner = 0; corner < 9; ++corner) {
     int i = corner % 3, j = corner / 3;
