@@ -90,7 +90,7 @@ struct LitMapSnapshot {
   uint32_t resolution = 0;
   std::vector<float> depth;         // row-major, resolution^2
   std::vector<float> corner_depth;  // the texels' corners' plane bounds, row-major, (resolution + 1)^2
-  // The tile level (izb_common.glsl, lit_tile_index): casters covering a whole tile of `tile`^2
+  // The tile level (izb_common.glsl, lit_tile_record): casters covering a whole tile of `tile`^2
   // texels are bounded there, not at its texels.
   uint32_t tile = 0, tiles_per_side = 0;
   std::vector<float> tile_depth;         // row-major, tiles_per_side^2
