@@ -84,6 +84,27 @@ uint csm_quad_verdict(vec3 g[4], ivec2 first, ivec2 last) {
   return kCsmPerSample;
 }
 
+// 32 spp: whether every sample of a μQuad is proved lit (lit_map_proves_lit), where its texels
+// [first, last] (quad_texel_bounds) span at most 2x2 texels, all inside the grid: each texel's bounds
+// and planes are tested once for all the samples in it (lit_map_proves_lit_in), against the farthest
+// corner's depth widened past a blend's rounding (as csm_quad_verdict's). So at most four texels'
+// words, not 32 samples' proofs one after another.
+bool lit_quad_verdict(vec3 g[4], ivec2 first, ivec2 last) {
+  vec2 lo = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels;
+  vec2 hi = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels;
+  if (any(lessThan(lo, vec2(0.0))) || any(greaterThanEqual(hi, vec2(float(izb_resolution())))) ||
+      any(greaterThan(last - first, ivec2(1))))
+    return false;
+  float z_highest = max(max(g[0].z, g[1].z), max(g[2].z, g[3].z));
+  float z = z_highest + 1.0e-5 * (1.0 + abs(z_highest));
+  bool lit = true;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 texel = first + ivec2(k & 1, k >> 1);
+    if (lit && all(lessThanEqual(texel, last))) lit = lit_map_proves_lit_in(texel, g, z, true);
+  }
+  return lit;
+}
+
 // 32 spp: a pixel's node texels as bits of the kSampleWindow x kSampleWindow texels from `origin` (bit
 // x + kSampleWindow * y), which holds every sample of a μQuad up to about two texels wide; the list
 // node_texels makes (local memory) only for a sample outside it.
@@ -146,6 +167,7 @@ void main() {
   ivec2 window = ivec2(0);
   uint window_cells = 0u;  // the window's texels holding samples the CSM did not settle
   bool outside_window = false;
+  ivec2 first = ivec2(0), last = ivec2(-1);  // 32 spp: the texels the μQuad's samples lie in (quad_texel_bounds)
   uint texel0 = 0u;
   uint count = 0u;
   float node_depth = 0.0;
@@ -177,7 +199,6 @@ void main() {
         // The CSM's verdict on the whole quad, else each sample's point and texel once, for the CSM
         // and for the node's texels.
         window = sample_window_origin(g);
-        ivec2 first, last;
         quad_texel_bounds(g, first, last);
         uint verdict = csm_quad_verdict(g, first, last);
         if (verdict == kCsmAllShadowed) {
@@ -207,7 +228,10 @@ void main() {
       if (izb_flag(IZB_FLAG_LIT) && mask == 0u) {
         if (izb_samples() == 1u) {
           lit = lit_map_proves_lit(g[0]);
+        } else if (all(lessThanEqual(last - first, ivec2(1)))) {
+          lit = lit_quad_verdict(g, first, last);
         } else {
+          // A wider μQuad (grazing): sample by sample.
           vec2 qmin = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy));
           vec2 qmax = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy));
           lit = all(lessThanEqual(qmax - qmin, vec2(kIzbLitQuadReach)));

@@ -495,27 +495,55 @@ bool lit_planes_prove(vec3 g, vec4 d, vec2 lo, vec2 hi, bool texel_cell) {
   float largest = max(max(abs(d.x), abs(d.y)), max(abs(d.z), abs(d.w)));
   return g.z <= blend - 1.0e-6 * largest;  // false for NaN (an empty corner: inf - inf)
 }
-// Whether grid point `g` is proved lit: inside the grid (outside it the texel clamp would compare it
-// with a texel that is not its own) and proved at both levels, each by its bound (g no farther) or its
-// corners' planes. Each load waits until the tests before it have failed (a CPU device then loads for
-// fewer lanes).
-bool lit_map_proves_lit(vec3 g) {
-  if (!(all(greaterThanEqual(g.xy, vec2(0.0))) && all(lessThan(g.xy, vec2(float(izb_resolution())))))) return false;
-  ivec2 texel = grid_texel(g);
+// 32 spp: lit_planes_prove for every sample of a μQuad (a convex blend of its corners' grid points
+// `g`, rounded) that lies in the cell [lo, hi], from the corners alone. Over the cell the blend is its
+// affine part L (through c00, c10 and c01) plus the twist c00 - c10 - c01 + c11 times f.x f.y, so at
+// least L + min(twist, 0) (zero twist: the four corners on one caster's plane). Depth less L is affine,
+// so a sample's lies below the largest of the corners' (L extended past the cell), up to the rounding
+// of the sample's blend and of L: the margin.
+bool lit_planes_prove_quad(vec3 g[4], vec4 d, vec2 lo, vec2 hi, bool texel_cell) {
+  vec2 scale = texel_cell ? vec2(1.0) : 1.0 / (hi - lo);
+  vec2 slope = vec2(d.y - d.x, d.z - d.x);  // per cell
+  float farthest_above = -3.0e38, largest_z = 0.0, largest_f = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    vec2 f = (g[i].xy - lo) * scale;
+    farthest_above = max(farthest_above, g[i].z - (d.x + slope.x * f.x + slope.y * f.y));
+    largest_z = max(largest_z, abs(g[i].z));
+    largest_f = max(largest_f, max(abs(f.x), abs(f.y)));
+  }
+  float largest = max(max(abs(d.x), abs(d.y)), max(abs(d.z), abs(d.w)));
+  float margin = 4.0e-6 * (largest * (1.0 + largest_f) + largest_z) + 1.0e-3 * (abs(slope.x) + abs(slope.y));
+  return farthest_above <= min(d.x - d.y - d.z + d.w, 0.0) - margin;  // false for NaN (an empty corner)
+}
+// Whether the points `g` are proved lit in `texel` (inside the grid), at both levels, each by its
+// bound or its corners' planes: with `quad` false the one point g[0] (the bounds compared with its
+// depth, `z`); with `quad` true every sample of the μQuad with corners g that lies in the texel (the
+// bounds compared with `z`, no nearer than any such sample; the planes by lit_planes_prove_quad).
+// Each load waits until the tests before it have failed (a CPU device then loads for fewer lanes).
+bool lit_map_proves_lit_in(ivec2 texel, vec3 g[4], float z, bool quad) {
   uvec2 tile = uvec2(texel) / kIzbTile;
   uint record = lit_tile_record(tile);
   uvec4 head = lit_tile_words[record / 4u];  // least texel bound, tile bound, c00, c10
-  if (!(g.z <= ordered_depth(head.x) || g.z <= ordered_depth(csm_texels[lit_map_index(texel_index(texel))]))) {
+  if (!(z <= ordered_depth(head.x) || z <= ordered_depth(csm_texels[lit_map_index(texel_index(texel))]))) {
     vec4 d = vec4(ordered_depth(csm_texels[lit_corner_index(texel)]),
                   ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 0))]),
                   ordered_depth(csm_texels[lit_corner_index(texel + ivec2(0, 1))]),
                   ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 1))]));
-    if (!lit_planes_prove(g, d, vec2(texel), vec2(texel + 1), true)) return false;
+    vec2 lo = vec2(texel), hi = vec2(texel + 1);
+    if (!(quad ? lit_planes_prove_quad(g, d, lo, hi, true) : lit_planes_prove(g[0], d, lo, hi, true))) return false;
   }
-  if (g.z <= ordered_depth(head.y)) return true;
+  if (z <= ordered_depth(head.y)) return true;
   uvec2 tail = lit_tile_words[record / 4u + 1u].xy;  // c01, c11
   vec4 d = vec4(ordered_depth(head.z), ordered_depth(head.w), ordered_depth(tail.x), ordered_depth(tail.y));
-  return lit_planes_prove(g, d, lit_tile_corner_point(tile), lit_tile_corner_point(tile + 1u), false);
+  vec2 lo = lit_tile_corner_point(tile), hi = lit_tile_corner_point(tile + 1u);
+  return quad ? lit_planes_prove_quad(g, d, lo, hi, false) : lit_planes_prove(g[0], d, lo, hi, false);
+}
+// Whether grid point `g` is proved lit: inside the grid (outside it the texel clamp would compare it
+// with a texel that is not its own) and proved at both levels (lit_map_proves_lit_in).
+bool lit_map_proves_lit(vec3 g) {
+  if (!(all(greaterThanEqual(g.xy, vec2(0.0))) && all(lessThan(g.xy, vec2(float(izb_resolution())))))) return false;
+  vec3 point[4] = vec3[4](g, g, g, g);
+  return lit_map_proves_lit_in(grid_texel(g), point, g.z, false);
 }
 
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its
