@@ -52,6 +52,18 @@ float csm_stored_depth(ivec2 texel) {
 bool csm_proves_shadowed_in(vec3 g, ivec2 texel) { return izb_flag(IZB_FLAG_CSM) && g.z > csm_stored_depth(texel); }
 bool csm_proves_shadowed(vec3 g) { return csm_proves_shadowed_in(g, grid_texel(g)); }
 
+// micro_quad_blend's x and y, and its z: it blends each component on its own, so these are its bits.
+vec2 micro_quad_blend_xy(vec3 g[4], vec2 offset) {
+  precise vec2 xy = (g[0].xy * (1.0 - offset.x) + g[1].xy * offset.x) * (1.0 - offset.y) +
+                    (g[2].xy * (1.0 - offset.x) + g[3].xy * offset.x) * offset.y;
+  return xy;
+}
+float micro_quad_blend_z(vec3 g[4], vec2 offset) {
+  precise float z = (g[0].z * (1.0 - offset.x) + g[1].z * offset.x) * (1.0 - offset.y) +
+                    (g[2].z * (1.0 - offset.x) + g[3].z * offset.x) * offset.y;
+  return z;
+}
+
 // 32 spp: the CSM's verdict on all of a μQuad's samples at once, where its corners' bounds, widened
 // past any rounding of a sample's blend, span at most 2x2 texels: kCsmAllShadowed if even its nearest
 // corner lies beyond every one of those texels' depths, kCsmNoneShadowed if even its farthest lies in
@@ -207,9 +219,13 @@ void main() {
           window_cells = sample_window_bit(window, first, outside_window);  // every sample in one texel
         } else {
           for (uint s = 0u; s < 32u; ++s) {
-            vec3 q = micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s]);
-            ivec2 texel = grid_texel(q);
-            if (verdict == kCsmPerSample && csm_proves_shadowed_in(q, texel))
+            // A sample's depth only where the CSM tests it one by one.
+            vec2 q = micro_quad_blend_xy(g, kSamplePattern[s]);
+            ivec2 texel = grid_texel(vec3(q, 0.0));
+            bool shadowed = false;
+            if (verdict == kCsmPerSample)
+              shadowed = csm_proves_shadowed_in(vec3(q, micro_quad_blend_z(g, kSamplePattern[s])), texel);
+            if (shadowed)
               mask |= 1u << s;
             else
               window_cells |= sample_window_bit(window, texel, outside_window);
