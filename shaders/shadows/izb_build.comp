@@ -73,11 +73,18 @@ const uint kCsmPerSample = 0u;
 const uint kCsmAllShadowed = 1u;
 const uint kCsmNoneShadowed = 2u;
 const float kBlendSlackTexels = 1.0 / 64.0;  // a blend of grid coordinates (< 2^14) rounds by a few ulps
-// The texels [first, last] of the μQuad corners' bounds, widened past any rounding of a sample's
-// blend: every sample lies in one of them.
+// The μQuad corners' bounds [lo, hi] in grid coordinates, widened past any rounding of a sample's
+// blend: every sample lies inside.
+void quad_sample_bounds(vec3 g[4], out vec2 lo, out vec2 hi) {
+  lo = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels;
+  hi = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels;
+}
+// The texels [first, last] of quad_sample_bounds: every sample lies in one of them.
 void quad_texel_bounds(vec3 g[4], out ivec2 first, out ivec2 last) {
-  first = grid_texel(vec3(min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels, 0.0));
-  last = grid_texel(vec3(max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels, 0.0));
+  vec2 lo, hi;
+  quad_sample_bounds(g, lo, hi);
+  first = grid_texel(vec3(lo, 0.0));
+  last = grid_texel(vec3(hi, 0.0));
 }
 uint csm_quad_verdict(vec3 g[4], ivec2 first, ivec2 last) {
   if (!izb_flag(IZB_FLAG_CSM)) return kCsmNoneShadowed;
@@ -96,17 +103,15 @@ uint csm_quad_verdict(vec3 g[4], ivec2 first, ivec2 last) {
   return kCsmPerSample;
 }
 
-// 32 spp: whether every sample of a μQuad is proved lit (lit_map_proves_lit), where its texels
-// [first, last] (quad_texel_bounds) span at most 2x2 texels, all inside the grid: each texel's bounds
-// and planes are tested once for all the samples in it (lit_map_proves_lit_in), against the farthest
-// corner's depth widened past a blend's rounding (as csm_quad_verdict's). So at most four texels'
-// words, not 32 samples' proofs one after another.
+// 32 spp: whether every sample of a μQuad is proved lit (lit_map_proves_lit), for a μQuad whose texels
+// [first, last] (quad_texel_bounds) span at most 2x2 texels; false unless its samples all lie inside
+// the grid. Each texel's bounds and planes are tested once for all the samples in it
+// (lit_map_proves_lit_in), against the farthest corner's depth widened past a blend's rounding (as
+// csm_quad_verdict's). So at most four texels' words, not 32 samples' proofs one after another.
 bool lit_quad_verdict(vec3 g[4], ivec2 first, ivec2 last) {
-  vec2 lo = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels;
-  vec2 hi = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels;
-  if (any(lessThan(lo, vec2(0.0))) || any(greaterThanEqual(hi, vec2(float(izb_resolution())))) ||
-      any(greaterThan(last - first, ivec2(1))))
-    return false;
+  vec2 lo, hi;
+  quad_sample_bounds(g, lo, hi);
+  if (any(lessThan(lo, vec2(0.0))) || any(greaterThanEqual(hi, vec2(float(izb_resolution()))))) return false;
   float z_highest = max(max(g[0].z, g[1].z), max(g[2].z, g[3].z));
   float z = z_highest + 1.0e-5 * (1.0 + abs(z_highest));
   bool lit = true;
