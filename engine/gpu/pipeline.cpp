@@ -359,27 +359,31 @@ void ShaderBindingTable::trace(const Context& ctx, VkCommandBuffer cmd, uint32_t
 }
 
 DescriptorWriter& DescriptorWriter::acceleration_structure(uint32_t binding, VkAccelerationStructureKHR structure) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, {}, {}, structure});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, {}, {}, structure, VK_NULL_HANDLE});
   return *this;
 }
 
 DescriptorWriter& DescriptorWriter::storage_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset,
                                                    VkDeviceSize range) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {buffer, offset, range}, {}, VK_NULL_HANDLE});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {buffer, offset, range}, {}, VK_NULL_HANDLE, VK_NULL_HANDLE});
   return *this;
 }
 DescriptorWriter& DescriptorWriter::uniform_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset,
                                                    VkDeviceSize range) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {buffer, offset, range}, {}, VK_NULL_HANDLE});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {buffer, offset, range}, {}, VK_NULL_HANDLE, VK_NULL_HANDLE});
   return *this;
 }
 DescriptorWriter& DescriptorWriter::storage_image(uint32_t binding, VkImageView view) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {}, {VK_NULL_HANDLE, view, VK_IMAGE_LAYOUT_GENERAL}, VK_NULL_HANDLE});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {}, {VK_NULL_HANDLE, view, VK_IMAGE_LAYOUT_GENERAL}, VK_NULL_HANDLE, VK_NULL_HANDLE});
+  return *this;
+}
+DescriptorWriter& DescriptorWriter::uniform_texel_buffer(uint32_t binding, VkBufferView view) {
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, {}, {}, VK_NULL_HANDLE, view});
   return *this;
 }
 DescriptorWriter& DescriptorWriter::sampled_image(uint32_t binding, VkImageView view, VkSampler sampler,
                                                   VkImageLayout layout) {
-  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {}, {sampler, view, layout}, VK_NULL_HANDLE});
+  entries_.push_back({binding, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {}, {sampler, view, layout}, VK_NULL_HANDLE, VK_NULL_HANDLE});
   return *this;
 }
 
@@ -402,6 +406,8 @@ void DescriptorWriter::push(const Context& ctx, VkCommandBuffer cmd, const Pipel
       w.pNext = &structures.back();
     } else if (e.type == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER || e.type == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER)
       w.pBufferInfo = &e.buffer;
+    else if (e.type == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER)
+      w.pTexelBufferView = &e.texel_view;
     else
       w.pImageInfo = &e.image;
     writes.push_back(w);

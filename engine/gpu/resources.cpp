@@ -1,5 +1,7 @@
 #include "engine/gpu/resources.hpp"
 
+#include <stdexcept>
+
 namespace engine::gpu {
 
 Buffer::Buffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, bool host_visible,
@@ -51,6 +53,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
     reset();
     ctx_ = o.ctx_;
     buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
+    texel_view_ = std::exchange(o.texel_view_, VK_NULL_HANDLE);
     memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
     size_ = std::exchange(o.size_, 0);
     mapped_ = std::exchange(o.mapped_, nullptr);
@@ -59,10 +62,21 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
   return *this;
 }
 
+void Buffer::make_texel_view(VkFormat format, VkDeviceSize elements, VkDeviceSize texel_bytes) {
+  if (texel_view_) throw std::logic_error("Buffer::make_texel_view: the buffer has its view already");
+  VkBufferViewCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+  info.buffer = buffer_;
+  info.format = format;
+  info.offset = 0;
+  info.range = elements * texel_bytes;
+  VK_CHECK(vkCreateBufferView(ctx_->device(), &info, ctx_->allocator(), &texel_view_));
+}
+
 void Buffer::reset() {
   if (!ctx_) return;
   const Context* ctx = ctx_;
-  auto destroy = [ctx, buffer = buffer_, memory = memory_] {
+  auto destroy = [ctx, buffer = buffer_, view = texel_view_, memory = memory_] {
+    if (view) vkDestroyBufferView(ctx->device(), view, ctx->allocator());
     if (buffer) vkDestroyBuffer(ctx->device(), buffer, ctx->allocator());
     if (memory) {
       ctx->untrack_allocation(memory);
@@ -73,6 +87,7 @@ void Buffer::reset() {
   if (ctx->defers_releases() && (buffer_ || memory_)) ctx->defer_release(destroy);
   else destroy();
   buffer_ = VK_NULL_HANDLE;
+  texel_view_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
   mapped_ = nullptr;
   size_ = 0;

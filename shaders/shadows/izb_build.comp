@@ -26,7 +26,8 @@ void raise_farthest(uint texel, float depth) {
   if (bits > farthest[texel]) atomicMax(farthest[texel], bits);  // most nodes are not their texel's farthest
   if (!izb_flag(IZB_FLAG_TILE_FARTHEST)) return;
   uint tile = tile_of(texel);
-  if (bits > tile_farthest[tile]) atomicMax(tile_farthest[tile], bits);
+  uint slot = tile_farthest_index(tile);
+  if (bits > farthest[slot]) atomicMax(farthest[slot], bits);
 }
 // 1 spp: every lane of the subgroup together (`has`: the lane's pixel has a node in `texel`). The
 // lanes' pixels neighbour one another, so mostly one tile takes one atomic (on a GPU; a CPU device
@@ -37,9 +38,9 @@ void raise_tiles_farthest(uint texel, float depth, bool has) {
   uint bits = has ? depth_bits(depth) : 0u;
   if (!izb_flag(IZB_FLAG_CPU_DEVICE) && subgroupMin(tile) == subgroupMax(tile)) {  // (arithmetic subgroup operations only)
     uint highest = subgroupMax(bits);
-    if (subgroupElect() && has && highest > tile_farthest[tile]) atomicMax(tile_farthest[tile], highest);
-  } else if (has && bits > tile_farthest[tile]) {
-    atomicMax(tile_farthest[tile], bits);
+    if (subgroupElect() && has && highest > farthest[tile_farthest_index(tile)]) atomicMax(farthest[tile_farthest_index(tile)], highest);
+  } else if (has && bits > farthest[tile_farthest_index(tile)]) {
+    atomicMax(farthest[tile_farthest_index(tile)], bits);
   }
 }
 

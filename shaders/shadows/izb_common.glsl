@@ -12,9 +12,6 @@ layout(set = 0, binding = IZB_BINDING_NODES, std430) buffer Nodes { uvec2 nodes[
 layout(set = 0, binding = IZB_BINDING_MASK, std430) buffer Mask { uint visibility_mask[]; };
 layout(set = 0, binding = IZB_BINDING_PIXEL_STATE, std430) buffer PixelState { uint pixel_state[]; };
 layout(set = 0, binding = IZB_BINDING_SHADOW_TERM, r32f) uniform image2D shadow_term;
-// Per light-space tile (kIzbTile² texels): its farthest node depth (float bits, 0: no node), raised by
-// the build for the compute trace's tile-level cull.
-layout(set = 0, binding = IZB_BINDING_TILE_FARTHEST, std430) buffer TileFarthest { uint tile_farthest[]; };
 uint tiles_per_side() { return params.capacities.y; }
 // This frame's shape of the compute work's step 1 (izb.h, kIzbStepOne*).
 uint step_one_triangles() { return params.capacities.w & 0xffffu; }
@@ -30,6 +27,8 @@ layout(set = 0, binding = IZB_BINDING_GRID_TRIANGLES, std430) buffer GridTriangl
 layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) buffer CsmTexels { uint csm_texels[]; };
 // The same buffer four words a load: the lit map's tile records (lit_tile_record).
 layout(set = 0, binding = IZB_BINDING_CSM_TEXELS, std430) readonly buffer LitTileWords { uvec4 lit_tile_words[]; };
+// And as a texel buffer (IZB_FLAG_LIT_FETCH).
+layout(set = 0, binding = IZB_BINDING_LIT_WORDS) uniform usamplerBuffer lit_words;
 layout(set = 0, binding = IZB_BINDING_LIST_COUNTS, std430) buffer ListCounts { uint list_counts[]; };
 layout(set = 0, binding = IZB_BINDING_LIST_CURSOR, std430) buffer ListCursor { uint list_cursor[]; };
 layout(set = 0, binding = IZB_BINDING_CASTER_DRAWS, std430) buffer CasterDraws { uint caster_draw_words[]; };
@@ -43,6 +42,9 @@ layout(constant_id = 10) const uint kIzbSamples = 1u;
 layout(constant_id = 11) const uint kIzbFlags = 0u;
 
 uint izb_resolution() { return params.extent.z; }
+// Per light-space tile (kIzbTile² texels), after the texels' words in `farthest`: its farthest node
+// depth (float bits, 0: no node), raised by the build for the compute trace's tile-level cull.
+uint tile_farthest_index(uint tile) { return izb_resolution() * izb_resolution() + tile; }
 uint izb_samples() { return kIzbSamples; }
 bool izb_flag(uint flag) { return (kIzbFlags & flag) != 0u; }
 
@@ -389,10 +391,18 @@ uint ordered_depth_bits(float d) {
 float ordered_depth(uint bits) {
   return uintBitsToFloat((bits & 0x80000000u) != 0u ? (bits & 0x7fffffffu) : ~bits);
 }
+// The lit map's word at `index` of IZB_BINDING_CSM_TEXELS, or four from a multiple of four (a tile
+// record's half), read through the texel buffer view where IZB_FLAG_LIT_FETCH says so.
+uint lit_word(uint index) { return izb_flag(IZB_FLAG_LIT_FETCH) ? texelFetch(lit_words, int(index)).r : csm_texels[index]; }
+uvec4 lit_words4(uint index) {
+  if (!izb_flag(IZB_FLAG_LIT_FETCH)) return lit_tile_words[index / 4u];
+  return uvec4(lit_word(index), lit_word(index + 1u), lit_word(index + 2u), lit_word(index + 3u));
+}
 // Lowers the CSM's or lit map's word at `index` to `bits` (an order-preserving encoding); the read
-// first, since most writes would not lower it.
+// first, since most writes would not lower it. The words only fall, so a read that misses a write of
+// this pass (the texel view's may) costs at most an atomic that changes nothing.
 void lower_stored_bits(uint index, uint bits) {
-  if (bits < csm_texels[index]) atomicMin(csm_texels[index], bits);
+  if (bits < lit_word(index)) atomicMin(csm_texels[index], bits);
 }
 float lit_quad_reach() { return izb_samples() == 32u ? kIzbLitQuadReach : 0.0; }
 // A bound of the triangle's extent (sum of its bounds' sides: at least any edge, at least the distance
@@ -523,17 +533,17 @@ bool lit_planes_prove_quad(vec3 g[4], vec4 d, vec2 lo, vec2 hi, bool texel_cell)
 bool lit_map_proves_lit_in(ivec2 texel, vec3 g[4], float z, bool quad) {
   uvec2 tile = uvec2(texel) / kIzbTile;
   uint record = lit_tile_record(tile);
-  uvec4 head = lit_tile_words[record / 4u];  // least texel bound, tile bound, c00, c10
-  if (!(z <= ordered_depth(head.x) || z <= ordered_depth(csm_texels[lit_map_index(texel_index(texel))]))) {
-    vec4 d = vec4(ordered_depth(csm_texels[lit_corner_index(texel)]),
-                  ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 0))]),
-                  ordered_depth(csm_texels[lit_corner_index(texel + ivec2(0, 1))]),
-                  ordered_depth(csm_texels[lit_corner_index(texel + ivec2(1, 1))]));
+  uvec4 head = lit_words4(record);  // least texel bound, tile bound, c00, c10
+  if (!(z <= ordered_depth(head.x) || z <= ordered_depth(lit_word(lit_map_index(texel_index(texel)))))) {
+    vec4 d = vec4(ordered_depth(lit_word(lit_corner_index(texel))),
+                  ordered_depth(lit_word(lit_corner_index(texel + ivec2(1, 0)))),
+                  ordered_depth(lit_word(lit_corner_index(texel + ivec2(0, 1)))),
+                  ordered_depth(lit_word(lit_corner_index(texel + ivec2(1, 1)))));
     vec2 lo = vec2(texel), hi = vec2(texel + 1);
     if (!(quad ? lit_planes_prove_quad(g, d, lo, hi, true) : lit_planes_prove(g[0], d, lo, hi, true))) return false;
   }
   if (z <= ordered_depth(head.y)) return true;
-  uvec2 tail = lit_tile_words[record / 4u + 1u].xy;  // c01, c11
+  uvec2 tail = lit_words4(record + 4u).xy;  // c01, c11
   vec4 d = vec4(ordered_depth(head.z), ordered_depth(head.w), ordered_depth(tail.x), ordered_depth(tail.y));
   vec2 lo = lit_tile_corner_point(tile), hi = lit_tile_corner_point(tile + 1u);
   return quad ? lit_planes_prove_quad(g, d, lo, hi, false) : lit_planes_prove(g[0], d, lo, hi, false);

@@ -114,7 +114,7 @@ bool tile_survives(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
   if (mode == IZB_WORK_LIT) return rect_touches_triangle_within(lo, hi, a, b, c, sign(area), lit_slack(a, b, c));
   if (mode != IZB_WORK_TRACE) return rect_may_hold_covered_texel(lo, hi, a, b, c, sign(area));
   if (!izb_flag(IZB_FLAG_NO_DEPTH_CULL)) {
-    float farthest_node = uintBitsToFloat(tile_farthest[tile.y * tiles_per_side() + tile.x]);
+    float farthest_node = uintBitsToFloat(farthest[tile_farthest_index(tile.y * tiles_per_side() + tile.x)]);
     if (farthest_node <= 0.0 || triangle_nearest_depth(lo, hi, a, b, c, area) >= farthest_node) return false;
   }
   return rect_touches_triangle(lo, hi, a, b, c, sign(area));

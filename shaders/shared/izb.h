@@ -76,6 +76,10 @@ SHARED_CONST uint IZB_FLAG_SPOT = 524288u;    // a spot light, or a face of a po
 // The compute trace runs: the build raises each light-space tile's farthest node depth, which its
 // tile cull reads (the raster trace reads only the texels').
 SHARED_CONST uint IZB_FLAG_TILE_FARTHEST = 2097152u;
+// The build reads the lit map through IZB_BINDING_LIT_WORDS. Set on a CPU device, whose driver loads a
+// storage buffer's words lane by lane but gathers a texel buffer's fetches across the lanes; only
+// where the view reaches the whole buffer (maxTexelBufferElements).
+SHARED_CONST uint IZB_FLAG_LIT_FETCH = 4194304u;
 // The inverse view-projection's w row ignores x and y (exact zeros), so every camera ray's near and far
 // points have one w each, whose reciprocals the CPU divides once (IzbParams::ray_scales).
 SHARED_CONST uint IZB_FLAG_CONSTANT_RAY_W = 1048576u;
@@ -228,7 +232,10 @@ SHARED_CONST uint IZB_BINDING_CASTER_DRAWS = 25u;
 // since push descriptors allow no more than 32.
 SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;
 SHARED_CONST uint IZB_BINDING_TILE_PAIRS = 27u;         // uvec2 {triangle, tile}
-SHARED_CONST uint IZB_BINDING_TILE_FARTHEST = 28u;      // per tile: its farthest node depth (float bits)
+// IZB_FLAG_LIT_FETCH: IZB_BINDING_CSM_TEXELS's words again, as an R32_UINT uniform texel buffer (the
+// per-tile farthest node depths, which this binding once held, follow the texels' in
+// IZB_BINDING_FARTHEST).
+SHARED_CONST uint IZB_BINDING_LIT_WORDS = 28u;
 // Sorted lists (counting sort): per texel its node count, and a fill cursor; after the cursors, per
 // scan block a sum (one binding for both, since push descriptors allow no more than 32).
 SHARED_CONST uint IZB_BINDING_LIST_COUNTS = 29u;

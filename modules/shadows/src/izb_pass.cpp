@@ -54,7 +54,7 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_CASTER_DRAWS, storage},
           {gpu_shared::IZB_BINDING_CSM_TEXELS, storage},
           {gpu_shared::IZB_BINDING_TILE_PAIRS, storage},
-          {gpu_shared::IZB_BINDING_TILE_FARTHEST, storage},
+          {gpu_shared::IZB_BINDING_LIT_WORDS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER},
           {gpu_shared::IZB_BINDING_LIST_COUNTS, storage},
           {gpu_shared::IZB_BINDING_LIST_CURSOR, storage},
           {gpu_shared::IZB_BINDING_RESOLVE_LIST, storage}};
@@ -130,7 +130,8 @@ struct IzbPass::Impl {
   }
   ReadbackRing counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
-  Buffer grid_triangles, caster_draw_words, csm_texels, tile_farthest;
+  Buffer grid_triangles, caster_draw_words, csm_texels;
+  bool lit_view_whole = false;  // csm_texels' texel view reaches all of it (IZB_FLAG_LIT_FETCH)
   size_t triangle_capacity = 0;
   uint64_t caster_draw_word_capacity = 0;
   std::vector<uint32_t> first_triangle;  // per frame draw: its first caster triangle (casters only)
@@ -333,11 +334,16 @@ struct IzbPass::Impl {
       // The compute CSM's depths, then the lit map's texels, texel corners and tile records (izb.h;
       // one binding for all).
       const VkDeviceSize tile_words = 8 * VkDeviceSize(tiles_per_side) * tiles_per_side;
-      csm_texels = Buffer(ctx, (gpu_shared::izb_lit_tile_records_at(resolution) + tile_words) * 4,
-                          usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "csm compute depths and lit map");
-      tile_farthest = Buffer(ctx, VkDeviceSize(tiles_per_side) * tiles_per_side * 4, usage, false,
-                             "izb farthest node depth per tile");
-      farthest = Buffer(ctx, texels * 4, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb farthest node depth");
+      const VkDeviceSize lit_words = gpu_shared::izb_lit_tile_records_at(resolution) + tile_words;
+      csm_texels = Buffer(ctx, lit_words * 4,
+                          usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, false,
+                          "csm compute depths and lit map");
+      const VkDeviceSize max_texels = ctx.properties().limits.maxTexelBufferElements;
+      lit_view_whole = lit_words <= max_texels;
+      csm_texels.make_texel_view(VK_FORMAT_R32_UINT, std::min(lit_words, max_texels), 4);
+      // Per texel, then per tile (tile_farthest_index): the farthest node depth.
+      farthest = Buffer(ctx, (texels + VkDeviceSize(tiles_per_side) * tiles_per_side) * 4,
+                        usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb farthest node depth per texel and tile");
       trace_depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
                           VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                           "izb trace depth (farthest node)");
@@ -536,7 +542,7 @@ struct IzbPass::Impl {
         .storage_buffer(gpu_shared::IZB_BINDING_RECORDS, records.buffer.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_TILE_PAIRS, tile_pairs.buffer.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_PAIRS, pairs.buffer.handle())
-        .storage_buffer(gpu_shared::IZB_BINDING_TILE_FARTHEST, tile_farthest.handle())
+        .uniform_texel_buffer(gpu_shared::IZB_BINDING_LIT_WORDS, csm_texels.texel_view())
         .storage_buffer(gpu_shared::IZB_BINDING_LIST_COUNTS, list_counts.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_LIST_CURSOR, list_cursor.handle())
         .storage_buffer(gpu_shared::IZB_BINDING_RESOLVE_LIST, resolve_list.handle())
@@ -791,6 +797,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (triangles_in_trace) flags |= gpu_shared::IZB_FLAG_TRIANGLES_IN_TRACE;
   const bool cpu = m.cpu_device();
   if (cpu) flags |= gpu_shared::IZB_FLAG_CPU_DEVICE;
+  if (cpu && lit && m.lit_view_whole) flags |= gpu_shared::IZB_FLAG_LIT_FETCH;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
@@ -838,7 +845,6 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (sorted) vkCmdFillBuffer(cmd, m.list_counts.handle(), 0, VK_WHOLE_SIZE, 0);
   else vkCmdFillBuffer(cmd, m.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
   vkCmdFillBuffer(cmd, m.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
-  vkCmdFillBuffer(cmd, m.tile_farthest.handle(), 0, VK_WHOLE_SIZE, 0);
   pass_barrier(frame.ctx, cmd);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "light_frustum");
@@ -897,7 +903,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
-    m.dispatch_pixels(cmd, frame, m.p->build, push);
+    { OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "build_classify");
+    m.dispatch_pixels(cmd, frame, m.p->build, push); }
     if (sorted) {
       // Counting sort: counts (above) -> prefix sum -> scatter into contiguous ranges.
       const uint32_t blocks = m.scan_blocks;
@@ -916,6 +923,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     // A CPU device sizes the lists' dispatches in a pass of their own (izb_list_dispatch.comp), then
     // inserts the listed pixels' nodes where the build runs in two steps.
     if (listed_resolve && cpu) {
+      OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "build_insert");
       m.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_RESOLVE);
       if (m.p->build_insert.valid()) {
         m.dispatch_indirect(cmd, frame, m.p->build_insert, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);

@@ -178,6 +178,7 @@ class DescriptorWriter {
   DescriptorWriter& uniform_buffer(uint32_t binding, VkBuffer buffer, VkDeviceSize offset = 0,
                                    VkDeviceSize range = VK_WHOLE_SIZE);
   DescriptorWriter& storage_image(uint32_t binding, VkImageView view);
+  DescriptorWriter& uniform_texel_buffer(uint32_t binding, VkBufferView view);
   DescriptorWriter& sampled_image(uint32_t binding, VkImageView view, VkSampler sampler,
                                   VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   DescriptorWriter& acceleration_structure(uint32_t binding, VkAccelerationStructureKHR structure);
@@ -190,6 +191,7 @@ class DescriptorWriter {
     VkDescriptorBufferInfo buffer;
     VkDescriptorImageInfo image;
     VkAccelerationStructureKHR structure;
+    VkBufferView texel_view;
   };
   std::vector<Entry> entries_;
 };

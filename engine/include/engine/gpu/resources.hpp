@@ -34,10 +34,15 @@ class Buffer {
   T* as() const { return static_cast<T*>(mapped_); }
   void write(const void* data, size_t bytes, size_t offset = 0) { std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes); }
   VkDescriptorBufferInfo descriptor() const { return {buffer_, 0, VK_WHOLE_SIZE}; }
+  // A texel view of the buffer's first `elements` texels of `format` (the buffer must have a texel
+  // buffer usage); it lives as long as the buffer. VK_NULL_HANDLE until made.
+  void make_texel_view(VkFormat format, VkDeviceSize elements, VkDeviceSize texel_bytes);
+  VkBufferView texel_view() const { return texel_view_; }
 
  private:
   const Context* ctx_ = nullptr;
   VkBuffer buffer_ = VK_NULL_HANDLE;
+  VkBufferView texel_view_ = VK_NULL_HANDLE;
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   VkDeviceSize size_ = 0;
   void* mapped_ = nullptr;
