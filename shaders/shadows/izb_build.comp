@@ -36,11 +36,12 @@ void raise_tiles_farthest(uint texel, float depth, bool has) {
   if (!izb_flag(IZB_FLAG_TILE_FARTHEST)) return;
   uint tile = has ? tile_of(texel) : 0xffffffffu;
   uint bits = has ? depth_bits(depth) : 0u;
+  uint slot = tile_farthest_index(tile);  // (read only where `has`)
   if (!izb_flag(IZB_FLAG_CPU_DEVICE) && subgroupMin(tile) == subgroupMax(tile)) {  // (arithmetic subgroup operations only)
     uint highest = subgroupMax(bits);
-    if (subgroupElect() && has && highest > farthest[tile_farthest_index(tile)]) atomicMax(farthest[tile_farthest_index(tile)], highest);
-  } else if (has && bits > farthest[tile_farthest_index(tile)]) {
-    atomicMax(farthest[tile_farthest_index(tile)], bits);
+    if (subgroupElect() && has && highest > farthest[slot]) atomicMax(farthest[slot], highest);
+  } else if (has && bits > farthest[slot]) {
+    atomicMax(farthest[slot], bits);
   }
 }
 

@@ -78,7 +78,7 @@ const char* kUsage =
     "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up);\n"
     "  lit culling: on, off, auto (timed both ways, the faster kept; repeat to alternate: on,off,on,off).\n"
     "  --csm-timed: an automatic CSM runs only where the IZB measures faster with it (IzbSettings::csm_timed).\n"
-    "  --step-times: each step of the light frustum, compute trace, CSM and lit map timed apart (their\n"
+    "  --step-times: each step of the light frustum, compute trace, CSM, lit map and build timed apart (their\n"
     "  timestamps cost waits; IzbSettings::step_timings).\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"

@@ -903,8 +903,10 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "izb_build");
-    { OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "build_classify");
-    m.dispatch_pixels(cmd, frame, m.p->build, push); }
+    {
+      OptionalGpuRegion step(settings.step_timings, m.ctx, frame.profiler, cmd, "build_classify");
+      m.dispatch_pixels(cmd, frame, m.p->build, push);
+    }
     if (sorted) {
       // Counting sort: counts (above) -> prefix sum -> scatter into contiguous ranges.
       const uint32_t blocks = m.scan_blocks;

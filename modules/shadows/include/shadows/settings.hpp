@@ -104,9 +104,10 @@ struct IzbSettings {
   // the caster draws, on a CPU device in a step of its own, "light_frustum_cull";
   // "light_frustum_triangles", absent where the compute trace's first step sets up a scene's few
   // caster triangles itself) and of the compute trace, CSM and lit map
-  // ("<work>_records", "_tiles", "_texels", "trace_pairs") inside their pass's region. Each region's
-  // timestamps wait for the work before them, a few µs per step on a GPU, so it is off where the
-  // frame's time matters.
+  // ("<work>_records", "_tiles", "_texels", "trace_pairs"), and the build's pass over every pixel
+  // ("build_classify"; on a CPU device its node insertion too, "build_insert"), inside their pass's
+  // region. Each region's timestamps wait for the work before them, a few µs per step on a GPU, so it
+  // is off where the frame's time matters.
   bool step_timings = false;
   StepOneShape step_one_shape = StepOneShape::Auto;
   CsmTest csm_test = CsmTest::Barycentric;
