@@ -196,6 +196,8 @@ SHARED_CONST uint IZB_BINDING_PARAMS = 0u;
 SHARED_CONST uint IZB_BINDING_FRAME = 1u;
 SHARED_CONST uint IZB_BINDING_COUNTERS = 2u;
 SHARED_CONST uint IZB_BINDING_HEADS = 3u;
+// Per texel its farthest node depth (float bits), then per tile (tile_farthest_index): one binding for
+// both, since push descriptors allow no more than 32.
 SHARED_CONST uint IZB_BINDING_FARTHEST = 4u;
 SHARED_CONST uint IZB_BINDING_NODES = 5u;
 SHARED_CONST uint IZB_BINDING_MASK = 6u;
@@ -232,9 +234,7 @@ SHARED_CONST uint IZB_BINDING_CASTER_DRAWS = 25u;
 // since push descriptors allow no more than 32.
 SHARED_CONST uint IZB_BINDING_CSM_TEXELS = 26u;
 SHARED_CONST uint IZB_BINDING_TILE_PAIRS = 27u;         // uvec2 {triangle, tile}
-// IZB_FLAG_LIT_FETCH: IZB_BINDING_CSM_TEXELS's words again, as an R32_UINT uniform texel buffer (the
-// per-tile farthest node depths, which this binding once held, follow the texels' in
-// IZB_BINDING_FARTHEST).
+// IZB_FLAG_LIT_FETCH: IZB_BINDING_CSM_TEXELS's words again, as an R32_UINT uniform texel buffer.
 SHARED_CONST uint IZB_BINDING_LIT_WORDS = 28u;
 // Sorted lists (counting sort): per texel its node count, and a fill cursor; after the cursors, per
 // scan block a sum (one binding for both, since push descriptors allow no more than 32).
