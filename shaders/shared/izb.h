@@ -76,7 +76,8 @@ SHARED_CONST uint IZB_FLAG_SPOT = 524288u;    // a spot light, or a face of a po
 // The compute trace runs: the build raises each light-space tile's farthest node depth, which its
 // tile cull reads (the raster trace reads only the texels').
 SHARED_CONST uint IZB_FLAG_TILE_FARTHEST = 2097152u;
-// The build reads the lit map through IZB_BINDING_LIT_WORDS. Set on a CPU device, whose driver loads a
+// The build's lit test, and the read before each atomicMin of the lit map and compute CSM, go through
+// IZB_BINDING_LIT_WORDS. Set on a CPU device, whose driver loads a
 // storage buffer's words lane by lane but gathers a texel buffer's fetches across the lanes; only
 // where the view reaches the whole buffer (maxTexelBufferElements).
 SHARED_CONST uint IZB_FLAG_LIT_FETCH = 4194304u;

@@ -131,7 +131,8 @@ struct IzbPass::Impl {
   ReadbackRing counters_readback;
   Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, triangles, occluder_distance;
   Buffer grid_triangles, caster_draw_words, csm_texels;
-  bool lit_view_whole = false;  // csm_texels' texel view reaches all of it (IZB_FLAG_LIT_FETCH)
+  // Whether csm_texels' texel view reaches all of its words (IZB_FLAG_LIT_FETCH).
+  bool lit_view_whole() const { return csm_texels.size() / 4 <= ctx.properties().limits.maxTexelBufferElements; }
   size_t triangle_capacity = 0;
   uint64_t caster_draw_word_capacity = 0;
   std::vector<uint32_t> first_triangle;  // per frame draw: its first caster triangle (casters only)
@@ -338,9 +339,8 @@ struct IzbPass::Impl {
       csm_texels = Buffer(ctx, lit_words * 4,
                           usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, false,
                           "csm compute depths and lit map");
-      const VkDeviceSize max_texels = ctx.properties().limits.maxTexelBufferElements;
-      lit_view_whole = lit_words <= max_texels;
-      csm_texels.make_texel_view(VK_FORMAT_R32_UINT, std::min(lit_words, max_texels), 4);
+      csm_texels.make_texel_view(VK_FORMAT_R32_UINT,
+                                 std::min<VkDeviceSize>(lit_words, ctx.properties().limits.maxTexelBufferElements), 4);
       // Per texel, then per tile (tile_farthest_index): the farthest node depth.
       farthest = Buffer(ctx, (texels + VkDeviceSize(tiles_per_side) * tiles_per_side) * 4,
                         usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb farthest node depth per texel and tile");
@@ -797,7 +797,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (triangles_in_trace) flags |= gpu_shared::IZB_FLAG_TRIANGLES_IN_TRACE;
   const bool cpu = m.cpu_device();
   if (cpu) flags |= gpu_shared::IZB_FLAG_CPU_DEVICE;
-  if (cpu && lit && m.lit_view_whole) flags |= gpu_shared::IZB_FLAG_LIT_FETCH;
+  if (cpu && lit && m.lit_view_whole()) flags |= gpu_shared::IZB_FLAG_LIT_FETCH;
   // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
   // local light's straddling casters and cone faces.
   const bool direct_term = m.samples == 1 && !hybrid && debug_code(debug) == 0 && !spot;
