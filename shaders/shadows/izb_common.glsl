@@ -221,10 +221,27 @@ bool shadows_point(vec3 s, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_are
   return true;
 }
 
-uint occluded_samples(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
-  if (izb_samples() == 1u) return shadows_point(quad_vectors[pixel].xyz, ca, a, b, c, inv_area, gap) ? 1u : 0u;
-  // The four corners (quad_point's layout) in three loads.
-  vec4 q0 = quad_vectors[3u * pixel], q1 = quad_vectors[3u * pixel + 1u], q2 = quad_vectors[3u * pixel + 2u];
+// A node's light-space point(s): 1 spp q[0].xyz; 32 spp the four corners (quad_point's layout) in
+// three vec4s.
+struct NodePoints {
+  vec4 q[3];
+};
+NodePoints load_node_points(uint pixel) {
+  NodePoints n;
+  if (izb_samples() == 1u) {
+    n.q[0] = quad_vectors[pixel];
+    n.q[1] = n.q[2] = vec4(0.0);
+  } else {
+    n.q[0] = quad_vectors[3u * pixel];
+    n.q[1] = quad_vectors[3u * pixel + 1u];
+    n.q[2] = quad_vectors[3u * pixel + 2u];
+  }
+  return n;
+}
+
+uint occluded_samples_of(NodePoints n, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
+  if (izb_samples() == 1u) return shadows_point(n.q[0].xyz, ca, a, b, c, inv_area, gap) ? 1u : 0u;
+  vec4 q0 = n.q[0], q1 = n.q[1], q2 = n.q[2];
   vec3 c00 = q0.xyz;
   vec3 c10 = vec3(q0.w, q1.xy);
   vec3 c01 = vec3(q1.zw, q2.x);
@@ -301,6 +318,10 @@ uint occluded_samples(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float 
     }
   }
   return bits;
+}
+
+uint occluded_samples(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
+  return occluded_samples_of(load_node_points(pixel), ca, a, b, c, inv_area, gap);
 }
 
 uint full_mask() { return izb_samples() == 32u ? 0xffffffffu : 1u; }
@@ -600,10 +621,12 @@ bool trace_node(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_ar
     if (occluded_samples(pixel, ca, a, b, c, inv_area, unused_gap) != 0u) write_shadowed_term(pixel);
     return true;
   }
+  // The point(s) load beside the mask, not after its test: one round trip to memory, not two.
+  NodePoints points = load_node_points(pixel);
   uint current = visibility_mask[pixel];
   if (izb_flag(IZB_FLAG_PROGRESSIVE) && current == full_mask()) return false;
   float gap = 1.0e30;
-  uint bits = occluded_samples(pixel, ca, a, b, c, inv_area, gap);
+  uint bits = occluded_samples_of(points, ca, a, b, c, inv_area, gap);
   if ((bits & ~current) != 0u) {
     atomicOr(visibility_mask[pixel], bits);
     if (izb_flag(IZB_FLAG_DIRECT_TERM)) write_shadowed_term(pixel);
@@ -622,18 +645,26 @@ uint trace_texel_list(uint texel, uint triangle, vec3 a, vec3 b, vec3 c, float i
       tests += trace_node(nodes[i].y, ca, a, b, c, inv_area) ? 1u : 0u;
     return tests;
   }
-  for (uint node = heads[texel]; node != kIzbEndOfList;) {
-    uint pixel;
-    if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
-      // A node's index is its pixel's: the pixel's point loads beside the next link, not after it.
-      pixel = node;
+  if (izb_flag(IZB_FLAG_DIRECT_NODES)) {
+    // A node's index is its pixel's: the pixel's point loads beside the next link, not after it.
+    for (uint node = heads[texel]; node != kIzbEndOfList;) {
+      uint pixel = node;
       node = nodes[node].x;
-    } else {
-      uvec2 n = nodes[node];
-      node = n.x;
-      pixel = n.y;
+      tests += trace_node(pixel, ca, a, b, c, inv_area) ? 1u : 0u;
     }
-    tests += trace_node(pixel, ca, a, b, c, inv_area) ? 1u : 0u;
+    return tests;
+  }
+  // The next node loads while this one is tested: a walk is otherwise a chain of dependent loads
+  // (32 spp, Sponza v1 4K on an H200: with the early loads of trace_node, the trace's pairs step
+  // 0.286 -> 0.265 ms).
+  uint node = heads[texel];
+  if (node == kIzbEndOfList) return 0u;
+  uvec2 n = nodes[node];
+  for (;;) {
+    uvec2 following = n.x != kIzbEndOfList ? nodes[n.x] : uvec2(kIzbEndOfList, 0u);
+    tests += trace_node(n.y, ca, a, b, c, inv_area) ? 1u : 0u;
+    if (n.x == kIzbEndOfList) break;
+    n = following;
   }
   return tests;
 }
