@@ -15,6 +15,7 @@ shared bool last_workgroup;
 // The invocation's k-th pixel: neighbouring invocations read neighbouring pixels at each k.
 const uint kFitColumns = kIzbFitBlockWidth / 16u;
 const uint kFitPixels = kFitColumns * (kIzbFitBlockHeight / 16u);
+const uint kBoundedFitBatch = 2u;
 ivec2 fit_pixel(uint k) {
   uvec2 block = gl_WorkGroupID.xy * uvec2(kIzbFitBlockWidth, kIzbFitBlockHeight);
   return ivec2(block + gl_LocalInvocationID.xy + 16u * uvec2(k % kFitColumns, k / kFitColumns));
@@ -41,6 +42,26 @@ void main() {
       vec2 v = (params.light_view * vec4(position[k].xyz, 1.0)).xy;
       lo = min(lo, v - kShadowNormalOffset);
       hi = max(hi, v + kShadowNormalOffset);
+    }
+  } else if (izb_flag(IZB_FLAG_BOUNDED_FIT)) {
+    // 32 spp: every covered point in range that faces the light bounds its μQuad (bound_micro_quad; as
+    // at 1 spp, a superset of the candidates: the receiver test is left out). No workgroup barrier; each
+    // batch's loads are issued before any is used, two pixels at a time (on an H200 the fit took
+    // 0.101 ms at 4K so, 0.124 four at a time and 0.146 all eight: the registers they hold).
+    for (uint first = 0u; first < kFitPixels; first += kBoundedFitBatch) {
+      vec4 position[kBoundedFitBatch];
+      vec4 normal[kBoundedFitBatch];
+      for (uint k = 0u; k < kBoundedFitBatch; ++k) {
+        ivec2 pixel = fit_pixel(first + k);
+        bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
+        position[k] = inside ? imageLoad(world_position_image, pixel) : vec4(0.0);
+        normal[k] = inside ? imageLoad(geometric_normal_image, pixel) : vec4(0.0);
+      }
+      for (uint k = 0u; k < kBoundedFitBatch; ++k) {
+        if (position[k].w <= 0.5 || !faces_light(normal[k]) || distance(position[k].xyz, params.camera_position.xyz) > reach)
+          continue;
+        bound_micro_quad(fit_pixel(first + k), position[k].xyz, normal[k].xyz, params.light_view, lo, hi);
+      }
     }
   } else {
     // Every candidate's μQuad corners (32 spp) or ray origin.

@@ -66,6 +66,62 @@ void micro_quad_corners(ivec2 pixel, PixelPoint p, out vec3 c[4]) {
                              p.normal);
 }
 
+// IZB_FLAG_BOUNDED_FIT: raises [lo, hi] to hold the light-view x and y of every corner
+// micro_quad_corners makes for `pixel` (a candidate at `position` with geometric normal `normal`),
+// with the shadow-ray offset. The corners come from the affine camera rays of
+// params.corner_ray_origin / _direction in fast arithmetic, widened by how far rounding can move them
+// from the build's: the two rays' distance (the bounds in the w components: origin, and direction
+// times the ray parameter t) and each computation's dot products, quotient and sum (4 units of 2^-23
+// on each magnitude, twice), through the intersection's conditioning 1 + |n| |d| / |n . d|; the
+// magnitudes of the rays' origins and directions are the frame's bounds (the w components of [1] and
+// [2]). Within kBoundedFitGrazing of grazing, or where the rays' distance could reach a tenth of n . d,
+// that bound is loose or its first order fails: such a pixel makes its exact corners (one lane's cost,
+// where micro_quad_corners is four rays a pixel).
+const float kBoundedFitGrazing = 1.0 / 16.0;
+const float kUnitRounding = 1.0 / 8388608.0;  // 2^-23, twice float's unit roundoff
+void bound_micro_quad(ivec2 pixel, vec3 position, vec3 normal, mat4 light_view, inout vec2 lo, inout vec2 hi) {
+  float origin_error = params.corner_ray_origin[0].w, direction_error = params.corner_ray_direction[0].w;
+  float origin_size = params.corner_ray_origin[1].w, direction_size = params.corner_ray_direction[1].w;
+  float normal_squared = dot(normal, normal);
+  float least_denom = max(10.0 * sqrt(normal_squared) * direction_error, 1.0e-11);
+  vec3 c[4];
+  float conditioning_squared = 0.0, farthest_t = 0.0;
+  bool fast = true;
+  for (int k = 0; k < 4; ++k) {
+    vec2 corner = vec2(pixel + ivec2(k & 1, k >> 1));
+    vec3 o = params.corner_ray_origin[0].xyz + corner.x * params.corner_ray_origin[1].xyz + corner.y * params.corner_ray_origin[2].xyz;
+    vec3 d = params.corner_ray_direction[0].xyz + corner.x * params.corner_ray_direction[1].xyz +
+             corner.y * params.corner_ray_direction[2].xyz;
+    float denom = dot(normal, d);
+    float inverse = 1.0 / denom;
+    float reach_squared = normal_squared * dot(d, d);
+    fast = fast && denom * denom >= kBoundedFitGrazing * kBoundedFitGrazing * reach_squared && abs(denom) >= least_denom;
+    float t = dot(normal, position - o) * inverse;
+    c[k] = o + d * t;
+    conditioning_squared = max(conditioning_squared, reach_squared * inverse * inverse);
+    farthest_t = max(farthest_t, abs(t));
+  }
+  float widen = 0.0;
+  if (!fast) {
+    PixelPoint p;
+    p.position = position;
+    p.normal = normal;
+    micro_quad_corners(pixel, p, c);
+  } else {
+    float reach = origin_size + farthest_t * direction_size;  // no corner farther from the origin
+    float ray_error = origin_error + farthest_t * direction_error;
+    float rounding = 8.0 * kUnitRounding * (length(position) + reach);
+    widen = (ray_error + rounding) * (1.0 + sqrt(conditioning_squared)) + 2.0 * kUnitRounding * reach;
+    widen *= 1.1;  // the terms of second order; a light view is a rotation and a translation: distances carry over
+    for (int k = 0; k < 4; ++k) c[k] = shadow_ray_origin(c[k], normal);
+  }
+  for (int k = 0; k < 4; ++k) {
+    vec2 v = (light_view * vec4(c[k], 1.0)).xy;
+    lo = min(lo, v - widen);
+    hi = max(hi, v + widen);
+  }
+}
+
 #ifdef IZB_RAY_BLOCK
 // 32 spp: the camera rays through the corners of a block of IZB_RAY_BLOCK x IZB_RAY_BLOCK pixels (one
 // an invocation), each made once for the workgroup, not once for each of the four pixels around it (a

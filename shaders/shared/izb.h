@@ -30,6 +30,11 @@ struct IzbParams {
   vec4 light_position;       // a spot light: xyz its position, w its range (0: the sun)
   vec4 light_cone;           // a spot light: x cosine of its outer cone, y tangent of its grid's half angle; z 1: a face of a point light
   vec4 ray_scales;           // IZB_FLAG_CONSTANT_RAY_W: x, y 1 / w of every camera ray's near and far point (pixel_corner_points)
+  // IZB_FLAG_BOUNDED_FIT: camera_ray's origin and direction at pixel corner (x, y) as affine functions,
+  // [0] + x [1] + y [2] (xyz), and in [0].w and [1].w bounds on how far camera_ray's own rounding
+  // can take its origin and direction from them (world units).
+  vec4 corner_ray_origin[3];
+  vec4 corner_ray_direction[3];
 };
 
 // (For the raster trace, depth culling and the rasterizer choice are pipeline state.)
@@ -84,6 +89,10 @@ SHARED_CONST uint IZB_FLAG_LIT_FETCH = 4194304u;
 // The inverse view-projection's w row ignores x and y (exact zeros), so every camera ray's near and far
 // points have one w each, whose reciprocals the CPU divides once (IzbParams::ray_scales).
 SHARED_CONST uint IZB_FLAG_CONSTANT_RAY_W = 1048576u;
+// 32 spp, the sun, IZB_FLAG_CONSTANT_RAY_W: the fit bounds each μQuad from corners made in fast float
+// arithmetic (IzbParams::corner_ray_*), widened past the distance rounding can put between them and
+// the build's exact corners; near grazing, where that bound is loose, it makes the exact corners.
+SHARED_CONST uint IZB_FLAG_BOUNDED_FIT = 8388608u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted
@@ -345,7 +354,7 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::IzbFrame) == 80);
-static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 3 * 16);
+static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 3 * 16 + 6 * 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterTriangle) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterDraw) == 96);

@@ -84,6 +84,9 @@ class IzbTest : public GpuTest {
     for (const char* way : ways) EXPECT_NE(std::find(seen.begin(), seen.end(), way), seen.end()) << way;
   }
 
+  void expect_fit_holds_candidates(const std::string& scene, size_t view, uint32_t width, uint32_t height,
+                                   uint32_t resolution);
+
   void TearDown() override {
     module_.reset();  // before the context goes
     GpuTest::TearDown();
@@ -309,6 +312,83 @@ TEST_P(IzbSceneTest, LitCullingIsExact) {
                   (unsigned long long)a.stats.nodes_inserted, (unsigned long long)b.stats.nodes_inserted);
     }
   }
+}
+
+// The light frustum's fit places the grid so that every candidate's ray origin (1 spp) or μQuad
+// corner (32 spp, where the fit bounds corners made in fast arithmetic, widened past rounding, and
+// makes the exact ones near grazing) lies inside it: checked against the corners shadow_common.h makes
+// on the CPU, with the same bits as the build's. The fit's border is two texels a side; what the
+// widening leaves of it stays over one and a half on the grid's longer side, so the window holds the
+// view without wasting texels.
+void IzbTest::expect_fit_holds_candidates(const std::string& scene, size_t view, uint32_t width, uint32_t height,
+                                          uint32_t resolution) {
+  for (uint32_t spp : {1u, 32u}) {
+    auto s = izb(spp);
+    s.izb.resolution = resolution;
+    s.izb.lit_culling = shadows::LitCulling::On;  // read_lit_map reads the frame's grid
+    auto& r = make_renderer(scene, view, width, height);
+    module_ = shadows::install(r, s);
+    r.render_frame(0.0f);
+    const glm::mat4 grid = module_->read_lit_map().light_view_projection;
+    const auto points = support::capture_shading_points(r);
+    const glm::vec2 viewport(float(points.width), float(points.height));
+    const float res = float(resolution);
+    glm::vec2 lo(1.0e30f), hi(-1.0e30f);
+    size_t candidates = 0, grazing = 0, outside = 0;
+    for (uint32_t y = 0; y < points.height; ++y) {
+      for (uint32_t x = 0; x < points.width; ++x) {
+        const size_t i = size_t(y) * points.width + x;
+        if (points.position[i].w <= 0.5f || !gpu_shared::faces_light(points.normal[i])) continue;
+        const glm::vec3 p(points.position[i]), n(points.normal[i]);
+        ++candidates;
+        glm::vec3 origins[4];
+        int count = 1;
+        if (spp == 1) {
+          origins[0] = gpu_shared::shadow_ray_origin(p, n);
+        } else {
+          count = 4;
+          bool near_grazing = false;
+          for (int k = 0; k < 4; ++k) {
+            const glm::vec2 corner(float(x + (k & 1)), float(y + (k >> 1)));
+            const auto ray = gpu_shared::pixel_corner_ray(corner, viewport, points.inv_view_proj);
+            near_grazing = near_grazing ||
+                           std::abs(glm::dot(n, ray.direction)) < glm::length(n) * glm::length(ray.direction) / 16.0f;
+            origins[k] = gpu_shared::shadow_ray_origin(gpu_shared::micro_quad_corner_on(ray, p, n), n);
+          }
+          grazing += near_grazing ? 1 : 0;
+        }
+        for (int k = 0; k < count; ++k) {
+          const glm::vec4 clip = grid * glm::vec4(origins[k], 1.0f);
+          const glm::vec2 g = (glm::vec2(clip) * 0.5f + 0.5f) * res;
+          if (!(g.x >= 0.0f && g.y >= 0.0f && g.x < res && g.y < res) && outside++ < 5)
+            ADD_FAILURE() << scene << " spp " << spp << " pixel " << x << "," << y << ": grid " << g.x << "," << g.y;
+          lo = glm::min(lo, g);
+          hi = glm::max(hi, g);
+        }
+      }
+    }
+    ASSERT_GT(candidates, 0u) << scene;
+    EXPECT_EQ(outside, 0u) << scene << " spp " << spp;
+    const float border = res - std::max(hi.x - lo.x, hi.y - lo.y);
+    EXPECT_GE(border, 3.0f) << scene << " spp " << spp << ": the window is wider than the candidates need";
+    std::printf("%s view %zu, %ux%u, grid %u, %u spp: %zu candidates (%zu within 1/16 of grazing at some corner), "
+                "border %.3f texels\n",
+                scene.c_str(), view, width, height, resolution, spp, candidates, grazing, border);
+  }
+}
+
+TEST_P(IzbSceneTest, FitWindowHoldsEveryCandidate) {
+  expect_fit_holds_candidates(GetParam().scene, GetParam().view, kSize, kSize, kGrid);
+}
+
+// The same at a size where the grid's texels are finer than the view's pixels: 4K and a 2048 grid on a
+// GPU, 640x360 and 1024 on lavapipe.
+TEST_F(IzbTest, SponzaFitWindowHoldsEveryCandidate) {
+  const std::string path = std::string(ENGINE_SOURCE_DIR) + "/../shared/content/sponza/sponza.gltf";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "Sponza not found at " << path;
+  const bool cpu = ctx_->device_name().find("llvmpipe") != std::string::npos;
+  for (size_t view : {0u, 1u})
+    expect_fit_holds_candidates(path, view, cpu ? 640 : 3840, cpu ? 360 : 2160, cpu ? 1024 : 2048);
 }
 
 TEST_F(IzbTest, SoftwareConservativeRasterMatchesBruteForce) {
