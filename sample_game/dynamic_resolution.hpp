@@ -7,7 +7,11 @@ namespace walkthrough {
 // Holds a frame-time target by scaling the render size: every 8 frames the median frame time is
 // compared with the target; over it shrinks each side by the square root of the ratio to 90% of the
 // target (at most by half), clearly fast (under 70% of the target) grows it by 8%; the scale stays in
-// [kMinScale, 1] in steps of 1/40.
+// [kMinScale, 1] in steps of 1/40. The first window holds the start's one-time work (pipelines made on
+// first use, the shadow module's automatic choices timing both of their ways: on lavapipe three of
+// its eight frames take 0.5-0.75 s, the rest 70-100 ms), so it changes nothing unless every frame is
+// far over the target; a median of a start would otherwise shrink the picture for good, since it
+// grows only when clearly fast.
 class DynamicResolution {
  public:
   // 256x144 in a 1280x720 window: where a CPU device still misses the target, a blurrier picture
@@ -30,6 +34,7 @@ class DynamicResolution {
   float target_ms_;
   float scale_ = 1.0f;
   float median_ms_ = 0.0f;
+  bool started_ = false;  // the first window is over
   std::vector<float> window_;
 };
 

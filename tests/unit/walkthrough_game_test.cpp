@@ -219,6 +219,15 @@ TEST(DynamicResolution, ShrinksWhenSlowGrowsWhenFastOffWhenDisabled) {
   EXPECT_FLOAT_EQ(d.scale(), 0.925f);  // just over: aims a tenth under the target, sqrt(90 / 104) = 0.93
   EXPECT_FLOAT_EQ(DynamicResolution(10.0f, 0.5f).scale(), 0.5f);  // a CPU device starts at half size
   EXPECT_FLOAT_EQ(DynamicResolution(10.0f, 0.01f).scale(), DynamicResolution::kMinScale);
+  // A start like lavapipe's: three frames of one-time work put the first window's median just over the
+  // target, which shrinks nothing; the same median in the next window does.
+  DynamicResolution start(10.0f, 0.5f);
+  for (float ms : {488.0f, 95.0f, 740.0f, 101.0f, 103.0f, 751.0f, 102.0f, 73.0f}) EXPECT_FALSE(start.add_frame(ms));
+  EXPECT_GT(start.median_ms(), 100.0f);
+  EXPECT_FLOAT_EQ(start.scale(), 0.5f);
+  for (int i = 0; i < 7; ++i) EXPECT_FALSE(start.add_frame(103.0f));
+  EXPECT_TRUE(start.add_frame(103.0f));
+  EXPECT_LT(start.scale(), 0.5f);
   d.enabled = false;
   EXPECT_TRUE(d.add_frame(1000.0f));  // off: full size at once, whatever the frame time
   EXPECT_FLOAT_EQ(d.scale(), 1.0f);
