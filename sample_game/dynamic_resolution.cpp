@@ -23,10 +23,9 @@ bool DynamicResolution::add_frame(float ms) {
   window_.clear();
   const bool start = !started_;
   started_ = true;
+  if (start && !far_over) return false;  // the start's window (see the class comment)
   float next = scale_;
-  if (start && !far_over) {
-    // the start's window: see the class comment
-  } else if (median_ms_ > target_ms_) {
+  if (median_ms_ > target_ms_) {
     // Cost goes with the pixel count, so the side scales with the square root of the ratio. It aims a
     // tenth under the target: aiming at the target itself would leave half the frames above it.
     next = std::floor(scale_ * std::max(0.5f, std::sqrt(kAim * target_ms_ / median_ms_)) * kSteps) / kSteps;

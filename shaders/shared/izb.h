@@ -31,8 +31,9 @@ struct IzbParams {
   vec4 light_cone;           // a spot light: x cosine of its outer cone, y tangent of its grid's half angle; z 1: a face of a point light
   vec4 ray_scales;           // IZB_FLAG_CONSTANT_RAY_W: x, y 1 / w of every camera ray's near and far point (pixel_corner_points)
   // IZB_FLAG_BOUNDED_FIT: camera_ray's origin and direction at pixel corner (x, y) as affine functions,
-  // [0] + x [1] + y [2] (xyz), and in [0].w and [1].w bounds on how far camera_ray's own rounding
-  // can take its origin and direction from them (world units).
+  // [0] + x [1] + y [2] (xyz); in [0].w a bound on how far rounding can take the build's and the fit's
+  // origin or direction apart, in [1].w a bound on the origin's or direction's length anywhere in the
+  // view (world units); [2].w unused.
   vec4 corner_ray_origin[3];
   vec4 corner_ray_direction[3];
 };

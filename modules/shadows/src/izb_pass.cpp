@@ -60,7 +60,6 @@ std::vector<Binding> izb_bindings() {
           {gpu_shared::IZB_BINDING_RESOLVE_LIST, storage}};
 }
 
-// The light frustum fit's workgroups over the view (izb_fit.comp).
 // IZB_FLAG_BOUNDED_FIT: camera_ray at pixel corner (x, y) as an origin and a direction affine in x and
 // y (with the inverse view-projection's w row free of x and y, each point's w is one constant), and
 // bounds on how far rounding takes the build's rays and the fit's from them, in units of 2^-23 (twice
@@ -96,6 +95,7 @@ void set_corner_rays(gpu_shared::IzbParams& p, const glm::mat4& inverse_vp, VkEx
   p.corner_ray_direction[2] = glm::vec4(glm::vec3(direction_y), 0.0f);
 }
 
+// The light frustum fit's workgroups over the view (izb_fit.comp).
 uint32_t fit_columns(uint32_t width) { return (width + gpu_shared::kIzbFitBlockWidth - 1) / gpu_shared::kIzbFitBlockWidth; }
 uint32_t fit_rows(uint32_t height) { return (height + gpu_shared::kIzbFitBlockHeight - 1) / gpu_shared::kIzbFitBlockHeight; }
 
