@@ -74,20 +74,6 @@ float micro_quad_blend_z(vec3 g[4], vec2 offset) {
 const uint kCsmPerSample = 0u;
 const uint kCsmAllShadowed = 1u;
 const uint kCsmNoneShadowed = 2u;
-const float kBlendSlackTexels = 1.0 / 64.0;  // a blend of grid coordinates (< 2^14) rounds by a few ulps
-// The μQuad corners' bounds [lo, hi] in grid coordinates, widened past any rounding of a sample's
-// blend: every sample lies inside.
-void quad_sample_bounds(vec3 g[4], out vec2 lo, out vec2 hi) {
-  lo = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels;
-  hi = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels;
-}
-// The texels [first, last] of quad_sample_bounds: every sample lies in one of them.
-void quad_texel_bounds(vec3 g[4], out ivec2 first, out ivec2 last) {
-  vec2 lo, hi;
-  quad_sample_bounds(g, lo, hi);
-  first = grid_texel(vec3(lo, 0.0));
-  last = grid_texel(vec3(hi, 0.0));
-}
 uint csm_quad_verdict(vec3 g[4], ivec2 first, ivec2 last) {
   if (!izb_flag(IZB_FLAG_CSM)) return kCsmNoneShadowed;
   if (any(greaterThan(last - first, ivec2(1)))) return kCsmPerSample;
@@ -220,10 +206,14 @@ void main() {
         window = sample_window_origin(g);
         quad_texel_bounds(g, first, last);
         uint verdict = csm_quad_verdict(g, first, last);
+        // Anchored nodes (node_anchor): samples within 2x2 texels take one node, in `first`, whichever
+        // of the four hold them (so no sample's texel is needed unless the CSM tests it).
+        bool one_anchor = anchored_nodes() && all(lessThanEqual(last - first, ivec2(1)));
         if (verdict == kCsmAllShadowed) {
           mask = full_mask();
-        } else if (verdict == kCsmNoneShadowed && first == last) {
-          window_cells = sample_window_bit(window, first, outside_window);  // every sample in one texel
+        } else if (verdict == kCsmNoneShadowed && (first == last || one_anchor)) {
+          // Every sample in one texel, or (one_anchor) in the 2x2 block from it.
+          window_cells = sample_window_bit(window, first, outside_window);
         } else {
           for (uint s = 0u; s < 32u; ++s) {
             // A sample's depth only where the CSM tests it one by one.
@@ -235,9 +225,10 @@ void main() {
             if (shadowed)
               mask |= 1u << s;
             else
-              window_cells |= sample_window_bit(window, texel, outside_window);
+              window_cells |= sample_window_bit(window, node_anchor(texel, first), outside_window);
           }
         }
+        if (one_anchor) window_cells = mask != full_mask() ? sample_window_bit(window, first, outside_window) : 0u;
       }
       if (mask == full_mask()) {
         state |= IZB_PIXEL_CSM_CULLED;

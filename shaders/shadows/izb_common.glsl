@@ -69,6 +69,22 @@ ivec2 grid_texel(vec3 g) {
 
 uint texel_index(ivec2 t) { return uint(t.y) * izb_resolution() + uint(t.x); }
 
+// 32 spp, a μQuad with grid-space corners g:
+const float kBlendSlackTexels = 1.0 / 64.0;  // a blend of grid coordinates (< 2^14) rounds by a few ulps
+// The μQuad corners' bounds [lo, hi] in grid coordinates, widened past any rounding of a sample's
+// blend: every sample lies inside.
+void quad_sample_bounds(vec3 g[4], out vec2 lo, out vec2 hi) {
+  lo = min(min(g[0].xy, g[1].xy), min(g[2].xy, g[3].xy)) - kBlendSlackTexels;
+  hi = max(max(g[0].xy, g[1].xy), max(g[2].xy, g[3].xy)) + kBlendSlackTexels;
+}
+// The texels [first, last] of quad_sample_bounds: every sample lies in one of them.
+void quad_texel_bounds(vec3 g[4], out ivec2 first, out ivec2 last) {
+  vec2 lo, hi;
+  quad_sample_bounds(g, lo, hi);
+  first = grid_texel(vec3(lo, 0.0));
+  last = grid_texel(vec3(hi, 0.0));
+}
+
 uint quad_stride() { return izb_samples() == 32u ? kIzbQuadFloats32 : kIzbQuadFloats1; }
 // A candidate's grid point (1 spp) or μQuad corner `corner` (32 spp: 00, 10, 01, 11), stored by the
 // build (a vec4 at a time, through quad_vectors).
@@ -577,19 +593,31 @@ bool lit_map_proves_lit(vec3 g) {
   return lit_map_proves_lit_in(grid_texel(g), point, g.z, false);
 }
 
+// IZB_FLAG_ANCHORED_NODES (izb.h): the texel whose node stands for a sample in `texel`, the lowest of
+// its 2x2 block, the blocks counted from `first` (quad_texel_bounds: no sample's texel is below it).
+bool anchored_nodes() { return izb_samples() == 32u && izb_flag(IZB_FLAG_ANCHORED_NODES); }
+ivec2 node_anchor(ivec2 texel, ivec2 first) { return anchored_nodes() ? first + ((texel - first) & ~1) : texel; }
+
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its
 // point's texel; 32 spp every texel holding one of its samples not already `settled` (bits the CSM
-// proved shadowed), since a triangle shadows a sample only if it covers the sample's texel. In a fixed
-// order; returns how many.
+// proved shadowed), since a triangle shadows a sample only if it covers the sample's texel, or with
+// anchored nodes those texels' anchors (one, `first`, where the samples span at most 2x2 texels). In
+// a fixed order; returns how many. (The build's own loop makes the same set.)
 uint node_texels(vec3 g[4], uint settled, out uint texels[32]) {
   uint count = 0u;
   if (izb_samples() == 1u) {
     if (settled == 0u) texels[count++] = texel_index(grid_texel(g[0]));
     return count;
   }
+  ivec2 first, last;
+  quad_texel_bounds(g, first, last);
+  if (anchored_nodes() && all(lessThanEqual(last - first, ivec2(1)))) {
+    if (settled != full_mask()) texels[count++] = texel_index(first);
+    return count;
+  }
   for (uint s = 0u; s < 32u; ++s) {
     if ((settled & (1u << s)) != 0u) continue;
-    uint t = texel_index(grid_texel(micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s])));
+    uint t = texel_index(node_anchor(grid_texel(micro_quad_blend(g[0], g[1], g[2], g[3], kSamplePattern[s])), first));
     bool seen = false;
     for (uint k = 0u; k < count; ++k) seen = seen || texels[k] == t;
     if (!seen) texels[count++] = t;

@@ -76,14 +76,14 @@ void main() {
     area = edge_fn(c.xy, a.xy, b.xy);
     bool useful = !is_csm_work(mode) || triangle_can_cover_a_texel(a, b, c, area);
     // (Edge-on to the light, |area| <= 1e-10: no trace tests it, so the lit map needs it neither.)
-    if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c, walk_slack(a, b, c, mode));
+    if (abs(area) > 1.0e-10 && useful) rows = triangle_tile_rows(a, b, c, walk_slack(a, b, c, mode), trace_reach(mode));
     if (rows.x <= rows.y) {
       // A small triangle's texels, here: a tile's workgroup would leave most of its lanes idle (a CPU
       // device pays for them all), and a record its tiles' workgroups. The same per-texel work, so the
       // same map, CSM and trace pairs (the trace's pairs after the others, in no particular order).
       float slack = walk_slack(a, b, c, mode);
       float last = float(izb_resolution()) - 1.0;
-      vec2 lo = clamp(floor(min(min(a.xy, b.xy), c.xy) - slack), vec2(0.0), vec2(last + 1.0));
+      vec2 lo = clamp(floor(min(min(a.xy, b.xy), c.xy) - slack - trace_reach(mode)), vec2(0.0), vec2(last + 1.0));
       vec2 hi = clamp(floor(max(max(a.xy, b.xy), c.xy) + slack), vec2(-1.0), vec2(last));
       if ((hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) <= float(step_one_texel_bound())) {
         direct = ivec4(lo, hi);
@@ -168,7 +168,7 @@ void main() {
       uint row_triangle = walk_triangle[owner];
       int r = walk_first_row[owner] + int(j - walk_row_start[owner]);
       walked_triangle(owner, a, b, c, area);
-      ivec2 span = triangle_tile_span(a, b, c, r, walk_slack(a, b, c, mode));
+      ivec2 span = triangle_tile_span(a, b, c, r, walk_slack(a, b, c, mode), trace_reach(mode));
       if (span.x > span.y) continue;
       if (pass == 0u) {
         record_total += (uint(span.y - span.x) + kIzbRecordTiles) / kIzbRecordTiles;

@@ -95,7 +95,14 @@ void resolve(ivec2 pixel, bool inside) {
   } else if (kDebug == kDebugListLength && (state & IZB_PIXEL_CANDIDATE) != 0u) {
     // A pixel culled whole (by the CSM or the lit map) has no node nor stored points: no list.
     bool has_nodes = (state & (IZB_PIXEL_CSM_CULLED | IZB_PIXEL_LIT_CULLED)) == 0u;
-    uint length = has_nodes ? list_length(texel_index(grid_texel(quad_point(index, 0u))), 64u) : 0u;
+    // (Anchored nodes: the list of the texel its samples' bounds start in, which holds its node.)
+    ivec2 texel = grid_texel(quad_point(index, 0u));
+    if (izb_flag(IZB_FLAG_ANCHORED_NODES) && has_nodes) {
+      vec3 g[4] = vec3[4](quad_point(index, 0u), quad_point(index, 1u), quad_point(index, 2u), quad_point(index, 3u));
+      ivec2 last;
+      quad_texel_bounds(g, texel, last);
+    }
+    uint length = has_nodes ? list_length(texel_index(texel), 64u) : 0u;
     imageStore(overlay, pixel, vec4(heat(log2(float(length) + 1.0) / 6.0), 0.7));
   } else if (kDebug == kDebugCsm && (state & IZB_PIXEL_CSM_CULLED) != 0u) {
     imageStore(overlay, pixel, vec4(0.1, 0.4, 1.0, 0.6));

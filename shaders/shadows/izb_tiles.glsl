@@ -56,20 +56,26 @@ bool triangle_can_cover_a_texel(vec3 a, vec3 b, vec3 c, float area) {
   return abs(area) >= (0.5 - 1.0e-3) * perimeter;  // |area| here is twice the triangle's area
 }
 
-// The rows of tiles [first, last] a triangle's bounds touch (empty when first > last).
-ivec2 triangle_tile_rows(vec3 a, vec3 b, vec3 c, float slack) {
+// How many texels past its own a texel's pairs reach up and right: 1 for the trace with anchored
+// nodes (IZB_FLAG_ANCHORED_NODES: a node's samples lie in the 2x2 block from its texel), else 0. The
+// tile walk reaches as far back from the triangle's lower bounds.
+float trace_reach(uint mode) { return mode == IZB_WORK_TRACE && izb_flag(IZB_FLAG_ANCHORED_NODES) ? 1.0 : 0.0; }
+
+// The rows of tiles [first, last] a triangle's bounds touch, reaching `reach` texels back (empty when
+// first > last).
+ivec2 triangle_tile_rows(vec3 a, vec3 b, vec3 c, float slack, float reach) {
   float tile = float(kIzbTile);
-  float lo = floor((min(min(a.y, b.y), c.y) - slack) / tile);
+  float lo = floor((min(min(a.y, b.y), c.y) - slack - reach) / tile);
   float hi = floor((max(max(a.y, b.y), c.y) + slack) / tile);
   return ivec2(clamp(lo, 0.0, float(tiles_per_side())), clamp(hi, -1.0, float(tiles_per_side()) - 1.0));
 }
 
 // The tiles [first, last] of tile row `row` the triangle may touch: its exact x-extent over the row's
 // band (vertices inside it, edges crossing its two lines), widened by `slack` (walk_slack()) and
-// rounding. Empty when first > last.
-ivec2 triangle_tile_span(vec3 a, vec3 b, vec3 c, int row, float slack) {
+// rounding, the band and the extent's low end by `reach` (trace_reach()). Empty when first > last.
+ivec2 triangle_tile_span(vec3 a, vec3 b, vec3 c, int row, float slack, float reach) {
   float tile = float(kIzbTile);
-  float y0 = float(row) * tile - slack, y1 = float(row + 1) * tile + slack;
+  float y0 = float(row) * tile - slack, y1 = float(row + 1) * tile + slack + reach;
   vec2 p[3] = vec2[3](a.xy, b.xy, c.xy);
   float x_lo = 1.0e30, x_hi = -1.0e30;
   for (int i = 0; i < 3; ++i) {
@@ -90,7 +96,8 @@ ivec2 triangle_tile_span(vec3 a, vec3 b, vec3 c, int row, float slack) {
   if (x_lo > x_hi) return ivec2(0, -1);
   float widen = slack + 1.0e-6 * max(abs(x_lo), abs(x_hi));
   float last = float(tiles_per_side()) - 1.0;
-  return ivec2(clamp(floor((x_lo - widen) / tile), 0.0, last + 1.0), clamp(floor((x_hi + widen) / tile), -1.0, last));
+  return ivec2(clamp(floor((x_lo - widen - reach) / tile), 0.0, last + 1.0),
+               clamp(floor((x_hi + widen) / tile), -1.0, last));
 }
 
 // The texel rectangle [lo, hi) of a tile, clipped to the grid.
@@ -113,6 +120,7 @@ bool tile_survives(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
   tile_rect(tile, lo, hi);
   if (mode == IZB_WORK_LIT) return rect_touches_triangle_within(lo, hi, a, b, c, sign(area), lit_slack(a, b, c));
   if (mode != IZB_WORK_TRACE) return rect_may_hold_covered_texel(lo, hi, a, b, c, sign(area));
+  hi += trace_reach(mode);  // its anchors' blocks
   if (!izb_flag(IZB_FLAG_NO_DEPTH_CULL)) {
     float farthest_node = uintBitsToFloat(farthest[tile_farthest_index(tile.y * tiles_per_side() + tile.x)]);
     if (farthest_node <= 0.0 || triangle_nearest_depth(lo, hi, a, b, c, area) >= farthest_node) return false;
@@ -126,16 +134,18 @@ bool tile_survives(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
 const uint IZB_PAIR_OUTSIDE = 0u;  // the triangle does not touch the texel
 const uint IZB_PAIR_CULLED = 1u;   // touches, but lies behind every node of the texel
 const uint IZB_PAIR_KEPT = 2u;
+// With anchored nodes the texel stands for its 2x2 block (trace_reach).
 uint trace_pair_outcome(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   vec2 lo = vec2(texel);
+  vec2 hi = lo + 1.0 + trace_reach(IZB_WORK_TRACE);
   bool counting = izb_flag(IZB_FLAG_STATS);
-  if (counting && !rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
+  if (counting && !rect_touches_triangle(lo, hi, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
   if (!izb_flag(IZB_FLAG_NO_DEPTH_CULL)) {
     float farthest_node = uintBitsToFloat(farthest[texel_index(texel)]);
-    if (farthest_node <= 0.0 || triangle_nearest_depth(lo, lo + 1.0, a, b, c, area) >= farthest_node)
+    if (farthest_node <= 0.0 || triangle_nearest_depth(lo, hi, a, b, c, area) >= farthest_node)
       return IZB_PAIR_CULLED;
   }
-  if (!counting && !rect_touches_triangle(lo, lo + 1.0, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
+  if (!counting && !rect_touches_triangle(lo, hi, a, b, c, sign(area))) return IZB_PAIR_OUTSIDE;
   return IZB_PAIR_KEPT;
 }
 

@@ -51,6 +51,7 @@ struct Options {
   std::vector<std::string> traces = {"auto"};        // frustum trace backends to run
   std::vector<std::string> csm_backends = {"auto"};  // CSM backends to run
   std::string lists;  // empty: the default list layout
+  std::string anchored_nodes;  // on|off; empty: the default (IzbSettings::anchored_nodes)
   std::vector<std::string> lit_culling;  // on/off per run, in order (repeats alternate); empty: the default
   bool csm_timed = false;   // IzbSettings::csm_timed
   bool step_times = false;  // IzbSettings::step_timings
@@ -67,7 +68,7 @@ const char* kUsage =
     "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent|auto]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted] [--lit-culling LIST]\n"
-    "                    [--csm-timed] [--step-times] [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
+    "                    [--anchored-nodes on|off] [--csm-timed] [--step-times] [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
     "                    [--light sun|spot|point]\n"
@@ -78,6 +79,7 @@ const char* kUsage =
     "  (auto times both on the first frames and keeps the faster; its probe frames come before the warm-up);\n"
     "  lit culling: on, off, auto (timed both ways, the faster kept; repeat to alternate: on,off,on,off).\n"
     "  --csm-timed: an automatic CSM runs only where the IZB measures faster with it (IzbSettings::csm_timed).\n"
+    "  --anchored-nodes: 32 spp, compute trace: a node per 2x2 block of texels (IzbSettings::anchored_nodes).\n"
     "  --step-times: each step of the light frustum, compute trace, CSM, lit map and build timed apart (their\n"
     "  timestamps cost waits; IzbSettings::step_timings).\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
@@ -153,6 +155,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--trace") o.traces = split(args.value());
     else if (a == "--csm-backend") o.csm_backends = split(args.value());
     else if (a == "--lists") o.lists = args.value();
+    else if (a == "--anchored-nodes") o.anchored_nodes = args.value();
     else if (a == "--node-pool") o.node_pool = args.uint_value();
     else if (a == "--lit-culling") o.lit_culling = split(args.value());
     else if (a == "--frames") o.frames = int(args.uint_value());
@@ -225,6 +228,11 @@ std::vector<RunConfig> expand_runs(const Options& o) {
       auto layout = shadows::parse_list_layout(o.lists);
       if (!layout) throw std::runtime_error("--lists '" + o.lists + "': expected linked or sorted");
       base.izb.lists = *layout;
+    }
+    if (!o.anchored_nodes.empty()) {
+      if (o.anchored_nodes != "on" && o.anchored_nodes != "off")
+        throw std::runtime_error("--anchored-nodes '" + o.anchored_nodes + "': expected on or off");
+      base.izb.anchored_nodes = o.anchored_nodes == "on";
     }
     if (!o.raster.empty()) {
       if (o.raster == "auto") base.izb.raster = shadows::ConservativeRaster::Auto;
@@ -472,6 +480,7 @@ struct Bench {
                         {"rays_occluded", l.rays_occluded}, {"gpu_ms", l.gpu_ms}});
     entry["lights"] = lights;
     entry["lists"] = shadows::list_layout_name(run.settings.izb.lists);
+    entry["anchored_nodes"] = run.settings.izb.anchored_nodes;
     entry["memory_bytes"] = st.memory_bytes;
     entry["memory_total_bytes"] = st.memory_total_bytes;
     if (!st.trace_choice.backend.empty()) entry["trace_choice"] = choice_json(st.trace_choice);

@@ -689,7 +689,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
                      uint64_t(m.triangle_count), uint64_t(settings.csm), uint64_t(settings.csm_test),
                      uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid),
                      uint64_t(settings.lit_culling), uint64_t(settings.csm_timed),
-                     uint64_t(settings.step_one_shape)})
+                     uint64_t(settings.step_one_shape), uint64_t(settings.anchored_nodes)})
     key = mix_key(key, v);
   const bool raster_trace_available = m.raster_trace_available();
   // A spot light's perspective grid is traced and culled by the compute passes, which read the
@@ -852,6 +852,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   // 32 spp and the sun: the fit bounds each μQuad from fast corners (izb_pixel.glsl, bound_micro_quad).
   const bool bounded_fit = constant_ray_w && m.samples == 32 && !spot;
   if (bounded_fit) flags |= gpu_shared::IZB_FLAG_BOUNDED_FIT;
+  // 32 spp and the compute trace: a node per 2x2 block of texels a pixel's samples fill (izb.h).
+  if (m.samples == 32 && use_compute_trace && settings.anchored_nodes) flags |= gpu_shared::IZB_FLAG_ANCHORED_NODES;
   m.ensure_resolve_list(frame.view.extent, listed_resolve);
   m.p = &m.pipelines(m.samples, flags);  // specialized for every flag above
   gpu_shared::IzbParams p{};

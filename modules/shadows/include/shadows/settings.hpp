@@ -116,6 +116,13 @@ struct IzbSettings {
   PassBackend csm_backend = PassBackend::Auto;  // CSM (hertel/bary only; the hardware tests are raster)
   ListLayout lists = ListLayout::Linked;
   bool depth_cull = true;             // cull trace fragments behind the farthest node of their texel
+  // 32 spp with the compute trace: a pixel's node goes only into the lowest texel of each 2x2 block of
+  // texels its samples lie in (one node for most pixels, not one per texel), and the trace pairs a
+  // caster with a texel where it touches that texel's 2x2 block. Exact either way (every node test
+  // covers all of a pixel's samples); shorter lists for a few more pairs (Sponza v1 4K on an H200:
+  // the trace's pair walks 0.266 -> 0.206 ms, tests/bench/BENCHMARKS.md). Ignored at 1 spp and by
+  // the raster trace.
+  bool anchored_nodes = true;
   bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed (at 32 spp also
                                       // when false, unless the hybrid blends by occluder distance)
   float node_pool_factor = 1.25f;     // pool size = factor * pixels * (1 or expected texels per μQuad)
