@@ -224,34 +224,38 @@ TEST_P(IzbSceneTest, ComputeAndRasterPassesAgreeBitForBit) {
 // Anchored nodes (32 spp, compute trace) change which lists hold a pixel, never a verdict: every
 // node test covers all of a pixel's samples, and the trace pairs each caster with every anchor whose
 // 2x2 block it touches. Linked and sorted lists (whose scatter makes the build's anchors again), with
-// and without the CSM (whose settled samples need no node), and at 32x32 pixels, where a pixel's
-// samples spread over more texels than the build's 4x4 window holds (node_texels' list).
+// and without the CSM (whose settled samples need no node), at 128x128 pixels and at 32x32, where a
+// pixel's samples spread over more texels than the build's 4x4 window holds (node_texels' list);
+// each size takes each layout once and the CSM once.
 TEST_P(IzbSceneTest, AnchoredNodesChangeNoVerdictAndTakeFewerNodes) {
+  using shadows::ListLayout;
+  struct Case {
+    uint32_t size;
+    bool csm;
+    ListLayout lists;
+  };
   uint64_t fewer = 0;
-  for (uint32_t size : {kSize, 32u}) {
-    for (bool csm : {false, true}) {
-      for (auto lists : {shadows::ListLayout::Linked, shadows::ListLayout::Sorted}) {
-        auto every_texel = izb(32, csm);
-        every_texel.izb.trace = shadows::PassBackend::Compute;
-        every_texel.izb.lists = lists;
-        every_texel.izb.anchored_nodes = false;
-        auto anchored = every_texel;
-        anchored.izb.anchored_nodes = true;
-        const auto a = render(GetParam().scene, GetParam().view, every_texel, false, 1, size);
-        const auto b = render(GetParam().scene, GetParam().view, anchored, false, 1, size);
-        const std::string what = std::to_string(size) + "² csm " + (csm ? "on" : "off") + " " +
-                                 shadows::list_layout_name(lists);
-        EXPECT_EQ(b.visibility, a.visibility) << what;
-        EXPECT_LE(b.stats.nodes_inserted, a.stats.nodes_inserted) << what;
-        EXPECT_EQ(b.stats.node_overflow, 0u) << what;
-        fewer += a.stats.nodes_inserted - std::min(a.stats.nodes_inserted, b.stats.nodes_inserted);
-        std::printf("%s v%zu %s: nodes %llu -> %llu, pairs %llu -> %llu, tests %llu -> %llu\n", GetParam().scene.c_str(),
-                    GetParam().view, what.c_str(), (unsigned long long)a.stats.nodes_inserted,
-                    (unsigned long long)b.stats.nodes_inserted, (unsigned long long)a.stats.trace_fragments_after_cull,
-                    (unsigned long long)b.stats.trace_fragments_after_cull, (unsigned long long)a.stats.triangle_tests,
-                    (unsigned long long)b.stats.triangle_tests);
-      }
-    }
+  for (const Case& c : {Case{kSize, false, ListLayout::Linked}, Case{kSize, true, ListLayout::Sorted},
+                        Case{32u, false, ListLayout::Sorted}, Case{32u, true, ListLayout::Linked}}) {
+    auto every_texel = izb(32, c.csm);
+    every_texel.izb.trace = shadows::PassBackend::Compute;
+    every_texel.izb.lists = c.lists;
+    every_texel.izb.anchored_nodes = false;
+    auto anchored = every_texel;
+    anchored.izb.anchored_nodes = true;
+    const auto a = render(GetParam().scene, GetParam().view, every_texel, false, 1, c.size);
+    const auto b = render(GetParam().scene, GetParam().view, anchored, false, 1, c.size);
+    const std::string what = std::to_string(c.size) + "² csm " + (c.csm ? "on" : "off") + " " +
+                             shadows::list_layout_name(c.lists);
+    EXPECT_EQ(b.visibility, a.visibility) << what;
+    EXPECT_LE(b.stats.nodes_inserted, a.stats.nodes_inserted) << what;
+    EXPECT_EQ(b.stats.node_overflow, 0u) << what;
+    fewer += a.stats.nodes_inserted - std::min(a.stats.nodes_inserted, b.stats.nodes_inserted);
+    std::printf("%s v%zu %s: nodes %llu -> %llu, pairs %llu -> %llu, tests %llu -> %llu\n", GetParam().scene.c_str(),
+                GetParam().view, what.c_str(), (unsigned long long)a.stats.nodes_inserted,
+                (unsigned long long)b.stats.nodes_inserted, (unsigned long long)a.stats.trace_fragments_after_cull,
+                (unsigned long long)b.stats.trace_fragments_after_cull, (unsigned long long)a.stats.triangle_tests,
+                (unsigned long long)b.stats.triangle_tests);
   }
   EXPECT_GT(fewer, 0u);
 }
