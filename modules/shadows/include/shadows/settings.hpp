@@ -120,8 +120,8 @@ struct IzbSettings {
   // texels its samples lie in (one node for most pixels, not one per texel), and the trace pairs a
   // caster with a texel where it touches that texel's 2x2 block. Exact either way (every node test
   // covers all of a pixel's samples); shorter lists for a few more pairs (Sponza v1 4K on an H200:
-  // the trace's pair walks 0.266 -> 0.206 ms, tests/bench/BENCHMARKS.md). Ignored at 1 spp and by
-  // the raster trace.
+  // the trace's pair walks 0.27 -> 0.21 ms, the whole IZB 1.25 -> 1.16, tests/bench/BENCHMARKS.md).
+  // Ignored at 1 spp and by the raster trace.
   bool anchored_nodes = true;
   bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed (at 32 spp also
                                       // when false, unless the hybrid blends by occluder distance)
