@@ -208,7 +208,7 @@ void main() {
         uint verdict = csm_quad_verdict(g, first, last);
         // Anchored nodes (node_anchor): samples within 2x2 texels take one node, in `first`, whichever
         // of the four hold them (so no sample's texel is needed unless the CSM tests it).
-        bool one_anchor = anchored_nodes() && all(lessThanEqual(last - first, ivec2(1)));
+        bool one_anchor = single_anchor(first, last);
         if (verdict == kCsmAllShadowed) {
           mask = full_mask();
         } else if (verdict == kCsmNoneShadowed && (first == last || one_anchor)) {
@@ -224,7 +224,7 @@ void main() {
               shadowed = csm_proves_shadowed_in(vec3(q, micro_quad_blend_z(g, kSamplePattern[s])), texel);
             if (shadowed)
               mask |= 1u << s;
-            else
+            else if (!one_anchor)  // (one_anchor: its one cell is set below)
               window_cells |= sample_window_bit(window, node_anchor(texel, first), outside_window);
           }
         }

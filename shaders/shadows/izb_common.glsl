@@ -597,6 +597,9 @@ bool lit_map_proves_lit(vec3 g) {
 // its 2x2 block, the blocks counted from `first` (quad_texel_bounds: no sample's texel is below it).
 bool anchored_nodes() { return izb_samples() == 32u && izb_flag(IZB_FLAG_ANCHORED_NODES); }
 ivec2 node_anchor(ivec2 texel, ivec2 first) { return anchored_nodes() ? first + ((texel - first) & ~1) : texel; }
+// Anchored nodes where every sample lies in the 2x2 block from `first` (quad_texel_bounds' [first,
+// last]): the pixel's one node is in `first`.
+bool single_anchor(ivec2 first, ivec2 last) { return anchored_nodes() && all(lessThanEqual(last - first, ivec2(1))); }
 
 // The texels a candidate pixel's node goes into, from its grid point(s) `g` (1 spp: g[0]): 1 spp its
 // point's texel; 32 spp every texel holding one of its samples not already `settled` (bits the CSM
@@ -611,7 +614,7 @@ uint node_texels(vec3 g[4], uint settled, out uint texels[32]) {
   }
   ivec2 first, last;
   quad_texel_bounds(g, first, last);
-  if (anchored_nodes() && all(lessThanEqual(last - first, ivec2(1)))) {
+  if (single_anchor(first, last)) {
     if (settled != full_mask()) texels[count++] = texel_index(first);
     return count;
   }

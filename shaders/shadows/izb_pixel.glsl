@@ -73,7 +73,8 @@ void micro_quad_corners(ivec2 pixel, PixelPoint p, out vec3 c[4]) {
 // from the build's: the two rays' distance (the bounds in the w components: origin, and direction
 // times the ray parameter t) and each computation's dot products, quotient and sum (4 units of 2^-23
 // on each magnitude, twice), through the intersection's conditioning 1 + |n| |d| / |n . d|; the
-// magnitudes of the rays' origins and directions are the frame's bounds (the w components of [1]). Within kBoundedFitGrazing of grazing, or where the rays' distance could reach a tenth of n . d,
+// magnitudes of the rays' origins and directions are the frame's bounds (the w components of [1]).
+// Within kBoundedFitGrazing of grazing, or where the rays' distance could reach a tenth of n . d,
 // that bound is loose or its first order fails: such a pixel makes its exact corners (one lane's cost,
 // where micro_quad_corners is four rays a pixel).
 const float kBoundedFitGrazing = 1.0 / 16.0;

@@ -95,9 +95,10 @@ SHARED_CONST uint IZB_FLAG_CONSTANT_RAY_W = 1048576u;
 // the build's exact corners; near grazing, where that bound is loose, it makes the exact corners.
 SHARED_CONST uint IZB_FLAG_BOUNDED_FIT = 8388608u;
 // 32 spp, the compute trace: a pixel's node goes only into the lowest texel (its anchor) of each 2x2
-// block of texels its samples fill, counted from the lowest row and column holding a sample (one node
-// where the samples span at most 2x2 texels, the common case, instead of one in each texel); the
-// trace pairs a triangle with a texel where it touches the 2x2 block from that texel up and right.
+// block of texels its samples fill, the blocks counted from the first texel of its corners' bounds
+// (one node where the samples span at most 2x2 texels, the common case, instead of one in each
+// texel); the trace pairs a triangle with a texel where it touches the 2x2 block from that texel up
+// and right.
 SHARED_CONST uint IZB_FLAG_ANCHORED_NODES = 16777216u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
