@@ -1,5 +1,7 @@
 #include "engine/assets/scene.hpp"
 
+#include <glm/gtx/component_wise.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -85,6 +87,61 @@ void replicate_scene(Scene& scene, uint32_t copies) {
   }
   scene.name += " x" + std::to_string(copies);
   update_world_transforms(scene.registry);
+}
+
+void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const std::string& what) {
+  if (!(std::isfinite(scale) && scale > 0.0))
+    throw SceneError(scene.name + ": " + what + " scale " + std::to_string(scale) + " must be finite and positive");
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(offset[i])) throw SceneError(scene.name + ": " + what + " offset must be finite");
+  const Aabb bounds = scene.world_bounds();
+  if (bounds.valid()) {
+    const glm::dvec3 lo = glm::dvec3(bounds.min) * scale + offset, hi = glm::dvec3(bounds.max) * scale + offset;
+    const double reach = std::max(glm::compMax(glm::abs(lo)), glm::compMax(glm::abs(hi)));
+    const double size = glm::compMax(hi - lo);
+    // Past 1e7 float spacing is a unit; a scene smaller than float's spacing at its distance has no shape.
+    if (!(reach <= 1.0e7) || !(size > 1.0e-30) || !(size >= reach * 1.0e-7))
+      throw SceneError(scene.name + ": " + what + " scale " + std::to_string(scale) + " and offset put the scene out of " +
+                       "float's reach (it would span " + std::to_string(size) + " units at " + std::to_string(reach) +
+                       " from the origin)");
+  }
+  const auto move = [&](const glm::vec3& p) { return glm::vec3(glm::dvec3(p) * scale + offset); };
+  const float s = float(scale);
+  Registry& r = scene.registry;
+  r.each<Transform>([&](Entity e, Transform& t) {
+    if (t.parent != kNullEntity) return;
+    t.translation = move(t.translation);
+    t.scale *= s;
+    if (auto* a = r.try_get<Animated>(e)) {
+      a->rest_translation = move(a->rest_translation);
+      for (auto& p : a->path) p = move(p);
+      if (a->kind == Animated::Kind::Walk) a->speed *= s;
+    }
+  });
+  // A light's or camera's scale would shear nothing but would scale its children: lights and the
+  // camera are placed by translation and rotation alone.
+  r.each<SpotLight>([&](Entity e, SpotLight& l) {
+    l.range *= s;
+    if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
+  });
+  r.each<PointLight>([&](Entity e, PointLight& l) {
+    l.range *= s;
+    if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
+  });
+  r.each<Camera>([&](Entity e, Camera& c) {
+    c.near_plane *= s;
+    c.far_plane *= s;
+    if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
+  });
+  for (auto& v : scene.views) {
+    v.eye = move(v.eye);
+    v.target = move(v.target);
+  }
+  if (scene.start) {
+    scene.start->eye = move(scene.start->eye);
+    scene.start->target = move(scene.start->target);
+  }
+  update_world_transforms(r);
 }
 
 size_t Scene::triangle_count() {

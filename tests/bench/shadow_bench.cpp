@@ -2,6 +2,7 @@
 // timestamp queries (medians over frames after warm-up), optionally compares the visibility with the
 // Embree reference, and writes one JSON object per run.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -61,6 +62,8 @@ struct Options {
   std::string out_dir; // suite: where suite.json and suite.md go
   std::vector<uint32_t> spps = {1};  // suite: samples per pixel to run
   std::vector<size_t> views;         // suite: views to run (empty: every view)
+  double scale = 1.0;                // --scale: the scene scaled about the origin (engine::transform_scene)
+  glm::dvec3 offset{0.0};            // --offset: then moved by this (world units)
 };
 
 const char* kUsage =
@@ -71,7 +74,7 @@ const char* kUsage =
     "                    [--anchored-nodes on|off] [--csm-timed] [--step-times] [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
-    "                    [--light sun|spot|point]\n"
+    "                    [--light sun|spot|point] [--scale S] [--offset X,Y,Z]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
@@ -82,6 +85,8 @@ const char* kUsage =
     "  --anchored-nodes: 32 spp, compute trace: a node per 2x2 block of texels (IzbSettings::anchored_nodes).\n"
     "  --step-times: each step of the light frustum, compute trace, CSM, lit map and build timed apart (their\n"
     "  timestamps cost waits; IzbSettings::step_timings).\n"
+    "  --scale S --offset X,Y,Z: the scene (procedural, glTF or level) scaled about the origin, then moved, with\n"
+    "  its views, light ranges and camera planes (100: a centimetre world; 1e4,0,1e4: far from the origin).\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
     "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
@@ -106,6 +111,14 @@ std::vector<uint32_t> split_uints(const std::string& flag, const std::string& s)
   }
   if (out.empty()) throw std::runtime_error(flag + " needs a value");
   return out;
+}
+
+// A finite number, or a one-line error naming the option.
+double parse_number(const std::string& flag, const std::string& v) {
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (v.empty() || !end || *end || !std::isfinite(x)) throw std::runtime_error(flag + " '" + v + "': expected a finite number");
+  return x;
 }
 
 struct SizeConfig {
@@ -171,6 +184,13 @@ Options parse(int argc, char** argv) {
         throw std::runtime_error(a + " '" + v + "': expected a non-negative number");
       (a == "--max-mismatch" ? o.max_mismatch : o.max_coverage_mae) = bound;
     }
+    else if (a == "--scale") o.scale = parse_number(a, args.value());
+    else if (a == "--offset") {
+      const std::string v = args.value();
+      const auto items = split(v);
+      if (items.size() != 3) throw std::runtime_error("--offset '" + v + "': expected X,Y,Z");
+      for (int i = 0; i < 3; ++i) o.offset[i] = parse_number(a, items[size_t(i)]);
+    }
     else if (a == "--faceted-terminator") o.faceted_terminator = true;
     else if (a == "--device") o.device = args.value();
     else if (a == "--json") o.json_path = args.value();
@@ -185,6 +205,7 @@ Options parse(int argc, char** argv) {
   }
   for (uint32_t spp : o.spps)
     if (spp != 1 && spp != 32) throw std::runtime_error("--spp must be 1 or 32");
+  if (!(o.scale > 0.0)) throw std::runtime_error("--scale must be positive");
   if (o.frames < 1) throw std::runtime_error("--frames must be at least 1");
   if ((o.max_mismatch >= 0.0 || o.max_coverage_mae >= 0.0) && (!o.reference || !o.suite.empty()))
     throw std::runtime_error("--max-mismatch and --max-coverage-mae need --reference (and no --suite)");
@@ -572,6 +593,7 @@ void print_header() {
 
 std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances, const Options& o) {
   auto scene = engine::load_scene(name, o.detail);
+  if (o.scale != 1.0 || o.offset != glm::dvec3(0.0)) engine::transform_scene(*scene, o.scale, o.offset, "--scale/--offset");
   engine::replicate_scene(*scene, instances);
   apply_csm_choice(*scene, o.csm_choice);
   return scene;

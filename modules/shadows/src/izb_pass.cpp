@@ -987,7 +987,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
     if (scene.valid()) box = {glm::max(box.min, scene.min), glm::min(box.max, scene.max)};
     if (!box.valid()) return glm::mat4(0.0f);  // nothing to receive: every caster culled
     // The shadow-ray offset and rounding may carry a node slightly outside.
-    return fit_orthographic(light_view, box, 1e-3f * glm::length(box.extent()) + 1e-3f);
+    // fit_orthographic gives the projection alone: the clip matrix is it after the light's view.
+    return fit_orthographic(light_view, box, 1e-3f * glm::length(box.extent()) + 1e-3f) * light_view;
   }();
   // The raster trace draws the opaque casters with pipelines whose node test has no alpha-test code
   // (a CPU device runs both sides of a branch), then the alpha-tested ones with it.

@@ -58,6 +58,14 @@ struct Scene {
 // copies == 0.
 void replicate_scene(Scene& scene, uint32_t copies);
 
+// Scales the whole scene about the world origin by `scale`, then moves it by `offset` (world units):
+// root transforms, views, the camera's near and far planes, light ranges and animation paths, so
+// that the scene looks the same in another unit (100: centimetres for metres) or far from the origin.
+// Throws SceneError naming `what` (the option that asked for it) when the result could not be held in
+// float: a scale that is not finite and positive, an offset that is not finite, or a scene that would
+// reach past 1e7 units from the origin (where float spacing reaches a unit).
+void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const std::string& what = "transform");
+
 // The procedural scenes built in code: "contact", "atrium", "foliage", "canopy".
 std::vector<std::string> procedural_scene_names();
 std::unique_ptr<Scene> build_procedural_scene(const std::string& name);
