@@ -141,6 +141,7 @@ void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const
     scene.start->eye = move(scene.start->eye);
     scene.start->target = move(scene.start->target);
   }
+  scene.units_per_metre *= scale;
   update_world_transforms(r);
 }
 

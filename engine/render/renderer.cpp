@@ -1,6 +1,7 @@
 #include "engine/render/renderer.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <unordered_map>
@@ -188,15 +189,39 @@ void Renderer::add_feature(std::shared_ptr<RenderFeature> feature) {
   features_.push_back(std::move(feature));
 }
 
+namespace {
+
+// The frame's local origin (FrameView): 0 while the camera is within 4096 near planes of the world's
+// origin (float then holds the scene as well as the depth buffer does), else the camera's position
+// rounded to a power-of-two cell of about 64 near planes, so the origin moves in steps rather than
+// every frame and every coordinate stays within the view's own scale.
+glm::dvec3 choose_world_origin(const glm::dvec3& eye, double near_plane) {
+  const double reach = std::max({std::abs(eye.x), std::abs(eye.y), std::abs(eye.z)});
+  if (!(reach > 4096.0 * near_plane)) return glm::dvec3(0.0);
+  const double cell = std::exp2(std::round(std::log2(64.0 * near_plane)));
+  return glm::round(eye / cell) * cell;
+}
+
+// A scene-space matrix (Transform::world) made relative to the frame's origin: `shift` is
+// Scene::origin - FrameView::origin, added to the translation in double.
+glm::mat4 rebased(const glm::mat4& world, const glm::dvec3& shift) {
+  glm::mat4 m = world;
+  m[3] = glm::vec4(glm::vec3(glm::dvec3(world[3]) + shift), world[3].w);
+  return m;
+}
+
+}  // namespace
+
 void Renderer::build_draw_list() {
   draws_.clear();
+  const glm::dvec3 shift = scene_->origin - view_.origin;
   scene_->registry.each<Mesh, Transform>([&](Entity e, Mesh& mesh, Transform& t) {
     if (mesh.gpu_mesh == UINT32_MAX) return;
     DrawItem d;
     d.entity = e;
-    d.world = t.world;
+    d.world = rebased(t.world, shift);
     d.mesh = mesh.gpu_mesh;
-    if (mesh.data) d.bounds = mesh.data->bounds.transformed(t.world);
+    if (mesh.data) d.bounds = mesh.data->bounds.transformed(d.world);
     if (const auto* m = scene_->registry.try_get<Material>(e)) {
       d.base_color = m->base_color;
       d.alpha_mode = m->alpha_mode;
@@ -219,7 +244,7 @@ void Renderer::gather_local_lights() {
     FrameLight l;
     l.entity = e;
     l.kind = kind;
-    l.position = glm::vec3(t->world[3]);
+    l.position = glm::vec3(glm::dvec3(t->world[3]) + (scene_->origin - view_.origin));
     l.direction = glm::normalize(-glm::vec3(t->world[2]));  // glTF: a spot light shines down local -Z
     l.radiance = color * intensity;
     l.range = range;
@@ -252,15 +277,26 @@ void Renderer::update(float dt) {
   update_world_transforms(scene_->registry);
   const float aspect = float(extent_.width) / float(extent_.height);
   update_camera(scene_->registry, scene_->camera, aspect);
-  build_draw_list();
 
   const auto& cam = scene_->registry.get<Camera>(scene_->camera);
   const auto& cam_t = scene_->registry.get<Transform>(scene_->camera);
-  view_.view = cam.view;
+  // The view relative to the frame's origin: its rotation as it is, its translation from the eye's
+  // position relative to that origin, in double (the scene-space view's own translation has already
+  // lost what a far camera's float position cannot hold).
+  const glm::dvec3 eye_world = scene_->origin + glm::dvec3(cam_t.world[3]);
+  view_.origin = choose_world_origin(eye_world, cam.near_plane);
+  const glm::dvec3 eye = eye_world - view_.origin;
+  glm::mat4 view = cam.view;
+  if (eye != eye_world || scene_->origin != glm::dvec3(0.0)) {
+    const glm::dmat3 rotation{glm::mat3(cam.view)};
+    view[3] = glm::vec4(glm::vec3(-(rotation * eye)), 1.0f);
+  }
+  build_draw_list();
+  view_.view = view;
   view_.projection = cam.projection;
-  view_.view_projection = cam.projection * cam.view;
+  view_.view_projection = cam.projection * view;
   view_.inverse_view_projection = glm::inverse(view_.view_projection);
-  view_.camera_position = glm::vec3(cam_t.world[3]);
+  view_.camera_position = glm::vec3(eye);
   view_.near_plane = cam.near_plane;
   view_.far_plane = cam.far_plane;
   view_.vertical_fov = cam.vertical_fov;

@@ -84,7 +84,7 @@ bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
 
 Probe probe(int c, vec3 p, vec3 n) {
   Probe pr;
-  vec3 q = shadow_ray_origin(p, n) + n * params.normal_offset[c];
+  vec3 q = shadow_ray_origin(p, n, shadow_ray_offset(p, params.camera_position.xyz)) + n * params.normal_offset[c];
   vec4 light = params.light_view_projection[c] * vec4(q, 1.0);
   float size = float(params.extent.z);
   pr.t = (light.xy * 0.5 + 0.5) * size;

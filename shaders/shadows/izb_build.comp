@@ -190,7 +190,7 @@ void main() {
       state |= IZB_PIXEL_CANDIDATE;
       vec3 g[4];
       if (izb_samples() == 1u) {
-        g[0] = to_grid(shadow_ray_origin(p.position, p.normal));
+        g[0] = to_grid(shadow_ray_origin(p.position, p.normal, izb_ray_offset(p.position)));
         node_depth = g[0].z;
         if (csm_proves_shadowed(g[0])) mask = 1u;
       } else {

@@ -40,8 +40,9 @@ void main() {
     for (uint k = 0u; k < kFitPixels; ++k) {
       if (position[k].w <= 0.5 || distance(position[k].xyz, params.camera_position.xyz) > reach) continue;
       vec2 v = (params.light_view * vec4(position[k].xyz, 1.0)).xy;
-      lo = min(lo, v - kShadowNormalOffset);
-      hi = max(hi, v + kShadowNormalOffset);
+      float offset = izb_ray_offset(position[k].xyz);
+      lo = min(lo, v - offset);
+      hi = max(hi, v + offset);
     }
   } else if (izb_flag(IZB_FLAG_BOUNDED_FIT)) {
     // 32 spp: every covered point in range that faces the light bounds its μQuad (bound_micro_quad; as
@@ -81,7 +82,7 @@ void main() {
           hi = max(hi, v);
         }
       } else {
-        vec2 v = (params.light_view * vec4(shadow_ray_origin(p.position, p.normal), 1.0)).xy;
+        vec2 v = (params.light_view * vec4(shadow_ray_origin(p.position, p.normal, izb_ray_offset(p.position)), 1.0)).xy;
         lo = min(lo, v);
         hi = max(hi, v);
       }

@@ -29,6 +29,9 @@ PixelPoint load_surface(ivec2 pixel) {
   return p;
 }
 
+// The shadow-ray offset of a shading point at `position` (shadow_common.h).
+float izb_ray_offset(vec3 position) { return shadow_ray_offset(position, params.camera_position.xyz); }
+
 // The IZB's range from the camera (params.camera_position.w; 0: unlimited, read as a huge reach). A
 // select, not a branch on the uniform alone (max_distance <= 0.0 || ...): Mesa 22.3's lavapipe can
 // latch onto such a branch and compile a new copy of the shader at every dispatch, never freed
@@ -61,9 +64,10 @@ CameraRay corner_ray(vec2 pixel_corner) {
 
 // The μQuad corners of `pixel` with the shadow-ray offset applied (world space).
 void micro_quad_corners(ivec2 pixel, PixelPoint p, out vec3 c[4]) {
+  float offset = izb_ray_offset(p.position);
   for (int k = 0; k < 4; ++k)
     c[k] = shadow_ray_origin(micro_quad_corner_on(corner_ray(vec2(pixel + ivec2(k & 1, k >> 1))), p.position, p.normal),
-                             p.normal);
+                             p.normal, offset);
 }
 
 // IZB_FLAG_BOUNDED_FIT: raises [lo, hi] to hold the light-view x and y of every corner
@@ -113,7 +117,8 @@ void bound_micro_quad(ivec2 pixel, vec3 position, vec3 normal, mat4 light_view, 
     float rounding = 8.0 * kUnitRounding * (length(position) + reach);
     widen = (ray_error + rounding) * (1.0 + sqrt(conditioning_squared)) + 2.0 * kUnitRounding * reach;
     widen *= 1.1;  // the terms of second order; a light view is a rotation and a translation: distances carry over
-    for (int k = 0; k < 4; ++k) c[k] = shadow_ray_origin(c[k], normal);
+    float offset = izb_ray_offset(position);
+    for (int k = 0; k < 4; ++k) c[k] = shadow_ray_origin(c[k], normal, offset);
   }
   for (int k = 0; k < 4; ++k) {
     vec2 v = (light_view * vec4(c[k], 1.0)).xy;
@@ -146,12 +151,13 @@ void make_block_rays(ivec2 block_origin) {
 // micro_quad_corners for a pixel of the block make_block_rays last made.
 void block_micro_quad_corners(ivec2 pixel, ivec2 block_origin, PixelPoint p, out vec3 c[4]) {
   ivec2 local = pixel - block_origin;
+  float offset = izb_ray_offset(p.position);
   for (int k = 0; k < 4; ++k) {
     uint i = uint(local.y + (k >> 1)) * kRayBlockSide + uint(local.x + (k & 1));
     CameraRay ray;
     ray.origin = block_ray_origin[i];
     ray.direction = block_ray_direction[i];
-    c[k] = shadow_ray_origin(micro_quad_corner_on(ray, p.position, p.normal), p.normal);
+    c[k] = shadow_ray_origin(micro_quad_corner_on(ray, p.position, p.normal), p.normal, offset);
   }
 }
 #endif

@@ -47,8 +47,8 @@ uint straddler_samples(ivec2 pixel, PixelPoint p) {
   uint bits = 0u;
   for (uint s = 0u; s < izb_samples(); ++s) {
     vec3 o = izb_samples() == 32u ? micro_quad_blend(c[0], c[1], c[2], c[3], kSamplePattern[s])
-                                  : shadow_ray_origin(p.position, p.normal);
-    float t_max = local_shadow_ray_length(o, params.light_position.xyz);
+                                  : shadow_ray_origin(p.position, p.normal, izb_ray_offset(p.position));
+    float t_max = local_shadow_ray_length(o, params.light_position.xyz, params.light_position.w);
     if (t_max <= 0.0) continue;
     vec3 dir = normalize(params.light_position.xyz - o);
     for (uint k = 0u; k < count; ++k) {

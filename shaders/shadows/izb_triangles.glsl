@@ -13,13 +13,13 @@
 // the light through the fitted grid. Every candidate's shadow ray runs inside that pyramid (a point
 // and the light share their projection), so such a triangle meets none. The triangle is clipped to
 // light-view depth >= apex_depth first: a candidate's ray (inside the cone, at most the cone's half
-// angle off the axis) is that near the apex only within apex_depth / cos(cone) < kLocalLightRadius of
+// angle off the axis) is that near the apex only within apex_depth / cos(cone) < the light's bulb (local_light_bulb) of
 // the light, the part of every ray that does not count (local_light.h). A cone of a half space keeps
 // every straddler. One texel of margin on each side.
 bool outside_light_pyramid(vec3 v[3], float depth[3]) {
   float cos_cone = params.light_cone.x;
   if (cos_cone <= 1.0e-3) return false;
-  float apex_depth = 0.99 * kLocalLightRadius * cos_cone;
+  float apex_depth = 0.99 * local_light_bulb(params.light_position.w) * cos_cone;
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
   bool any = false;
   for (int i = 0; i < 3; ++i) {
@@ -61,7 +61,7 @@ bool set_up_triangle(uint t, out vec3 grid[3]) {
     for (int i = 0; i < 3; ++i) {
       float d = -(params.light_view * vec4(v[i], 1.0)).z;
       depth[i] = d;
-      apart = apart || d < params.depth_range.x || distance(v[i], params.light_position.xyz) < 2.0 * kLocalLightRadius;
+      apart = apart || d < params.depth_range.x || distance(v[i], params.light_position.xyz) < 2.0 * local_light_bulb(params.light_position.w);
       behind = behind && d < 0.0;
       inv_w[i] = 1.0 / max(d, 1.0e-30);
     }

@@ -32,7 +32,7 @@ void main() {
                            faces_local_light(n, p.xyz, params.light_position.xyz)
                      : faces_light(normal);
   if (facing) {
-    vec4 light = params.light_view_projection * vec4(shadow_ray_origin(p.xyz, n), 1.0);
+    vec4 light = params.light_view_projection * vec4(shadow_ray_origin(p.xyz, n, shadow_ray_offset(p.xyz, params.camera_position.xyz)), 1.0);
     light.xyz /= light.w;  // 1 for the sun's orthographic map
     vec2 uv = light.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) {

@@ -7,9 +7,11 @@
 
 SHARED_BEGIN
 
-// Occluders closer than this to the light's position (world units, along the ray) do not count: the
-// light's own bulb and housing, and what keeps a light-space near plane finite.
-SHARED_CONST float kLocalLightRadius = 0.01f;
+// Occluders closer to the light's position than its bulb (along the ray) do not count: the light's own
+// bulb and housing, and what keeps a light-space near plane finite. The bulb is this fraction of the
+// light's range (a range of 10 units: 0.01), so it scales with the world's units.
+SHARED_CONST float kLocalLightBulbPerRange = 1.0e-3f;
+SHARED_INLINE float local_light_bulb(float range) { return range * kLocalLightBulbPerRange; }
 
 // Whether a light at `light_position` (range `range` > 0; for a spot light, `spot` set, travelling
 // along the unit `spot_direction` with outer-cone cosine `cos_outer`) reaches `point`. A point it does
@@ -33,11 +35,11 @@ SHARED_INLINE bool faces_local_light(SHARED_IN(vec3) geometric_normal, SHARED_IN
   return facing > 0.0f;
 }
 
-// The shadow ray toward a local light from `origin` (shadow_ray_origin of the sample): it is occluded
-// by a hit at t in [0, local_shadow_ray_length] along normalize(light_position - origin); nothing
-// occludes when that length is <= 0.
-SHARED_INLINE float local_shadow_ray_length(SHARED_IN(vec3) origin, SHARED_IN(vec3) light_position) {
-  return length(light_position - origin) - kLocalLightRadius;
+// The shadow ray toward a local light of range `range` from `origin` (shadow_ray_origin of the
+// sample): it is occluded by a hit at t in [0, local_shadow_ray_length] along
+// normalize(light_position - origin); nothing occludes when that length is <= 0.
+SHARED_INLINE float local_shadow_ray_length(SHARED_IN(vec3) origin, SHARED_IN(vec3) light_position, float range) {
+  return length(light_position - origin) - local_light_bulb(range);
 }
 
 SHARED_END

@@ -9,7 +9,7 @@ struct RayTracedPush {
   mat4 inverse_view_projection;  // NDC -> world, for the μQuad corners (32 samples per pixel)
   vec4 light_direction;          // xyz: the direction light travels (unit; a point light: unused)
   vec4 light_position;           // xyz: a spot or point light's position; w: its range (0: the sun)
-  vec4 light_cone;               // x: cosine of a spot light's outer cone (a point light: -1)
+  vec4 light_cone;               // x: cosine of a spot light's outer cone (a point light: -1); yzw: the camera's position
   uvec4 extent;                  // xy: render size; z: samples per pixel (1 or 32); w: 1 = count rays
 };
 

@@ -5,13 +5,27 @@
 
 SHARED_BEGIN
 
-// World-space distance a shadow ray's origin is pushed off its surface along the geometric normal
-// (the side facing the camera). It hides depth-reconstruction error; every technique and the reference
-// start their rays at shadow_ray_origin() and count any hit with t > 0 as an occluder.
-SHARED_CONST float kShadowNormalOffset = 2.0e-3f;
+// How far a shading point's shadow rays start off its surface, along the geometric normal (the side
+// facing the camera): 1/8192 of the point's largest coordinate plus its largest coordinate offset from
+// the camera `eye` (both in the frame's coordinates, relative to FrameDesc::origin). The first term
+// covers float's spacing at the point (some thousand ulps), the second the depth buffer's and the
+// reconstruction's error, which grow with the distance from the camera. So the offset follows the
+// precision at hand, not a world-unit constant: a scene in centimetres gets offsets 100 times longer,
+// a scene far from the frame's origin longer ones than one near it. Every technique and the reference
+// start their rays at shadow_ray_origin() with this offset, one per pixel (its μQuad samples share it),
+// and count any hit with t > 0 as an occluder.
+SHARED_CONST float kShadowOffsetPerUnit = 1.0f / 8192.0f;
 
-SHARED_INLINE vec3 shadow_ray_origin(SHARED_IN(vec3) position, SHARED_IN(vec3) geometric_normal) {
-  SHARED_PRECISE vec3 origin = position + geometric_normal * kShadowNormalOffset;
+SHARED_INLINE float shadow_ray_offset(SHARED_IN(vec3) position, SHARED_IN(vec3) eye) {
+  SHARED_PRECISE vec3 from_eye = abs(position - eye);
+  vec3 size = abs(position);
+  SHARED_PRECISE float reach = max(max(size.x, size.y), size.z) + max(max(from_eye.x, from_eye.y), from_eye.z);
+  SHARED_PRECISE float offset = reach * kShadowOffsetPerUnit;
+  return offset;
+}
+
+SHARED_INLINE vec3 shadow_ray_origin(SHARED_IN(vec3) position, SHARED_IN(vec3) geometric_normal, float offset) {
+  SHARED_PRECISE vec3 origin = position + geometric_normal * offset;
   return origin;
 }
 

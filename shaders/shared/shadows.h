@@ -17,6 +17,7 @@ struct ShadowMapResolveParams {
   vec4 light_cone;       // x: cosine of the spot light's outer cone
   vec4 bias;             // x: constant depth bias; y: PCF radius in map texels (0: one tap)
   uvec4 extent;          // xy render size, zw map size
+  vec4 camera_position;  // xyz (the shadow-ray offset, shadow_common.h)
 };
 SHARED_CONST uint SM_RESOLVE_BINDING_PARAMS = 0u;
 SHARED_CONST uint SM_RESOLVE_BINDING_WORLD_POSITION = 1u;
@@ -38,6 +39,6 @@ SHARED_END
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::ShadowMapPush) == 128);
 static_assert(sizeof(gpu_shared::AlphaDepthPush) == 80);
-static_assert(sizeof(gpu_shared::ShadowMapResolveParams) == 64 + 80);
+static_assert(sizeof(gpu_shared::ShadowMapResolveParams) == 64 + 96);
 #endif
 #endif

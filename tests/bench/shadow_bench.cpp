@@ -394,6 +394,7 @@ struct Bench {
 
   json measure(const RunConfig& run, bool print) {
     module->settings() = run.settings;
+    module->settings().units_per_metre = float(scene.units_per_metre);
     const uint32_t spp = run.settings.izb.samples_per_pixel;
     const VkExtent2D extent = renderer.extent();
     json entry;
@@ -520,7 +521,13 @@ struct Bench {
     uint64_t false_shadowed = 0;
     const std::string tag = scene.name + "_v" + std::to_string(view) + "_" + run.mode + "_" + run.csm_test + "_spp" +
                             std::to_string(spp);
-    if (tracer) {
+    if (o.reference) {
+      // The reference traces the frame's triangles relative to the frame's origin (the renderer rebases
+      // a camera far from the world's origin).
+      if (!tracer || tracer->shift() != support::frame_shift(renderer)) {
+        tracer = std::make_unique<reference::EmbreeTracer>(scene.registry, support::frame_shift(renderer));
+        reference_vis.clear();
+      }
       if (reference_vis.empty())
         reference_vis = local_light ? support::reference_visibility(renderer, *tracer, spp, *local_light)
                                     : support::reference_visibility(renderer, *tracer, spp);
@@ -629,7 +636,6 @@ int run_single(const Options& o) {
   for (const auto& run : runs)
     if (std::string why; !bench.module->supported(run.settings.technique, &why))
       throw std::runtime_error("--mode " + run.mode + ": " + why);
-  if (o.reference) bench.tracer = std::make_unique<reference::EmbreeTracer>(scene->registry);
 
   json results = json::array();
   print_header();

@@ -383,7 +383,7 @@ void IzbTest::expect_fit_holds_candidates(const std::string& scene, size_t view,
         glm::vec3 origins[4];
         int count = 1;
         if (spp == 1) {
-          origins[0] = gpu_shared::shadow_ray_origin(p, n);
+          origins[0] = gpu_shared::shadow_ray_origin(p, n, gpu_shared::shadow_ray_offset(p, points.eye));
         } else {
           count = 4;
           bool near_grazing = false;
@@ -392,7 +392,8 @@ void IzbTest::expect_fit_holds_candidates(const std::string& scene, size_t view,
             const auto ray = gpu_shared::pixel_corner_ray(corner, viewport, points.inv_view_proj);
             near_grazing = near_grazing ||
                            std::abs(glm::dot(n, ray.direction)) < glm::length(n) * glm::length(ray.direction) / 16.0f;
-            origins[k] = gpu_shared::shadow_ray_origin(gpu_shared::micro_quad_corner_on(ray, p, n), n);
+            origins[k] = gpu_shared::shadow_ray_origin(gpu_shared::micro_quad_corner_on(ray, p, n), n,
+                                                       gpu_shared::shadow_ray_offset(p, points.eye));
           }
           grazing += near_grazing ? 1 : 0;
         }
@@ -1005,7 +1006,7 @@ TEST_F(IzbTest, HybridNearPointsMatchTheReference) {
     if (!points.covered(i) || !points.faces(i, to_light)) continue;
     const glm::vec3 p(points.position[i]);
     if (glm::distance(p, eye) > 0.9f * hybrid.hybrid_izb_distance) continue;  // the IZB's range, before its fade
-    const glm::vec3 origin = gpu_shared::shadow_ray_origin(p, glm::vec3(points.normal[i]));
+    const glm::vec3 origin = gpu_shared::shadow_ray_origin(p, glm::vec3(points.normal[i]), gpu_shared::shadow_ray_offset(p, eye));
     const bool shadowed = h.reference[i] < 0.5f;
     // 0.4 rather than 0.5: a margin for the trace's own measure of the distance.
     if (shadowed && !tracer.occluded_within(origin, to_light, 0.4f * hybrid.hybrid_soft_distance)) continue;

@@ -231,7 +231,7 @@ TEST_F(MaterialsTest, SmoothTerminatorFollowsTheSpheresShading) {
       const glm::vec3 p(points.position[i]);
       const glm::vec3 n = glm::normalize(p - kSphereCenter);
       if (std::abs(glm::length(p - kSphereCenter) - kSphereRadius) > 0.02f) continue;  // not the sphere
-      if (others.occluded(gpu_shared::shadow_ray_origin(p, glm::vec3(points.normal[i])), -sun)) continue;
+      if (others.occluded(gpu_shared::shadow_ray_origin(p, glm::vec3(points.normal[i]), gpu_shared::shadow_ray_offset(p, points.eye)), -sun)) continue;
       const bool lit = glm::dot(n, -sun) > 0.0f;
       ++c.pixels;
       c.izb_wrong += (izb[i] > 0.5f) != lit;

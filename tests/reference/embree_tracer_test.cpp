@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <shared/shadow_common.h>
 
+#include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 #include <stdexcept>
@@ -96,7 +97,7 @@ TEST(EmbreeTracer, OneSampleGroundShadowBackgroundAndBackFacing) {
 
 // A light 3 above the ground at the origin and the occluder at height 1: a ground point (x, 0, z) is
 // shadowed when its ray crosses y = 1 inside [-1, 1]^2, i.e. |x|, |z| <= 1.5: pixels 5..10. A quad
-// 0.002 under the light (within kLocalLightRadius along every ray here: at most 0.0041) and one above
+// 0.002 under the light (within the bulb, range / 1000, along every ray here: at most 0.0041) and one above
 // the light shadow nothing.
 TEST(EmbreeTracer, PointLightShadowsWhatItsRaysCross) {
   engine::Registry reg;
@@ -144,28 +145,67 @@ TEST(EmbreeTracer, LocalLightsReachOnlyTheirRangeAndCone) {
   EXPECT_LT(reached_by_point, reached_by_spot);
 }
 
-TEST(EmbreeTracer, RayStartsAtSharedNormalOffset) {
-  engine::Registry reg;
-  reference::add_mesh_entity(reg, reference::make_quad_y(1.0f, glm::vec2(-1.0f), glm::vec2(1.0f)));
-  const EmbreeTracer tracer(reg);
-  const float k = gpu_shared::kShadowNormalOffset;
-  ShadingPoints sp;
-  sp.resize(4, 1);
-  // Just under the surface, within the offset: the pushed origin clears it.
-  sp.position[0] = glm::vec4(0.0f, 1.0f - 0.5f * k, 0.0f, 1.0f);
-  // Under the surface by more than the offset: still below it, so shadowed.
-  sp.position[1] = glm::vec4(0.0f, 1.0f - 2.0f * k, 0.0f, 1.0f);
-  // Exactly on it: no self-shadowing.
-  sp.position[2] = glm::vec4(0.0f, 1.0f, 0.0f, 1.0f);
-  // Normal perpendicular to the light counts as facing away.
-  sp.position[3] = glm::vec4(5.0f, 0.0f, 0.0f, 1.0f);
-  for (int i = 0; i < 3; ++i) sp.normal[i] = glm::vec4(kUp, 0.0f);
-  sp.normal[3] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
-  const std::vector<float> vis = tracer.visibility_1spp(sp, kDown);
-  EXPECT_EQ(vis, (std::vector<float>{1.0f, 0.0f, 1.0f, 0.0f}));
-  // With an identity inv_view_proj the camera rays run parallel to these planes, so every μQuad
-  // sample stays at its shading point and 32 samples must give the same answers.
-  EXPECT_EQ(tracer.visibility_32spp(sp, kDown), vis);
+// The offset follows the coordinates' scale and the camera's distance (shadow_ray_offset), so the same
+// configuration answers the same at a millimetre, a metre or a kilometre per unit, and far from the
+// origin: each scene here is the one at scale 1 scaled by `scale` and moved by `shift`.
+TEST(EmbreeTracer, RayStartsAtSharedNormalOffsetAtEveryScale) {
+  for (const float scale : {0.01f, 1.0f, 100.0f, 1000.0f}) {
+    for (const float shift : {0.0f, 1.0e3f, 1.0e4f}) {
+      SCOPED_TRACE(testing::Message() << "scale " << scale << ", shift " << shift);
+      const glm::vec3 move(shift, 0.0f, shift);
+      engine::Registry reg;
+      reference::add_mesh_entity(reg, reference::make_quad_y(scale, glm::vec2(-scale) + shift, glm::vec2(scale) + shift));
+      const EmbreeTracer tracer(reg);
+      ShadingPoints sp;
+      sp.resize(4, 1);
+      sp.eye = move + glm::vec3(0.0f, 3.0f * scale, 0.0f);
+      const glm::vec3 surface = move + glm::vec3(0.0f, scale, 0.0f);
+      const float k = gpu_shared::shadow_ray_offset(surface, sp.eye);
+      // Just under the surface, within the offset: the pushed origin clears it.
+      sp.position[0] = glm::vec4(surface - glm::vec3(0.0f, 0.5f * k, 0.0f), 1.0f);
+      // Under the surface by more than the offset: still below it, so shadowed.
+      sp.position[1] = glm::vec4(surface - glm::vec3(0.0f, 2.0f * k, 0.0f), 1.0f);
+      // Exactly on it: no self-shadowing.
+      sp.position[2] = glm::vec4(surface, 1.0f);
+      // Normal perpendicular to the light counts as facing away.
+      sp.position[3] = glm::vec4(move + glm::vec3(5.0f * scale, 0.0f, 0.0f), 1.0f);
+      for (int i = 0; i < 3; ++i) sp.normal[i] = glm::vec4(kUp, 0.0f);
+      sp.normal[3] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+      const std::vector<float> vis = tracer.visibility_1spp(sp, kDown);
+      EXPECT_EQ(vis, (std::vector<float>{1.0f, 0.0f, 1.0f, 0.0f}));
+      // With an identity inv_view_proj the camera rays run parallel to these planes, so every μQuad
+      // sample stays at its shading point and 32 samples must give the same answers.
+      EXPECT_EQ(tracer.visibility_32spp(sp, kDown), vis);
+      // The offset is a few thousand ulps of the coordinates at hand, whatever their size.
+      const float ulp = std::nextafter(std::max(std::abs(surface.x), surface.y), 1.0e30f) - std::max(std::abs(surface.x), surface.y);
+      EXPECT_GT(k, 256.0f * ulp);
+      EXPECT_LT(k, 1.0e-3f * (3.0f * scale + shift) + 8192.0f * ulp);
+    }
+  }
+}
+
+// A world far from its origin, rebased: entities a million units out, traced relative to a local
+// origin beside them (the tracer's shift, computed in double), answer as the same scene at the origin.
+TEST(EmbreeTracer, RebasedWorldAnswersAsAtTheOrigin) {
+  const auto build = [](glm::dvec3 where, engine::Registry& reg) {
+    const engine::Entity e = reference::add_mesh_entity(reg, reference::make_quad_y(1.0f, glm::vec2(-1.0f), glm::vec2(1.0f)));
+    reg.get<engine::Transform>(e).world[3] = glm::vec4(glm::vec3(where), 1.0f);
+  };
+  engine::Registry at_origin, far_away;
+  build(glm::dvec3(0.0), at_origin);
+  const glm::dvec3 far(1.0e6, 0.0, -1.0e6);
+  build(far, far_away);
+  const EmbreeTracer near_tracer(at_origin), rebased(far_away, -far);
+  ShadingPoints sp = reference::plane_shading_points(kSize, kSize, camera(), glm::vec3(0.0f), kUp);
+  const glm::vec3 light(0.3f, -1.0f, 0.2f);
+  const auto expected = near_tracer.visibility_1spp(sp, light);
+  EXPECT_EQ(rebased.visibility_1spp(sp, light), expected);
+  EXPECT_EQ(rebased.visibility_32spp(sp, light), near_tracer.visibility_32spp(sp, light));
+  EXPECT_GT(std::count(expected.begin(), expected.end(), 0.0f), 10);
+  // Without the shift the far scene is somewhere else entirely: nothing shadows the points.
+  const EmbreeTracer unshifted(far_away);
+  const auto none = unshifted.visibility_1spp(sp, light);
+  EXPECT_EQ(std::count(none.begin(), none.end(), 0.0f), 0);
 }
 
 TEST(EmbreeTracer, FlippedLightFlipsPointsUnderTheOccluder) {
@@ -219,7 +259,7 @@ TEST(EmbreeTracer, ThirtyTwoSamplesMatchAnalyticShadow) {
 
   const glm::vec3 to_light = -glm::normalize(light);
   auto lit_analytic = [&](glm::vec3 surface) {
-    const glm::vec3 o = gpu_shared::shadow_ray_origin(surface, kUp);
+    const glm::vec3 o = gpu_shared::shadow_ray_origin(surface, kUp, gpu_shared::shadow_ray_offset(surface, sp.eye));
     const glm::vec3 h = o + to_light * ((1.0f - o.y) / to_light.y);
     return !(std::abs(h.x) <= 1.0f && std::abs(h.z) <= 1.0f);
   };
@@ -265,7 +305,7 @@ TEST(EmbreeTracer, PacketResultsAgreeWithSingleRays) {
   const std::vector<float> vis = tracer.visibility_1spp(sp, light);
   int shadowed = 0;
   for (size_t i = 0; i < vis.size(); ++i) {
-    const glm::vec3 o = gpu_shared::shadow_ray_origin(glm::vec3(sp.position[i]), kUp);
+    const glm::vec3 o = gpu_shared::shadow_ray_origin(glm::vec3(sp.position[i]), kUp, gpu_shared::shadow_ray_offset(glm::vec3(sp.position[i]), sp.eye));
     EXPECT_EQ(vis[i], tracer.occluded(o, -light) ? 0.0f : 1.0f) << "pixel " << i;
     shadowed += vis[i] == 0.0f;
   }

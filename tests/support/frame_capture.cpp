@@ -13,19 +13,37 @@ reference::ShadingPoints capture_shading_points(engine::Renderer& renderer) {
   points.normal = renderer.read_geometric_normals();
   points.facing_from_w = true;
   points.inv_view_proj = renderer.frame_view().inverse_view_projection;
+  points.eye = renderer.frame_view().camera_position;
   return points;
 }
 
+glm::dvec3 frame_shift(engine::Renderer& renderer) {
+  const glm::dvec3 scene_origin = renderer.scene() ? renderer.scene()->origin : glm::dvec3(0.0);
+  return scene_origin - renderer.world_origin();
+}
+
+namespace {
+// The reference must trace the triangles the frame drew, relative to the frame's origin.
+void check_tracer(engine::Renderer& renderer, const reference::EmbreeTracer& tracer) {
+  if (tracer.shift() != frame_shift(renderer))
+    throw std::runtime_error("the reference tracer was built for another frame origin: build it with support::frame_shift(renderer)");
+}
+}  // namespace
+
 std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
                                         uint32_t samples_per_pixel) {
+  check_tracer(renderer, tracer);
   const auto points = capture_shading_points(renderer);
   const glm::vec3 light = renderer.frame_view().light_direction;
   return samples_per_pixel == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
 }
 
 std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
-                                        uint32_t samples_per_pixel, const reference::LocalLight& light) {
+                                        uint32_t samples_per_pixel, const reference::LocalLight& scene_light) {
+  check_tracer(renderer, tracer);
   const auto points = capture_shading_points(renderer);
+  reference::LocalLight light = scene_light;  // scene space -> the frame's coordinates
+  light.position = glm::vec3(glm::dvec3(light.position) + frame_shift(renderer));
   return samples_per_pixel == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
 }
 

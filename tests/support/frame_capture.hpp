@@ -12,10 +12,15 @@ namespace support {
 // World positions and geometric normals exactly as the GPU passes read them this frame.
 reference::ShadingPoints capture_shading_points(engine::Renderer& renderer);
 
+// What the frame's rebasing adds to scene-space positions (Scene::origin - FrameView::origin): build
+// the reference tracer with it (reference::EmbreeTracer(registry, frame_shift(renderer))).
+glm::dvec3 frame_shift(engine::Renderer& renderer);
+
 // Reference visibility (1 lit, 0 shadowed, fraction at 32 spp, -1 background) for the last frame.
 std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
                                         uint32_t samples_per_pixel);
-// The same toward a spot or point light.
+// The same toward a spot or point light (its position in scene space, as scene_local_light gives it).
+// Both throw std::runtime_error when the tracer was built for another frame origin.
 std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
                                         uint32_t samples_per_pixel, const reference::LocalLight& light);
 

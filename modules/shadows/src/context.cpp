@@ -289,6 +289,19 @@ void ContextImpl::validate(const FrameDesc& f) const {
                   " is not a registered mesh");
   if (!(f.camera.near_plane > 0.0f) || !(f.camera.far_plane > f.camera.near_plane))
     throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
+  const auto finite = [](const auto* values, int count) {
+    for (int k = 0; k < count; ++k)
+      if (!std::isfinite(values[k])) return false;
+    return true;
+  };
+  if (!finite(f.camera.view, 16)) throw Error("shadows: FrameDesc.camera.view has a value that is not finite");
+  if (!finite(f.camera.projection, 16)) throw Error("shadows: FrameDesc.camera.projection has a value that is not finite");
+  if (!finite(f.origin, 3)) throw Error("shadows: FrameDesc.origin has a value that is not finite");
+  for (uint32_t i = 0; i < f.instance_count; ++i)
+    if (!finite(f.instances[i].world, 16))
+      throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].world has a value that is not finite");
+  if (!(settings_.units_per_metre > 0.0f) || !std::isfinite(settings_.units_per_metre))
+    throw Error("shadows: Settings.units_per_metre must be finite and > 0");
   // A technique the device cannot run is refused here, before anything is recorded.
   if (settings_.technique == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline)
     throw Error(capabilities().of(Technique::RayTraced).reason);  // the line capabilities() gives
@@ -578,8 +591,9 @@ void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_fac
 
 // The techniques whose passes differ for a spot or point light (off and rt take every light alike).
 void ContextImpl::record_local_light(Frame& frame) {
+  const Settings settings = in_world_units(settings_);
   const bool point = frame.view.light_cos_outer <= -1.0f;
-  switch (settings_.technique) {
+  switch (settings.technique) {
     case Technique::Off:
     case Technique::RayTraced:
       break;
@@ -588,8 +602,8 @@ void ContextImpl::record_local_light(Frame& frame) {
       // One perspective map per spot light (per cube-face cone of a point light), unfiltered for sm and
       // PCF-filtered for cascades.
       if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
-      const float filter = settings_.technique == Technique::Cascades ? kSpotFilterTexels : 0.0f;
-      auto map = [&](Frame& f) { shadow_map_->record(f, settings_.shadow_map, filter); };
+      const float filter = settings.technique == Technique::Cascades ? kSpotFilterTexels : 0.0f;
+      auto map = [&](Frame& f) { shadow_map_->record(f, settings.shadow_map, filter); };
       if (point) record_point_light_faces(frame, map);
       else map(frame);
       break;
@@ -598,7 +612,7 @@ void ContextImpl::record_local_light(Frame& frame) {
     case Technique::Hybrid: {
       // The hybrid shadows a local light with the IZB alone: its range bounds the work, and every point
       // it reaches gets the exact term.
-      auto izb_pass = [&](Frame& f) { izb().record(f, settings_.izb, settings_.debug, false, collect_stats_); };
+      auto izb_pass = [&](Frame& f) { izb().record(f, settings.izb, settings.debug, false, collect_stats_); };
       if (point) record_point_light_faces(frame, izb_pass);
       else izb_pass(frame);
       break;
@@ -607,39 +621,40 @@ void ContextImpl::record_local_light(Frame& frame) {
 }
 
 void ContextImpl::record_technique(Frame& frame) {
-  if (frame.view.local_light && settings_.technique != Technique::Off && settings_.technique != Technique::RayTraced) {
+  const Settings settings = in_world_units(settings_);
+  if (frame.view.local_light && settings.technique != Technique::Off && settings.technique != Technique::RayTraced) {
     record_local_light(frame);
     return;
   }
-  switch (settings_.technique) {
+  switch (settings.technique) {
     case Technique::Off:
       break;
     case Technique::ShadowMap:
       if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
-      shadow_map_->record(frame, settings_.shadow_map);
+      shadow_map_->record(frame, settings.shadow_map);
       break;
     case Technique::Cascades:
-      cascades().record(frame, settings_.cascades, frame.shadow_term, settings_.debug);
+      cascades().record(frame, settings.cascades, frame.shadow_term, settings.debug);
       break;
     case Technique::Izb:
-      izb().record(frame, settings_.izb, settings_.debug, false, collect_stats_);
+      izb().record(frame, settings.izb, settings.debug, false, collect_stats_);
       break;
     case Technique::Hybrid: {
       // IZB first: its resolve lists the pixels that take some of the cascades' term, and the
       // cascades filter only those.
-      IzbSettings near = settings_.izb;
-      near.max_distance = settings_.hybrid_izb_distance;
-      izb().record(frame, near, settings_.debug, true, collect_stats_, settings_.hybrid_soft_distance);
+      IzbSettings near = settings.izb;
+      near.max_distance = settings.hybrid_izb_distance;
+      izb().record(frame, near, settings.debug, true, collect_stats_, settings.hybrid_soft_distance);
       pass_barrier(*gpu_, frame.cmd);
       const PixelList listed = izb().hybrid_list();
-      cascades().record(frame, settings_.cascades, izb().soft_term(), settings_.debug, &listed);
+      cascades().record(frame, settings.cascades, izb().soft_term(), settings.debug, &listed);
       pass_barrier(*gpu_, frame.cmd);
       izb().record_hybrid_blend(frame);
       break;
     }
     case Technique::RayTraced:
       if (!ray_traced_) ray_traced_ = std::make_unique<RayTracedPass>(*gpu_);
-      ray_traced_->record(frame, settings_.izb.samples_per_pixel, collect_stats_);
+      ray_traced_->record(frame, settings.izb.samples_per_pixel, collect_stats_);
       break;
   }
 }

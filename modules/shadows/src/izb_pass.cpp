@@ -789,7 +789,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (spot) {
     light_view = light_view * glm::translate(glm::mat4(1.0f), -frame.view.light_position);
     const float cos_outer = std::clamp(frame.view.light_cos_outer, 0.05f, 1.0f);
-    near_d = gpu_shared::kLocalLightRadius * cos_outer;
+    near_d = gpu_shared::local_light_bulb(frame.view.light_range) * cos_outer;
     far_d = frame.view.light_range;
     tan_half = std::tan(std::acos(cos_outer)) * 1.02f;  // the cone's rim inside the grid
   } else if (depth_box.valid()) {

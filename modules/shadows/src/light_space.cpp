@@ -22,7 +22,7 @@ glm::mat4 spot_view_projection(const View& view) {
   const glm::mat4 light_view = rotation * glm::translate(glm::mat4(1.0f), -view.light_position);
   // The cone's half angle from its cosine, widened a little so its rim is inside the map.
   const float half_angle = std::acos(std::clamp(view.light_cos_outer, -1.0f, 1.0f)) * 1.02f;
-  const float near_plane = std::max(gpu_shared::kLocalLightRadius, 1.0e-3f * view.light_range);
+  const float near_plane = gpu_shared::local_light_bulb(view.light_range);
   return glm::perspectiveRH_ZO(2.0f * std::min(half_angle, 1.55f), 1.0f, near_plane, view.light_range) * light_view;
 }
 

@@ -322,9 +322,10 @@ void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collec
     gpu_shared::RayTracedPush push{};
     push.inverse_view_projection = frame.view.inverse_view_projection;
     push.light_direction = glm::vec4(glm::normalize(frame.view.light_direction), 0.0f);
+    push.light_cone = glm::vec4(0.0f, frame.view.camera_position);  // yzw: the shadow-ray offset's eye
     if (frame.view.local_light) {
       push.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
-      push.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, 0.0f, 0.0f);
+      push.light_cone.x = frame.view.light_cos_outer;
     }
     push.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, samples_per_pixel == 32 ? 32u : 1u,
                              collect_stats ? 1u : 0u);

@@ -127,3 +127,18 @@ std::string lit_culling_name(LitCulling mode) {
 }
 
 }  // namespace shadows
+
+namespace shadows {
+
+Settings in_world_units(const Settings& settings) {
+  Settings s = settings;
+  const float u = settings.units_per_metre;
+  s.cascades.max_distance *= u;
+  s.cascades.kernel_radius *= u;
+  s.izb.max_distance *= u;
+  s.hybrid_izb_distance *= u;
+  s.hybrid_soft_distance *= u;
+  return s;
+}
+
+}  // namespace shadows

@@ -77,6 +77,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     }
     p.bias = glm::vec4(settings.constant_bias, filter_texels, 0.0f, 0.0f);
     p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
+    p.camera_position = glm::vec4(frame.view.camera_position, 1.0f);
     record_update(ctx_, cmd, params_, &p, sizeof(p));
     resolve_pipeline_.bind(cmd);
     DescriptorWriter()

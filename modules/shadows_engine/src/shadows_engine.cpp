@@ -74,7 +74,9 @@ class EngineShadowModule final : public ShadowModule {
     return c.available;
   }
 
-  void on_scene(engine::gpu::Context&, engine::Scene&, engine::SceneGeometry& geometry) override {
+  void on_scene(engine::gpu::Context&, engine::Scene& scene, engine::SceneGeometry& geometry) override {
+    // The scene's units (engine::Scene::units_per_metre) scale the settings' distances in metres.
+    context_->settings().units_per_metre = float(scene.units_per_metre);
     // A new scene: its meshes and textures are registered as they are first drawn.
     for (const auto& [key, id] : meshes_) context_->unregister_mesh(id);
     meshes_.clear();
@@ -122,6 +124,7 @@ class EngineShadowModule final : public ShadowModule {
     std::memcpy(f.camera.view, glm::value_ptr(frame.view.view), sizeof(f.camera.view));
     std::memcpy(f.camera.projection, glm::value_ptr(frame.view.projection), sizeof(f.camera.projection));
     f.camera.reversed_z = true;
+    for (int k = 0; k < 3; ++k) f.origin[k] = frame.view.origin[k];
     f.camera.near_plane = frame.view.near_plane;
     f.camera.far_plane = frame.view.far_plane;
     // The sun into the renderer's shadow term, then each local light into its own; a night without
@@ -130,7 +133,10 @@ class EngineShadowModule final : public ShadowModule {
     outputs_.clear();
     const bool sun_lit = glm::length(frame.view.light_radiance) > 0.0f || frame.view.local_lights.empty();
     if (light_) {
-      lights_.push_back(*light_);
+      // set_light() takes world positions: made relative to the frame's origin like the rest.
+      Light light = *light_;
+      for (int k = 0; k < 3; ++k) light.position[k] = float(double(light.position[k]) - frame.view.origin[k]);
+      lights_.push_back(light);
       outputs_.push_back(image_input(frame.shadow_term));
     } else {
       if (sun_lit) {

@@ -112,6 +112,7 @@ void alpha_filter(const RTCFilterFunctionNArguments* args) {
 }
 
 struct EmbreeTracer::Impl {
+  glm::dvec3 shift{0.0};
   DeviceHandle device;
   std::unique_ptr<AlphaScene> alpha;
   SceneHandle scene;
@@ -183,8 +184,9 @@ struct EmbreeTracer::Impl {
   }
 };
 
-EmbreeTracer::EmbreeTracer(engine::Registry& registry) : impl_(std::make_unique<Impl>()) {
+EmbreeTracer::EmbreeTracer(engine::Registry& registry, const glm::dvec3& shift) : impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
+  im.shift = shift;
   im.device.reset(rtcNewDevice(nullptr));
   if (!im.device) {
     throw std::runtime_error(std::string("Embree error (") +
@@ -213,8 +215,10 @@ EmbreeTracer::EmbreeTracer(engine::Registry& registry) : impl_(std::make_unique<
         if (!mesh.data) return;
         const engine::MeshData& data = *mesh.data;
         const size_t base = vertices.size();
+        glm::mat4 world = transform.world;
+        world[3] = glm::vec4(glm::vec3(glm::dvec3(world[3]) + shift), world[3].w);
         for (const engine::Vertex& v : data.vertices) {
-          vertices.push_back(glm::vec3(transform.world * glm::vec4(v.position, 1.0f)));
+          vertices.push_back(glm::vec3(world * glm::vec4(v.position, 1.0f)));
         }
         const size_t whole = data.indices.size() / 3 * 3;
         TriangleAlpha alpha;
@@ -297,6 +301,8 @@ bool EmbreeTracer::occluded(glm::vec3 origin, glm::vec3 dir_to_light) const {
   return impl_->occluded1(origin, dir_to_light);
 }
 
+const glm::dvec3& EmbreeTracer::shift() const { return impl_->shift; }
+
 bool EmbreeTracer::occluded_within(glm::vec3 origin, glm::vec3 dir_to_light, float distance) const {
   return impl_->occluded1(origin, glm::normalize(dir_to_light), distance);
 }
@@ -326,7 +332,7 @@ std::vector<float> EmbreeTracer::visibility_1spp(const ShadingPoints& points,
         out[i] = 0.0f;
         continue;
       }
-      origins[count] = gpu_shared::shadow_ray_origin(p, n);
+      origins[count] = gpu_shared::shadow_ray_origin(p, n, gpu_shared::shadow_ray_offset(p, points.eye));
       slots[count] = i;
       if (++count == kPacket) flush();
     }
@@ -361,10 +367,11 @@ std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points,
       for (int k = 0; k < 4; ++k)
         corner[k] = gpu_shared::micro_quad_corner(pixel + glm::vec2(float(k & 1), float(k >> 1)), viewport,
                                                   points.inv_view_proj, p, n);
+      const float offset = gpu_shared::shadow_ray_offset(p, points.eye);
       for (uint32_t s = 0; s < kSamples; ++s) {
         const glm::vec3 q = gpu_shared::micro_quad_blend(corner[0], corner[1], corner[2], corner[3],
                                                          gpu_shared::kSamplePattern[s]);
-        origins[s] = gpu_shared::shadow_ray_origin(q, n);
+        origins[s] = gpu_shared::shadow_ray_origin(q, n, offset);
       }
       for (uint32_t s = 0; s < kSamples; s += kPacket)
         impl_->occluded_batch(kPacket, origins + s, to_light, hit + s);
@@ -402,12 +409,13 @@ std::vector<float> local_visibility(const ShadingPoints& points, const LocalLigh
           corner[k] = gpu_shared::micro_quad_corner(glm::vec2(float(x + (k & 1)), float(y + (k >> 1))), viewport,
                                                     points.inv_view_proj, p, n);
       uint32_t lit = 0;
+      const float offset = gpu_shared::shadow_ray_offset(p, points.eye);
       for (uint32_t s = 0; s < samples; ++s) {
         const glm::vec3 q = samples == 32 ? gpu_shared::micro_quad_blend(corner[0], corner[1], corner[2], corner[3],
                                                                          gpu_shared::kSamplePattern[s])
                                           : p;
-        const glm::vec3 origin = gpu_shared::shadow_ray_origin(q, n);
-        const float length = gpu_shared::local_shadow_ray_length(origin, light.position);
+        const glm::vec3 origin = gpu_shared::shadow_ray_origin(q, n, offset);
+        const float length = gpu_shared::local_shadow_ray_length(origin, light.position, light.range);
         lit += length <= 0.0f || !occluded(origin, light.position - origin, length) ? 1u : 0u;
       }
       out[i] = float(lit) / float(samples);

@@ -35,6 +35,13 @@ struct SceneView {
 struct Scene {
   std::string name;
   Registry registry;
+  // Large worlds: the world position (double) that every Transform, view and light of the scene is
+  // relative to. A host far from the world's origin keeps its entities' floats small and puts the
+  // distance here; the renderer and the shadow module then work relative to a point near the camera.
+  glm::dvec3 origin{0.0};
+  // How many world units make a metre (1: metres; 100: centimetres). The shadow module's distances
+  // in metres (the hybrid's split, the cascades' range) scale with it.
+  double units_per_metre = 1.0;
   Entity camera = kNullEntity;
   Entity light = kNullEntity;
   // The hemisphere ambient's sky colour (lighting.comp) and how bright the sky background is (1: day;

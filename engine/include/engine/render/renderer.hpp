@@ -75,7 +75,13 @@ struct FrameLight {
   float inner_cone = 0.0f, outer_cone = 0.0f;  // spot: half angles, radians
 };
 
+// Every world-space value of a frame (FrameView's matrices and positions, DrawItem::world and bounds,
+// FrameLight::position, the G-buffer's world positions) is relative to FrameView::origin, a world
+// position in double near the camera (Renderer::world_origin), so float keeps its precision however
+// far the camera is from the world's origin. A scene near the origin (within 4096 near planes of the
+// camera) keeps origin 0.
 struct FrameView {
+  glm::dvec3 origin{0.0};
   glm::mat4 view{1.0f};
   glm::mat4 projection{1.0f};
   glm::mat4 view_projection{1.0f};
@@ -186,6 +192,9 @@ class Renderer {
   // Local light i's shadow term (FrameView::local_lights[i]).
   gpu::Image& local_shadow_term(uint32_t i) { return local_shadow_terms_.at(i); }
   const FrameView& frame_view() const { return view_; }
+  // The world position (double, Scene::origin included) that this frame's world-space values are
+  // relative to: see FrameView.
+  const glm::dvec3& world_origin() const { return view_.origin; }
   const std::vector<DrawItem>& draws() const { return draws_; }
   SceneGeometry* geometry() { return geometry_.get(); }
   gpu::GpuProfiler& profiler() { return profiler_; }

@@ -182,8 +182,8 @@ enum class LightType : uint32_t { Directional, Spot, Point };
 // Stats::lights entry sums them). A local light shadows the points it reaches: within
 // `range` of `position` and, for a spot light, inside its outer cone; every other point, and every
 // point whose geometric normal turns away from the light, is written 0. Shadow rays run from the
-// point (pushed off its surface as for the sun) toward `position`, and occluders closer than 0.01
-// world units to the light (its bulb and housing) do not count (shaders/shared/local_light.h).
+// point (pushed off its surface as for the sun) toward `position`, and occluders closer to the light
+// than its bulb, 1/1000 of its range (its bulb and housing), do not count (shaders/shared/local_light.h).
 struct Light {
   LightType type = LightType::Directional;
   float direction[3] = {0.0f, -1.0f, 0.0f};  // directional and spot: the direction light travels, unit
@@ -259,6 +259,12 @@ struct FrameDesc {
   // (all three, or none): the module then reads them in place and skips its input pass, and depth,
   // normals, geometric normals, terminator offset and receiver mask are checked but not read.
   NativeInputs native;
+  // Large worlds: the world position, in double, that every world-space value of this FrameDesc is
+  // relative to: camera.view, instances' world matrices, lights' positions and native world positions
+  // (world = value + origin). A host whose world reaches far from its origin passes a point near the
+  // camera here (Unreal's rebasing, a floating origin) and makes its matrices relative to it, so float
+  // keeps its precision; the shadows are the same wherever the origin is. Finite.
+  double origin[3] = {0.0, 0.0, 0.0};
   Camera camera;
   // The lights to shadow, 1..kMaxLightsPerRecord, each into its own image: lights[0] into `output`,
   // lights[i] into light_outputs[i - 1]. They run one after another through the same passes, with a

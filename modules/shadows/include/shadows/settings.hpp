@@ -145,7 +145,16 @@ struct Settings {
   // (world units, along the light) or farther above it takes the cascades' filtered term; nearer
   // occluders blend linearly toward the exact IZB term, which contact shadows keep.
   float hybrid_soft_distance = 2.0f;
+  // How many of the host's world units make a metre (1: metres, 100: centimetres, 0.01: hectometres).
+  // The distances above stated in world units are taken in metres and scaled by it: cascades.max_distance
+  // and kernel_radius, izb.max_distance, hybrid_izb_distance and hybrid_soft_distance. Nothing else in
+  // the module depends on the world's units or on how far the scene is from the world's origin (see
+  // FrameDesc::origin). Finite and > 0.
+  float units_per_metre = 1.0f;
 };
+
+// `settings` with its distances in metres (Settings::units_per_metre) turned into world units.
+Settings in_world_units(const Settings& settings);
 
 // Why the automatic CSM choice took or left an entity.
 struct CsmDecision {

@@ -7,12 +7,12 @@
 //  * covered pixel that does not face the light (ShadingPoints::faces: the G-buffer's decision,
 //    gpu_shared::faces_light, for captured frames)            -> 0  (the GPU passes skip such
 //    points)
-//  * otherwise, visibility_1spp: one ray from gpu_shared::shadow_ray_origin(p, n) towards the
-//  light;
+//  * otherwise, visibility_1spp: one ray from gpu_shared::shadow_ray_origin(p, n, offset) towards the
+//  light, offset = gpu_shared::shadow_ray_offset(p, ShadingPoints::eye);
 //    occluded -> 0, else 1.
 //  * otherwise, visibility_32spp: for each i < 32, s_i = gpu_shared::micro_quad_sample(vec2(x, y),
 //    kSamplePattern[i], vec2(width, height), inv_view_proj, p, n); one ray from
-//    shadow_ray_origin(s_i, n); the value is the unoccluded fraction k / 32.
+//    shadow_ray_origin(s_i, n, offset) (the pixel's offset); the value is the unoccluded fraction k / 32.
 // A ray (tnear = 0, tfar = inf) is occluded by any hit on either face of any triangle (no backface
 // culling), except where an alpha-tested triangle (engine::alpha_tested: MASK, BLEND) is transparent:
 // an occlusion filter reads its texture at the hit's texture coordinate with the rule every GPU
@@ -41,9 +41,12 @@ class EmbreeTracer {
  public:
   // Takes every entity with Mesh + Transform, skipping those whose ShadowCaster says
   // casts_shadow = false (no ShadowCaster means it casts). Vertices go through Transform::world as
-  // it stands: run the transform system first. Throws std::runtime_error (one line) on an Embree
-  // error or a mesh index out of range.
-  explicit EmbreeTracer(engine::Registry& registry);
+  // it stands: run the transform system first. `shift` is added to each world matrix's translation in
+  // double first, as the renderer rebases a frame (engine::FrameView: Scene::origin minus the frame's
+  // origin), so the reference traces the same float triangles the GPU draws, relative to the same
+  // local origin. Throws std::runtime_error (one line) on an Embree error or a mesh index out of range.
+  explicit EmbreeTracer(engine::Registry& registry, const glm::dvec3& shift = glm::dvec3(0.0));
+  const glm::dvec3& shift() const;
   ~EmbreeTracer();
   EmbreeTracer(EmbreeTracer&&) noexcept;
   EmbreeTracer& operator=(EmbreeTracer&&) noexcept;

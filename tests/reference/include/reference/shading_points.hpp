@@ -20,6 +20,9 @@ struct ShadingPoints {
   // NDC (Vulkan: x, y in [-1,1], y down, reversed depth: 1 near, 0 far) to world. The 32-sample
   // mode needs it to place the μQuad samples exactly where the GPU places them.
   glm::mat4 inv_view_proj{1.0f};
+  // The camera's position, in the points' coordinates: the shadow-ray offset grows with the distance
+  // from it (gpu_shared::shadow_ray_offset).
+  glm::vec3 eye{0.0f};
 
   // Pixel (x, y) lives at index y * width + x.
   size_t index(uint32_t x, uint32_t y) const { return size_t(y) * width + x; }
