@@ -26,6 +26,15 @@ gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu ENVIRO
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_PREFIX syncval.
                      PROPERTIES LABELS syncval ENVIRONMENT ENGINE_SYNC_VALIDATION=1)
 
+# Exact anywhere: the scale and offset matrix against Embree (tests/scale), one CTest entry per scene,
+# validation on; outside gpu_tests so the synchronization-validation pass does not run it twice.
+add_executable(world_scale_tests scale/world_scale_test.cpp)
+target_link_libraries(world_scale_tests PRIVATE shadow_test_support GTest::gtest_main)
+target_compile_definitions(world_scale_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+engine_target_warnings(world_scale_tests)
+gtest_discover_tests(world_scale_tests DISCOVERY_TIMEOUT 60
+                     PROPERTIES LABELS "gpu;scale" TIMEOUT 1500 ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
+
 add_subdirectory(window)
 
 # The walkthrough executable itself: headless run, and one-line errors for bad scene files.
