@@ -122,6 +122,7 @@ class Loader {
   std::map<std::pair<int, int>, std::shared_ptr<const MeshData>> primitive_cache_;
   std::vector<std::pair<Entity, int>> camera_nodes_;  // node entity, camera index
   std::vector<Entity> sun_nodes_;                     // nodes holding a directional light
+  size_t local_lights_ = 0;                           // spot and point lights
   size_t skipped_primitives_ = 0;
   size_t skipped_cameras_ = 0;
   std::map<int, std::shared_ptr<const Texture>> texture_cache_;  // by glTF texture index (null: unusable)
@@ -650,12 +651,14 @@ void Loader::add_light(Registry& r, Entity node_entity, int node_index, const ti
     sun_nodes_.push_back(node_entity);
   } else if (l.type == "point") {
     r.emplace<PointLight>(node_entity, PointLight{color, intensity, range});
+    ++local_lights_;
   } else if (l.type == "spot") {
     const double inner = l.spot.innerConeAngle, outer = l.spot.outerConeAngle;
     if (!(inner >= 0.0 && inner < outer && outer <= glm::half_pi<double>() + 1e-6))
       fail(label + " cones must satisfy 0 <= innerConeAngle < outerConeAngle <= pi/2 (got " + std::to_string(inner) +
            ", " + std::to_string(outer) + ")");
     r.emplace<SpotLight>(node_entity, SpotLight{color, intensity, range, float(inner), float(outer)});
+    ++local_lights_;
   } else {
     fail(label + " has type \"" + l.type + "\" (directional, point or spot)");
   }
@@ -697,6 +700,10 @@ void Loader::add_views(Scene& scene) {
     const glm::vec3 forward = -glm::vec3(r.get<Transform>(sun_nodes_.front()).world[2]);
     if (glm::length(forward) > 1e-6f) sun_direction = glm::normalize(forward);
     sun.direction = sun_direction;
+  } else if (local_lights_ > 0) {
+    // A file lit by its own spot and point lights and no sun is lit by them alone: the default sun
+    // stays dark (enable_default_sun brings it back).
+    sun.intensity = 0.0f;
   }
   r.emplace<DirectionalLight>(scene.light, sun);
 

@@ -145,6 +145,13 @@ void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const
   update_world_transforms(r);
 }
 
+bool enable_default_sun(Scene& scene) {
+  auto* sun = scene.registry.try_get<DirectionalLight>(scene.light);
+  if (!sun || sun->intensity > 0.0f) return false;
+  sun->intensity = DirectionalLight{}.intensity;
+  return true;
+}
+
 size_t Scene::triangle_count() {
   size_t total = 0;
   registry.each<Mesh>([&](Entity, Mesh& m) {

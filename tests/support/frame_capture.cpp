@@ -47,6 +47,38 @@ std::vector<float> reference_visibility(engine::Renderer& renderer, const refere
   return samples_per_pixel == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
 }
 
+std::vector<FrameLightCheck> check_every_light(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
+                                               uint32_t samples_per_pixel) {
+  check_tracer(renderer, tracer);
+  const auto points = capture_shading_points(renderer);
+  const engine::FrameView& view = renderer.frame_view();
+  const auto masked = [&](std::vector<float> term) {
+    for (size_t i = 0; i < term.size(); ++i)
+      if (!points.covered(i)) term[i] = -1.0f;
+    return term;
+  };
+  std::vector<FrameLightCheck> out;
+  if (glm::length(view.light_radiance) > 0.0f || view.local_lights.empty()) {
+    FrameLightCheck c{"sun", masked(renderer.read_shadow_term()), {}};
+    c.reference = samples_per_pixel == 32 ? tracer.visibility_32spp(points, view.light_direction)
+                                          : tracer.visibility_1spp(points, view.light_direction);
+    out.push_back(std::move(c));
+  }
+  for (uint32_t i = 0; i < view.local_lights.size(); ++i) {
+    const engine::FrameLight& l = view.local_lights[i];
+    reference::LocalLight light;  // already in the frame's coordinates
+    light.position = l.position;
+    light.range = l.range;
+    light.spot = l.kind == engine::LocalLightKind::Spot;
+    light.spot_direction = l.direction;
+    light.cos_outer = light.spot ? std::cos(l.outer_cone) : -1.0f;
+    FrameLightCheck c{light.spot ? "spot" : "point", masked(renderer.read_local_shadow_term(i)), {}};
+    c.reference = samples_per_pixel == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
 SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type) {
   SceneLight out;
   out.module.type = type;

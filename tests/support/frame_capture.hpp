@@ -1,6 +1,9 @@
 #pragma once
 // Glue between a rendered frame and the reference: reads the shading points the shadow passes used,
 // and runs the Embree reference on them.
+#include <string>
+#include <vector>
+
 #include "engine/render/renderer.hpp"
 #include "reference/comparator.hpp"
 #include "reference/embree_tracer.hpp"
@@ -23,6 +26,18 @@ std::vector<float> reference_visibility(engine::Renderer& renderer, const refere
 // Both throw std::runtime_error when the tracer was built for another frame origin.
 std::vector<float> reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
                                         uint32_t samples_per_pixel, const reference::LocalLight& light);
+
+// Every light the frame shadows, as the engine adapter records them without set_light(): the sun (while
+// it shines, or when there is no local light) into Renderer::shadow_term, then each of
+// FrameView::local_lights into its own term. `visibility` is the light's term (-1 background), and
+// `reference` Embree's answer for it, toward the light as the frame placed it.
+struct FrameLightCheck {
+  std::string kind;  // "sun", "spot" or "point"
+  std::vector<float> visibility;
+  std::vector<float> reference;
+};
+std::vector<FrameLightCheck> check_every_light(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
+                                               uint32_t samples_per_pixel);
 
 // A scene's spot or point light (its first engine::SpotLight or PointLight, placed and aimed by its
 // Transform's world matrix) as the module and the reference take it; throws std::runtime_error when

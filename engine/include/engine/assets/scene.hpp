@@ -79,12 +79,17 @@ std::unique_ptr<Scene> build_procedural_scene(const std::string& name);
 
 // Loads a .gltf or .glb file into a new scene. Cameras in the file become views; a file without
 // cameras gets two default views derived from its bounds (0: overview from above, 1: inside at eye
-// height) and a default sun.
+// height). A directional light in the file is the sun; a file with none gets a default sun, which stays
+// dark (intensity 0: neither lit nor shadowed) when the file brings spot or point lights of its own.
 std::unique_ptr<Scene> load_gltf_scene(const std::filesystem::path& path);
 // The same for a file's bytes already in memory: `name` stands for the file in errors (and names the
 // scene), external buffers resolve in `base_dir`.
 std::unique_ptr<Scene> load_gltf_scene_from_memory(std::string bytes, const std::string& name,
                                                    const std::filesystem::path& base_dir);
+
+// Lights a scene's dark sun (a glTF file lit by its own lights) with the default sun's intensity, for
+// runs that ask for the sun (--sun). Returns whether it changed anything.
+bool enable_default_sun(Scene& scene);
 
 // A procedural scene name, a path to a glTF file, or a .json scene file (engine/assets/scene_file.hpp).
 // `detail` applies to scene files' generated content.
