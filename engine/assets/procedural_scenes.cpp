@@ -505,13 +505,84 @@ std::unique_ptr<Scene> build_lamps() {
   return scene;
 }
 
+// A hall about 60 units across and 30 high, the scale of a game level's room: pillars, crates and a
+// gallery, lit by three spot lights 20 to 50 units from what they light and a point light under the
+// gallery, with a dim moon through the open roof. Shadows here travel tens of units, where a
+// light-space depth or ray offset made for a metre-sized scene loses its precision.
+std::unique_ptr<Scene> build_hall() {
+  auto scene = std::make_unique<Scene>();
+  scene->name = "hall";
+  const glm::vec4 stone{0.7f, 0.68f, 0.64f, 1.0f};
+  add_mesh(*scene, "floor", make_ground(30.0f, 30.0f, 0.0f, 8), {0.5f, 0.47f, 0.43f, 1.0f});
+  add_mesh(*scene, "wall_north", make_box({30.0f, 15.0f, 0.5f}), stone, {0.0f, 15.0f, -30.5f});
+  add_mesh(*scene, "wall_west", make_box({0.5f, 15.0f, 30.0f}), stone, {-30.5f, 15.0f, 0.0f});
+  add_mesh(*scene, "wall_east", make_box({0.5f, 15.0f, 30.0f}), stone, {30.5f, 15.0f, 0.0f});
+  for (int i = 0; i < 6; ++i) {
+    const glm::vec3 base{-20.0f + 8.0f * float(i), 0.0f, -12.0f};
+    char name[16];
+    std::snprintf(name, sizeof(name), "pillar_%d", i);
+    add_mesh(*scene, name, make_cylinder(glm::vec3(0.0f), {0.0f, 18.0f, 0.0f}, 1.1f, 24, true), stone, base);
+  }
+  // The gallery on the pillars, and crates on the floor.
+  add_mesh(*scene, "gallery", make_box({22.0f, 0.6f, 4.0f}), {0.45f, 0.32f, 0.22f, 1.0f}, {0.0f, 18.6f, -16.0f});
+  const glm::vec3 crates[5][2] = {{{-12.0f, 1.5f, 6.0f}, glm::vec3(1.5f)},
+                                  {{-9.2f, 1.0f, 7.5f}, glm::vec3(1.0f)},
+                                  {{4.0f, 2.5f, 2.0f}, {2.5f, 2.5f, 2.5f}},
+                                  {{14.0f, 1.2f, 10.0f}, {3.0f, 1.2f, 1.2f}},
+                                  {{8.0f, 0.6f, -4.0f}, {0.6f, 0.6f, 0.6f}}};
+  for (int i = 0; i < 5; ++i) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "crate_%d", i);
+    add_mesh(*scene, name, make_box(crates[i][1]), {0.6f, 0.42f, 0.25f, 1.0f}, crates[i][0]);
+  }
+  add_mesh(*scene, "statue", make_uv_sphere(glm::vec3(0.0f), 2.0f, 32, 16), {0.75f, 0.75f, 0.8f, 1.0f}, {-4.0f, 2.0f, 14.0f});
+
+  Registry& r = scene->registry;
+  // Three spot lights high on the walls and under the roof, aimed at the floor 20 to 50 units away.
+  const struct {
+    const char* name;
+    glm::vec3 position, target, color;
+    float range, outer;
+  } spots[3] = {{"spot_west", {-29.0f, 26.0f, 10.0f}, {-6.0f, 0.0f, 8.0f}, {1.0f, 0.85f, 0.6f}, 70.0f, 0.5f},
+                {"spot_east", {29.0f, 22.0f, -4.0f}, {10.0f, 0.0f, 6.0f}, {0.7f, 0.85f, 1.0f}, 60.0f, 0.55f},
+                {"spot_roof", {2.0f, 29.0f, 4.0f}, {2.0f, 0.0f, 4.0f}, {1.0f, 1.0f, 0.9f}, 45.0f, 0.6f}};
+  for (const auto& s : spots) {
+    const Entity e = r.create();
+    r.emplace<Name>(e, Name{s.name});
+    Transform t;
+    t.translation = s.position;
+    t.rotation = glm::rotation(glm::vec3(0.0f, 0.0f, -1.0f), glm::normalize(s.target - s.position));
+    r.emplace<Transform>(e, t);
+    r.emplace<SpotLight>(e, SpotLight{s.color, 900.0f, s.range, 0.6f * s.outer, s.outer});
+  }
+  const Entity point = r.create();
+  r.emplace<Name>(point, Name{"lamp_under_gallery"});
+  Transform point_transform;
+  point_transform.translation = {-6.0f, 12.0f, -10.0f};
+  r.emplace<Transform>(point, point_transform);
+  r.emplace<PointLight>(point, PointLight{{1.0f, 0.8f, 0.55f}, 150.0f, 35.0f});
+
+  add_camera_and_light(*scene, 0.1f, 300.0f);
+  const glm::vec3 moon_direction{0.35f, -1.0f, 0.25f};
+  DirectionalLight& moon = r.get<DirectionalLight>(scene->light);
+  moon.direction = glm::normalize(moon_direction);
+  moon.color = {0.6f, 0.7f, 1.0f};
+  moon.intensity = 0.3f;
+  scene->sky_color = {0.05f, 0.06f, 0.1f};
+  scene->sky_brightness = 0.15f;
+  scene->views.push_back({"overview", {26.0f, 24.0f, 28.0f}, {-2.0f, 2.0f, 0.0f}, moon_direction, glm::radians(60.0f)});
+  scene->views.push_back({"floor", {16.0f, 2.0f, 22.0f}, {-6.0f, 3.0f, -6.0f}, moon_direction, glm::radians(65.0f)});
+  finish(*scene);
+  return scene;
+}
+
 }  // namespace
 
 }  // namespace engine::procedural
 
 namespace engine {
 
-std::vector<std::string> procedural_scene_names() { return {"contact", "atrium", "foliage", "canopy", "lamps"}; }
+std::vector<std::string> procedural_scene_names() { return {"contact", "atrium", "foliage", "canopy", "lamps", "hall"}; }
 
 std::unique_ptr<Scene> build_procedural_scene(const std::string& name) {
   if (name == "contact") return procedural::build_contact();
@@ -519,7 +590,8 @@ std::unique_ptr<Scene> build_procedural_scene(const std::string& name) {
   if (name == "foliage") return procedural::build_foliage();
   if (name == "canopy") return procedural::build_canopy();
   if (name == "lamps") return procedural::build_lamps();
-  throw SceneError("unknown procedural scene '" + name + "': expected one of contact, atrium, foliage, canopy, lamps");
+  if (name == "hall") return procedural::build_hall();
+  throw SceneError("unknown procedural scene '" + name + "': expected one of contact, atrium, foliage, canopy, lamps, hall");
 }
 
 }  // namespace engine

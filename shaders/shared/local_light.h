@@ -12,6 +12,9 @@ SHARED_BEGIN
 // light's range (a range of 10 units: 0.01), so it scales with the world's units.
 SHARED_CONST float kLocalLightBulbPerRange = 1.0e-3f;
 SHARED_INLINE float local_light_bulb(float range) { return range * kLocalLightBulbPerRange; }
+// The IZB's perspective grid of a spot light (or a point light's face) starts this fraction of the
+// range from the light: casters nearer than that are ray-tested in world space instead.
+SHARED_CONST float kLocalLightNearPerRange = 1.0f / 64.0f;
 
 // Whether a light at `light_position` (range `range` > 0; for a spot light, `spot` set, travelling
 // along the unit `spot_direction` with outer-cone cosine `cos_outer`) reaches `point`. A point it does

@@ -789,7 +789,12 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (spot) {
     light_view = light_view * glm::translate(glm::mat4(1.0f), -frame.view.light_position);
     const float cos_outer = std::clamp(frame.view.light_cos_outer, 0.05f, 1.0f);
-    near_d = gpu_shared::local_light_bulb(frame.view.light_range) * cos_outer;
+    // The near plane sits at 1/64 of the range, not at the bulb: a perspective depth in [0, 1] keeps
+    // about far / near ulps of relative precision, and a bulb-sized near plane left the node test's depths
+    // of a room-scale light (tens of units) too coarse for its shadow-ray offsets (speckled false
+    // shadow). The few casters nearer than it are ray-tested in world space (izb_triangles.comp).
+    near_d = std::max(gpu_shared::local_light_bulb(frame.view.light_range) * cos_outer,
+                      frame.view.light_range * gpu_shared::kLocalLightNearPerRange);
     far_d = frame.view.light_range;
     tan_half = std::tan(std::acos(cos_outer)) * 1.02f;  // the cone's rim inside the grid
   } else if (depth_box.valid()) {
