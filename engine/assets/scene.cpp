@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <unordered_map>
 
 #include "engine/assets/scene_file.hpp"
@@ -90,8 +91,11 @@ void replicate_scene(Scene& scene, uint32_t copies) {
 }
 
 void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const std::string& what) {
-  if (!(std::isfinite(scale) && scale > 0.0))
-    throw SceneError(scene.name + ": " + what + " scale " + std::to_string(scale) + " must be finite and positive");
+  if (!(std::isfinite(scale) && scale > 0.0)) {
+    char line[160];
+    std::snprintf(line, sizeof(line), ": %s scale %g must be finite and positive", what.c_str(), scale);
+    throw SceneError(scene.name + line);
+  }
   for (int i = 0; i < 3; ++i)
     if (!std::isfinite(offset[i])) throw SceneError(scene.name + ": " + what + " offset must be finite");
   const Aabb bounds = scene.world_bounds();
@@ -100,10 +104,14 @@ void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const
     const double reach = std::max(glm::compMax(glm::abs(lo)), glm::compMax(glm::abs(hi)));
     const double size = glm::compMax(hi - lo);
     // Past 1e7 float spacing is a unit; a scene smaller than float's spacing at its distance has no shape.
-    if (!(reach <= 1.0e7) || !(size > 1.0e-30) || !(size >= reach * 1.0e-7))
-      throw SceneError(scene.name + ": " + what + " scale " + std::to_string(scale) + " and offset put the scene out of " +
-                       "float's reach (it would span " + std::to_string(size) + " units at " + std::to_string(reach) +
-                       " from the origin)");
+    if (!(reach <= 1.0e7) || !(size > 1.0e-30) || !(size >= reach * 1.0e-7)) {
+      char line[256];
+      std::snprintf(line, sizeof(line),
+                    ": %s scale %g and offset put the scene out of float's reach (%g units across, %g from the origin; "
+                    "at most 1e7 from it, and no smaller than float's spacing there)",
+                    what.c_str(), scale, size, reach);
+      throw SceneError(scene.name + line);
+    }
   }
   const auto move = [&](const glm::vec3& p) { return glm::vec3(glm::dvec3(p) * scale + offset); };
   const float s = float(scale);

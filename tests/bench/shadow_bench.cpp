@@ -62,6 +62,7 @@ struct Options {
   std::string out_dir; // suite: where suite.json and suite.md go
   std::vector<uint32_t> spps = {1};  // suite: samples per pixel to run
   std::vector<size_t> views;         // suite: views to run (empty: every view)
+  bool large_world = false;          // --large-world: the offset goes into Scene::origin
   bool sun = false;                  // --sun: a glTF lit by its own lights gets the default sun too
   double scale = 1.0;                // --scale: the scene scaled about the origin (engine::transform_scene)
   glm::dvec3 offset{0.0};            // --offset: then moved by this (world units)
@@ -75,7 +76,7 @@ const char* kUsage =
     "                    [--anchored-nodes on|off] [--csm-timed] [--step-times] [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
-    "                    [--light sun|spot|point] [--scale S] [--offset X,Y,Z] [--sun]\n"
+    "                    [--light sun|spot|point] [--scale S] [--offset X,Y,Z] [--large-world] [--sun]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
@@ -88,6 +89,8 @@ const char* kUsage =
     "  timestamps cost waits; IzbSettings::step_timings).\n"
     "  --scale S --offset X,Y,Z: the scene (procedural, glTF or level) scaled about the origin, then moved, with\n"
     "  its views, light ranges and camera planes (100: a centimetre world; 1e4,0,1e4: far from the origin).\n"
+    "  --large-world: the offset goes into engine::Scene::origin (double) and the entities stay near 0, as a\n"
+    "  host of a world far from its origin keeps them; the renderer and the module then work relative to it.\n"
     "  --reference and --dump cover every light the frame shadows (the sun while it shines, and up to three\n"
     "  spot and point lights), one JSON reference entry per light; --light spot|point shadows that light alone.\n"
     "  --sun: a glTF lit by its own spot and point lights and no directional light is lit by them alone\n"
@@ -190,6 +193,7 @@ Options parse(int argc, char** argv) {
       (a == "--max-mismatch" ? o.max_mismatch : o.max_coverage_mae) = bound;
     }
     else if (a == "--sun") o.sun = true;
+    else if (a == "--large-world") o.large_world = true;
     else if (a == "--scale") o.scale = parse_number(a, args.value());
     else if (a == "--offset") {
       const std::string v = args.value();
@@ -640,7 +644,12 @@ void print_header() {
 std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances, const Options& o) {
   auto scene = engine::load_scene(name, o.detail);
   if (o.sun) engine::enable_default_sun(*scene);
-  if (o.scale != 1.0 || o.offset != glm::dvec3(0.0)) engine::transform_scene(*scene, o.scale, o.offset, "--scale/--offset");
+  if (o.large_world) {
+    engine::transform_scene(*scene, o.scale, glm::dvec3(0.0), "--scale");
+    scene->origin = o.offset;
+  } else if (o.scale != 1.0 || o.offset != glm::dvec3(0.0)) {
+    engine::transform_scene(*scene, o.scale, o.offset, "--scale/--offset");
+  }
   engine::replicate_scene(*scene, instances);
   apply_csm_choice(*scene, o.csm_choice);
   return scene;
