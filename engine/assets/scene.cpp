@@ -128,12 +128,17 @@ void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const
   });
   // A light's or camera's scale would shear nothing but would scale its children: lights and the
   // camera are placed by translation and rotation alone.
+  // Intensities in candela light a point by intensity / distance²: scaled by scale² they light the
+  // scaled scene as before.
+  const float intensity_scale = float(scale * scale);
   r.each<SpotLight>([&](Entity e, SpotLight& l) {
     l.range *= s;
+    l.intensity *= intensity_scale;
     if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
   });
   r.each<PointLight>([&](Entity e, PointLight& l) {
     l.range *= s;
+    l.intensity *= intensity_scale;
     if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
   });
   r.each<Camera>([&](Entity e, Camera& c) {

@@ -3,6 +3,9 @@
 #include <cstdlib>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include <cstring>
 #include <glm/gtc/type_ptr.hpp>
 
@@ -251,6 +254,23 @@ TEST_F(HostBadInput, NullDepthView) {
   shadows::FrameDesc f = frame_;
   f.depth.view = VK_NULL_HANDLE;
   expect_refused(f, "FrameDesc.depth.view");
+}
+
+// Non-finite matrices and origins are refused, each naming its field.
+TEST_F(HostBadInput, NonFiniteCameraInstanceAndOrigin) {
+  const float nan = std::nanf("");
+  shadows::FrameDesc f = frame_;
+  f.camera.view[13] = nan;
+  expect_refused(f, "FrameDesc.camera.view");
+  f = frame_;
+  f.origin[2] = std::numeric_limits<double>::infinity();
+  expect_refused(f, "FrameDesc.origin");
+  shadows::Instance instance;
+  instance.world[12] = nan;
+  f = frame_;
+  f.instances = &instance;
+  f.instance_count = 1;
+  expect_refused(f, "FrameDesc.instances[0].world");
 }
 
 TEST_F(HostBadInput, UnsupportedOutputFormat) {

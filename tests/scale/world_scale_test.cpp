@@ -313,7 +313,7 @@ TEST_F(HallTest, EveryLightOfEveryTechniqueMatchesTheReferenceInMetresAndCentime
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, WorldScaleTest, ::testing::Values("contact", "atrium", "foliage", "canopy", "sponza"),
+INSTANTIATE_TEST_SUITE_P(Scenes, WorldScaleTest, ::testing::Values("contact", "atrium", "foliage", "canopy", "lamps", "sponza"),
                          [](const auto& info) { return info.param; });
 
 }  // namespace

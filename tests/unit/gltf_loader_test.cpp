@@ -402,6 +402,23 @@ TEST(GltfLoader, LoadsPunctualLights) {
   for (const SceneView& v : scene->views) EXPECT_NEAR(glm::distance(v.light_direction, sun), 0.0f, 1e-5f);
 }
 
+// A file lit by its own spot and point lights and no directional light is lit by them alone: its
+// default sun stays dark until asked for (enable_default_sun, shadow_bench --sun). A file with no
+// light at all keeps a shining default sun.
+TEST(GltfLoader, OwnLightsLeaveTheDefaultSunDark) {
+  TempDir dir;
+  const nlohmann::json lights = {{{"type", "spot"}, {"intensity", 40.0}, {"range", 12.0},
+                                  {"spot", {{"innerConeAngle", 0.3}, {"outerConeAngle", 0.6}}}}};
+  auto scene = load_gltf_scene(write_with_lights(dir, lights, nlohmann::json::array({{{"name", "lamp"}, {"light", 0}}})));
+  DirectionalLight& sun = scene->registry.get<DirectionalLight>(scene->light);
+  EXPECT_EQ(sun.intensity, 0.0f);
+  EXPECT_TRUE(enable_default_sun(*scene));
+  EXPECT_EQ(sun.intensity, DirectionalLight{}.intensity);
+  EXPECT_FALSE(enable_default_sun(*scene));  // shining already
+  auto plain = load_gltf_scene(test_file("triangle.gltf"));
+  EXPECT_EQ(plain->registry.get<DirectionalLight>(plain->light).intensity, DirectionalLight{}.intensity);
+}
+
 // Each malformed light is refused with one line naming the file, the light and the problem.
 TEST(GltfLoader, MalformedLightsAreRefusedInOneLine) {
   const nlohmann::json spot = {{"type", "spot"}, {"spot", {{"innerConeAngle", 0.3}, {"outerConeAngle", 0.6}}}};

@@ -361,3 +361,46 @@ TEST(ReplicateScene, CopiesShareMeshesAndTileTheGround) {
   EXPECT_NE(scene->name.find("x5"), std::string::npos);
   EXPECT_THROW(engine::replicate_scene(*scene, 0), engine::SceneError);
 }
+
+// transform_scene scales and moves a whole scene with what is measured in its units, and refuses what
+// float cannot hold in one line naming the option that asked.
+TEST(TransformScene, ScalesAndMovesEverythingMeasuredInUnits) {
+  auto scene = build_procedural_scene("lamps");
+  const Aabb before = scene->world_bounds();
+  const SceneView view = scene->views[0];
+  float spot_range = 0.0f;
+  scene->registry.each<SpotLight>([&](Entity, SpotLight& s) { spot_range = s.range; });
+  const float near_plane = scene->registry.get<Camera>(scene->camera).near_plane;
+  transform_scene(*scene, 100.0, glm::dvec3(1.0e4, 0.0, -2.0e3), "--scale/--offset");
+  const Aabb after = scene->world_bounds();
+  const glm::vec3 offset(1.0e4f, 0.0f, -2.0e3f);
+  EXPECT_LT(glm::distance(after.min, before.min * 100.0f + offset), 1e-2f);
+  EXPECT_LT(glm::distance(after.max, before.max * 100.0f + offset), 1e-2f);
+  EXPECT_LT(glm::distance(scene->views[0].eye, view.eye * 100.0f + offset), 1e-2f);
+  scene->registry.each<SpotLight>([&](Entity, SpotLight& s) { EXPECT_FLOAT_EQ(s.range, 100.0f * spot_range); });
+  EXPECT_FLOAT_EQ(scene->registry.get<Camera>(scene->camera).near_plane, 100.0f * near_plane);
+  EXPECT_EQ(scene->units_per_metre, 100.0);
+  // The lights and the camera keep unit scale: their children are not stretched.
+  scene->registry.each<SpotLight, Transform>([&](Entity, SpotLight&, Transform& t) {
+    EXPECT_NEAR(glm::length(glm::vec3(t.world[0])), 1.0f, 1e-5f);
+  });
+}
+
+TEST(TransformScene, RefusesWhatFloatCannotHoldInOneLine) {
+  const double nan = std::nan("");
+  const std::vector<std::pair<double, glm::dvec3>> bad = {{0.0, glm::dvec3(0.0)},  {-1.0, glm::dvec3(0.0)},
+                                                          {nan, glm::dvec3(0.0)},  {1.0, glm::dvec3(nan, 0.0, 0.0)},
+                                                          {1.0e30, glm::dvec3(0.0)}, {1.0, glm::dvec3(1.0e9, 0.0, 0.0)},
+                                                          {1.0e-12, glm::dvec3(1.0e6, 0.0, 0.0)}};
+  for (const auto& [scale, offset] : bad) {
+    auto scene = build_procedural_scene("contact");
+    try {
+      transform_scene(*scene, scale, offset, "--scale/--offset");
+      ADD_FAILURE() << "accepted scale " << scale << " offset " << offset.x;
+    } catch (const SceneError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("--scale/--offset"), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+}

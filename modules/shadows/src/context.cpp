@@ -2,6 +2,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include <glm/gtc/type_ptr.hpp>
 #include <shared/host.h>
@@ -284,6 +285,10 @@ void ContextImpl::validate(const FrameDesc& f) const {
   for (uint32_t i = 0; i < f.light_count; ++i) validate_light(f.lights[i], "FrameDesc.lights[" + std::to_string(i) + "]");
   if (f.instance_count > 0 && !f.instances) throw Error("shadows: FrameDesc.instances is null with instance_count > 0");
   for (uint32_t i = 0; i < f.instance_count; ++i)
+    for (const float v : f.instances[i].world)
+      if (!std::isfinite(v))
+        throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].world has a value that is not finite");
+  for (uint32_t i = 0; i < f.instance_count; ++i)
     if (!geometry_.find(f.instances[i].mesh))
       throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].mesh " + std::to_string(f.instances[i].mesh) +
                   " is not a registered mesh");
@@ -297,9 +302,6 @@ void ContextImpl::validate(const FrameDesc& f) const {
   if (!finite(f.camera.view, 16)) throw Error("shadows: FrameDesc.camera.view has a value that is not finite");
   if (!finite(f.camera.projection, 16)) throw Error("shadows: FrameDesc.camera.projection has a value that is not finite");
   if (!finite(f.origin, 3)) throw Error("shadows: FrameDesc.origin has a value that is not finite");
-  for (uint32_t i = 0; i < f.instance_count; ++i)
-    if (!finite(f.instances[i].world, 16))
-      throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].world has a value that is not finite");
   if (!(settings_.units_per_metre > 0.0f) || !std::isfinite(settings_.units_per_metre))
     throw Error("shadows: Settings.units_per_metre must be finite and > 0");
   // A technique the device cannot run is refused here, before anything is recorded.
@@ -532,8 +534,17 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   // inputs are read in place.
   const bool off = settings_.technique == Technique::Off;
   prepare_targets(cmd, !off && f.native.present());
-  if (!off && !f.native.present()) {
+  // The input pass stores whether each point faces the sun (host_inputs.comp): for the sun of this
+  // record, not the light the previous record left in view_ (a spot's axis, or none on the first
+  // frame). A later sun of another direction in the same record runs the pass again (below).
+  const bool host_inputs = !off && !f.native.present();
+  const auto sun_direction = [&](uint32_t i) { return glm::normalize(glm::make_vec3(f.lights[i].direction)); };
+  std::optional<glm::vec3> inputs_sun;
+  for (uint32_t i = 0; i < f.light_count && !inputs_sun; ++i)
+    if (f.lights[i].type == LightType::Directional) inputs_sun = sun_direction(i);
+  if (host_inputs) {
     engine::gpu::ScopedGpuRegion inputs_region(*gpu_, profiler, cmd, "host_inputs");
+    if (inputs_sun) view.light_direction = *inputs_sun;
     record_inputs(cmd, f, view);
   }
   const ShadingInputs inputs = f.native.present()
@@ -554,6 +565,12 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     if (f.light_count > 1) light_region.emplace(*gpu_, profiler, cmd, "light " + std::to_string(i));
     if (i > 0) restart_term(cmd);
     set_light(view, f.lights[i]);
+    if (host_inputs && f.lights[i].type == LightType::Directional && sun_direction(i) != *inputs_sun) {
+      // restart_term's barrier has ordered the previous light's reads of the inputs before this rewrite.
+      engine::gpu::ScopedGpuRegion inputs_region(*gpu_, profiler, cmd, "host_inputs");
+      record_inputs(cmd, f, view);
+      inputs_sun = sun_direction(i);
+    }
     Frame frame{*gpu_, cmd, profiler, view, inputs, shadow_term_, overlay_, geometry_.geometry(), draws_,
                 slot_index, frames_in_flight_};
     record_technique(frame);

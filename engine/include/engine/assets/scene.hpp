@@ -66,7 +66,8 @@ struct Scene {
 void replicate_scene(Scene& scene, uint32_t copies);
 
 // Scales the whole scene about the world origin by `scale`, then moves it by `offset` (world units):
-// root transforms, views, the camera's near and far planes, light ranges and animation paths, so
+// root transforms, views, the camera's near and far planes, light ranges (and their intensities, by
+// scale², as lighting falls off with the distance squared) and animation paths, so
 // that the scene looks the same in another unit (100: centimetres for metres) or far from the origin.
 // Throws SceneError naming `what` (the option that asked for it) when the result could not be held in
 // float: a scale that is not finite and positive, an offset that is not finite, or a scene that would
