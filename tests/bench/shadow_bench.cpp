@@ -705,8 +705,9 @@ int run_single(const Options& o) {
                              std::to_string(r["view"].get<size_t>()) + ", " + std::to_string(r["spp"].get<uint32_t>()) +
                              " spp)";
     for (const auto& ref : r["references"]) {
-      const std::string light = what + " light " + std::to_string(ref["light"].get<size_t>()) + " (" +
-                                ref["kind"].get<std::string>() + ")";
+      const std::string light = r["references"].size() == 1 ? what
+                                                             : what + " light " + std::to_string(ref["light"].get<size_t>()) +
+                                                                   " (" + ref["kind"].get<std::string>() + ")";
       const double mismatch = ref["mismatch_rate"], mae = ref["coverage_mae"];
       if (o.max_mismatch >= 0.0 && mismatch > o.max_mismatch) {
         std::fprintf(stderr, "shadow_bench: %s: mismatch rate %.6f over --max-mismatch %g\n", light.c_str(), mismatch,

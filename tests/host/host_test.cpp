@@ -39,6 +39,7 @@ reference::ShadingPoints shading_points(const Result& r) {
   sp.facing_from_w = true;
   const glm::vec4 eye_h = glm::make_mat4(r.inverse_view_projection.data()) * glm::vec4(0, 0, 1, 0);  // w = 0 in clip
   const glm::vec3 eye = glm::vec3(eye_h) / eye_h.w;
+  sp.eye = eye;  // the shadow-ray offset grows with the distance from the camera
   const glm::vec3 to_light = -glm::make_vec3(r.light_direction.data());
   for (uint32_t y = 0; y < r.height; ++y)
     for (uint32_t x = 0; x < r.width; ++x) {
