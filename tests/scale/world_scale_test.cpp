@@ -23,6 +23,9 @@
 #include "reference/embree_tracer.hpp"
 #include "shared/shadow_common.h"
 
+#include <glm/glm.hpp>
+#include <glm/gtx/component_wise.hpp>
+
 namespace {
 
 constexpr uint32_t kSize = 160;
@@ -82,6 +85,12 @@ struct Result {
   reference::Comparison cmp;
   reference::Comparison away_from_edges;  // pixels over 2 pixels from a reference shadow edge
   uint64_t near_points = 0;  // hybrid: the points compared
+  // Whether float holds the placed scene's shape: its entities' translations (floats, as
+  // engine::Transform keeps them) round by at most 1e-4 of its size. Where they round by more (a
+  // 0.2-unit scene 1e4 units out: steps of 1e-3), the parts of the scene move against each other, and
+  // both the GPU and the reference see that other scene: the exact techniques are held to their bounds
+  // there too, the filtered ones, whose aliasing follows the geometry, only where the shape is kept.
+  bool shape_kept = true;
 };
 
 class WorldScaleTest : public GpuTest, public ::testing::WithParamInterface<std::string> {
@@ -102,6 +111,9 @@ class WorldScaleTest : public GpuTest, public ::testing::WithParamInterface<std:
     std::unique_ptr<reference::EmbreeTracer> tracer;
     std::vector<float> reference_1spp, reference_32spp;
     std::vector<Result> out;
+    const engine::Aabb bounds = scene_->world_bounds();
+    const float reach = std::max(glm::compMax(glm::abs(bounds.min)), glm::compMax(glm::abs(bounds.max)));
+    const bool shape_kept = std::nextafter(reach, 2.0f * reach) - reach <= 1.0e-4f * glm::compMax(bounds.extent());
     for (const Technique& t : techniques()) {
       module->settings() = t.settings;
       module->settings().units_per_metre = float(scene_->units_per_metre);
@@ -113,6 +125,7 @@ class WorldScaleTest : public GpuTest, public ::testing::WithParamInterface<std:
       if (expected.empty()) expected = support::reference_visibility(*renderer_, *tracer, spp);
       const std::vector<float> vis = module->read_visibility();
       Result r;
+      r.shape_kept = shape_kept || where.large_world;
       if (!t.hybrid_near) {
         r.cmp = reference::compare_visibility(vis, expected);
         r.away_from_edges = reference::compare_visibility(vis, expected, reference::edge_distance_mask(expected, kSize, kSize, 2.0f));
@@ -136,9 +149,10 @@ class WorldScaleTest : public GpuTest, public ::testing::WithParamInterface<std:
         }
         r.cmp = reference::compare_visibility(vis, expected, include);
       }
-      std::printf("%-28s %-14s pixels %6llu mismatch %.6f false shadowed %4llu false lit %4llu MAE %.6f\n",
+      std::printf("%-28s %-14s pixels %6llu mismatch %.6f false shadowed %4llu (%4llu off edges) false lit %4llu MAE %.6f%s\n",
                   where.label().c_str(), t.name, (unsigned long long)r.cmp.pixels, r.cmp.mismatch_rate,
-                  (unsigned long long)r.cmp.false_shadowed, (unsigned long long)r.cmp.false_lit, r.cmp.coverage_mae);
+                  (unsigned long long)r.cmp.false_shadowed, (unsigned long long)r.away_from_edges.false_shadowed,
+                  (unsigned long long)r.cmp.false_lit, r.cmp.coverage_mae, r.shape_kept ? "" : " (shape rounded)");
       out.push_back(r);
     }
     renderer_->finish_frames();
@@ -177,8 +191,10 @@ TEST_P(WorldScaleTest, EveryPlacementIsAsExactAsTheOrigin) {
       // scene once it moves, which moves their errors along shadow edges by a few pixels either way;
       // acne shows away from the edges, so they are held to the origin's count there.
       if (name == "sm" || name == "cascades") {
-        EXPECT_LE(double(got[k].away_from_edges.false_shadowed),
-                  double(origin[k].away_from_edges.false_shadowed) + acne_allowance);
+        if (got[k].shape_kept) {
+          EXPECT_LE(double(got[k].away_from_edges.false_shadowed),
+                    double(origin[k].away_from_edges.false_shadowed) + acne_allowance);
+        }
       } else {
         EXPECT_LE(double(c.false_shadowed), double(origin[k].cmp.false_shadowed) + acne_allowance);
       }
@@ -195,7 +211,7 @@ TEST_P(WorldScaleTest, EveryPlacementIsAsExactAsTheOrigin) {
         EXPECT_GT(got[k].near_points, origin[k].near_points / 2);
       }
       // The filtered techniques keep the error they have at the origin.
-      if (name == "sm" || name == "cascades") {
+      if ((name == "sm" || name == "cascades") && got[k].shape_kept) {
         EXPECT_LE(c.mismatch_rate, origin[k].cmp.mismatch_rate * 1.25 + 2.0e-3);
       }
     }
