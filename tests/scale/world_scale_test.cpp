@@ -108,6 +108,11 @@ class WorldScaleTest : public GpuTest, public ::testing::WithParamInterface<std:
     renderer_ = std::make_unique<engine::Renderer>(*ctx_, VkExtent2D{kSize, kSize});
     renderer_->set_scene(*scene_);
     auto module = shadows::install(*renderer_, base(shadows::Technique::Izb));
+    // The sun alone (a night scene's moon too), whatever local lights the scene has: HallTest checks those.
+    shadows::Light sun;
+    const glm::vec3 direction = glm::normalize(scene_->registry.get<engine::DirectionalLight>(scene_->light).direction);
+    for (int k = 0; k < 3; ++k) sun.direction[k] = direction[k];
+    module->set_light(sun);
     std::unique_ptr<reference::EmbreeTracer> tracer;
     std::vector<float> reference_1spp, reference_32spp;
     std::vector<Result> out;
