@@ -79,20 +79,27 @@ std::vector<FrameLightCheck> check_every_light(engine::Renderer& renderer, const
   return out;
 }
 
+SceneLight local_light_at(const glm::mat4& world, shadows::LightType type, float range) {
+  SceneLight out;
+  out.module.type = type;
+  const glm::vec3 position(world[3]), direction = glm::normalize(-glm::vec3(world[2]));
+  for (int k = 0; k < 3; ++k) {
+    out.module.position[k] = position[k];
+    out.module.direction[k] = direction[k];
+  }
+  out.module.range = range;
+  out.reference.position = position;
+  out.reference.range = range;
+  out.reference.spot_direction = direction;
+  return out;
+}
+
 SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type) {
   SceneLight out;
   out.module.type = type;
   bool found = false;
   auto place = [&](const engine::Transform& t, float range) {
-    const glm::vec3 position(t.world[3]), direction = glm::normalize(-glm::vec3(t.world[2]));
-    for (int k = 0; k < 3; ++k) {
-      out.module.position[k] = position[k];
-      out.module.direction[k] = direction[k];
-    }
-    out.module.range = range;
-    out.reference.position = position;
-    out.reference.range = range;
-    out.reference.spot_direction = direction;
+    out = local_light_at(t.world, type, range);
     found = true;
   };
   if (type == shadows::LightType::Spot) {

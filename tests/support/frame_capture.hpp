@@ -46,6 +46,9 @@ struct SceneLight {
   shadows::Light module;
   reference::LocalLight reference;
 };
+// A spot or point light placed and aimed by `world` (a spot shines down its -Z), with its range; a
+// spot's cones are the caller's to set.
+SceneLight local_light_at(const glm::mat4& world, shadows::LightType type, float range);
 SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type);
 
 }  // namespace support
