@@ -126,25 +126,25 @@ void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const
       if (a->kind == Animated::Kind::Walk) a->speed *= s;
     }
   });
-  // A light's or camera's scale would shear nothing but would scale its children: lights and the
-  // camera are placed by translation and rotation alone.
+  // Lights and the camera are placed by translation and rotation alone: a root one keeps its unit
+  // scale (which would otherwise scale its children) and scales its ranges instead.
+  const auto keep_unit_scale = [&](Entity e) {
+    if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
+  };
   // Intensities in candela light a point by intensity / distance²: scaled by scale² they light the
   // scaled scene as before.
   const float intensity_scale = float(scale * scale);
-  r.each<SpotLight>([&](Entity e, SpotLight& l) {
-    l.range *= s;
-    l.intensity *= intensity_scale;
-    if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
-  });
-  r.each<PointLight>([&](Entity e, PointLight& l) {
-    l.range *= s;
-    l.intensity *= intensity_scale;
-    if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
-  });
+  const auto scale_light = [&](Entity e, float& range, float& intensity) {
+    range *= s;
+    intensity *= intensity_scale;
+    keep_unit_scale(e);
+  };
+  r.each<SpotLight>([&](Entity e, SpotLight& l) { scale_light(e, l.range, l.intensity); });
+  r.each<PointLight>([&](Entity e, PointLight& l) { scale_light(e, l.range, l.intensity); });
   r.each<Camera>([&](Entity e, Camera& c) {
     c.near_plane *= s;
     c.far_plane *= s;
-    if (auto* t = r.try_get<Transform>(e); t && t->parent == kNullEntity) t->scale /= s;
+    keep_unit_scale(e);
   });
   for (auto& v : scene.views) {
     v.eye = move(v.eye);

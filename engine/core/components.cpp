@@ -2,6 +2,12 @@
 
 namespace engine {
 
+glm::mat4 rebased(const glm::mat4& world, const glm::dvec3& shift) {
+  glm::mat4 m = world;
+  m[3] = glm::vec4(glm::vec3(glm::dvec3(world[3]) + shift), world[3].w);
+  return m;
+}
+
 glm::mat4 Transform::local_matrix() const {
   // T * R * S built directly: scale the rotation's basis columns, then set the translation column.
   glm::mat4 m = glm::mat4_cast(glm::normalize(rotation));

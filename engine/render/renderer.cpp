@@ -202,14 +202,6 @@ glm::dvec3 choose_world_origin(const glm::dvec3& eye, double near_plane) {
   return glm::round(eye / cell) * cell;
 }
 
-// A scene-space matrix (Transform::world) made relative to the frame's origin: `shift` is
-// Scene::origin - FrameView::origin, added to the translation in double.
-glm::mat4 rebased(const glm::mat4& world, const glm::dvec3& shift) {
-  glm::mat4 m = world;
-  m[3] = glm::vec4(glm::vec3(glm::dvec3(world[3]) + shift), world[3].w);
-  return m;
-}
-
 }  // namespace
 
 void Renderer::build_draw_list() {
@@ -244,7 +236,7 @@ void Renderer::gather_local_lights() {
     FrameLight l;
     l.entity = e;
     l.kind = kind;
-    l.position = glm::vec3(glm::dvec3(t->world[3]) + (scene_->origin - view_.origin));
+    l.position = glm::vec3(rebased(t->world, scene_->origin - view_.origin)[3]);
     l.direction = glm::normalize(-glm::vec3(t->world[2]));  // glTF: a spot light shines down local -Z
     l.radiance = color * intensity;
     l.range = range;
@@ -287,7 +279,7 @@ void Renderer::update(float dt) {
   view_.origin = choose_world_origin(eye_world, cam.near_plane);
   const glm::dvec3 eye = eye_world - view_.origin;
   glm::mat4 view = cam.view;
-  if (eye != eye_world || scene_->origin != glm::dvec3(0.0)) {
+  if (view_.origin != glm::dvec3(0.0) || scene_->origin != glm::dvec3(0.0)) {
     const glm::dmat3 rotation{glm::mat3(cam.view)};
     view[3] = glm::vec4(glm::vec3(-(rotation * eye)), 1.0f);
   }

@@ -284,21 +284,20 @@ void ContextImpl::validate(const FrameDesc& f) const {
                 std::to_string(f.light_count));
   for (uint32_t i = 0; i < f.light_count; ++i) validate_light(f.lights[i], "FrameDesc.lights[" + std::to_string(i) + "]");
   if (f.instance_count > 0 && !f.instances) throw Error("shadows: FrameDesc.instances is null with instance_count > 0");
-  for (uint32_t i = 0; i < f.instance_count; ++i)
-    for (const float v : f.instances[i].world)
-      if (!std::isfinite(v))
-        throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].world has a value that is not finite");
-  for (uint32_t i = 0; i < f.instance_count; ++i)
-    if (!geometry_.find(f.instances[i].mesh))
-      throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].mesh " + std::to_string(f.instances[i].mesh) +
-                  " is not a registered mesh");
-  if (!(f.camera.near_plane > 0.0f) || !(f.camera.far_plane > f.camera.near_plane))
-    throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
   const auto finite = [](const auto* values, int count) {
     for (int k = 0; k < count; ++k)
       if (!std::isfinite(values[k])) return false;
     return true;
   };
+  for (uint32_t i = 0; i < f.instance_count; ++i) {
+    if (!finite(f.instances[i].world, 16))
+      throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].world has a value that is not finite");
+    if (!geometry_.find(f.instances[i].mesh))
+      throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].mesh " + std::to_string(f.instances[i].mesh) +
+                  " is not a registered mesh");
+  }
+  if (!(f.camera.near_plane > 0.0f) || !(f.camera.far_plane > f.camera.near_plane))
+    throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
   if (!finite(f.camera.view, 16)) throw Error("shadows: FrameDesc.camera.view has a value that is not finite");
   if (!finite(f.camera.projection, 16)) throw Error("shadows: FrameDesc.camera.projection has a value that is not finite");
   if (!finite(f.origin, 3)) throw Error("shadows: FrameDesc.origin has a value that is not finite");
@@ -607,8 +606,7 @@ void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_fac
 }
 
 // The techniques whose passes differ for a spot or point light (off and rt take every light alike).
-void ContextImpl::record_local_light(Frame& frame) {
-  const Settings settings = in_world_units(settings_);
+void ContextImpl::record_local_light(Frame& frame, const Settings& settings) {
   const bool point = frame.view.light_cos_outer <= -1.0f;
   switch (settings.technique) {
     case Technique::Off:
@@ -640,7 +638,7 @@ void ContextImpl::record_local_light(Frame& frame) {
 void ContextImpl::record_technique(Frame& frame) {
   const Settings settings = in_world_units(settings_);
   if (frame.view.local_light && settings.technique != Technique::Off && settings.technique != Technique::RayTraced) {
-    record_local_light(frame);
+    record_local_light(frame, settings);
     return;
   }
   switch (settings.technique) {

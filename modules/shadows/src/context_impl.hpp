@@ -61,7 +61,7 @@ class ContextImpl final : public Context {
   void prepare_targets(VkCommandBuffer cmd, bool clear);
   template <typename RecordFace>
   void record_point_light_faces(Frame& frame, RecordFace&& record_face);
-  void record_local_light(Frame& frame);
+  void record_local_light(Frame& frame, const Settings& settings);  // settings in world units
   void set_light(View& view, const Light& light);
   void restart_term(VkCommandBuffer cmd);
   void clear_term_and_overlay(VkCommandBuffer cmd);

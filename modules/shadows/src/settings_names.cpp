@@ -126,10 +126,6 @@ std::string lit_culling_name(LitCulling mode) {
   return "?";
 }
 
-}  // namespace shadows
-
-namespace shadows {
-
 Settings in_world_units(const Settings& settings) {
   Settings s = settings;
   const float u = settings.units_per_metre;

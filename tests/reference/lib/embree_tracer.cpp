@@ -215,8 +215,7 @@ EmbreeTracer::EmbreeTracer(engine::Registry& registry, const glm::dvec3& shift) 
         if (!mesh.data) return;
         const engine::MeshData& data = *mesh.data;
         const size_t base = vertices.size();
-        glm::mat4 world = transform.world;
-        world[3] = glm::vec4(glm::vec3(glm::dvec3(world[3]) + shift), world[3].w);
+        const glm::mat4 world = engine::rebased(transform.world, shift);
         for (const engine::Vertex& v : data.vertices) {
           vertices.push_back(glm::vec3(world * glm::vec4(v.position, 1.0f)));
         }

@@ -29,6 +29,12 @@ struct Transform {
   glm::mat4 local_matrix() const;
 };
 
+// A world matrix (Transform::world) moved by `shift`, added to its translation in double: how a frame
+// rebases the scene to its local origin (engine::FrameView; shift = Scene::origin - FrameView::origin).
+// The renderer and the reference both take their matrices from here, so they draw and trace the same
+// float triangles.
+glm::mat4 rebased(const glm::mat4& world, const glm::dvec3& shift);
+
 struct Aabb {
   glm::vec3 min{std::numeric_limits<float>::max()};
   glm::vec3 max{-std::numeric_limits<float>::max()};
