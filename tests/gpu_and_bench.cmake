@@ -224,6 +224,14 @@ err=$($b --mode sm --max-mismatch 0.0002 2>&1 >/dev/null); rc=$?; echo \"$err\";
 set_tests_properties(shadow_bench_reference_bounds PROPERTIES LABELS gpu
                      ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
 
+# A spot light handed over with set_light (--light spot) in a world 1e5 units out through Scene::origin
+# (--large-world): the adapter rebases its scene-space position like the rest, and the IZB matches Embree.
+add_test(NAME shadow_bench_large_world_spot
+         COMMAND $<TARGET_FILE:shadow_bench> --scene lamps --light spot --large-world --offset 100000,0,100000
+                 --size 128x128 --izb 256 --mode izb --reference --frames 1 --warmup 0 --max-mismatch 0.0002)
+set_tests_properties(shadow_bench_large_world_spot PROPERTIES LABELS gpu TIMEOUT 300
+                     ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe" FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
+
 # The paper suite at small sizes: every technique on every view of two scenes, both tables written;
 # every run but those lavapipe cannot make (rt, the hardware coverage tests) must have run.
 add_test(NAME shadow_bench_suite_paper_quick

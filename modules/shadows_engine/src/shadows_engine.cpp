@@ -133,9 +133,11 @@ class EngineShadowModule final : public ShadowModule {
     outputs_.clear();
     const bool sun_lit = glm::length(frame.view.light_radiance) > 0.0f || frame.view.local_lights.empty();
     if (light_) {
-      // set_light() takes world positions: made relative to the frame's origin like the rest.
+      // set_light() takes scene-space positions (as Transform places lights): rebased to the frame's
+      // origin like the rest, Scene::origin included.
       Light light = *light_;
-      for (int k = 0; k < 3; ++k) light.position[k] = float(double(light.position[k]) - frame.view.origin[k]);
+      const glm::dvec3 shift = renderer_.scene()->origin - frame.view.origin;
+      for (int k = 0; k < 3; ++k) light.position[k] = float(double(light.position[k]) + shift[k]);
       lights_.push_back(light);
       outputs_.push_back(image_input(frame.shadow_term));
     } else {

@@ -56,8 +56,9 @@ class ShadowModule : public engine::RenderFeature {
   // The host-API context the adapter drives.
   virtual Context& context() = 0;
   // The one light the module shadows from the next frame on, into the renderer's sun term, instead of
-  // the renderer's sun and local lights (nullopt: those again). The renderer's lighting is not told:
-  // for tests and tools that read the visibility.
+  // the renderer's sun and local lights (nullopt: those again). A local light's position is in scene
+  // space, as its Transform places it (relative to engine::Scene::origin). The renderer's lighting is
+  // not told: for tests and tools that read the visibility.
   virtual void set_light(std::optional<Light> light) = 0;
 };
 
