@@ -19,21 +19,63 @@ target_link_libraries(gpu_tests PRIVATE shadow_test_support GTest::gtest_main)
 target_include_directories(gpu_tests PRIVATE ${PROJECT_SOURCE_DIR}/modules/shadows/src)
 target_compile_definitions(gpu_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 engine_target_warnings(gpu_tests)
-gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
-# The same tests with the validation layer's synchronization checks on: a hazard between commands
-# (a missing or too narrow barrier) is a validation message, so a failure. One variable only: the
-# discovered tests' properties take a single ENVIRONMENT entry (the variable implies the layer).
-gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_PREFIX syncval.
-                     PROPERTIES LABELS syncval ENVIRONMENT ENGINE_SYNC_VALIDATION=1)
+# Discovered tests take a flat PROPERTIES list: one label and one ENVIRONMENT entry each (a CMake list
+# there would be split into keys and values). The layer is on either way: the GPU fixture forces it.
+#
+# The GPU smoke set (label gpu_smoke, in the plain run like the rest of label gpu): what the sanitizer
+# run (.ci/sanitize) protects beyond the unit and reference tests, the module's and engine's CPU code on
+# every path: context and device adoption, every refusal, pool growth and overflow, resize, each
+# technique and light type once, moving casters, overlays, alpha-tested materials.
+set(GPU_SMOKE_FILTER "GpuTest.*:AdoptedDeviceTest.*:RobustnessTest.*InOneLine:RobustnessTest.LiveAllocation*:\
+IzbTest.TinyNodePool*:IzbTest.NodePoolGrows*:IzbTest.Resize*:IzbTest.HybridNearPoints*:IzbTest.DebugOverlays*:\
+CascadesTest.DebugOverlaysAndCullingChoice:RayTracedTest.DeviceWithoutRayTracing*:RayTracedTest.EveryLightOfAFrame*:\
+Levels/DynamicSceneTest.*/wall:Lights/LocalLightTest.ShadowMapsOfTheLight/*:Scenes/IzbSceneTest.OneSample*/contact_view0:\
+MaterialsTest.GbufferAlphaTests*:Features/MaskedFeatureTest.PathsThatNeedTheFeatureRefuseInOneLine/*")
+# The rest of the per-scene sweeps of the equivalence tests (an optimisation changes no verdict: lit
+# culling, anchored nodes, compute against raster) and the 512² lamps run under `long`; the plain run
+# keeps two scenes of each sweep and the 256² lamps.
+set(GPU_LONG_FILTER "Scenes/IzbSceneTest.LitCullingIsExact/atrium*:Scenes/IzbSceneTest.LitCullingIsExact/canopy*:\
+Scenes/IzbSceneTest.LitCullingIsExact/contact_view1:Scenes/IzbSceneTest.LitCullingIsExact/foliage_view1:\
+Scenes/IzbSceneTest.AnchoredNodes*/atrium*:Scenes/IzbSceneTest.AnchoredNodes*/foliage*:\
+Scenes/IzbSceneTest.AnchoredNodes*/contact_view1:Scenes/IzbSceneTest.ComputeAndRaster*/atrium*:\
+Scenes/IzbSceneTest.ComputeAndRaster*/canopy*:Scenes/IzbSceneTest.ComputeAndRaster*/contact_view0:\
+Scenes/IzbSceneTest.ComputeAndRaster*/foliage_view1:Lamps/LampsTest.*_512")
+gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "${GPU_SMOKE_FILTER}"
+                     PROPERTIES LABELS gpu_smoke TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
+gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "${GPU_LONG_FILTER}"
+                     PROPERTIES LABELS long TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
+gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "*-${GPU_SMOKE_FILTER}:${GPU_LONG_FILTER}"
+                     PROPERTIES LABELS gpu TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
+# The same tests with the validation layer's synchronization checks on: a hazard between commands (a
+# missing or too narrow barrier) is a validation message, so a failure. Label syncval runs a
+# representative set: every technique and light type, both trace and CSM backends, several lights in
+# one record, moving casters over many frames, resize, pool growth, overlays, 32 spp. The whole suite
+# under synchronization validation is one entry under `long` (syncval_gpu_suite).
+set(SYNCVAL_FILTER "RobustnessTest.SyncValidationReportsAMissingBarrier:IzbTest.Resize*:IzbTest.NodePoolGrows*:\
+IzbTest.TimedCsmTimesBothAndKeepsOne:IzbTest.AutomaticBackendsKeepTheFasterMeasuredPass:IzbTest.HybridNearPoints*:\
+IzbTest.DebugOverlays*:CascadesTest.MaskingMatchesUnmaskedAndSavesWork:CascadesTest.DebugOverlaysAndCullingChoice:\
+Levels/DynamicSceneTest.*:RayTracedTest.EveryLightOfAFrame*:RayTracedTest.IzbSpotLightTraces*:\
+Lights/LocalLightTest.ShadowMapsOfTheLight/*:MaterialsTest.SmoothTerminator*:GpuTest.HeadlessImageShowsLitGeometry:\
+Scenes/IzbSceneTest.ComputeAndRasterPassesAgreeBitForBit/contact_view0:Scenes/IzbSceneTest.ThirtyTwoSamples*/contact_view0:\
+Views/CanopyTest.*/view0_256:AdoptedDeviceTest.RunsOnTheHostDeviceAndLeavesItAlive")
+gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_PREFIX syncval. TEST_FILTER "${SYNCVAL_FILTER}"
+                     PROPERTIES LABELS syncval TIMEOUT 900 ENVIRONMENT ENGINE_SYNC_VALIDATION=1)
+add_test(NAME syncval_gpu_suite COMMAND gpu_tests)
+set_tests_properties(syncval_gpu_suite PROPERTIES LABELS long TIMEOUT 14400 ENVIRONMENT ENGINE_SYNC_VALIDATION=1)
 
 # Exact anywhere: the scale and offset matrix against Embree (tests/scale), one CTest entry per scene,
-# validation on; outside gpu_tests so the synchronization-validation pass does not run it twice.
+# validation on; outside gpu_tests so the synchronization-validation pass does not run it twice. The
+# plain run (label scale) takes the key placements of three scenes and the room-scale hall; every
+# placement of every scene is under `long`.
 add_executable(world_scale_tests scale/world_scale_test.cpp)
 target_link_libraries(world_scale_tests PRIVATE shadow_test_support GTest::gtest_main)
 target_compile_definitions(world_scale_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 engine_target_warnings(world_scale_tests)
 gtest_discover_tests(world_scale_tests DISCOVERY_TIMEOUT 60
-                     PROPERTIES LABELS "gpu;scale" TIMEOUT 1500 ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
+                     TEST_FILTER "HallTest.*:Scenes/WorldScaleTest.KeyPlacements*/contact:Scenes/WorldScaleTest.KeyPlacements*/lamps:Scenes/WorldScaleTest.KeyPlacements*/sponza"
+                     PROPERTIES LABELS scale TIMEOUT 1800 ENVIRONMENT ENGINE_VALIDATION=1)
+gtest_discover_tests(world_scale_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "Scenes/WorldScaleTest.EveryPlacement*"
+                     PROPERTIES LABELS long TIMEOUT 3600 ENVIRONMENT ENGINE_VALIDATION=1)
 
 add_subdirectory(window)
 
@@ -279,6 +321,7 @@ set_tests_properties(vulkan_host_writes_png PROPERTIES LABELS gpu FAIL_REGULAR_E
 add_executable(host_tests host/host_test.cpp)
 target_link_libraries(host_tests PRIVATE vulkan_host_app shadow_reference GTest::gtest_main)
 engine_target_warnings(host_tests)
-gtest_discover_tests(host_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu ENVIRONMENT "ENGINE_VALIDATION=1;ENGINE_DEVICE=lavapipe")
-add_test(NAME syncval.host_frames_in_flight COMMAND host_tests --gtest_filter=HostFramesInFlight.*)
-set_tests_properties(syncval.host_frames_in_flight PROPERTIES LABELS syncval ENVIRONMENT ENGINE_SYNC_VALIDATION=1)
+# The host path is all smoke: its refusals and input pass are CPU code the sanitizer run protects.
+gtest_discover_tests(host_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu_smoke TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
+add_test(NAME syncval.host_frames_in_flight COMMAND host_tests --gtest_filter=*HostFramesInFlight.*:*HostLights.*)
+set_tests_properties(syncval.host_frames_in_flight PROPERTIES LABELS syncval TIMEOUT 900 ENVIRONMENT ENGINE_SYNC_VALIDATION=1)

@@ -1,6 +1,7 @@
 // vulkan_host: a renderer on its own Vulkan device that shadows its frames with the shadow module.
 //   vulkan_host [--out FILE.png] [--frames N] [--size WxH] [--mode izb|izb+csm|hybrid|...] [--spp 1|32]
-//               [--view 0|1] [--device gpu|lavapipe] [--validation]
+//               [--view 0|1] [--device gpu|lavapipe] [--validation] [--frames-in-flight 1..8]
+//               [--lights sun,spot,point] [--moving-sun]
 // Exits non-zero on any error, and on any validation message when the layer is on (--validation,
 // ENGINE_VALIDATION=1 or ENGINE_SYNC_VALIDATION=1).
 #include <cstdio>
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
     const char* value = i + 1 < argc ? argv[i + 1] : nullptr;
     bool ok = true;
     if (arg == "--validation") { o.validation = true; continue; }
+    if (arg == "--moving-sun") { o.moving_sun = true; continue; }
     if (!value) ok = false;
     else if (arg == "--out") out = value;
     else if (arg == "--frames") ok = (o.frames = unsigned(std::atoi(value))) > 0;
@@ -29,6 +31,15 @@ int main(int argc, char** argv) {
     else if (arg == "--spp") ok = (o.spp = unsigned(std::atoi(value))) > 0;
     else if (arg == "--view") o.view = unsigned(std::atoi(value));
     else if (arg == "--device") o.device = value;
+    else if (arg == "--frames-in-flight") o.frames_in_flight = unsigned(std::atoi(value));
+    else if (arg == "--lights") {
+      o.lights.clear();
+      for (std::string list = value; !list.empty();) {
+        const size_t comma = list.find(',');
+        o.lights.push_back(list.substr(0, comma));
+        list = comma == std::string::npos ? "" : list.substr(comma + 1);
+      }
+    }
     else ok = false;
     if (!ok) {
       std::fprintf(stderr, "vulkan_host: bad argument '%s'%s%s\n", arg.c_str(), value ? " " : "", value ? value : "");

@@ -80,7 +80,53 @@ CameraSetup camera_for(uint32_t index, float aspect) {
   return {glm::lookAt(eye, target, glm::vec3(0, 1, 0)), p};
 }
 constexpr float kNear = 0.1f, kFar = 100.0f;
-const glm::vec3 kLightDirection = glm::normalize(glm::vec3(0.45f, -1.0f, 0.3f));
+
+// The sun of frame `frame`: (0.45, -1, 0.3) normalized, turning about the vertical when it moves.
+glm::vec3 sun_direction(uint32_t frame, bool moving) {
+  const float radius = std::hypot(0.45f, 0.3f), azimuth = std::atan2(0.3f, 0.45f) + (moving ? 0.5f * float(frame) : 0.0f);
+  return glm::normalize(glm::vec3(radius * std::cos(azimuth), -1.0f, radius * std::sin(azimuth)));
+}
+
+// The lights of a frame, as the module takes them and as the result reports them. The spot light looks
+// down at the scene from a corner; the point light hangs above the middle, over the moving caster.
+struct FrameLights {
+  std::vector<shadows::Light> module;
+  std::vector<HostLight> host;
+};
+FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun) {
+  FrameLights out;
+  for (const std::string& kind : kinds) {
+    shadows::Light l;
+    HostLight h{kind};
+    if (kind == "sun") {
+      const glm::vec3 d = sun_direction(frame, moving_sun);
+      l.type = shadows::LightType::Directional;
+      std::memcpy(l.direction, &d, 12);
+    } else if (kind == "spot") {
+      const glm::vec3 position(3.0f, 4.5f, 3.5f), d = glm::normalize(glm::vec3(0.0f, 0.3f, 0.0f) - position);
+      l.type = shadows::LightType::Spot;
+      std::memcpy(l.direction, &d, 12);
+      std::memcpy(l.position, &position, 12);
+      l.range = 12.0f;
+      l.inner_cone = 0.45f;
+      l.outer_cone = 0.6f;
+    } else if (kind == "point") {
+      const glm::vec3 position(0.5f, 3.4f, -0.6f);
+      l.type = shadows::LightType::Point;
+      std::memcpy(l.position, &position, 12);
+      l.range = 9.0f;
+    } else {
+      throw std::runtime_error("unknown light '" + kind + "' (sun, spot or point)");
+    }
+    std::memcpy(h.direction.data(), l.direction, 12);
+    std::memcpy(h.position.data(), l.position, 12);
+    h.range = l.range;
+    h.outer_cone = l.outer_cone;
+    out.module.push_back(l);
+    out.host.push_back(h);
+  }
+  return out;
+}
 
 VkShaderModule load_shader(VkDevice device, const char* name) {
   // The program's SPIR-V lies in vulkan_host_shaders/ next to the executable.
@@ -109,12 +155,15 @@ Result run(const Options& o) {
   if (!settings) throw std::runtime_error("unknown mode '" + o.mode + "'");
   if (o.spp != 1 && o.spp != 32) throw std::runtime_error("--spp must be 1 or 32");
   settings->izb.samples_per_pixel = o.spp;
+  if (o.lights.empty() || o.lights.size() > shadows::kMaxLightsPerRecord)
+    throw std::runtime_error("--lights takes 1 to " + std::to_string(shadows::kMaxLightsPerRecord) + " lights");
   const uint32_t F = o.frames_in_flight;
   Device d({.device = o.device, .validation = o.validation, .sync_validation = o.sync_validation});
   const VkDevice dev = d.device;
   auto module = shadows::Context::create(d.context_desc(F, *settings));
   const shadows::Capability can = module->capabilities().of(settings->technique);
   if (!can.available) throw std::runtime_error(can.reason);
+  module->set_collect_stats(o.report_completed);
 
   // ----- Meshes: one buffer per mesh (interleaved position + normal, then indices), also the module's input.
   const VkBufferUsageFlags mesh_usage =
@@ -155,13 +204,37 @@ Result run(const Options& o) {
   Image depth = make_image(d, extent, VK_FORMAT_D24_UNORM_S8_UINT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | read);
   Image albedo = make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
   Image normals = make_image(d, extent, VK_FORMAT_R16G16_SNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
-  Image visibility = make_image(d, extent, VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read);
+  // The module's outputs, one per light (the first lights the frame; the others are light_outputs).
+  const uint32_t light_count = uint32_t(o.lights.size());
+  std::vector<Image> visibility;
+  std::vector<shadows::ImageInput> light_outputs;
+  for (uint32_t l = 0; l < light_count; ++l) {
+    visibility.push_back(make_image(d, extent, VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read));
+    if (l > 0) light_outputs.push_back(visibility.back().input(VK_IMAGE_LAYOUT_GENERAL));
+  }
   Image lit = make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read);
   const size_t pixels = size_t(o.width) * o.height;
-  Buffer readback[4] = {make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT),   // depth (X8_D24)
-                        make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT),   // normals
-                        make_buffer(d, pixels, VK_BUFFER_USAGE_TRANSFER_DST_BIT),       // visibility
-                        make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT)};  // lit
+  // Read-backs per frame slot, read when the host waits for that slot's fence (so frames stay in
+  // flight while every one of them is captured).
+  struct SlotCapture {
+    Buffer depth, normals, lit;      // X8_D24, R16G16_SNORM, RGBA8
+    std::vector<Buffer> visibility;  // R8 per light
+    bool pending = false;
+    uint32_t frame = 0;
+    glm::mat4 inverse_view_projection{1.0f};
+    std::vector<HostLight> lights;
+    std::vector<Object> objects;
+  };
+  std::vector<SlotCapture> captures(F);
+  auto readbacks_of = [&](SlotCapture& c) -> SlotCapture& {
+    if (!c.depth.buffer) {
+      c.depth = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+      c.normals = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+      c.lit = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+      for (uint32_t l = 0; l < light_count; ++l) c.visibility.push_back(make_buffer(d, pixels, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+    }
+    return c;
+  };
 
   // ----- Pipelines: G-buffer (dynamic rendering) and lighting (compute, push descriptors).
   VkSampler sampler;
@@ -265,27 +338,75 @@ Result run(const Options& o) {
 
   const CameraSetup camera = camera_for(o.view, float(o.width) / float(o.height));
   const glm::mat4 view_projection = camera.projection * camera.view;
-  const shadows::Light sun{.direction = {kLightDirection.x, kLightDirection.y, kLightDirection.z}};
-  std::vector<Object> objects;
   const auto C = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+  // What reads a target before the next frame writes it: the module's and the lighting's compute
+  // passes, and a captured frame's copies.
+  const auto READERS = C | VK_PIPELINE_STAGE_2_COPY_BIT;
   const auto FRAGMENT_TESTS = VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+  Result r;
+  std::vector<uint8_t> last_rgba;
+  // A slot's captured frame, once its fence has been waited for: decoded into r.frames.
+  auto collect = [&](SlotCapture& c) {
+    FrameCapture f;
+    f.frame = c.frame;
+    f.depth.resize(pixels);
+    f.normals.resize(pixels * 3);
+    const auto* depth_words = static_cast<const uint32_t*>(c.depth.mapped);
+    const auto* normal_texels = static_cast<const int16_t*>(c.normals.mapped);
+    for (size_t i = 0; i < pixels; ++i) {
+      f.depth[i] = float(depth_words[i] & 0xffffffu) / float(0xffffff);  // D24 copies as X8_D24
+      glm::vec2 e(std::max(normal_texels[2 * i] / 32767.0f, -1.0f), std::max(normal_texels[2 * i + 1] / 32767.0f, -1.0f));
+      glm::vec3 n(e, 1.0f - std::abs(e.x) - std::abs(e.y));
+      if (n.z < 0.0f) n = glm::vec3((1.0f - glm::abs(glm::vec2(n.y, n.x))) * glm::vec2(n.x >= 0 ? 1 : -1, n.y >= 0 ? 1 : -1), n.z);
+      n = glm::normalize(n);
+      std::memcpy(&f.normals[3 * i], &n, 12);
+    }
+    for (const Buffer& b : c.visibility) {
+      const auto* bytes = static_cast<const uint8_t*>(b.mapped);
+      std::vector<float>& v = f.visibility.emplace_back(pixels);
+      for (size_t i = 0; i < pixels; ++i) v[i] = bytes[i] / 255.0f;
+    }
+    std::memcpy(f.inverse_view_projection.data(), glm::value_ptr(c.inverse_view_projection), 64);
+    f.lights = c.lights;
+    for (const Object& obj : c.objects)
+      for (uint32_t index : meshes[obj.mesh].indices) {
+        const glm::vec3 p(obj.world * glm::vec4(meshes[obj.mesh].vertices[index].position, 1.0f));
+        f.caster_triangles.insert(f.caster_triangles.end(), {p.x, p.y, p.z});
+      }
+    if (c.frame + 1 == o.frames) {
+      const auto* rgba = static_cast<const uint8_t*>(c.lit.mapped);
+      last_rgba.assign(rgba, rgba + pixels * 4);
+    }
+    r.frames.push_back(std::move(f));
+    c.pending = false;
+  };
+  // The host knows `frame` has completed: the module reads its statistics now.
+  auto completed = [&](uint32_t frame) {
+    if (!o.report_completed) return;
+    module->frame_completed(frame);
+    r.csm_culled += module->stats().csm_culled;
+  };
   for (uint32_t frame = 0; frame < o.frames; ++frame) {
     // The slot's previous frame (frame - F) has completed: the module's frames-in-flight promise.
     const uint32_t slot = frame % F;
     check(vkWaitForFences(dev, 1, &fences[slot], VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    if (captures[slot].pending) collect(captures[slot]);
+    if (frame >= F) completed(frame - F);
     check(vkResetFences(dev, 1, &fences[slot]), "vkResetFences");
     VkCommandBuffer cmd = cmds[slot];
     check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun);
+    const bool capture = o.capture_every_frame || frame + 1 == o.frames;
 
-    // G-buffer. Earlier frames read it in compute (module, lighting); their contents are discarded.
-    image_barrier(cmd, depth, C, 0, FRAGMENT_TESTS, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
+    // G-buffer. Earlier frames read it (module, lighting, capture copies); their contents are discarded.
+    image_barrier(cmd, depth, READERS, 0, FRAGMENT_TESTS, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
                   VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                   VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
     for (const Image* target : {&albedo, &normals})
-      image_barrier(cmd, *target, C, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+      image_barrier(cmd, *target, READERS, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
     VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
@@ -310,7 +431,7 @@ Result run(const Options& o) {
     rendering_info.pDepthAttachment = &depth_attachment;
     vkCmdBeginRendering(cmd, &rendering_info);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, draw_pipeline);
-    objects = scene_at(frame);
+    const std::vector<Object> objects = scene_at(frame);
     std::vector<shadows::Instance> instances(objects.size());
     for (size_t i = 0; i < objects.size(); ++i) {
       const Object& obj = objects[i];
@@ -335,9 +456,10 @@ Result run(const Options& o) {
       image_barrier(cmd, *target, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                     C, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                     VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-    // Its output: the previous frame's lighting read finishes before the module writes (GENERAL).
-    image_barrier(cmd, visibility, C, 0, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                  frame == 0 ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
+    // Its outputs: the previous frames' lighting reads and copies finish before the module writes (GENERAL).
+    for (const Image& v : visibility)
+      image_barrier(cmd, v, READERS, 0, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                    frame == 0 ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
 
     shadows::FrameDesc fd;
     fd.frame_index = frame;
@@ -350,49 +472,55 @@ Result run(const Options& o) {
     fd.camera.reversed_z = false;
     fd.camera.near_plane = kNear;
     fd.camera.far_plane = kFar;
-    fd.lights = &sun;
-    fd.light_count = 1;
+    fd.lights = lights.module.data();
+    fd.light_count = light_count;
     fd.instances = instances.data();
     fd.instance_count = uint32_t(instances.size());
-    fd.output = visibility.input(VK_IMAGE_LAYOUT_GENERAL);
+    fd.output = visibility[0].input(VK_IMAGE_LAYOUT_GENERAL);
+    fd.light_outputs = light_outputs.empty() ? nullptr : light_outputs.data();
     module->record(cmd, fd);
 
-    // Lighting: albedo * (ambient + sun * visibility), into the lit frame (written last frame: WAW).
-    image_barrier(cmd, visibility, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, C, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
+    // Lighting: albedo * (ambient + sun * the first light's visibility), into the lit frame (written
+    // last frame and maybe copied: WAW and WAR).
+    image_barrier(cmd, visibility[0], C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, C, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
                   VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
-    image_barrier(cmd, lit, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+    image_barrier(cmd, lit, READERS, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                   frame == 0 ? VK_IMAGE_LAYOUT_UNDEFINED : VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, light_pipeline);
     VkDescriptorImageInfo image_infos[4] = {{sampler, albedo.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
                                             {sampler, normals.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-                                            {sampler, visibility.view, VK_IMAGE_LAYOUT_GENERAL},
+                                            {sampler, visibility[0].view, VK_IMAGE_LAYOUT_GENERAL},
                                             {VK_NULL_HANDLE, lit.view, VK_IMAGE_LAYOUT_GENERAL}};
     VkWriteDescriptorSet writes[4];
     for (uint32_t b = 0; b < 4; ++b)
       writes[b] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, VK_NULL_HANDLE, b, 0, 1, bindings[b].descriptorType,
                    &image_infos[b], nullptr, nullptr};
     push_descriptors(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, light_layout, 0, 4, writes);
-    const glm::vec4 to_light(-kLightDirection, 0.0f);
+    const glm::vec4 to_light(-sun_direction(frame, o.moving_sun), 0.0f);
     vkCmdPushConstants(cmd, light_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, 16, &to_light);
     vkCmdDispatch(cmd, (o.width + 7) / 8, (o.height + 7) / 8, 1);
 
-    if (frame + 1 == o.frames) {
-      // Capture: every image of the frame into the read-back buffers, then to the host.
+    if (capture) {
+      // Capture: every image of the frame into the slot's read-back buffers, then to the host.
+      SlotCapture& c = readbacks_of(captures[slot]);
       image_barrier(cmd, depth, C, 0, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
                     VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
       image_barrier(cmd, normals, C, 0, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
                     VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-      image_barrier(cmd, visibility, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
-                    VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
+      for (const Image& v : visibility)
+        image_barrier(cmd, v, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                      VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
       image_barrier(cmd, lit, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
                     VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
-      const Image* sources[4] = {&depth, &normals, &visibility, &lit};
-      for (int i = 0; i < 4; ++i) {
+      std::vector<std::pair<const Image*, const Buffer*>> copies = {{&depth, &c.depth}, {&normals, &c.normals}, {&lit, &c.lit}};
+      for (uint32_t l = 0; l < light_count; ++l) copies.push_back({&visibility[l], &c.visibility[l]});
+      for (const auto& [image, buffer] : copies) {
         VkBufferImageCopy region{};
-        region.imageSubresource = {sources[i]->aspect, 0, 0, 1};
+        region.imageSubresource = {image->aspect, 0, 0, 1};
         region.imageExtent = {o.width, o.height, 1};
-        const VkImageLayout layout = i < 2 ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL : VK_IMAGE_LAYOUT_GENERAL;
-        vkCmdCopyImageToBuffer(cmd, sources[i]->image, layout, readback[i].buffer, 1, &region);
+        const VkImageLayout layout = image == &depth || image == &normals ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+                                                                          : VK_IMAGE_LAYOUT_GENERAL;
+        vkCmdCopyImageToBuffer(cmd, image->image, layout, buffer->buffer, 1, &region);
       }
       VkMemoryBarrier2 to_host{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2, nullptr, VK_PIPELINE_STAGE_2_COPY_BIT,
                                VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT};
@@ -400,6 +528,11 @@ Result run(const Options& o) {
       dep.memoryBarrierCount = 1;
       dep.pMemoryBarriers = &to_host;
       vkCmdPipelineBarrier2(cmd, &dep);
+      c.pending = true;
+      c.frame = frame;
+      c.inverse_view_projection = glm::inverse(view_projection);
+      c.lights = lights.host;
+      c.objects = objects;
     }
     check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
     VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -408,37 +541,25 @@ Result run(const Options& o) {
     check(vkQueueSubmit(d.queue, 1, &submit, fences[slot]), "vkQueueSubmit");
   }
   check(vkWaitForFences(dev, F, fences.data(), VK_TRUE, UINT64_MAX), "vkWaitForFences");
+  for (uint32_t frame = o.frames > F ? o.frames - F : 0; frame < o.frames; ++frame) {
+    SlotCapture& c = captures[frame % F];
+    if (c.pending && c.frame == frame) collect(c);
+    completed(frame);
+  }
+  r.csm_status = module->stats().csm_status;
 
-  // ----- The captured frame, for the PNG and for tests that trace the same scene.
-  Result r;
+  // ----- The last frame, for the PNG and for tests that trace the same scene.
+  const FrameCapture& last = r.frames.back();
   r.width = o.width;
   r.height = o.height;
   r.device_name = d.name;
-  r.depth.resize(pixels);
-  r.normals.resize(pixels * 3);
-  r.visibility.resize(pixels);
-  r.rgba.resize(pixels * 4);
-  const auto* depth_words = static_cast<const uint32_t*>(readback[0].mapped);
-  const auto* normal_texels = static_cast<const int16_t*>(readback[1].mapped);
-  const auto* vis_bytes = static_cast<const uint8_t*>(readback[2].mapped);
-  for (size_t i = 0; i < pixels; ++i) {
-    r.depth[i] = float(depth_words[i] & 0xffffffu) / float(0xffffff);  // D24 copies as X8_D24
-    glm::vec2 e(std::max(normal_texels[2 * i] / 32767.0f, -1.0f), std::max(normal_texels[2 * i + 1] / 32767.0f, -1.0f));
-    glm::vec3 n(e, 1.0f - std::abs(e.x) - std::abs(e.y));
-    if (n.z < 0.0f) n = glm::vec3((1.0f - glm::abs(glm::vec2(n.y, n.x))) * glm::vec2(n.x >= 0 ? 1 : -1, n.y >= 0 ? 1 : -1), n.z);
-    n = glm::normalize(n);
-    std::memcpy(&r.normals[3 * i], &n, 12);
-    r.visibility[i] = vis_bytes[i] / 255.0f;
-  }
-  std::memcpy(r.rgba.data(), readback[3].mapped, pixels * 4);
-  const glm::mat4 inverse = glm::inverse(view_projection);
-  std::memcpy(r.inverse_view_projection.data(), glm::value_ptr(inverse), 64);
-  std::memcpy(r.light_direction.data(), &kLightDirection, 12);
-  for (const Object& obj : objects)
-    for (uint32_t index : meshes[obj.mesh].indices) {
-      const glm::vec3 p(obj.world * glm::vec4(meshes[obj.mesh].vertices[index].position, 1.0f));
-      r.caster_triangles.insert(r.caster_triangles.end(), {p.x, p.y, p.z});
-    }
+  r.depth = last.depth;
+  r.normals = last.normals;
+  r.visibility = last.visibility[0];
+  r.rgba = last_rgba;
+  r.inverse_view_projection = last.inverse_view_projection;
+  r.light_direction = last.lights[0].direction;
+  r.caster_triangles = last.caster_triangles;
 
   // ----- Teardown: the module first (it holds objects of the host's device).
   module.reset();
@@ -448,8 +569,13 @@ Result run(const Options& o) {
   for (VkPipelineLayout l : {draw_layout, light_layout}) vkDestroyPipelineLayout(dev, l, nullptr);
   vkDestroyDescriptorSetLayout(dev, light_set, nullptr);
   vkDestroySampler(dev, sampler, nullptr);
-  for (Image* i : {&depth, &albedo, &normals, &visibility, &lit}) destroy(d, *i);
-  for (Buffer& b : readback) destroy(d, b);
+  for (Image* i : {&depth, &albedo, &normals, &lit}) destroy(d, *i);
+  for (Image& v : visibility) destroy(d, v);
+  for (SlotCapture& c : captures) {
+    for (Buffer* b : {&c.depth, &c.normals, &c.lit})
+      if (b->buffer) destroy(d, *b);
+    for (Buffer& b : c.visibility) destroy(d, b);
+  }
   for (Buffer& b : mesh_buffers) destroy(d, b);
   r.validation_messages = d.validation_messages();
   return r;

@@ -20,9 +20,37 @@ struct Options {
   std::string device;             // "gpu", "lavapipe" or empty (a GPU if there is one)
   bool validation = false;        // also ENGINE_VALIDATION=1 / ENGINE_SYNC_VALIDATION=1
   bool sync_validation = false;   // the layer's synchronization checks too
+  // The lights of every record(), in order, each at most once: "sun", "spot", "point" (the first one's
+  // visibility lights the frame; the others go to FrameDesc::light_outputs).
+  std::vector<std::string> lights = {"sun"};
+  bool moving_sun = false;        // the sun turns a little every frame (frame 0 as when still)
+  bool capture_every_frame = false;  // Result::frames holds every frame, not only the last
+  // Calls Context::frame_completed() for each frame whose fence it has waited for, as a host that
+  // knows its frames' completion does (statistics and the automatic choices' measures come back then).
+  bool report_completed = true;
 };
 
-// The captured (last) frame, pixel (x, y) at index y * width + x.
+// A light as the host recorded it (world space).
+struct HostLight {
+  std::string kind;                  // "sun", "spot" or "point"
+  std::array<float, 3> direction{};  // sun and spot: the direction light travels, unit
+  std::array<float, 3> position{};   // spot and point
+  float range = 0.0f;                // spot and point
+  float outer_cone = 0.0f;           // spot: half angle, radians
+};
+
+// One captured frame, pixel (x, y) at index y * width + x.
+struct FrameCapture {
+  uint32_t frame = 0;
+  std::vector<float> depth;    // the host's depth in [0, 1], standard Z (1 = background)
+  std::vector<float> normals;  // 3 per pixel: decoded world normal as stored (not turned to the camera)
+  std::array<float, 16> inverse_view_projection{};  // Vulkan NDC (standard depth) -> world, column-major
+  std::vector<HostLight> lights;                   // as recorded, in Options::lights order
+  std::vector<std::vector<float>> visibility;      // the module's output per light, 1 lit .. 0 shadowed
+  std::vector<float> caster_triangles;             // 9 per triangle: world-space corners at that frame
+};
+
+// The last frame (the fields below; its first light), and every captured frame in order (`frames`).
 struct Result {
   uint32_t width = 0, height = 0;
   std::string device_name;
@@ -34,6 +62,9 @@ struct Result {
   std::array<float, 3> light_direction{};           // the direction light travels, unit
   std::vector<float> caster_triangles;              // 9 per triangle: world-space corners at that frame
   uint32_t validation_messages = 0;
+  std::vector<FrameCapture> frames;  // capture_every_frame: all, in order; else the last one
+  std::string csm_status;            // Stats::csm_status after the last frame (izb+csm: whether the prepass ran)
+  uint64_t csm_culled = 0;           // Stats::csm_culled_points, summed over the frames whose statistics came back
 };
 
 Result run(const Options& options);  // throws std::exception (one line) on any failure

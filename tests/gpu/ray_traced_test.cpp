@@ -209,7 +209,7 @@ TEST_P(LocalLightTest, IzbMatchesReference) {
   EXPECT_GT(one.occluded, kSize * kSize / 100);
   EXPECT_LE(one.cmp.mismatch_rate, 0.0002) << one.cmp.mismatched << " of " << one.cmp.pixels << " pixels differ";
   const Result thirty_two = compare(32, shadows::Technique::Izb);
-  EXPECT_LE(thirty_two.cmp.coverage_mae, 1.0 / 64.0);
+  EXPECT_LE(thirty_two.cmp.coverage_mae, 1.0e-3);  // the sun suite's bound
   // With the CSM prepass: no false shadow beyond the IZB's own (the H200 puts 1 pixel of 11,776 on the
   // other side of a triangle edge, CSM or not).
   const Result with_csm = compare(1, shadows::Technique::Izb, true);
@@ -272,7 +272,7 @@ TEST_F(RayTracedTest, IzbSpotLightTracesTrianglesAcrossTheNearPlane) {
     EXPECT_GT(occluded, kSize * kSize / 100);
     EXPECT_LE(cmp.mismatch_rate, 0.0002) << cmp.mismatched << " of " << cmp.pixels << " pixels differ";
     if (spp == 32) {
-      EXPECT_LE(cmp.coverage_mae, 1.0 / 64.0);
+      EXPECT_LE(cmp.coverage_mae, 1.0e-3);  // the sun suite's bound
     }
   }
 }
@@ -329,7 +329,7 @@ TEST_P(LampsTest, IzbMatchesReference) {
   const auto with_csm = render(shadows::Technique::Izb, 1, true);
   EXPECT_LE(with_csm.false_shadowed, one.false_shadowed) << "the CSM prepass added false shadows";
   const auto thirty_two = render(shadows::Technique::Izb, 32, false);
-  EXPECT_LE(thirty_two.coverage_mae, 1.0 / 64.0);
+  EXPECT_LE(thirty_two.coverage_mae, 1.0e-3);  // the sun suite's bound
   const double sm = render(shadows::Technique::ShadowMap, 1, false).mismatch_rate;
   const double cascades = render(shadows::Technique::Cascades, 1, false).mismatch_rate;
   // Reported, and bounded only loosely: aliasing, not a missing shadow.

@@ -42,7 +42,11 @@ struct Placement {
   }
 };
 
-std::vector<Placement> placements() {
+// Every placement (the `long` label) or the key ones the CI run takes: one of each failure this matrix
+// was built against (1e3 units out: no shadow at all; centimetres: acne; far out through Scene::origin)
+// plus a small scale farther out.
+std::vector<Placement> placements(bool every) {
+  if (!every) return {{1.0, 0.0, false}, {100.0, 0.0, false}, {1.0, 1.0e3, false}, {0.01, 1.0e4, false}, {100.0, 1.0e6, true}};
   std::vector<Placement> out;
   for (double scale : {1.0, 0.01, 100.0, 1000.0})
     for (double offset : {0.0, 1.0e3, 1.0e4}) out.push_back({scale, offset, false});
@@ -110,6 +114,7 @@ void expect_exact(const Technique& t, const reference::Comparison& c) {
 
 class WorldScaleTest : public GpuTest, public ::testing::WithParamInterface<std::string> {
  protected:
+  void check_placements(std::string scene, const std::vector<Placement>& all);
   // The scene placed as `where`, every technique rendered and compared with Embree.
   std::vector<Result> run(const std::string& scene_name, size_t view, const Placement& where) {
     scene_ = engine::load_scene(scene_name);
@@ -184,15 +189,16 @@ class WorldScaleTest : public GpuTest, public ::testing::WithParamInterface<std:
 
 std::string sponza_path() { return std::string(ENGINE_SOURCE_DIR) + "/../shared/content/sponza/sponza.gltf"; }
 
-TEST_P(WorldScaleTest, EveryPlacementIsAsExactAsTheOrigin) {
-  std::string scene = GetParam();
+TEST_P(WorldScaleTest, EveryPlacementIsAsExactAsTheOrigin) { check_placements(GetParam(), placements(true)); }
+TEST_P(WorldScaleTest, KeyPlacementsAreAsExactAsTheOrigin) { check_placements(GetParam(), placements(false)); }
+
+void WorldScaleTest::check_placements(std::string scene, const std::vector<Placement>& all) {
   size_t view = 0;
   if (scene == "sponza") {
     if (!std::filesystem::exists(sponza_path())) GTEST_SKIP() << "Sponza is not at " << sponza_path();
     scene = sponza_path();
     view = 1;
   }
-  const auto all = placements();
   const auto kinds = techniques();
   const std::vector<Result> origin = run(scene, view, all.front());
   for (size_t k = 0; k < kinds.size(); ++k) ASSERT_GT(origin[k].cmp.pixels, 1000u) << kinds[k].name;

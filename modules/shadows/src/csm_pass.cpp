@@ -120,8 +120,24 @@ struct CsmPass::Impl {
     std::vector<bool> last_choice;
     glm::vec3 last_light{0.0f};
     uint32_t last_resolution = 0;
+    uint64_t generation = 0;  // counts changes of choice, light or resolution
   };
   std::vector<Adaptive> adaptive;
+  // Per frame-in-flight slot and record: whether the prepass ran there, and under which generation. A
+  // yield comes back frames_in_flight frames after its record, perhaps under another choice; only one
+  // measured under the current choice may decide to skip (a stale 0 % would skip a useful prepass).
+  struct SlotRun {
+    bool ran = false;
+    uint64_t generation = 0;
+  };
+  std::vector<std::vector<SlotRun>> slot_runs;
+  uint32_t plan_slot = 0;
+  void note_run(bool ran) {
+    if (slot_runs.size() <= plan_slot) slot_runs.resize(plan_slot + 1);
+    std::vector<SlotRun>& runs = slot_runs[plan_slot];
+    if (runs.size() <= record_in_frame) runs.resize(record_in_frame + 1);
+    runs[record_in_frame] = {ran, record_in_frame < adaptive.size() ? adaptive[record_in_frame].generation : 0};
+  }
 
   explicit Impl(Context& c) : ctx(c) {
     nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "csm nearest");
@@ -384,6 +400,7 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
   } else {
     ++m.record_in_frame;
   }
+  m.plan_slot = frame.slot;
   m.choose(frame, resolution);
   m.record_measures(frame);
   bool any = false, explicit_on = false;
@@ -394,6 +411,7 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
   m.automatic_only = !explicit_on;
   if (!any) {
     m.status = "skipped: no caster chosen for the CSM";
+    m.note_run(false);
     return false;
   }
   if (m.adaptive.size() <= m.record_in_frame) m.adaptive.resize(m.record_in_frame + 1);
@@ -404,19 +422,24 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
   a.last_choice = m.in_csm;
   a.last_light = frame.view.light_direction;
   a.last_resolution = resolution;
-  if (changed) a.have_yield = false;
+  if (changed) {
+    a.have_yield = false;
+    ++a.generation;
+  }
   if (!explicit_on && a.have_yield && a.last_yield < kCsmMinimumYield && ++a.frames_since_probe < kCsmReprobeFrames) {
     std::ostringstream why;
     why.precision(3);
     why << "skipped: auto choice culled " << a.last_yield * 100.0 << "% of points when last run (< "
         << kCsmMinimumYield * 100.0 << "%)";
     m.status = why.str();
+    m.note_run(false);
     return false;
   }
   a.frames_since_probe = 0;
   m.status = "ran";
   m.ran = true;
   a.ran = true;
+  m.note_run(true);
   return true;
 }
 
@@ -426,13 +449,18 @@ void CsmPass::skip(const std::string& why) {
   Impl& m = *impl_;
   m.ran = false;
   if (m.record_in_frame < m.adaptive.size()) m.adaptive[m.record_in_frame].ran = false;
+  m.note_run(false);
   m.status = why;
 }
 
-void CsmPass::note_yield(uint32_t record, double culling_rate) {
-  if (record >= impl_->adaptive.size() || !impl_->adaptive[record].ran) return;
-  impl_->adaptive[record].last_yield = culling_rate;
-  impl_->adaptive[record].have_yield = true;
+void CsmPass::note_yield(uint32_t slot, uint32_t record, double culling_rate) {
+  Impl& m = *impl_;
+  if (slot >= m.slot_runs.size() || record >= m.slot_runs[slot].size() || record >= m.adaptive.size()) return;
+  const Impl::SlotRun run = m.slot_runs[slot][record];
+  Impl::Adaptive& a = m.adaptive[record];
+  if (!run.ran || run.generation != a.generation) return;
+  a.last_yield = culling_rate;
+  a.have_yield = true;
 }
 
 void CsmPass::record(Frame& frame, const IzbSettings& settings, const Buffer& izb_frame,

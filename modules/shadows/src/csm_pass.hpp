@@ -58,9 +58,10 @@ class CsmPass {
   // Takes back plan()'s decision to run this frame (the caller timed the frames without the prepass
   // faster): the prepass records nothing and no yield is noted; `why` becomes the status.
   void skip(const std::string& why);
-  // The culling rate the IZB measured with the prepass of the frame's IZB record `record` (0 for the
-  // first light, counting each cone of a point light), when that prepass ran.
-  void note_yield(uint32_t record, double culling_rate);
+  // The culling rate the IZB measured with the prepass of IZB record `record` (0 for the first light,
+  // counting each cone of a point light) of the frame recorded in slot `slot`; it counts only when that
+  // prepass ran under the record's current choice of casters, light and resolution.
+  void note_yield(uint32_t slot, uint32_t record, double culling_rate);
   // Renders the CSM of the chosen casters with the GPU-fitted light projection in `izb_frame`. With
   // `compute_fill`, that callback records compute work leaving the depths (float bits, [0,1]) in
   // `compute_texels` instead, which the IZB build reads directly; only statistics (the covered-texel

@@ -1223,7 +1223,7 @@ void IzbPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
   grow(m.tile_pairs, tile_pairs_asked);
   grow(m.pairs, pairs_asked);
   Stats& last = records.back();
-  for (uint32_t k = 0; k < records.size(); ++k) m.csm->note_yield(k, records[k].culling_rate);
+  for (uint32_t k = 0; k < records.size(); ++k) m.csm->note_yield(slot, k, records[k].culling_rate);
   m.csm->after_frame(last, slot);
   // Grow the pool for the next frame when this one overflowed (unless a fixed size was asked for).
   if (nodes_asked > m.pool_size) m.pool_demand = uint64_t(double(nodes_asked) * 1.25);
