@@ -27,19 +27,20 @@ engine_target_warnings(gpu_tests)
 # every path: context and device adoption, every refusal, pool growth and overflow, resize, each
 # technique and light type once, moving casters, overlays, alpha-tested materials.
 set(GPU_SMOKE_FILTER "GpuTest.*:AdoptedDeviceTest.*:RobustnessTest.*InOneLine:RobustnessTest.LiveAllocation*:\
-IzbTest.TinyNodePool*:IzbTest.NodePoolGrows*:IzbTest.Resize*:IzbTest.HybridNearPoints*:IzbTest.DebugOverlays*:\
+IzbTest.TinyNodePool*:IzbTest.NodePoolGrows*:IzbTest.Resize*:IzbTest.HybridNearPoints*:\
 CascadesTest.DebugOverlaysAndCullingChoice:RayTracedTest.DeviceWithoutRayTracing*:RayTracedTest.EveryLightOfAFrame*:\
 Levels/DynamicSceneTest.*/wall:Lights/LocalLightTest.ShadowMapsOfTheLight/*:Scenes/IzbSceneTest.OneSample*/contact_view0:\
 MaterialsTest.GbufferAlphaTests*:Features/MaskedFeatureTest.PathsThatNeedTheFeatureRefuseInOneLine/*")
 # The rest of the per-scene sweeps of the equivalence tests (an optimisation changes no verdict: lit
-# culling, anchored nodes, compute against raster) and the 512² lamps run under `long`; the plain run
-# keeps two scenes of each sweep and the 256² lamps.
+# culling, anchored nodes, compute against raster; every shape of the IZB's first step) and the 512²
+# lamps run under `long`; the plain run keeps one scene of each sweep and the 256² lamps.
 set(GPU_LONG_FILTER "Scenes/IzbSceneTest.LitCullingIsExact/atrium*:Scenes/IzbSceneTest.LitCullingIsExact/canopy*:\
-Scenes/IzbSceneTest.LitCullingIsExact/contact_view1:Scenes/IzbSceneTest.LitCullingIsExact/foliage_view1:\
+Scenes/IzbSceneTest.LitCullingIsExact/contact_view1:Scenes/IzbSceneTest.LitCullingIsExact/foliage*:\
 Scenes/IzbSceneTest.AnchoredNodes*/atrium*:Scenes/IzbSceneTest.AnchoredNodes*/foliage*:\
-Scenes/IzbSceneTest.AnchoredNodes*/contact_view1:Scenes/IzbSceneTest.ComputeAndRaster*/atrium*:\
-Scenes/IzbSceneTest.ComputeAndRaster*/canopy*:Scenes/IzbSceneTest.ComputeAndRaster*/contact_view0:\
-Scenes/IzbSceneTest.ComputeAndRaster*/foliage_view1:Lamps/LampsTest.*_512")
+Scenes/IzbSceneTest.AnchoredNodes*/contact_view1:Scenes/IzbSceneTest.AnchoredNodes*/canopy*:\
+Scenes/IzbSceneTest.ComputeAndRaster*/atrium*:Scenes/IzbSceneTest.ComputeAndRaster*/canopy*:\
+Scenes/IzbSceneTest.ComputeAndRaster*/contact_view0:Scenes/IzbSceneTest.ComputeAndRaster*/foliage*:\
+IzbTest.EveryStepOneShapeGivesTheSameAnswer:Lamps/LampsTest.*_512")
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "${GPU_SMOKE_FILTER}"
                      PROPERTIES LABELS gpu_smoke TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "${GPU_LONG_FILTER}"
@@ -321,7 +322,14 @@ set_tests_properties(vulkan_host_writes_png PROPERTIES LABELS gpu FAIL_REGULAR_E
 add_executable(host_tests host/host_test.cpp)
 target_link_libraries(host_tests PRIVATE vulkan_host_app shadow_reference GTest::gtest_main)
 engine_target_warnings(host_tests)
-# The host path is all smoke: its refusals and input pass are CPU code the sanitizer run protects.
-gtest_discover_tests(host_tests DISCOVERY_TIMEOUT 60 PROPERTIES LABELS gpu_smoke TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
+# The host path's smoke set: every refusal, several lights in one record, frames in flight, a few of
+# the input matrix's pairings (CPU code the sanitizer run protects); the rest of it in label gpu.
+set(HOST_SMOKE_FILTER "HostBadInput.*:HostDevice.*:Modes/HostLights.*/izb_1spp:Slots/HostFramesInFlight.*/2_in_flight:\
+Pairs/HostInputMatrix.*/0_*:Pairs/HostInputMatrix.*/5_*:Pairs/HostInputMatrix.*/10_*:Pairs/HostInputMatrix.*/15_*:\
+Pairs/HostInputMatrix.*/17_*:Modes/HostMatchesEmbree.*/izb_csm_view0_1spp")
+gtest_discover_tests(host_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "${HOST_SMOKE_FILTER}"
+                     PROPERTIES LABELS gpu_smoke TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
+gtest_discover_tests(host_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "*-${HOST_SMOKE_FILTER}"
+                     PROPERTIES LABELS gpu TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
 add_test(NAME syncval.host_frames_in_flight COMMAND host_tests --gtest_filter=*HostFramesInFlight.*:*HostLights.*)
 set_tests_properties(syncval.host_frames_in_flight PROPERTIES LABELS syncval TIMEOUT 900 ENVIRONMENT ENGINE_SYNC_VALIDATION=1)

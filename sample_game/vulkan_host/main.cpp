@@ -1,7 +1,9 @@
 // vulkan_host: a renderer on its own Vulkan device that shadows its frames with the shadow module.
 //   vulkan_host [--out FILE.png] [--frames N] [--size WxH] [--mode izb|izb+csm|hybrid|...] [--spp 1|32]
 //               [--view 0|1] [--device gpu|lavapipe] [--validation] [--frames-in-flight 1..8]
-//               [--lights sun,spot,point] [--moving-sun]
+//               [--lights sun,spot,point] [--moving-sun] [--depth d32|d24s8|d32s8|d16] [--reversed-z]
+//               [--normals oct|xyz] [--view-normals] [--geometric-normals] [--facing-in-alpha]
+//               [--output r8|r16f|r32f]
 // Exits non-zero on any error, and on any validation message when the layer is on (--validation,
 // ENGINE_VALIDATION=1 or ENGINE_SYNC_VALIDATION=1).
 #include <cstdio>
@@ -23,6 +25,10 @@ int main(int argc, char** argv) {
     bool ok = true;
     if (arg == "--validation") { o.validation = true; continue; }
     if (arg == "--moving-sun") { o.moving_sun = true; continue; }
+    if (arg == "--reversed-z") { o.reversed_z = true; continue; }
+    if (arg == "--view-normals") { o.view_space_normals = true; continue; }
+    if (arg == "--geometric-normals") { o.geometric_normals = true; continue; }
+    if (arg == "--facing-in-alpha") { o.facing_in_alpha = o.geometric_normals = true; continue; }
     if (!value) ok = false;
     else if (arg == "--out") out = value;
     else if (arg == "--frames") ok = (o.frames = unsigned(std::atoi(value))) > 0;
@@ -32,6 +38,9 @@ int main(int argc, char** argv) {
     else if (arg == "--view") o.view = unsigned(std::atoi(value));
     else if (arg == "--device") o.device = value;
     else if (arg == "--frames-in-flight") o.frames_in_flight = unsigned(std::atoi(value));
+    else if (arg == "--depth") o.depth_format = value;
+    else if (arg == "--normals") o.normals = value;
+    else if (arg == "--output") o.output_format = value;
     else if (arg == "--lights") {
       o.lights.clear();
       for (std::string list = value; !list.empty();) {

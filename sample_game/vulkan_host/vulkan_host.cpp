@@ -9,6 +9,7 @@
 
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/packing.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "device.hpp"
@@ -66,7 +67,7 @@ std::vector<Object> scene_at(uint32_t frame) {
 struct CameraSetup {
   glm::mat4 view, projection;
 };
-CameraSetup camera_for(uint32_t index, float aspect) {
+CameraSetup camera_for(uint32_t index, float aspect, bool reversed_z) {
   const glm::vec3 eye = index == 0 ? glm::vec3(5.0f, 5.0f, 6.0f) : glm::vec3(-6.0f, 3.5f, 3.0f);
   const glm::vec3 target = index == 0 ? glm::vec3(0.0f, 0.5f, 0.0f) : glm::vec3(0.5f, 0.8f, -0.5f);
   // Right-handed perspective into Vulkan clip space: y down, standard depth (0 near, 1 far).
@@ -74,9 +75,9 @@ CameraSetup camera_for(uint32_t index, float aspect) {
   glm::mat4 p(0.0f);
   p[0][0] = t / aspect;
   p[1][1] = -t;
-  p[2][2] = f / (n - f);
+  p[2][2] = reversed_z ? n / (f - n) : f / (n - f);  // reversed: depth 1 at the near plane, 0 at the far one
   p[2][3] = -1.0f;
-  p[3][2] = n * f / (n - f);
+  p[3][2] = reversed_z ? n * f / (f - n) : n * f / (n - f);
   return {glm::lookAt(eye, target, glm::vec3(0, 1, 0)), p};
 }
 constexpr float kNear = 0.1f, kFar = 100.0f;
@@ -142,11 +143,40 @@ VkShaderModule load_shader(VkDevice device, const char* name) {
   return module;
 }
 
-struct DrawPush {  // gbuffer.vert
+struct DrawPush {  // gbuffer.vert / gbuffer.frag: 128 bytes, the least every device offers
   glm::mat4 view_projection;
   glm::vec4 world_rows[3];  // the affine object -> world transform, row by row
   glm::vec4 albedo;
 };
+struct DrawFrame {  // gbuffer.frag's uniform buffer, one per frame slot
+  glm::vec4 view_rows[3];  // world -> view rotation; view_rows[0].w: the module's normals in view space
+  glm::vec4 to_sun;        // w: the module's normal encoding (0 octahedral, 1 xyz * 0.5 + 0.5)
+};
+
+VkFormat depth_format_of(const std::string& name) {
+  if (name == "d32") return VK_FORMAT_D32_SFLOAT;
+  if (name == "d24s8") return VK_FORMAT_D24_UNORM_S8_UINT;
+  if (name == "d32s8") return VK_FORMAT_D32_SFLOAT_S8_UINT;
+  if (name == "d16") return VK_FORMAT_D16_UNORM;
+  throw std::runtime_error("unknown depth format '" + name + "' (d32, d24s8, d32s8 or d16)");
+}
+VkFormat output_format_of(const std::string& name) {
+  if (name == "r8") return VK_FORMAT_R8_UNORM;
+  if (name == "r16f") return VK_FORMAT_R16_SFLOAT;
+  if (name == "r32f") return VK_FORMAT_R32_SFLOAT;
+  throw std::runtime_error("unknown output format '" + name + "' (r8, r16f or r32f)");
+}
+// A depth texel as copied to a buffer (the depth aspect: D24 as X8_D24, D32 as float, D16 as unorm).
+float depth_texel(const void* data, size_t i, VkFormat format) {
+  if (format == VK_FORMAT_D16_UNORM) return static_cast<const uint16_t*>(data)[i] / 65535.0f;
+  if (format == VK_FORMAT_D24_UNORM_S8_UINT) return float(static_cast<const uint32_t*>(data)[i] & 0xffffffu) / float(0xffffff);
+  return static_cast<const float*>(data)[i];
+}
+float output_texel(const void* data, size_t i, VkFormat format) {
+  if (format == VK_FORMAT_R8_UNORM) return static_cast<const uint8_t*>(data)[i] / 255.0f;
+  if (format == VK_FORMAT_R16_SFLOAT) return glm::unpackHalf1x16(static_cast<const uint16_t*>(data)[i]);
+  return static_cast<const float*>(data)[i];
+}
 
 }  // namespace
 
@@ -155,6 +185,9 @@ Result run(const Options& o) {
   if (!settings) throw std::runtime_error("unknown mode '" + o.mode + "'");
   if (o.spp != 1 && o.spp != 32) throw std::runtime_error("--spp must be 1 or 32");
   settings->izb.samples_per_pixel = o.spp;
+  const VkFormat depth_format = depth_format_of(o.depth_format), output_format = output_format_of(o.output_format);
+  if (o.normals != "oct" && o.normals != "xyz") throw std::runtime_error("unknown normals '" + o.normals + "' (oct or xyz)");
+  if (o.facing_in_alpha && !o.geometric_normals) throw std::runtime_error("facing in alpha needs the geometric normals");
   if (o.lights.empty() || o.lights.size() > shadows::kMaxLightsPerRecord)
     throw std::runtime_error("--lights takes 1 to " + std::to_string(shadows::kMaxLightsPerRecord) + " lights");
   const uint32_t F = o.frames_in_flight;
@@ -201,15 +234,21 @@ Result run(const Options& o) {
   // ----- Targets: the host's G-buffer in its own formats, the module's output, the lit frame.
   const VkExtent2D extent{o.width, o.height};
   const VkImageUsageFlags read = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-  Image depth = make_image(d, extent, VK_FORMAT_D24_UNORM_S8_UINT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | read);
+  Image depth = make_image(d, extent, depth_format, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | read);
   Image albedo = make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
   Image normals = make_image(d, extent, VK_FORMAT_R16G16_SNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
+  // What the module reads as normals (octahedral world: the lighting's own image), and the geometric
+  // normals; both always drawn, handed over as the options say.
+  const bool own_normals = o.normals != "oct" || o.view_space_normals;
+  Image module_normals = make_image(d, extent, o.normals == "xyz" ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R16G16_SNORM,
+                                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
+  Image geometric_normals = make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
   // The module's outputs, one per light (the first lights the frame; the others are light_outputs).
   const uint32_t light_count = uint32_t(o.lights.size());
   std::vector<Image> visibility;
   std::vector<shadows::ImageInput> light_outputs;
   for (uint32_t l = 0; l < light_count; ++l) {
-    visibility.push_back(make_image(d, extent, VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read));
+    visibility.push_back(make_image(d, extent, output_format, VK_IMAGE_USAGE_STORAGE_BIT | read));
     if (l > 0) light_outputs.push_back(visibility.back().input(VK_IMAGE_LAYOUT_GENERAL));
   }
   Image lit = make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read);
@@ -217,8 +256,8 @@ Result run(const Options& o) {
   // Read-backs per frame slot, read when the host waits for that slot's fence (so frames stay in
   // flight while every one of them is captured).
   struct SlotCapture {
-    Buffer depth, normals, lit;      // X8_D24, R16G16_SNORM, RGBA8
-    std::vector<Buffer> visibility;  // R8 per light
+    Buffer depth, normals, lit;      // the depth aspect, R16G16_SNORM, RGBA8
+    std::vector<Buffer> visibility;  // the output format, per light
     bool pending = false;
     uint32_t frame = 0;
     glm::mat4 inverse_view_projection{1.0f};
@@ -231,7 +270,7 @@ Result run(const Options& o) {
       c.depth = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
       c.normals = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
       c.lit = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
-      for (uint32_t l = 0; l < light_count; ++l) c.visibility.push_back(make_buffer(d, pixels, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      for (uint32_t l = 0; l < light_count; ++l) c.visibility.push_back(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
     }
     return c;
   };
@@ -241,7 +280,17 @@ Result run(const Options& o) {
   VkSamplerCreateInfo sampler_info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
   check(vkCreateSampler(dev, &sampler_info, nullptr, &sampler), "vkCreateSampler");
   VkPushConstantRange draw_push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(DrawPush)};
+  // gbuffer.frag: the frame's uniform buffer (DrawFrame), a push descriptor.
+  const VkDescriptorSetLayoutBinding frame_binding{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
+  VkDescriptorSetLayoutCreateInfo frame_set_info{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  frame_set_info.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
+  frame_set_info.bindingCount = 1;
+  frame_set_info.pBindings = &frame_binding;
+  VkDescriptorSetLayout draw_set;
+  check(vkCreateDescriptorSetLayout(dev, &frame_set_info, nullptr, &draw_set), "vkCreateDescriptorSetLayout");
   VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  layout_info.setLayoutCount = 1;
+  layout_info.pSetLayouts = &draw_set;
   layout_info.pushConstantRangeCount = 1;
   layout_info.pPushConstantRanges = &draw_push;
   VkPipelineLayout draw_layout, light_layout;
@@ -291,17 +340,20 @@ Result run(const Options& o) {
   multisample.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
   VkPipelineDepthStencilStateCreateInfo depth_state{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
   depth_state.depthTestEnable = depth_state.depthWriteEnable = VK_TRUE;
-  depth_state.depthCompareOp = VK_COMPARE_OP_LESS;  // standard Z: cleared to 1, nearer is smaller
-  VkPipelineColorBlendAttachmentState blend[2] = {};
-  blend[0].colorWriteMask = blend[1].colorWriteMask = 0xf;
+  // Standard Z: cleared to 1, nearer is smaller; reversed: cleared to 0, nearer is larger.
+  depth_state.depthCompareOp = o.reversed_z ? VK_COMPARE_OP_GREATER : VK_COMPARE_OP_LESS;
+  VkPipelineColorBlendAttachmentState blend[4] = {};
+  for (auto& b : blend) b.colorWriteMask = 0xf;
   VkPipelineColorBlendStateCreateInfo blend_state{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  blend_state.attachmentCount = 2;
+  blend_state.attachmentCount = 4;
   blend_state.pAttachments = blend;
-  const VkFormat color_formats[2] = {albedo.format, normals.format};
+  const VkFormat color_formats[4] = {albedo.format, normals.format, module_normals.format, geometric_normals.format};
   VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-  rendering.colorAttachmentCount = 2;
+  rendering.colorAttachmentCount = 4;
   rendering.pColorAttachmentFormats = color_formats;
-  rendering.depthAttachmentFormat = rendering.stencilAttachmentFormat = depth.format;
+  rendering.depthAttachmentFormat = depth.format;
+  const bool has_stencil = depth.format == VK_FORMAT_D24_UNORM_S8_UINT || depth.format == VK_FORMAT_D32_SFLOAT_S8_UINT;
+  rendering.stencilAttachmentFormat = has_stencil ? depth.format : VK_FORMAT_UNDEFINED;
   VkGraphicsPipelineCreateInfo gp{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, &rendering};
   gp.stageCount = 2;
   gp.pStages = stages;
@@ -333,10 +385,12 @@ Result run(const Options& o) {
                                     VK_COMMAND_BUFFER_LEVEL_PRIMARY, F};
   check(vkAllocateCommandBuffers(dev, &alloc, cmds.data()), "vkAllocateCommandBuffers");
   std::vector<VkFence> fences(F);
+  std::vector<Buffer> draw_frames;
+  for (uint32_t k = 0; k < F; ++k) draw_frames.push_back(make_buffer(d, sizeof(DrawFrame), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT));
   VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, nullptr, VK_FENCE_CREATE_SIGNALED_BIT};
   for (VkFence& f : fences) check(vkCreateFence(dev, &fence_info, nullptr, &f), "vkCreateFence");
 
-  const CameraSetup camera = camera_for(o.view, float(o.width) / float(o.height));
+  const CameraSetup camera = camera_for(o.view, float(o.width) / float(o.height), o.reversed_z);
   const glm::mat4 view_projection = camera.projection * camera.view;
   const auto C = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
   // What reads a target before the next frame writes it: the module's and the lighting's compute
@@ -353,8 +407,12 @@ Result run(const Options& o) {
     f.normals.resize(pixels * 3);
     const auto* depth_words = static_cast<const uint32_t*>(c.depth.mapped);
     const auto* normal_texels = static_cast<const int16_t*>(c.normals.mapped);
+    f.reversed_z = o.reversed_z;
+    f.depth_step = depth_format == VK_FORMAT_D16_UNORM           ? 1.0f / 65535.0f
+                   : depth_format == VK_FORMAT_D24_UNORM_S8_UINT ? 1.0f / 16777215.0f
+                                                                 : 0.0f;
     for (size_t i = 0; i < pixels; ++i) {
-      f.depth[i] = float(depth_words[i] & 0xffffffu) / float(0xffffff);  // D24 copies as X8_D24
+      f.depth[i] = depth_texel(depth_words, i, depth_format);
       glm::vec2 e(std::max(normal_texels[2 * i] / 32767.0f, -1.0f), std::max(normal_texels[2 * i + 1] / 32767.0f, -1.0f));
       glm::vec3 n(e, 1.0f - std::abs(e.x) - std::abs(e.y));
       if (n.z < 0.0f) n = glm::vec3((1.0f - glm::abs(glm::vec2(n.y, n.x))) * glm::vec2(n.x >= 0 ? 1 : -1, n.y >= 0 ? 1 : -1), n.z);
@@ -362,9 +420,8 @@ Result run(const Options& o) {
       std::memcpy(&f.normals[3 * i], &n, 12);
     }
     for (const Buffer& b : c.visibility) {
-      const auto* bytes = static_cast<const uint8_t*>(b.mapped);
       std::vector<float>& v = f.visibility.emplace_back(pixels);
-      for (size_t i = 0; i < pixels; ++i) v[i] = bytes[i] / 255.0f;
+      for (size_t i = 0; i < pixels; ++i) v[i] = output_texel(b.mapped, i, output_format);
     }
     std::memcpy(f.inverse_view_projection.data(), glm::value_ptr(c.inverse_view_projection), 64);
     f.lights = c.lights;
@@ -405,14 +462,15 @@ Result run(const Options& o) {
     image_barrier(cmd, depth, READERS, 0, FRAGMENT_TESTS, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
                   VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                   VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
-    for (const Image* target : {&albedo, &normals})
+    for (const Image* target : {&albedo, &normals, &module_normals, &geometric_normals})
       image_barrier(cmd, *target, READERS, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
-    VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
-                                           {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
-    for (int i = 0; i < 2; ++i) {
-      colors[i].imageView = i == 0 ? albedo.view : normals.view;
+    VkRenderingAttachmentInfo colors[4];
+    const Image* targets[4] = {&albedo, &normals, &module_normals, &geometric_normals};
+    for (int i = 0; i < 4; ++i) {
+      colors[i] = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+      colors[i].imageView = targets[i]->view;
       colors[i].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
       colors[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
       colors[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
@@ -422,15 +480,25 @@ Result run(const Options& o) {
     depth_attachment.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
     depth_attachment.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
     depth_attachment.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    depth_attachment.clearValue.depthStencil = {1.0f, 0};  // standard Z: far
+    depth_attachment.clearValue.depthStencil = {o.reversed_z ? 0.0f : 1.0f, 0};  // far
     VkRenderingInfo rendering_info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     rendering_info.renderArea = scissor;
     rendering_info.layerCount = 1;
-    rendering_info.colorAttachmentCount = 2;
+    rendering_info.colorAttachmentCount = 4;
     rendering_info.pColorAttachments = colors;
     rendering_info.pDepthAttachment = &depth_attachment;
+    rendering_info.pStencilAttachment = has_stencil ? &depth_attachment : nullptr;
     vkCmdBeginRendering(cmd, &rendering_info);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, draw_pipeline);
+    // The slot's uniforms: its previous frame has completed (its fence), so the host may write them.
+    const glm::mat4 view_rows = glm::transpose(camera.view);
+    const DrawFrame frame_uniforms{{glm::vec4(glm::vec3(view_rows[0]), o.view_space_normals ? 1.0f : 0.0f), view_rows[1], view_rows[2]},
+                                   glm::vec4(-sun_direction(frame, o.moving_sun), o.normals == "xyz" ? 1.0f : 0.0f)};
+    std::memcpy(draw_frames[slot].mapped, &frame_uniforms, sizeof(frame_uniforms));
+    const VkDescriptorBufferInfo frame_buffer{draw_frames[slot].buffer, 0, sizeof(DrawFrame)};
+    const VkWriteDescriptorSet frame_write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, VK_NULL_HANDLE, 0, 0, 1,
+                                           VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, nullptr, &frame_buffer, nullptr};
+    push_descriptors(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, draw_layout, 0, 1, &frame_write);
     const std::vector<Object> objects = scene_at(frame);
     std::vector<shadows::Instance> instances(objects.size());
     for (size_t i = 0; i < objects.size(); ++i) {
@@ -452,7 +520,7 @@ Result run(const Options& o) {
     image_barrier(cmd, depth, FRAGMENT_TESTS, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, C,
                   VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
                   VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
-    for (const Image* target : {&albedo, &normals})
+    for (const Image* target : {&albedo, &normals, &module_normals, &geometric_normals})
       image_barrier(cmd, *target, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                     C, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                     VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
@@ -464,12 +532,23 @@ Result run(const Options& o) {
     shadows::FrameDesc fd;
     fd.frame_index = frame;
     fd.depth = depth.input(VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
-    fd.normals.image = normals.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-    fd.normals.encoding = shadows::NormalEncoding::Octahedral;  // SNORM: already in [-1, 1]
-    fd.normals.space = shadows::NormalSpace::World;
+    fd.normals.image = (own_normals ? module_normals : normals).input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    if (o.normals == "xyz") {
+      fd.normals.encoding = shadows::NormalEncoding::Xyz;  // stored n * 0.5 + 0.5
+      fd.normals.scale = 2.0f;
+      fd.normals.bias = -1.0f;
+    } else {
+      fd.normals.encoding = shadows::NormalEncoding::Octahedral;  // SNORM: already in [-1, 1]
+    }
+    fd.normals.space = o.view_space_normals ? shadows::NormalSpace::View : shadows::NormalSpace::World;
+    if (o.geometric_normals) {
+      fd.geometric_normals.image = geometric_normals.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+      fd.geometric_normals.encoding = shadows::NormalEncoding::Xyz;
+      fd.facing_in_alpha = o.facing_in_alpha;
+    }
     std::memcpy(fd.camera.view, glm::value_ptr(camera.view), 64);
     std::memcpy(fd.camera.projection, glm::value_ptr(camera.projection), 64);
-    fd.camera.reversed_z = false;
+    fd.camera.reversed_z = o.reversed_z;
     fd.camera.near_plane = kNear;
     fd.camera.far_plane = kFar;
     fd.lights = lights.module.data();
@@ -567,9 +646,10 @@ Result run(const Options& o) {
   vkDestroyCommandPool(dev, pool, nullptr);
   for (VkPipeline p : {draw_pipeline, light_pipeline}) vkDestroyPipeline(dev, p, nullptr);
   for (VkPipelineLayout l : {draw_layout, light_layout}) vkDestroyPipelineLayout(dev, l, nullptr);
-  vkDestroyDescriptorSetLayout(dev, light_set, nullptr);
+  for (VkDescriptorSetLayout l : {light_set, draw_set}) vkDestroyDescriptorSetLayout(dev, l, nullptr);
+  for (Buffer& b : draw_frames) destroy(d, b);
   vkDestroySampler(dev, sampler, nullptr);
-  for (Image* i : {&depth, &albedo, &normals, &lit}) destroy(d, *i);
+  for (Image* i : {&depth, &albedo, &normals, &module_normals, &geometric_normals, &lit}) destroy(d, *i);
   for (Image& v : visibility) destroy(d, v);
   for (SlotCapture& c : captures) {
     for (Buffer* b : {&c.depth, &c.normals, &c.lit})

@@ -28,6 +28,15 @@ struct Options {
   // Calls Context::frame_completed() for each frame whose fence it has waited for, as a host that
   // knows its frames' completion does (statistics and the automatic choices' measures come back then).
   bool report_completed = true;
+  // The G-buffer as the module reads it (the host tests' input matrix). The lighting pass always reads
+  // its own octahedral world normals; these are what FrameDesc hands the module.
+  std::string depth_format = "d24s8";  // d32, d24s8, d32s8 or d16
+  bool reversed_z = false;             // depth 1 near, 0 far (cleared to 0, GREATER); else 0 near, 1 far
+  std::string normals = "oct";         // oct: R16G16_SNORM octahedral; xyz: R16G16B16A16_SFLOAT n * 0.5 + 0.5 (scale 2, bias -1)
+  bool view_space_normals = false;     // normals in view space (NormalSpace::View); else world
+  bool geometric_normals = false;      // an R16G16B16A16_SFLOAT face normal (world) beside them
+  bool facing_in_alpha = false;        // its alpha: the host's decision whether the point faces the sun
+  std::string output_format = "r8";    // the module's outputs: r8 (R8_UNORM), r16f or r32f
 };
 
 // A light as the host recorded it (world space).
@@ -42,9 +51,11 @@ struct HostLight {
 // One captured frame, pixel (x, y) at index y * width + x.
 struct FrameCapture {
   uint32_t frame = 0;
-  std::vector<float> depth;    // the host's depth in [0, 1], standard Z (1 = background)
+  bool reversed_z = false;
+  float depth_step = 0.0f;     // the depth format's step: 1 / (2^bits - 1) for D16 and D24, 0 for float ones
+  std::vector<float> depth;    // the host's depth in [0, 1] as stored (background: 1 standard, 0 reversed)
   std::vector<float> normals;  // 3 per pixel: decoded world normal as stored (not turned to the camera)
-  std::array<float, 16> inverse_view_projection{};  // Vulkan NDC (standard depth) -> world, column-major
+  std::array<float, 16> inverse_view_projection{};  // Vulkan NDC (the depth convention used) -> world, column-major
   std::vector<HostLight> lights;                   // as recorded, in Options::lights order
   std::vector<std::vector<float>> visibility;      // the module's output per light, 1 lit .. 0 shadowed
   std::vector<float> caster_triangles;             // 9 per triangle: world-space corners at that frame
@@ -54,11 +65,11 @@ struct FrameCapture {
 struct Result {
   uint32_t width = 0, height = 0;
   std::string device_name;
-  std::vector<float> depth;       // the host's depth in [0, 1], standard Z (1 = background)
+  std::vector<float> depth;       // as FrameCapture::depth
   std::vector<float> normals;     // 3 per pixel: decoded world normal as stored (not turned to the camera)
   std::vector<float> visibility;  // the module's output, 1 lit .. 0 shadowed
   std::vector<uint8_t> rgba;      // the lit frame
-  std::array<float, 16> inverse_view_projection{};  // Vulkan NDC (standard depth) -> world, column-major
+  std::array<float, 16> inverse_view_projection{};  // as FrameCapture::inverse_view_projection
   std::array<float, 3> light_direction{};           // the direction light travels, unit
   std::vector<float> caster_triangles;              // 9 per triangle: world-space corners at that frame
   uint32_t validation_messages = 0;

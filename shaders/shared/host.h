@@ -24,7 +24,7 @@ SHARED_CONST uint HOST_GEOMETRIC_SHIFT = 12u;
 struct HostInputs {
   mat4 inverse_view_projection;  // module NDC (y down, reversed depth) -> world
   mat4 view_to_world;            // rotates view-space normals into world space
-  vec4 camera_position;          // xyz
+  vec4 camera_position;          // xyz; w: the host depth's step (UNORM), 0 for a float format
   vec4 light_direction;          // xyz: travel direction
   vec4 normal_scale_bias;        // x scale, y bias (shading normal); z scale, w bias (geometric)
   uvec4 extent;                  // x, y: size; z: flags (HOST_*); w: receiver-mask channel

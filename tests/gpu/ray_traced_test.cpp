@@ -298,6 +298,8 @@ struct LampsCase {
   size_t view;
   uint32_t size;
   shadows::LightType light;
+  // sm's and cascades' mismatch bound: 4x the larger of the two measured on lavapipe at 256² and 512².
+  double filtered_bound;
 };
 class LampsTest : public RayTracedTest, public testing::WithParamInterface<LampsCase> {
  protected:
@@ -332,9 +334,9 @@ TEST_P(LampsTest, IzbMatchesReference) {
   EXPECT_LE(thirty_two.coverage_mae, 1.0e-3);  // the sun suite's bound
   const double sm = render(shadows::Technique::ShadowMap, 1, false).mismatch_rate;
   const double cascades = render(shadows::Technique::Cascades, 1, false).mismatch_rate;
-  // Reported, and bounded only loosely: aliasing, not a missing shadow.
-  EXPECT_LE(sm, 0.02);
-  EXPECT_LE(cascades, 0.02);
+  // Aliasing, not a missing shadow: within 4x what is measured.
+  EXPECT_LE(sm, c.filtered_bound);
+  EXPECT_LE(cascades, c.filtered_bound);
   const std::string filtered = "sm " + std::to_string(sm) + ", cascades " + std::to_string(cascades);
   std::printf("lamps view %zu %ux%u %s: izb 1 spp mismatch %.6f, izb+csm %.6f (false shadows %llu), 32 spp coverage "
               "MAE %.6f; mismatch %s\n",
@@ -344,10 +346,16 @@ TEST_P(LampsTest, IzbMatchesReference) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Lamps, LampsTest,
-                         testing::Values(LampsCase{0, 256, shadows::LightType::Spot}, LampsCase{0, 256, shadows::LightType::Point},
-                                         LampsCase{1, 256, shadows::LightType::Spot}, LampsCase{1, 256, shadows::LightType::Point},
-                                         LampsCase{0, 512, shadows::LightType::Spot}, LampsCase{0, 512, shadows::LightType::Point},
-                                         LampsCase{1, 512, shadows::LightType::Spot}, LampsCase{1, 512, shadows::LightType::Point}),
+                         // Measured (sm, cascades): spot view 0 0.00038/0.00026, point view 0 0.00049/0.00059,
+                         // spot view 1 0.00066/0.00051, point view 1 0.0019/0.0020 (the larger of 256², 512²).
+                         testing::Values(LampsCase{0, 256, shadows::LightType::Spot, 0.0016},
+                                         LampsCase{0, 256, shadows::LightType::Point, 0.0024},
+                                         LampsCase{1, 256, shadows::LightType::Spot, 0.0027},
+                                         LampsCase{1, 256, shadows::LightType::Point, 0.0082},
+                                         LampsCase{0, 512, shadows::LightType::Spot, 0.0016},
+                                         LampsCase{0, 512, shadows::LightType::Point, 0.0024},
+                                         LampsCase{1, 512, shadows::LightType::Spot, 0.0027},
+                                         LampsCase{1, 512, shadows::LightType::Point, 0.0082}),
                          [](const testing::TestParamInfo<LampsCase>& info) {
                            return std::string(info.param.light == shadows::LightType::Spot ? "spot" : "point") + "_view" +
                                   std::to_string(info.param.view) + "_" + std::to_string(info.param.size);

@@ -65,6 +65,26 @@ std::string format_name(VkFormat format) {
   }
 }
 
+std::string layout_name(VkImageLayout layout) {
+  switch (layout) {
+    case VK_IMAGE_LAYOUT_UNDEFINED: return "VK_IMAGE_LAYOUT_UNDEFINED";
+    case VK_IMAGE_LAYOUT_GENERAL: return "VK_IMAGE_LAYOUT_GENERAL";
+    case VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL: return "VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL";
+    case VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL: return "VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL";
+    case VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL: return "VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL";
+    case VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL: return "VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL";
+    case VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL: return "VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL";
+    case VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL: return "VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL";
+    case VK_IMAGE_LAYOUT_PREINITIALIZED: return "VK_IMAGE_LAYOUT_PREINITIALIZED";
+    case VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL: return "VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL";
+    case VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL: return "VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL";
+    case VK_IMAGE_LAYOUT_READ_ONLY_OPTIMAL: return "VK_IMAGE_LAYOUT_READ_ONLY_OPTIMAL";
+    case VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL: return "VK_IMAGE_LAYOUT_ATTACHMENT_OPTIMAL";
+    case VK_IMAGE_LAYOUT_PRESENT_SRC_KHR: return "VK_IMAGE_LAYOUT_PRESENT_SRC_KHR";
+    default: return "VkImageLayout " + std::to_string(int(layout));
+  }
+}
+
 void check_buffer(const BufferInput& b, const std::string& name, VkDeviceSize minimum, bool half_aligned) {
   if (b.buffer == VK_NULL_HANDLE) throw Error("shadows: " + name + ".buffer is VK_NULL_HANDLE");
   if (!(b.usage & VK_BUFFER_USAGE_STORAGE_BUFFER_BIT))
@@ -96,7 +116,7 @@ void check_image(const ImageInput& image, const std::string& name, std::initiali
     throw Error("shadows: " + name + ".usage lacks " +
                 (usage & VK_IMAGE_USAGE_STORAGE_BIT ? "VK_IMAGE_USAGE_STORAGE_BIT" : "VK_IMAGE_USAGE_SAMPLED_BIT"));
   if (std::find(layouts.begin(), layouts.end(), image.layout) == layouts.end())
-    throw Error("shadows: " + name + ".layout " + std::to_string(int(image.layout)) + " is not supported (" +
+    throw Error("shadows: " + name + ".layout " + layout_name(image.layout) + " is not supported (" +
                 (layouts.size() == 1 ? "VK_IMAGE_LAYOUT_GENERAL" : "a read-only layout or GENERAL") + ")");
   if (image.extent.width == 0 || image.extent.height == 0) throw Error("shadows: " + name + ".extent is empty");
   if (extent && (image.extent.width != extent->width || image.extent.height != extent->height))
@@ -118,6 +138,9 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
   if (!desc.get_device_proc_addr) throw Error("shadows: ContextDesc.get_device_proc_addr is null");
   if (desc.frames_in_flight < 1 || desc.frames_in_flight > 8)
     throw Error("shadows: ContextDesc.frames_in_flight is " + std::to_string(desc.frames_in_flight) + " (1..8)");
+  if (!desc.enabled_features)
+    throw Error("shadows: ContextDesc.enabled_features is null (give the VkPhysicalDeviceFeatures2 chain passed to "
+                "vkCreateDevice)");
   engine::gpu::AdoptedDevice adopted;
   adopted.instance = desc.instance;
   adopted.physical_device = desc.physical_device;
@@ -139,7 +162,10 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
-    throw Error(e.what());
+    // The adoption names its own fields, which are the host's ContextDesc fields of the same names.
+    std::string what = e.what();
+    for (size_t at; (at = what.find("AdoptedDevice.")) != std::string::npos;) what.replace(at, 14, "ContextDesc.");
+    throw Error(what);
   }
   frames_in_flight_ = desc.frames_in_flight;
   // Resources the passes replace (pools growing, a resize) may still be read by frames in flight.
@@ -358,7 +384,12 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
   gs::HostInputs p{};
   p.inverse_view_projection = view.inverse_view_projection;
   p.view_to_world = glm::inverse(view.view);
-  p.camera_position = glm::vec4(view.camera_position, 1.0f);
+  // w: the host depth's step (UNORM formats), 0 for float ones (their step is relative): how far a
+  // reconstructed point may lie from the surface, which host_inputs.comp pushes it off by.
+  const float depth_step = f.depth.format == VK_FORMAT_D16_UNORM           ? 1.0f / 65535.0f
+                           : f.depth.format == VK_FORMAT_D24_UNORM_S8_UINT ? 1.0f / 16777215.0f
+                                                                           : 0.0f;
+  p.camera_position = glm::vec4(view.camera_position, depth_step);
   p.light_direction = glm::vec4(view.light_direction, 0.0f);
   p.normal_scale_bias = glm::vec4(f.normals.scale, f.normals.bias, f.geometric_normals.scale, f.geometric_normals.bias);
   auto normal_bits = [](const NormalInput& n, bool as_given) {

@@ -468,8 +468,9 @@ struct IzbPass::Impl {
     }
     // Mesh ranges are never reused (the geometry only grows), so an equal table means equal triangles.
     const size_t table_bytes = caster_table.size() * sizeof(gpu_shared::IzbCasterDraw);
+    // (A frame without casters has empty tables, whose data() may be null: memcmp must not see them.)
     if (triangles.valid() && built_table.size() == caster_table.size() &&
-        std::memcmp(built_table.data(), caster_table.data(), table_bytes) == 0)
+        (table_bytes == 0 || std::memcmp(built_table.data(), caster_table.data(), table_bytes) == 0))
       return;
     if (triangle_count > triangle_capacity || !triangles.valid()) {
       triangle_capacity = std::max<size_t>(triangle_count, 1);

@@ -237,7 +237,10 @@ constexpr uint32_t kMaxLightsPerRecord = 8;
 struct FrameDesc {
   uint64_t frame_index = 0;  // increases by one per record(); slot = frame_index % frames_in_flight
   // Depth: D32_SFLOAT, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT or D16_UNORM, SAMPLED usage. A pixel at
-  // the clear depth (0 reversed, 1 standard) is background: lit, not a shading point.
+  // the clear depth (0 reversed, 1 standard) is background: lit, not a shading point. A point rebuilt
+  // from it is pushed off its surface (along the geometric normal, else the shading one) by the
+  // distance half a step of the format spans there, so a coarse depth (D16 standard Z: about 5 mm 8
+  // units from a 0.1 near plane) does not shadow its own surface.
   ImageInput depth;
   // Shading normals (required), facing the camera or not (the module turns them toward it). Any
   // float/UNORM/SNORM colour format with SAMPLED usage; `extent` equal to depth's.
