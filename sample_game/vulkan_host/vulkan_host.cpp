@@ -59,6 +59,9 @@ std::vector<Object> scene_at(uint32_t frame) {
   const float slide = std::sin(0.7f * float(frame));
   return {{0, glm::scale(glm::mat4(1.0f), glm::vec3(5.0f, 1.0f, 5.0f)), {0.75f, 0.72f, 0.65f, 1}},
           {1, box({-2.0f, 2.0f, -1.5f}, {0.6f, 4.0f, 0.6f}, 0.0f), {0.8f, 0.3f, 0.25f, 1}},      // pillar
+          // A low tile in the pillar's shadow; its albedo alpha (0.25) marks it as no receiver where the
+          // albedo is the receiver mask (Options::receiver_mask), which then keeps it lit.
+          {1, box({-1.1f, 0.02f, -0.9f}, {0.8f, 0.04f, 0.8f}, 0.0f), {0.6f, 0.6f, 0.6f, 0.25f}},
           {1, box({1.8f, 0.6f, 0.8f}, {1.2f, 1.2f, 1.2f}, 30.0f), {0.3f, 0.5f, 0.8f, 1}},        // box
           {1, box({0.0f, 2.2f, 2.2f}, {2.5f, 0.15f, 0.8f}, -15.0f), {0.4f, 0.7f, 0.35f, 1}},     // floating slab
           {1, box({-0.5f + 1.5f * slide, 1.0f, -0.2f}, glm::vec3(0.7f), 45.0f), {0.9f, 0.8f, 0.3f, 1}}};
@@ -243,6 +246,7 @@ Result run(const Options& o) {
   Image module_normals = make_image(d, extent, o.normals == "xyz" ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R16G16_SNORM,
                                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
   Image geometric_normals = make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
+  Image terminator = make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
   // The module's outputs, one per light (the first lights the frame; the others are light_outputs).
   const uint32_t light_count = uint32_t(o.lights.size());
   std::vector<Image> visibility;
@@ -256,7 +260,7 @@ Result run(const Options& o) {
   // Read-backs per frame slot, read when the host waits for that slot's fence (so frames stay in
   // flight while every one of them is captured).
   struct SlotCapture {
-    Buffer depth, normals, lit;      // the depth aspect, R16G16_SNORM, RGBA8
+    Buffer depth, normals, lit, albedo;  // the depth aspect, R16G16_SNORM, RGBA8, RGBA8
     std::vector<Buffer> visibility;  // the output format, per light
     bool pending = false;
     uint32_t frame = 0;
@@ -270,6 +274,7 @@ Result run(const Options& o) {
       c.depth = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
       c.normals = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
       c.lit = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+      c.albedo = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
       for (uint32_t l = 0; l < light_count; ++l) c.visibility.push_back(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
     }
     return c;
@@ -342,14 +347,15 @@ Result run(const Options& o) {
   depth_state.depthTestEnable = depth_state.depthWriteEnable = VK_TRUE;
   // Standard Z: cleared to 1, nearer is smaller; reversed: cleared to 0, nearer is larger.
   depth_state.depthCompareOp = o.reversed_z ? VK_COMPARE_OP_GREATER : VK_COMPARE_OP_LESS;
-  VkPipelineColorBlendAttachmentState blend[4] = {};
+  VkPipelineColorBlendAttachmentState blend[5] = {};
   for (auto& b : blend) b.colorWriteMask = 0xf;
   VkPipelineColorBlendStateCreateInfo blend_state{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  blend_state.attachmentCount = 4;
+  blend_state.attachmentCount = 5;
   blend_state.pAttachments = blend;
-  const VkFormat color_formats[4] = {albedo.format, normals.format, module_normals.format, geometric_normals.format};
+  const VkFormat color_formats[5] = {albedo.format, normals.format, module_normals.format, geometric_normals.format,
+                                     terminator.format};
   VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-  rendering.colorAttachmentCount = 4;
+  rendering.colorAttachmentCount = 5;
   rendering.pColorAttachmentFormats = color_formats;
   rendering.depthAttachmentFormat = depth.format;
   const bool has_stencil = depth.format == VK_FORMAT_D24_UNORM_S8_UINT || depth.format == VK_FORMAT_D32_SFLOAT_S8_UINT;
@@ -408,6 +414,12 @@ Result run(const Options& o) {
     const auto* depth_words = static_cast<const uint32_t*>(c.depth.mapped);
     const auto* normal_texels = static_cast<const int16_t*>(c.normals.mapped);
     f.reversed_z = o.reversed_z;
+    f.terminator_offset = o.terminator_offset ? kTerminatorOffset : 0.0f;
+    if (o.receiver_mask) {
+      const auto* rgba = static_cast<const uint8_t*>(c.albedo.mapped);
+      f.receives.resize(pixels);
+      for (size_t i = 0; i < pixels; ++i) f.receives[i] = rgba[4 * i + 3] > 127 ? 1 : 0;
+    }
     f.depth_step = depth_format == VK_FORMAT_D16_UNORM           ? 1.0f / 65535.0f
                    : depth_format == VK_FORMAT_D24_UNORM_S8_UINT ? 1.0f / 16777215.0f
                                                                  : 0.0f;
@@ -462,13 +474,13 @@ Result run(const Options& o) {
     image_barrier(cmd, depth, READERS, 0, FRAGMENT_TESTS, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
                   VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                   VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
-    for (const Image* target : {&albedo, &normals, &module_normals, &geometric_normals})
+    for (const Image* target : {&albedo, &normals, &module_normals, &geometric_normals, &terminator})
       image_barrier(cmd, *target, READERS, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
                     VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                     VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
-    VkRenderingAttachmentInfo colors[4];
-    const Image* targets[4] = {&albedo, &normals, &module_normals, &geometric_normals};
-    for (int i = 0; i < 4; ++i) {
+    VkRenderingAttachmentInfo colors[5];
+    const Image* targets[5] = {&albedo, &normals, &module_normals, &geometric_normals, &terminator};
+    for (int i = 0; i < 5; ++i) {
       colors[i] = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
       colors[i].imageView = targets[i]->view;
       colors[i].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
@@ -484,7 +496,7 @@ Result run(const Options& o) {
     VkRenderingInfo rendering_info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     rendering_info.renderArea = scissor;
     rendering_info.layerCount = 1;
-    rendering_info.colorAttachmentCount = 4;
+    rendering_info.colorAttachmentCount = 5;
     rendering_info.pColorAttachments = colors;
     rendering_info.pDepthAttachment = &depth_attachment;
     rendering_info.pStencilAttachment = has_stencil ? &depth_attachment : nullptr;
@@ -492,7 +504,9 @@ Result run(const Options& o) {
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, draw_pipeline);
     // The slot's uniforms: its previous frame has completed (its fence), so the host may write them.
     const glm::mat4 view_rows = glm::transpose(camera.view);
-    const DrawFrame frame_uniforms{{glm::vec4(glm::vec3(view_rows[0]), o.view_space_normals ? 1.0f : 0.0f), view_rows[1], view_rows[2]},
+    const DrawFrame frame_uniforms{{glm::vec4(glm::vec3(view_rows[0]), o.view_space_normals ? 1.0f : 0.0f),
+                                    glm::vec4(glm::vec3(view_rows[1]), o.terminator_offset ? kTerminatorOffset : 0.0f),
+                                    view_rows[2]},
                                    glm::vec4(-sun_direction(frame, o.moving_sun), o.normals == "xyz" ? 1.0f : 0.0f)};
     std::memcpy(draw_frames[slot].mapped, &frame_uniforms, sizeof(frame_uniforms));
     const VkDescriptorBufferInfo frame_buffer{draw_frames[slot].buffer, 0, sizeof(DrawFrame)};
@@ -520,7 +534,7 @@ Result run(const Options& o) {
     image_barrier(cmd, depth, FRAGMENT_TESTS, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, C,
                   VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
                   VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
-    for (const Image* target : {&albedo, &normals, &module_normals, &geometric_normals})
+    for (const Image* target : {&albedo, &normals, &module_normals, &geometric_normals, &terminator})
       image_barrier(cmd, *target, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
                     C, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                     VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
@@ -545,6 +559,11 @@ Result run(const Options& o) {
       fd.geometric_normals.image = geometric_normals.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
       fd.geometric_normals.encoding = shadows::NormalEncoding::Xyz;
       fd.facing_in_alpha = o.facing_in_alpha;
+    }
+    if (o.terminator_offset) fd.terminator_offset = terminator.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    if (o.receiver_mask) {
+      fd.receiver_mask = albedo.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+      fd.receiver_channel = 3;
     }
     std::memcpy(fd.camera.view, glm::value_ptr(camera.view), 64);
     std::memcpy(fd.camera.projection, glm::value_ptr(camera.projection), 64);
@@ -584,21 +603,24 @@ Result run(const Options& o) {
       SlotCapture& c = readbacks_of(captures[slot]);
       image_barrier(cmd, depth, C, 0, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
                     VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-      image_barrier(cmd, normals, C, 0, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
-                    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+      for (const Image* image : {&normals, &albedo})
+        image_barrier(cmd, *image, C, 0, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT,
+                      VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
       for (const Image& v : visibility)
         image_barrier(cmd, v, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
                       VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
       image_barrier(cmd, lit, C, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
                     VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL);
-      std::vector<std::pair<const Image*, const Buffer*>> copies = {{&depth, &c.depth}, {&normals, &c.normals}, {&lit, &c.lit}};
+      std::vector<std::pair<const Image*, const Buffer*>> copies = {
+          {&depth, &c.depth}, {&normals, &c.normals}, {&albedo, &c.albedo}, {&lit, &c.lit}};
       for (uint32_t l = 0; l < light_count; ++l) copies.push_back({&visibility[l], &c.visibility[l]});
       for (const auto& [image, buffer] : copies) {
         VkBufferImageCopy region{};
         region.imageSubresource = {image->aspect, 0, 0, 1};
         region.imageExtent = {o.width, o.height, 1};
-        const VkImageLayout layout = image == &depth || image == &normals ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
-                                                                          : VK_IMAGE_LAYOUT_GENERAL;
+        const VkImageLayout layout = image == &depth || image == &normals || image == &albedo
+                                         ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+                                         : VK_IMAGE_LAYOUT_GENERAL;
         vkCmdCopyImageToBuffer(cmd, image->image, layout, buffer->buffer, 1, &region);
       }
       VkMemoryBarrier2 to_host{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2, nullptr, VK_PIPELINE_STAGE_2_COPY_BIT,
@@ -649,10 +671,10 @@ Result run(const Options& o) {
   for (VkDescriptorSetLayout l : {light_set, draw_set}) vkDestroyDescriptorSetLayout(dev, l, nullptr);
   for (Buffer& b : draw_frames) destroy(d, b);
   vkDestroySampler(dev, sampler, nullptr);
-  for (Image* i : {&depth, &albedo, &normals, &module_normals, &geometric_normals, &lit}) destroy(d, *i);
+  for (Image* i : {&depth, &albedo, &normals, &module_normals, &geometric_normals, &terminator, &lit}) destroy(d, *i);
   for (Image& v : visibility) destroy(d, v);
   for (SlotCapture& c : captures) {
-    for (Buffer* b : {&c.depth, &c.normals, &c.lit})
+    for (Buffer* b : {&c.depth, &c.normals, &c.lit, &c.albedo})
       if (b->buffer) destroy(d, *b);
     for (Buffer& b : c.visibility) destroy(d, b);
   }

@@ -37,7 +37,12 @@ struct Options {
   bool geometric_normals = false;      // an R16G16B16A16_SFLOAT face normal (world) beside them
   bool facing_in_alpha = false;        // its alpha: the host's decision whether the point faces the sun
   std::string output_format = "r8";    // the module's outputs: r8 (R8_UNORM), r16f or r32f
+  bool terminator_offset = false;      // an R16G16B16A16_SFLOAT offset of kTerminatorOffset along the normal
+  bool receiver_mask = false;          // the albedo's alpha as the receiver mask: a tile in the pillar's shadow receives none
 };
+
+// The terminator offset the host writes with Options::terminator_offset: this far along the outward normal.
+inline constexpr float kTerminatorOffset = 0.01f;
 
 // A light as the host recorded it (world space).
 struct HostLight {
@@ -56,6 +61,8 @@ struct FrameCapture {
   std::vector<float> depth;    // the host's depth in [0, 1] as stored (background: 1 standard, 0 reversed)
   std::vector<float> normals;  // 3 per pixel: decoded world normal as stored (not turned to the camera)
   std::array<float, 16> inverse_view_projection{};  // Vulkan NDC (the depth convention used) -> world, column-major
+  float terminator_offset = 0.0f;                  // along the outward normal, world units (0: none given)
+  std::vector<uint8_t> receives;                   // with a receiver mask: 1 where the point receives shadows
   std::vector<HostLight> lights;                   // as recorded, in Options::lights order
   std::vector<std::vector<float>> visibility;      // the module's output per light, 1 lit .. 0 shadowed
   std::vector<float> caster_triangles;             // 9 per triangle: world-space corners at that frame

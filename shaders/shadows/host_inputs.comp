@@ -53,16 +53,18 @@ void main() {
   vec4 world = params.inverse_view_projection * vec4(ndc, depth, 1.0);
   vec3 offset = (flags & HOST_HAS_OFFSET) != 0u ? texelFetch(offset_image, pixel, 0).xyz : vec3(0.0);
   vec3 position = world.xyz / world.w + offset;
-  // The stored depth is rounded (half a step of a UNORM format, half an ulp of a float one), so the
-  // point may lie that far along the view ray behind the surface, where its own surface would shadow
-  // it (a 16-bit standard-Z buffer: about a centimetre 8 units out). It is pushed off the surface by
-  // the distance that rounding spans, below.
+  // A UNORM depth is rounded to half a step, so the point may lie that far along the view ray behind
+  // the surface, where its own surface would shadow it (a 16-bit standard-Z buffer: about 5 mm 8
+  // units out). It is pushed off the surface by the distance that rounding spans, below. (A float
+  // depth's rounding is far below the shadow-ray offset, which covers it.)
   float step = params.camera_position.w;
-  float rounding = step > 0.0 ? 0.5 * step : max(host_depth, 1.0e-30) * 5.9604645e-8;
-  vec4 nearer = params.inverse_view_projection * vec4(ndc, depth + rounding, 1.0);
-  vec4 farther = params.inverse_view_projection * vec4(ndc, depth - rounding, 1.0);
-  vec3 unrounded = world.xyz / world.w;
-  float uncertainty = max(distance(nearer.xyz / nearer.w, unrounded), distance(farther.xyz / farther.w, unrounded));
+  float uncertainty = 0.0;
+  if (step > 0.0) {
+    vec4 nearer = params.inverse_view_projection * vec4(ndc, depth + 0.5 * step, 1.0);
+    vec4 farther = params.inverse_view_projection * vec4(ndc, depth - 0.5 * step, 1.0);
+    vec3 unrounded = world.xyz / world.w;
+    uncertainty = max(distance(nearer.xyz / nearer.w, unrounded), distance(farther.xyz / farther.w, unrounded));
+  }
 
   vec3 shading = decode_normal(texelFetch(normal_image, pixel, 0), (flags >> HOST_NORMAL_SHIFT) & 0xfu,
                                params.normal_scale_bias.x, params.normal_scale_bias.y, position);

@@ -56,13 +56,16 @@ reference::ShadingPoints shading_points(const vulkan_host::FrameCapture& f, uint
       const glm::vec3 p = glm::vec3(w) / w.w;
       glm::vec3 n = glm::normalize(glm::make_vec3(&f.normals[3 * i]));
       if (glm::dot(n, eye - p) < 0.0f) n = -n;
-      // The stored depth is rounded (half a step of UNORM, half an ulp of float): the point is pushed off
-      // its surface by the distance that rounding spans along the view ray.
-      const float rounding = f.depth_step > 0.0f ? 0.5f * f.depth_step : std::max(f.depth[i], 1.0e-30f) * 5.9604645e-8f;
-      const glm::vec4 nearer = sp.inv_view_proj * glm::vec4(ndc, depth + rounding, 1.0f);
-      const glm::vec4 farther = sp.inv_view_proj * glm::vec4(ndc, depth - rounding, 1.0f);
-      const float uncertainty = std::max(glm::distance(glm::vec3(nearer) / nearer.w, p), glm::distance(glm::vec3(farther) / farther.w, p));
-      sp.position[i] = glm::vec4(p + n * uncertainty, 1.0f);
+      // A UNORM depth is rounded to half a step: the point is pushed off its surface by the distance that
+      // rounding spans along the view ray.
+      float uncertainty = 0.0f;
+      if (f.depth_step > 0.0f) {
+        const glm::vec4 nearer = sp.inv_view_proj * glm::vec4(ndc, depth + 0.5f * f.depth_step, 1.0f);
+        const glm::vec4 farther = sp.inv_view_proj * glm::vec4(ndc, depth - 0.5f * f.depth_step, 1.0f);
+        uncertainty = std::max(glm::distance(glm::vec3(nearer) / nearer.w, p), glm::distance(glm::vec3(farther) / farther.w, p));
+      }
+      // The host's terminator offset (kTerminatorOffset along the outward normal, which faces the camera).
+      sp.position[i] = glm::vec4(p + n * f.terminator_offset + n * uncertainty, 1.0f);
       sp.normal[i] = glm::vec4(n, glm::dot(n, to_light) > 0.0f ? 1.0f : 0.0f);
     }
   return sp;
@@ -96,6 +99,19 @@ reference::Comparison compare_with_embree(const vulkan_host::FrameCapture& f, ui
     local.cos_outer = local.spot ? std::cos(light.outer_cone) : -1.0f;
     expected = spp == 1 ? tracer.visibility_1spp(sp, local) : tracer.visibility_32spp(sp, local);
   }
+  // Points the receiver mask leaves out stay lit where they face the sun (facing away they are 0, as
+  // every point is). The matrix gives masks with the sun alone.
+  size_t unmasked = 0;  // shadowed points the mask keeps lit
+  if (!f.receives.empty()) {
+    EXPECT_EQ(light.kind, "sun") << "a receiver mask with a local light: this comparison does not model it";
+    const glm::vec3 to_sun = -glm::make_vec3(light.direction.data());
+    for (size_t i = 0; i < f.receives.size(); ++i)
+      if (sp.covered(i) && !f.receives[i] && sp.faces(i, to_sun) && expected[i] < 1.0f) {
+        expected[i] = 1.0f;
+        ++unmasked;
+      }
+  }
+  if (!f.receives.empty()) std::printf("[ measure ] receiver mask: %zu shadowed points kept lit\n", unmasked);
   std::vector<float> actual = f.visibility.at(l);
   for (size_t i = 0; i < actual.size(); ++i)
     if (!sp.covered(i)) actual[i] = -1.0f;
@@ -177,17 +193,22 @@ void expect_every_frame_matches(const Result& r, uint32_t spp, size_t frames) {
     }
 }
 
-// The host input pass in every pairing of its inputs (a pairwise selection of 23 runs from the product
+// The host input pass in every pairing of its inputs (a pairwise selection of 24 runs from the product
 // of technique {izb, izb+csm, sm, cascades, hybrid} x depth {D32, D24S8, D32S8, D16} x normals
 // {octahedral, Xyz with scale 2 and bias -1} x {world, view space} x Z {standard, reversed} x geometric
-// normals {none, given, given with the sun-facing decision in alpha} x output {R8, R16F, R32F}: every
-// pair of values of two factors appears in some run). The exact techniques within the sun suite's 1 spp
+// normals {none, given, given with the sun-facing decision in alpha} x output {R8, R16F, R32F} x
+// terminator offset {none, given} x receiver mask {none, given}: every pair of values of two factors
+// appears in some run, except sm and cascades with a receiver mask: those two do not honour the mask
+// yet (they shadow a masked-out point like any other; measured: the 56 shadowed points of the masked
+// tile), a known defect left for its own change). The exact techniques within the sun suite's 1 spp
 // bound; the filtered ones within 4x what they measure.
 struct InputCase {
   std::string mode, depth, normals, z, geometric, output;
+  bool terminator_offset, receiver_mask;
 };
 void PrintTo(const InputCase& c, std::ostream* os) {
-  *os << c.mode << " " << c.depth << " " << c.normals << " " << c.z << " " << c.geometric << " " << c.output;
+  *os << c.mode << " " << c.depth << " " << c.normals << " " << c.z << " " << c.geometric << " " << c.output
+      << (c.terminator_offset ? " offset" : "") << (c.receiver_mask ? " mask" : "");
 }
 class HostInputMatrix : public ::testing::TestWithParam<InputCase> {};
 
@@ -202,6 +223,8 @@ TEST_P(HostInputMatrix, MatchesTheReference) {
   o.geometric_normals = c.geometric != "none";
   o.facing_in_alpha = c.geometric == "geo+facing";
   o.output_format = c.output;
+  o.terminator_offset = c.terminator_offset;
+  o.receiver_mask = c.receiver_mask;
   o.frames = 6;  // izb+csm: the automatic CSM choice's GPU measure comes back after frames_in_flight frames
   const Result r = vulkan_host::run(o);
   EXPECT_EQ(r.validation_messages, 0u);
@@ -220,32 +243,34 @@ TEST_P(HostInputMatrix, MatchesTheReference) {
 }
 INSTANTIATE_TEST_SUITE_P(
     Pairs, HostInputMatrix,
-    ::testing::Values(InputCase{"izb", "d32", "oct", "std", "none", "r8"},
-                      InputCase{"izb", "d24s8", "xyz", "rev", "geo", "r16f"},
-                      InputCase{"izb", "d32s8", "oct-view", "std", "geo+facing", "r32f"},
-                      InputCase{"izb", "d16", "xyz-view", "rev", "none", "r32f"},
-                      InputCase{"izb+csm", "d32", "oct", "rev", "geo+facing", "r16f"},
-                      InputCase{"izb+csm", "d24s8", "xyz-view", "std", "geo", "r8"},
-                      InputCase{"izb+csm", "d32s8", "xyz", "std", "none", "r16f"},
-                      InputCase{"izb+csm", "d16", "oct-view", "rev", "geo", "r8"},
-                      InputCase{"sm", "d32", "oct", "std", "geo", "r32f"},
-                      InputCase{"sm", "d24s8", "xyz", "rev", "geo+facing", "r8"},
-                      InputCase{"sm", "d32s8", "oct-view", "rev", "none", "r16f"},
-                      InputCase{"sm", "d16", "xyz-view", "std", "geo+facing", "r16f"},
-                      InputCase{"cascades", "d32", "xyz", "std", "none", "r32f"},
-                      InputCase{"cascades", "d24s8", "oct", "rev", "none", "r8"},
-                      InputCase{"cascades", "d32s8", "xyz-view", "std", "geo", "r8"},
-                      InputCase{"cascades", "d16", "oct", "std", "geo+facing", "r16f"},
-                      InputCase{"hybrid", "d32", "oct-view", "std", "none", "r8"},
-                      InputCase{"hybrid", "d24s8", "oct", "rev", "geo", "r32f"},
-                      InputCase{"hybrid", "d32s8", "oct", "std", "geo+facing", "r16f"},
-                      InputCase{"hybrid", "d16", "xyz", "std", "none", "r8"},
-                      InputCase{"izb+csm", "d32", "xyz-view", "std", "none", "r32f"},
-                      InputCase{"cascades", "d24s8", "oct-view", "std", "none", "r8"},
-                      InputCase{"hybrid", "d32", "xyz-view", "std", "none", "r8"}),
+    ::testing::Values(InputCase{"izb", "d32", "oct", "std", "none", "r8", false, false},
+                      InputCase{"izb", "d24s8", "xyz", "rev", "geo", "r16f", true, true},
+                      InputCase{"izb", "d32s8", "oct-view", "std", "geo+facing", "r32f", false, true},
+                      InputCase{"izb", "d16", "xyz-view", "rev", "none", "r32f", true, false},
+                      InputCase{"izb+csm", "d32", "oct", "rev", "geo+facing", "r8", true, true},
+                      InputCase{"izb+csm", "d24s8", "xyz-view", "std", "geo", "r16f", false, false},
+                      InputCase{"izb+csm", "d32s8", "oct-view", "rev", "none", "r16f", true, false},
+                      InputCase{"izb+csm", "d16", "xyz", "std", "geo+facing", "r8", false, false},
+                      InputCase{"sm", "d32", "oct", "std", "geo", "r32f", true, false},
+                      InputCase{"sm", "d24s8", "oct-view", "rev", "none", "r8", false, false},
+                      InputCase{"sm", "d32s8", "xyz-view", "std", "geo", "r8", false, false},
+                      InputCase{"sm", "d16", "oct", "std", "geo+facing", "r16f", false, false},
+                      InputCase{"cascades", "d32", "xyz", "std", "none", "r16f", false, false},
+                      InputCase{"cascades", "d24s8", "oct", "rev", "geo+facing", "r32f", true, false},
+                      InputCase{"cascades", "d32s8", "oct-view", "std", "geo", "r8", false, false},
+                      InputCase{"cascades", "d16", "xyz", "std", "geo", "r32f", false, false},
+                      InputCase{"hybrid", "d32", "xyz-view", "std", "geo+facing", "r8", false, false},
+                      InputCase{"hybrid", "d24s8", "oct", "rev", "none", "r16f", true, true},
+                      InputCase{"hybrid", "d32s8", "xyz", "std", "geo", "r32f", false, false},
+                      InputCase{"hybrid", "d16", "oct-view", "std", "none", "r8", false, false},
+                      InputCase{"izb+csm", "d32", "oct-view", "std", "none", "r32f", false, false},
+                      InputCase{"izb", "d32s8", "oct", "std", "none", "r8", false, false},
+                      InputCase{"sm", "d32", "xyz", "std", "none", "r8", false, false},
+                      InputCase{"cascades", "d32", "xyz-view", "std", "none", "r8", false, false}),
     [](const auto& info) {
       std::string name = info.param.mode + "_" + info.param.depth + "_" + info.param.normals + "_" + info.param.z + "_" +
-                         info.param.geometric + "_" + info.param.output;
+                         info.param.geometric + "_" + info.param.output + (info.param.terminator_offset ? "_offset" : "") +
+                         (info.param.receiver_mask ? "_mask" : "");
       for (char& ch : name)
         if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
       return std::to_string(info.index) + "_" + name;
@@ -693,6 +718,67 @@ TEST_F(HostBadInput, EveryContextDescRefusalNamesItsField) {
     mutate(desc);
     expect_create_refused(desc, argument);
   }
+}
+
+// Every refusal of FrameDesc (context.hpp) the tests above do not name already: one line naming the
+// field, nothing recorded, and a valid frame on the same context after each.
+TEST_F(HostBadInput, EveryFrameDescRefusalNamesItsField) {
+  const float nan = std::nanf("");
+  static const shadows::Light bad_type{.type = shadows::LightType(7)};
+  static const shadows::Light zero_direction{.direction = {0.0f, 0.0f, 0.0f}};
+  static const shadows::Light spot_nowhere{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
+                                           .position = {nan, 3.0f, 0.0f}, .range = 10.0f, .inner_cone = 0.2f, .outer_cone = 0.5f};
+  static const shadows::Instance unregistered{.mesh = 42};
+  using Mutation = std::function<void(shadows::FrameDesc&)>;
+  const std::vector<std::pair<Mutation, std::string>> cases = {
+      {[](shadows::FrameDesc& f) { f.depth.image = VK_NULL_HANDLE; }, "FrameDesc.depth.image is VK_NULL_HANDLE"},
+      {[](shadows::FrameDesc& f) { f.depth.format = VK_FORMAT_R32_SFLOAT; },
+       "FrameDesc.depth.format VK_FORMAT_R32_SFLOAT is not supported"},
+      {[](shadows::FrameDesc& f) { f.depth.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT; },
+       "FrameDesc.depth.usage lacks VK_IMAGE_USAGE_SAMPLED_BIT"},
+      {[](shadows::FrameDesc& f) { f.depth.layout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL; },
+       "FrameDesc.depth.layout VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL is not supported"},
+      {[](shadows::FrameDesc& f) { f.depth.extent = {0, 0}; }, "FrameDesc.depth.extent is empty"},
+      {[](shadows::FrameDesc& f) { f.normals.image.format = VK_FORMAT_D32_SFLOAT; }, "FrameDesc.normals.image.format"},
+      {[](shadows::FrameDesc& f) { f.facing_in_alpha = true; },
+       "FrameDesc.facing_in_alpha is set but FrameDesc.geometric_normals has no image"},
+      {[&](shadows::FrameDesc& f) {
+         f.receiver_mask = normals_.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+         f.receiver_channel = 4;
+       },
+       "FrameDesc.receiver_channel is 4 (0..3)"},
+      {[&](shadows::FrameDesc& f) { f.overlay = output_.input(VK_IMAGE_LAYOUT_GENERAL); }, "FrameDesc.overlay.format"},
+      {[](shadows::FrameDesc& f) { f.light_count = 0; }, "FrameDesc.light_count is 0 (1..8"},
+      {[](shadows::FrameDesc& f) { f.lights = nullptr; }, "FrameDesc.light_count is 1 (1..8, with FrameDesc.lights"},
+      {[](shadows::FrameDesc& f) { f.lights = &bad_type; }, "FrameDesc.lights[0].type 7 is not a LightType"},
+      {[](shadows::FrameDesc& f) { f.lights = &zero_direction; }, "FrameDesc.lights[0].direction must be a unit vector"},
+      {[](shadows::FrameDesc& f) { f.lights = &spot_nowhere; }, "FrameDesc.lights[0].position must be finite"},
+      {[](shadows::FrameDesc& f) { f.instance_count = 1; }, "FrameDesc.instances is null with instance_count > 0"},
+      {[](shadows::FrameDesc& f) {
+         f.instances = &unregistered;
+         f.instance_count = 1;
+       },
+       "FrameDesc.instances[0].mesh 42 is not a registered mesh"},
+      {[](shadows::FrameDesc& f) { f.camera.near_plane = 0.0f; }, "FrameDesc.camera near_plane/far_plane"},
+      {[](shadows::FrameDesc& f) { f.camera.far_plane = 0.5f * f.camera.near_plane; }, "FrameDesc.camera near_plane/far_plane"},
+      {[&](shadows::FrameDesc& f) { f.camera.projection[5] = nan; }, "FrameDesc.camera.projection"},
+  };
+  for (const auto& [mutate, argument] : cases) {
+    SCOPED_TRACE(argument);
+    shadows::FrameDesc f = frame_;
+    mutate(f);
+    expect_refused(f, argument);
+  }
+  module_->settings().units_per_metre = 0.0f;
+  expect_refused(frame_, "Settings.units_per_metre must be finite and > 0");
+  std::string what;
+  try {
+    module_->record(VK_NULL_HANDLE, frame_);
+  } catch (const shadows::Error& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find("record: cmd is VK_NULL_HANDLE"), std::string::npos) << what;
+  expect_valid_frame();
 }
 
 // Every refusal of MeshDesc (context.hpp): one line naming the mesh and the field; the context stays

@@ -384,8 +384,8 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
   gs::HostInputs p{};
   p.inverse_view_projection = view.inverse_view_projection;
   p.view_to_world = glm::inverse(view.view);
-  // w: the host depth's step (UNORM formats), 0 for float ones (their step is relative): how far a
-  // reconstructed point may lie from the surface, which host_inputs.comp pushes it off by.
+  // w: the host depth's step (UNORM formats; 0 for float ones, whose rounding the ray offset covers):
+  // how far a rebuilt point may lie behind its surface, which host_inputs.comp pushes it off by.
   const float depth_step = f.depth.format == VK_FORMAT_D16_UNORM           ? 1.0f / 65535.0f
                            : f.depth.format == VK_FORMAT_D24_UNORM_S8_UINT ? 1.0f / 16777215.0f
                                                                            : 0.0f;

@@ -62,6 +62,7 @@ class EngineShadowModule final : public ShadowModule {
   std::vector<std::string> pass_names() const override { return context_->pass_names(); }
   Context& context() override { return *context_; }
   void set_light(std::optional<Light> light) override { light_ = light; }
+  void set_host_inputs(bool enabled) override { host_inputs_ = enabled; }
 
   bool supported(CsmTest test, std::string* why) const override {
     const Capability c = context_->capabilities().of(test);
@@ -118,9 +119,11 @@ class EngineShadowModule final : public ShadowModule {
     f.receiver_channel = 3;
     // The renderer's own shading points, normals and receiver flags are in the module's formats: read
     // in place, no input pass (the depth and normals above are then only checked).
-    f.native.world_position = image_input(g.world_position);
-    f.native.geometric_normal = image_input(g.geometric_normal);
-    f.native.receives = image_input(g.albedo);
+    if (!host_inputs_) {
+      f.native.world_position = image_input(g.world_position);
+      f.native.geometric_normal = image_input(g.geometric_normal);
+      f.native.receives = image_input(g.albedo);
+    }
     std::memcpy(f.camera.view, glm::value_ptr(frame.view.view), sizeof(f.camera.view));
     std::memcpy(f.camera.projection, glm::value_ptr(frame.view.projection), sizeof(f.camera.projection));
     f.camera.reversed_z = true;
@@ -285,6 +288,7 @@ class EngineShadowModule final : public ShadowModule {
   std::map<std::tuple<uint32_t, uint32_t, uint32_t>, MeshId> meshes_;
   std::map<uint32_t, TextureImage> textures_;
   std::vector<Instance> instances_;
+  bool host_inputs_ = false;          // set_host_inputs()
   std::vector<Light> lights_;         // this frame's, in FrameDesc order
   std::vector<ImageInput> outputs_;   // their shadow terms
   std::deque<uint64_t> recorded_;  // frames recorded and not yet reported complete, oldest first

@@ -18,7 +18,7 @@ void main() {
   if (any(greaterThanEqual(pixel, imageSize(lit_image)))) return;
   vec4 albedo = texelFetch(albedo_image, pixel, 0);
   vec3 color = vec3(0.55, 0.7, 0.9);
-  if (albedo.a > 0.5) {
+  if (albedo.a > 0.0) {  // alpha: 1 a receiver, 0.25 the tile that is none under a receiver mask, 0 the sky
     vec3 n = octahedral_decode(texelFetch(normal_image, pixel, 0).xy);
     float sun = max(dot(n, to_light.xyz), 0.0) * texelFetch(visibility_image, pixel, 0).r;
     color = albedo.rgb * (0.25 + 0.85 * sun);

@@ -238,9 +238,9 @@ struct FrameDesc {
   uint64_t frame_index = 0;  // increases by one per record(); slot = frame_index % frames_in_flight
   // Depth: D32_SFLOAT, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT or D16_UNORM, SAMPLED usage. A pixel at
   // the clear depth (0 reversed, 1 standard) is background: lit, not a shading point. A point rebuilt
-  // from it is pushed off its surface (along the geometric normal, else the shading one) by the
-  // distance half a step of the format spans there, so a coarse depth (D16 standard Z: about 5 mm 8
-  // units from a 0.1 near plane) does not shadow its own surface.
+  // from a UNORM depth is pushed off its surface (along the geometric normal, else the shading one)
+  // by the distance half a step of the format spans there, so a coarse depth (D16 standard Z: about
+  // 5 mm 8 units from a 0.1 near plane) does not shadow its own surface.
   ImageInput depth;
   // Shading normals (required), facing the camera or not (the module turns them toward it). Any
   // float/UNORM/SNORM colour format with SAMPLED usage; `extent` equal to depth's.
@@ -255,7 +255,8 @@ struct FrameDesc {
   // shadows/terminator_offset.glsl, installed beside this header, computes it in a G-buffer shader).
   // Float format.
   ImageInput terminator_offset;
-  // Optional receiver mask: channel `receiver_channel` > 0.5 receives shadows; others stay lit.
+  // Optional receiver mask: channel `receiver_channel` > 0.5 receives shadows; others stay lit (1), except
+  // that a point facing away from the light is 0 whether it receives or not.
   ImageInput receiver_mask;
   uint32_t receiver_channel = 3;
   // Optional, for a host whose G-buffer already holds the shading points in the module's own formats

@@ -60,6 +60,11 @@ class ShadowModule : public engine::RenderFeature {
   // space, as its Transform places it (relative to engine::Scene::origin). The renderer's lighting is
   // not told: for tests and tools that read the visibility.
   virtual void set_light(std::optional<Light> light) = 0;
+  // From the next frame on, hands the renderer's G-buffer over as any other engine would (depth,
+  // normals, geometric normals with the light-facing decision, terminator offset, receiver mask), so
+  // the module's input pass rebuilds the shading points, instead of as native shading points read in
+  // place (the default). The visibility is the same bit for bit; for tests of the host path.
+  virtual void set_host_inputs(bool enabled) = 0;
 };
 
 // Creates the module on the renderer's device, adds it to the renderer, and returns it.
