@@ -452,13 +452,7 @@ class HostBadInput : public ::testing::Test {
     f.instances = instances.data();
     f.instance_count = uint32_t(instances.size());
     std::string what;
-    submit([&](VkCommandBuffer cmd) {
-      try {
-        module_->record(cmd, f);
-      } catch (const shadows::Error& e) {
-        what = e.what();
-      }
-    });
+    submit([&](VkCommandBuffer cmd) { what = error_of([&] { module_->record(cmd, f); }); });
     module_->settings() = kept;
     EXPECT_EQ(what, "") << "a valid frame after the refusal was refused";
     const std::vector<uint8_t> texels = read_output();
@@ -466,28 +460,29 @@ class HostBadInput : public ::testing::Test {
         << "the valid frame did not write its output";
     fill_output(VK_IMAGE_LAYOUT_GENERAL);
   }
-  // create() refuses `desc` with one line naming `argument`; then a valid frame on the fixture's context.
-  void expect_create_refused(const shadows::ContextDesc& desc, const std::string& argument) {
-    std::string what;
+  // The shadows::Error message `call` throws, or "" when it throws none.
+  template <typename Call>
+  static std::string error_of(Call&& call) {
     try {
-      shadows::Context::create(desc);
+      call();
     } catch (const shadows::Error& e) {
-      what = e.what();
+      return e.what();
     }
+    return "";
+  }
+  // `what` is one line naming `argument`.
+  void expect_one_line_naming(const std::string& what, const std::string& argument) {
     EXPECT_NE(what.find(argument), std::string::npos) << "message: '" << what << "'";
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  // create() refuses `desc` with one line naming `argument`; then a valid frame on the fixture's context.
+  void expect_create_refused(const shadows::ContextDesc& desc, const std::string& argument) {
+    expect_one_line_naming(error_of([&] { shadows::Context::create(desc); }), argument);
     expect_valid_frame();
   }
   // register_mesh() refuses `mesh` with one line naming `argument`; then a valid frame.
   void expect_mesh_refused(const shadows::MeshDesc& mesh, const std::string& argument) {
-    std::string what;
-    try {
-      module_->register_mesh(mesh);
-    } catch (const shadows::Error& e) {
-      what = e.what();
-    }
-    EXPECT_NE(what.find(argument), std::string::npos) << "message: '" << what << "'";
-    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    expect_one_line_naming(error_of([&] { module_->register_mesh(mesh); }), argument);
     expect_valid_frame();
   }
 
@@ -497,15 +492,8 @@ class HostBadInput : public ::testing::Test {
                                  const std::string& argument);
   void expect_refused(const shadows::FrameDesc& frame, const std::string& argument) {
     std::string what;
-    submit([&](VkCommandBuffer cmd) {
-      try {
-        module_->record(cmd, frame);
-      } catch (const shadows::Error& e) {
-        what = e.what();
-      }
-    });
-    EXPECT_NE(what.find(argument), std::string::npos) << "message: '" << what << "'";
-    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    submit([&](VkCommandBuffer cmd) { what = error_of([&] { module_->record(cmd, frame); }); });
+    expect_one_line_naming(what, argument);
     const std::vector<uint8_t> texels = read_output();
     const size_t changed = texels.size() - size_t(std::count(texels.begin(), texels.end(), uint8_t(64)));
     EXPECT_EQ(changed, 0u) << "the output changed: something was recorded";
@@ -771,13 +759,7 @@ TEST_F(HostBadInput, EveryFrameDescRefusalNamesItsField) {
   }
   module_->settings().units_per_metre = 0.0f;
   expect_refused(frame_, "Settings.units_per_metre must be finite and > 0");
-  std::string what;
-  try {
-    module_->record(VK_NULL_HANDLE, frame_);
-  } catch (const shadows::Error& e) {
-    what = e.what();
-  }
-  EXPECT_NE(what.find("record: cmd is VK_NULL_HANDLE"), std::string::npos) << what;
+  expect_one_line_naming(error_of([&] { module_->record(VK_NULL_HANDLE, frame_); }), "record: cmd is VK_NULL_HANDLE");
   expect_valid_frame();
 }
 

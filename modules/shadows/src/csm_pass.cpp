@@ -113,7 +113,6 @@ struct CsmPass::Impl {
   std::string status = "off";
   // Adaptive skipping under Auto, per IZB record of a frame (each light, each cone of a point light).
   struct Adaptive {
-    bool ran = false;
     double last_yield = 1.0;
     bool have_yield = false;
     uint32_t frames_since_probe = 0;
@@ -416,7 +415,6 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
   }
   if (m.adaptive.size() <= m.record_in_frame) m.adaptive.resize(m.record_in_frame + 1);
   Impl::Adaptive& a = m.adaptive[m.record_in_frame];
-  a.ran = false;
   const bool changed = m.in_csm != a.last_choice || frame.view.light_direction != a.last_light ||
                        resolution != a.last_resolution;
   a.last_choice = m.in_csm;
@@ -438,7 +436,6 @@ bool CsmPass::plan(const Frame& frame, const IzbSettings& settings, uint32_t res
   a.frames_since_probe = 0;
   m.status = "ran";
   m.ran = true;
-  a.ran = true;
   m.note_run(true);
   return true;
 }
@@ -448,7 +445,6 @@ bool CsmPass::automatic_only() const { return impl_->automatic_only; }
 void CsmPass::skip(const std::string& why) {
   Impl& m = *impl_;
   m.ran = false;
-  if (m.record_in_frame < m.adaptive.size()) m.adaptive[m.record_in_frame].ran = false;
   m.note_run(false);
   m.status = why;
 }
