@@ -47,6 +47,17 @@ gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "${GPU_LONG_FILT
                      PROPERTIES LABELS long TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "*-${GPU_SMOKE_FILTER}:${GPU_LONG_FILTER}"
                      PROPERTIES LABELS gpu TIMEOUT 900 ENVIRONMENT ENGINE_VALIDATION=1)
+# A third of the GPU suite (every third test in gtest's order, the `long` ones left out) through the
+# host path: ENGINE_HOST_INPUTS=1 hands every module the engine's G-buffer as any other engine would,
+# so the input pass rebuilds the shading points the tests then check (HostInputsTest compares the two
+# paths bit for bit). Two entries of gtest's shards 0 and 3 of 6, which are the tests of shard 0 of 3.
+foreach(shard 0 3)
+  add_test(NAME host_inputs_suite_${shard} COMMAND gpu_tests "--gtest_filter=-${GPU_LONG_FILTER}")
+  set_tests_properties(host_inputs_suite_${shard} PROPERTIES LABELS gpu TIMEOUT 1800
+    ENVIRONMENT "ENGINE_HOST_INPUTS=1;ENGINE_VALIDATION=1;GTEST_TOTAL_SHARDS=6;GTEST_SHARD_INDEX=${shard}")
+endforeach()
+add_test(NAME host_inputs_switch COMMAND gpu_tests "--gtest_filter=GpuTest.HostInputsEnvironmentPicksThePath")
+set_tests_properties(host_inputs_switch PROPERTIES LABELS gpu TIMEOUT 300 ENVIRONMENT "ENGINE_HOST_INPUTS=1;ENGINE_VALIDATION=1")
 # The same tests with the validation layer's synchronization checks on: a hazard between commands (a
 # missing or too narrow barrier) is a validation message, so a failure. Label syncval runs a
 # representative set: every technique and light type, both trace and CSM backends, several lights in
@@ -66,17 +77,14 @@ set_tests_properties(syncval_gpu_suite PROPERTIES LABELS long TIMEOUT 14400 ENVI
 
 # Exact anywhere: the scale and offset matrix against Embree (tests/scale), one CTest entry per scene,
 # validation on; outside gpu_tests so the synchronization-validation pass does not run it twice. The
-# plain run (label scale) takes the key placements of three scenes and the room-scale hall; every
-# placement of every scene is under `long`.
+# plain run (label scale) takes every placement of every scene and the room-scale hall (about 290 s on
+# two cores, the entries two at a time).
 add_executable(world_scale_tests scale/world_scale_test.cpp)
 target_link_libraries(world_scale_tests PRIVATE shadow_test_support GTest::gtest_main)
 target_compile_definitions(world_scale_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 engine_target_warnings(world_scale_tests)
 gtest_discover_tests(world_scale_tests DISCOVERY_TIMEOUT 60
-                     TEST_FILTER "HallTest.*:Scenes/WorldScaleTest.KeyPlacements*/contact:Scenes/WorldScaleTest.KeyPlacements*/lamps:Scenes/WorldScaleTest.KeyPlacements*/sponza"
                      PROPERTIES LABELS scale TIMEOUT 1800 ENVIRONMENT ENGINE_VALIDATION=1)
-gtest_discover_tests(world_scale_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "Scenes/WorldScaleTest.EveryPlacement*"
-                     PROPERTIES LABELS long TIMEOUT 3600 ENVIRONMENT ENGINE_VALIDATION=1)
 
 add_subdirectory(window)
 

@@ -5,6 +5,7 @@
 // shading points the rest of the suite reads. A representative third of the suite's scenes, views,
 // lights and techniques.
 #include <algorithm>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -75,6 +76,21 @@ TEST_P(HostInputsTest, EveryTechniqueMatchesTheNativePathBitForBit) {
     for (float v : visibility[0]) shadowed += v >= 0.0f && v < 1.0f;
     EXPECT_GT(shadowed, 0u) << "nothing shadowed: the comparison would prove little";
   }
+  r.finish_frames();
+  module.reset();
+}
+
+// ENGINE_HOST_INPUTS=1 (the host_inputs_suite entries) starts every module on the host path; unset,
+// the engine's native shading points are read in place.
+TEST_F(GpuTest, HostInputsEnvironmentPicksThePath) {
+  const char* env = std::getenv("ENGINE_HOST_INPUTS");
+  const bool host = env && *env && std::string(env) != "0";
+  auto& r = make_renderer("contact", 0, 64, 64);
+  auto module = shadows::install(r, {});
+  r.render_frame(0.0f);
+  bool input_pass = false;
+  for (const auto& pass : module->context().pass_times()) input_pass = input_pass || pass.name == "host_inputs";
+  EXPECT_EQ(input_pass, host) << "ENGINE_HOST_INPUTS=" << (env ? env : "(unset)");
   r.finish_frames();
   module.reset();
 }

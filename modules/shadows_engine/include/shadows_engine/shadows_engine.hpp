@@ -63,7 +63,8 @@ class ShadowModule : public engine::RenderFeature {
   // From the next frame on, hands the renderer's G-buffer over as any other engine would (depth,
   // normals, geometric normals with the light-facing decision, terminator offset, receiver mask), so
   // the module's input pass rebuilds the shading points, instead of as native shading points read in
-  // place (the default). The visibility is the same bit for bit; for tests of the host path.
+  // place (the default). The visibility is the same bit for bit; for tests of the host path. The
+  // environment variable ENGINE_HOST_INPUTS=1 makes `true` the starting value of every module.
   virtual void set_host_inputs(bool enabled) = 0;
 };
 
