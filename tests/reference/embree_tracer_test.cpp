@@ -338,3 +338,146 @@ TEST(EmbreeTracer, RejectsBadInput) {
 }
 
 }  // namespace
+
+// The independent reference (its own hits, normals, facing, reach and ray starts, in double) against
+// shadows worked out by hand: a perspective camera over a floor (y = 0) with a card at y = 1 over
+// [-1, 1]^2, lit by a slanted sun and by a slanted spot light. Pixels whose hand-worked answer lies
+// within 1e-4 of a card edge or 1e-5 of the cone's cosine are left out; every other is exact.
+namespace independent {
+
+constexpr uint32_t kPixels = 96;
+constexpr double kCardHeight = 1.0;
+
+struct HandWorked {
+  bool covered = false;
+  bool on_card = false;
+  glm::dvec3 point{0.0};
+};
+
+reference::PinholeCamera perspective_camera() {
+  reference::PinholeCamera camera;
+  camera.eye = glm::dvec3(0.5, 6.0, 7.0);
+  const glm::dmat4 view = glm::lookAt(camera.eye, glm::dvec3(0.0), glm::dvec3(0.0, 1.0, 0.0));
+  glm::dmat4 projection = glm::perspective(glm::radians(60.0), 1.0, 0.1, 100.0);
+  projection[1][1] *= -1.0;  // Vulkan's y down
+  camera.inv_view_proj = glm::inverse(projection * view);
+  camera.width = camera.height = kPixels;
+  return camera;
+}
+
+// The floor or card point pixel (x, y)'s centre shows, by intersecting planes.
+HandWorked hand_worked_point(const reference::PinholeCamera& camera, uint32_t x, uint32_t y) {
+  const glm::dvec4 ndc((x + 0.5) / kPixels * 2.0 - 1.0, (y + 0.5) / kPixels * 2.0 - 1.0, 0.5, 1.0);
+  const glm::dvec4 far = camera.inv_view_proj * ndc;
+  const glm::dvec3 dir = glm::normalize(glm::dvec3(far) / far.w - camera.eye);
+  HandWorked h;
+  const glm::dvec3 card = camera.eye + dir * ((kCardHeight - camera.eye.y) / dir.y);
+  if (std::abs(card.x) <= 1.0 && std::abs(card.z) <= 1.0) {
+    h.covered = h.on_card = true;
+    h.point = card;
+    return h;
+  }
+  h.point = camera.eye + dir * (-camera.eye.y / dir.y);
+  h.covered = std::abs(h.point.x) <= 8.0 && std::abs(h.point.z) <= 8.0;
+  return h;
+}
+
+// Where the segment from a floor point toward `target` (a point above the card) crosses y = 1: under
+// the card (1), clear of it (0), or within 1e-4 of an edge (-1).
+int card_blocks(const glm::dvec3& floor_point, const glm::dvec3& toward) {
+  const glm::dvec3 at = floor_point + toward * ((kCardHeight - floor_point.y) / toward.y);
+  const double inside = 1.0 - std::max(std::abs(at.x), std::abs(at.z));
+  if (std::abs(inside) < 1.0e-4) return -1;
+  return inside > 0.0 ? 1 : 0;
+}
+
+void add_floor_and_card(engine::Registry& reg) {
+  reference::add_mesh_entity(reg, reference::make_quad_y(0.0f, glm::vec2(-8.0f), glm::vec2(8.0f)));
+  reference::add_mesh_entity(reg, reference::make_quad_y(float(kCardHeight), glm::vec2(-1.0f), glm::vec2(1.0f)));
+}
+
+}  // namespace independent
+
+TEST(EmbreeTracer, IndependentReferenceMatchesAHandWorkedSunAndPerspectiveCamera) {
+  using namespace independent;
+  engine::Registry reg;
+  add_floor_and_card(reg);
+  const EmbreeTracer tracer(reg);
+  const reference::PinholeCamera camera = perspective_camera();
+  reference::TrueLight sun;
+  sun.direction = glm::dvec3(0.35, -1.0, 0.2);
+  const glm::dvec3 to_sun = -glm::normalize(sun.direction);
+  const auto truth = tracer.independent_visibility(camera, sun, 1, 1.0 / 4096.0);
+  size_t checked = 0, shadowed = 0;
+  for (uint32_t y = 0; y < kPixels; ++y)
+    for (uint32_t x = 0; x < kPixels; ++x) {
+      const HandWorked h = hand_worked_point(camera, x, y);
+      const reference::TrueVisibility& t = truth[size_t(y) * kPixels + x];
+      ASSERT_EQ(t.covered(), h.covered) << x << "," << y;
+      if (!h.covered) continue;
+      EXPECT_LT(glm::length(t.point - h.point), 1.0e-9 * 16.0) << x << "," << y;
+      const int blocked = h.on_card ? 0 : card_blocks(h.point, to_sun);
+      if (blocked < 0) continue;
+      const float expected = blocked ? 0.0f : 1.0f;
+      EXPECT_EQ(t.lit_min, expected) << x << "," << y;
+      EXPECT_EQ(t.lit_max, expected) << x << "," << y;
+      ++checked;
+      shadowed += blocked;
+    }
+  EXPECT_GT(checked, kPixels * kPixels / 2);
+  EXPECT_GT(shadowed, 100u);
+}
+
+TEST(EmbreeTracer, IndependentReferenceMatchesAHandWorkedSlantedSpotLight) {
+  using namespace independent;
+  engine::Registry reg;
+  add_floor_and_card(reg);
+  const EmbreeTracer tracer(reg);
+  const reference::PinholeCamera camera = perspective_camera();
+  reference::TrueLight spot;
+  spot.sun = false;
+  spot.spot = true;
+  spot.position = glm::dvec3(3.0, 4.0, 1.5);
+  spot.spot_direction = glm::dvec3(-0.6, -1.0, -0.3);
+  spot.outer_cone = glm::radians(28.0);
+  spot.range = 5.5;
+  const auto truth = tracer.independent_visibility(camera, spot, 1, 1.0 / 4096.0);
+  const double cos_outer = std::cos(spot.outer_cone);
+  size_t checked = 0, lit = 0, outside_cone = 0, beyond_range = 0, shadowed = 0;
+  for (uint32_t y = 0; y < kPixels; ++y)
+    for (uint32_t x = 0; x < kPixels; ++x) {
+      const HandWorked h = hand_worked_point(camera, x, y);
+      const reference::TrueVisibility& t = truth[size_t(y) * kPixels + x];
+      ASSERT_EQ(t.covered(), h.covered) << x << "," << y;
+      if (!h.covered) continue;
+      const glm::dvec3 from_light = h.point - spot.position;
+      const double distance = glm::length(from_light);
+      const double cos_angle = glm::dot(from_light / distance, glm::normalize(spot.spot_direction));
+      if (std::abs(cos_angle - cos_outer) < 1.0e-5 || std::abs(distance - spot.range) < 1.0e-5) continue;
+      float expected = 1.0f;
+      if (cos_angle < cos_outer) {
+        expected = 0.0f;
+        ++outside_cone;
+      } else if (distance > spot.range) {
+        expected = 0.0f;
+        ++beyond_range;
+      } else if (!h.on_card) {
+        const int blocked = card_blocks(h.point, spot.position - h.point);
+        if (blocked < 0) continue;
+        if (blocked) {
+          expected = 0.0f;
+          ++shadowed;
+        }
+      }
+      EXPECT_EQ(t.lit_min, expected) << x << "," << y;
+      EXPECT_EQ(t.lit_max, expected) << x << "," << y;
+      ++checked;
+      lit += expected > 0.0f;
+    }
+  EXPECT_GT(checked, kPixels * kPixels / 2);
+  // The picture holds each case: lit, outside the cone, beyond the range, behind the card.
+  EXPECT_GT(lit, 300u);
+  EXPECT_GT(outside_cone, 300u);
+  EXPECT_GT(beyond_range, 20u);
+  EXPECT_GT(shadowed, 30u);
+}

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -118,6 +119,9 @@ struct EmbreeTracer::Impl {
   SceneHandle scene;
   uint32_t triangles = 0;
   bool packets = false;
+  // The triangle soup Embree holds, kept for the independent reference's double-precision hits.
+  std::vector<glm::vec3> vertices;
+  std::vector<uint32_t> indices;
   std::string last_message;  // filled by the device error callback
 
   void check(const char* what) {
@@ -181,6 +185,26 @@ struct EmbreeTracer::Impl {
     rtcInitIntersectContext(&ctx);
     rtcOccluded1(scene.get(), &ctx, &ray);
     return ray.tfar < 0.0f;
+  }
+
+  // The triangle the ray from `origin` along `dir` meets first, or -1.
+  int64_t first_hit(glm::vec3 origin, glm::vec3 dir) const {
+    RTCRayHit rh{};
+    rh.ray.org_x = origin.x;
+    rh.ray.org_y = origin.y;
+    rh.ray.org_z = origin.z;
+    rh.ray.dir_x = dir.x;
+    rh.ray.dir_y = dir.y;
+    rh.ray.dir_z = dir.z;
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = kInf;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcIntersect1(scene.get(), &ctx, &rh);
+    return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int64_t(rh.hit.primID);
   }
 };
 
@@ -270,7 +294,10 @@ EmbreeTracer::EmbreeTracer(engine::Registry& registry, const glm::dvec3& shift) 
     if (any_alpha_tested) {
       rtcSetGeometryUserData(geom, im.alpha.get());
       rtcSetGeometryOccludedFilterFunction(geom, alpha_filter);
+      rtcSetGeometryIntersectFilterFunction(geom, alpha_filter);  // primary rays see through the same texels
     }
+    im.vertices = std::move(vertices);
+    im.indices = std::move(indices);
     rtcCommitGeometry(geom);
     rtcAttachGeometry(im.scene.get(), geom);
     rtcReleaseGeometry(geom);  // the scene keeps its own reference
@@ -433,6 +460,117 @@ std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points, c
   check_points(points);
   return local_visibility(points, light, gpu_shared::kSamplesPerPixel,
                           [&](glm::vec3 o, glm::vec3 d, float t) { return occluded_within(o, d, t); });
+}
+
+namespace {
+double max_abs(const glm::dvec3& v) { return std::max(std::max(std::abs(v.x), std::abs(v.y)), std::abs(v.z)); }
+
+// Where the ray from `eye` along `dir` meets the plane through `point` with normal `normal` (t <= 0
+// or parallel: nullopt).
+std::optional<glm::dvec3> on_plane(const glm::dvec3& eye, const glm::dvec3& dir, const glm::dvec3& point,
+                                   const glm::dvec3& normal) {
+  const double along = glm::dot(dir, normal);
+  if (along == 0.0) return std::nullopt;
+  const double t = glm::dot(point - eye, normal) / along;
+  if (!(t > 0.0)) return std::nullopt;
+  return eye + t * dir;
+}
+}  // namespace
+
+std::vector<TrueVisibility> EmbreeTracer::independent_visibility(const PinholeCamera& camera, const TrueLight& light,
+                                                                 uint32_t samples, double offset_band) const {
+  if (camera.width == 0 || camera.height == 0) throw std::invalid_argument("independent_visibility: a zero image size");
+  if (samples != 1 && samples != gpu_shared::kSamplesPerPixel)
+    throw std::invalid_argument("independent_visibility: samples must be 1 or 32");
+  if (!(offset_band > 0.0)) throw std::invalid_argument("independent_visibility: the offset band must be positive");
+  const Impl& im = *impl_;
+  constexpr double kOpen = 1.0e-6;  // decisions this close to their threshold are left open
+  const glm::dvec3 to_sun = -glm::normalize(light.direction);
+  const glm::dvec3 spot_direction = light.spot ? glm::normalize(light.spot_direction) : glm::dvec3(0.0);
+  const double cos_outer = std::cos(light.outer_cone);
+  const double bulb = light.range / 1000.0;
+  // The ray from the eye through (sx, sy) in pixels (the pixel's centre at +0.5).
+  const auto eye_ray = [&](double sx, double sy) {
+    const glm::dvec4 ndc(sx / camera.width * 2.0 - 1.0, sy / camera.height * 2.0 - 1.0, 0.5, 1.0);
+    const glm::dvec4 far = camera.inv_view_proj * ndc;
+    return glm::normalize(glm::dvec3(far) / far.w - camera.eye);
+  };
+  std::vector<TrueVisibility> out(size_t(camera.width) * camera.height);
+  for_each_row(camera.height, [&](uint32_t y) {
+    for (uint32_t x = 0; x < camera.width; ++x) {
+      TrueVisibility& pixel = out[size_t(y) * camera.width + x];
+      const glm::dvec3 dir = eye_ray(x + 0.5, y + 0.5);
+      const int64_t prim = im.first_hit(glm::vec3(camera.eye), glm::vec3(dir));
+      if (prim < 0) continue;
+      glm::dvec3 v[3];
+      double size = 0.0;
+      for (int k = 0; k < 3; ++k) {
+        v[k] = glm::dvec3(im.vertices[im.indices[3 * size_t(prim) + k]]);
+        size = std::max(size, max_abs(v[k]));
+      }
+      glm::dvec3 n = glm::cross(v[1] - v[0], v[2] - v[0]);
+      if (glm::dot(n, n) == 0.0) continue;  // a degenerate triangle draws nothing
+      n = glm::normalize(n);
+      if (glm::dot(n, camera.eye - v[0]) < 0.0) n = -n;
+      const std::optional<glm::dvec3> p = on_plane(camera.eye, dir, v[0], n);
+      if (!p) continue;
+      pixel.point = *p;
+      pixel.normal = n;
+      pixel.lit_min = 0.0f;
+      pixel.lit_max = 0.0f;
+      // Seen nearly edge-on, the raster and the ray may show different surfaces.
+      bool open = std::abs(glm::dot(dir, n)) < kOpen;
+      // Facing and reach at the shading point.
+      const glm::dvec3 toward = light.sun ? to_sun : glm::normalize(light.position - *p);
+      const double facing = glm::dot(n, toward);
+      if (facing <= -kOpen) continue;
+      open = open || facing < kOpen;
+      if (!light.sun) {
+        const double distance = glm::length(*p - light.position);
+        if (distance > light.range * (1.0 + kOpen)) continue;
+        open = open || distance >= light.range * (1.0 - kOpen);
+        if (light.spot) {
+          const double cos_angle = glm::dot((*p - light.position) / distance, spot_direction);
+          if (cos_angle < cos_outer - kOpen) continue;
+          open = open || cos_angle < cos_outer + kOpen;
+        }
+      }
+      // The pixel's footprint on the plane of its centre's triangle (the μQuad): where the rays through
+      // its four corners meet that plane; a sample is the bilinear blend of those corners at its
+      // pattern position.
+      glm::dvec3 corner[4];
+      for (int k = 0; k < 4 && samples > 1; ++k) {
+        const std::optional<glm::dvec3> on = on_plane(camera.eye, eye_ray(x + (k & 1), y + (k >> 1)), *p, n);
+        corner[k] = on ? *on : *p;
+      }
+      uint32_t lit_always = 0, lit_somewhere = 0;
+      for (uint32_t s = 0; s < samples; ++s) {
+        glm::dvec3 q = *p;
+        if (samples > 1) {
+          const glm::dvec2 at(gpu_shared::kSamplePattern[s]);
+          q = glm::mix(glm::mix(corner[0], corner[1], at.x), glm::mix(corner[2], corner[3], at.x), at.y);
+        }
+        const double heights[2] = {std::ldexp(std::max(max_abs(q), size), -16),
+                                   offset_band * (max_abs(q) + max_abs(q - camera.eye))};
+        bool lit[2];
+        for (int h = 0; h < 2; ++h) {
+          const glm::dvec3 origin = q + n * std::max(heights[0], heights[h]);
+          if (light.sun) {
+            lit[h] = !im.occluded1(glm::vec3(origin), glm::vec3(to_sun));
+          } else {
+            const double length = glm::length(light.position - origin) - bulb;
+            lit[h] = length <= 0.0 ||
+                     !im.occluded1(glm::vec3(origin), glm::vec3(glm::normalize(light.position - origin)), float(length));
+          }
+        }
+        lit_always += lit[0] && lit[1];
+        lit_somewhere += lit[0] || lit[1];
+      }
+      pixel.lit_min = open ? 0.0f : float(lit_always) / float(samples);
+      pixel.lit_max = float(lit_somewhere) / float(samples);
+    }
+  });
+  return out;
 }
 
 }  // namespace reference

@@ -37,6 +37,35 @@ struct LocalLight {
   float cos_outer = -1.0f;                      // cosine of the spot's outer cone
 };
 
+// A reference of its own (EmbreeTracer::independent_visibility): what it needs, in double and in the
+// tracer's coordinates (its `shift` applied), taken from the camera and the light themselves.
+struct PinholeCamera {
+  glm::dvec3 eye{0.0};
+  // Vulkan NDC (x, y in [-1, 1], y down; either depth convention, a finite or infinite far plane) to
+  // the tracer's coordinates; a perspective projection.
+  glm::dmat4 inv_view_proj{1.0};
+  uint32_t width = 0, height = 0;
+};
+struct TrueLight {
+  bool sun = true;
+  glm::dvec3 direction{0.0, -1.0, 0.0};  // sun: the direction light travels (need not be unit)
+  glm::dvec3 position{0.0};              // spot and point
+  double range = 1.0;                    // spot and point: > 0
+  bool spot = false;
+  glm::dvec3 spot_direction{0.0, -1.0, 0.0};  // the direction the spot shines (need not be unit)
+  double outer_cone = 0.0;                    // spot: the outer cone's half angle in radians
+};
+// One pixel's true lit fraction, as the bounds the module's answer must fall within: lit_min counts
+// the samples lit whatever the shadow ray's start within [own epsilon, offset band] off the surface,
+// lit_max those not shadowed whatever that start. -1 both: the primary ray hit nothing.
+struct TrueVisibility {
+  float lit_min = -1.0f;
+  float lit_max = -1.0f;
+  glm::dvec3 point{0.0};   // the pixel centre's hit, in double
+  glm::dvec3 normal{0.0};  // the hit triangle's unit normal, facing the eye
+  bool covered() const { return lit_min >= 0.0f; }
+};
+
 class EmbreeTracer {
  public:
   // Takes every entity with Mesh + Transform, skipping those whose ShadowCaster says
@@ -71,6 +100,22 @@ class EmbreeTracer {
   // is occluded by a hit within local_shadow_ray_length. The G-buffer's sun-facing decision is not used.
   std::vector<float> visibility_1spp(const ShadingPoints& points, const LocalLight& light) const;
   std::vector<float> visibility_32spp(const ShadingPoints& points, const LocalLight& light) const;
+
+  // The same truth computed without the module's shader code (of shared/*.h only the documented
+  // sample positions, kSamplePattern, are read): for each pixel a
+  // primary ray from the eye through the pixel's centre finds the triangle it shows, and its hit,
+  // normal, light facing and light reach (range, the spot's cone) are recomputed in double from that
+  // triangle's vertices. Samples (1, or 32: the rays through the pixel's corners meet the centre's
+  // plane, and each sample is the bilinear blend of those four points at its kSamplePattern position)
+  // start their shadow rays at two heights along the normal: 2^-16 of
+  // the largest coordinate of the sample and its triangle (the least Embree's float needs), and
+  // `offset_band` times reach = |q|inf + |q - eye|inf (what the module may use: its documented offset
+  // is 1/8192 of that reach). A ray toward a local light stops 1/1000 of the range short of it (the
+  // documented bulb). Decisions within 1e-6 of their threshold (facing, range, cone) and points seen
+  // within 1e-6 of edge-on are left open (lit_min 0, lit_max from the rays). Throws
+  // std::invalid_argument on a zero size, samples other than 1 or 32, or a non-positive band.
+  std::vector<TrueVisibility> independent_visibility(const PinholeCamera& camera, const TrueLight& light,
+                                                     uint32_t samples, double offset_band) const;
 
  private:
   struct Impl;
