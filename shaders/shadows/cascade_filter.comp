@@ -29,6 +29,7 @@ layout(set = 0, binding = CASCADE_FILTER_BINDING_DEPTH) uniform sampler2DArray d
 layout(set = 0, binding = CASCADE_FILTER_BINDING_NEIGHBOURHOODS) readonly buffer Neighbourhoods { uvec2 neighbourhoods[]; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_ROTATION) uniform sampler2D rotation;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
+layout(set = 0, binding = CASCADE_FILTER_BINDING_RECEIVERS, rgba8) readonly uniform image2D receivers;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_OVERLAY, rgba8) writeonly uniform image2D overlay;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_BLUR_LIST) writeonly buffer BlurList { uint blur_list[]; };
@@ -192,7 +193,9 @@ uvec2 classify_pixel(ivec2 pixel) {
   // Surfaces facing away from the light are shadowed by themselves: no lookups.
   bool facing = covered && faces_light(normal);
   Choice ch = choose(dot(p.xyz - params.camera_position.xyz, params.camera_forward.xyz));
-  bool evaluated = facing && ch.in_range;
+  // A point that does not receive shadows (its receiver flag) and faces the light is lit, unfiltered.
+  bool receives = covered && imageLoad(receivers, pixel).a > 0.5;
+  bool evaluated = facing && receives && ch.in_range;
   Probe pr = probe(ch.cascade, p.xyz, n);
   // (The kernel stage's arithmetic, so the same term.)
   uint lit = kKernelInClassify ? kernel(ch.cascade, pr, pixel) : 0u;

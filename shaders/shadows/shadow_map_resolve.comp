@@ -10,10 +10,12 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_WORLD_POSITION, rgba32f) readonly u
 layout(set = 0, binding = SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly uniform image2D geometric_normal;
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_MAP) uniform sampler2D shadow_map;
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
+layout(set = 0, binding = SM_RESOLVE_BINDING_RECEIVERS, rgba8) readonly uniform image2D receivers;
 
 // One tap, no filtering: the baseline whose aliasing the other techniques remove. A spot light's map
 // is a perspective one from the light (a point light's, one per cube-face cone); points it does not
-// reach or that turn away from it are 0.
+// reach or that turn away from it are 0; a point that does not receive shadows (its receiver flag) and
+// faces the light is 1, as in every technique.
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
@@ -31,7 +33,9 @@ void main() {
                                            params.light_cone.x, true, p.xyz) &&
                            faces_local_light(n, p.xyz, params.light_position.xyz)
                      : faces_light(normal);
-  if (facing) {
+  if (facing && imageLoad(receivers, pixel).a <= 0.5) {
+    visibility = 1.0;
+  } else if (facing) {
     vec4 light = params.light_view_projection * vec4(shadow_ray_origin(p.xyz, n, shadow_ray_offset(p.xyz, params.camera_position.xyz)), 1.0);
     light.xyz /= light.w;  // 1 for the sun's orthographic map
     vec2 uv = light.xy * 0.5 + 0.5;

@@ -24,6 +24,7 @@ SHARED_CONST uint SM_RESOLVE_BINDING_WORLD_POSITION = 1u;
 SHARED_CONST uint SM_RESOLVE_BINDING_GEOMETRIC_NORMAL = 2u;
 SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_MAP = 3u;
 SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_TERM = 4u;
+SHARED_CONST uint SM_RESOLVE_BINDING_RECEIVERS = 5u;  // RGBA8, a > 0.5: receives shadows
 
 // ---- Alpha-tested casters in the shadow-map depth passes (sm, cascades) ----
 struct AlphaDepthPush {

@@ -163,7 +163,8 @@ struct CascadesPass::Impl {
           {gs::CASCADE_FILTER_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
           {gs::CASCADE_FILTER_BINDING_WORK_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
           {gs::CASCADE_FILTER_BINDING_INPUT_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+          {gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+          {gs::CASCADE_FILTER_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
          0,
          {{0, stage}, {1, masking}, {2, debug}}});
     return pipeline;
@@ -446,6 +447,7 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
           .storage_buffer(gs::CASCADE_FILTER_BINDING_WORK_LIST, m.work_list.handle())
           .storage_buffer(gs::CASCADE_FILTER_BINDING_INPUT_LIST, only ? only->entries : m.no_input_list.handle())
           .storage_buffer(gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, only ? only->counters : m.no_input_list.handle())
+          .storage_image(gs::CASCADE_FILTER_BINDING_RECEIVERS, frame.gbuffer.albedo)
           .push(m.ctx, cmd, pipeline);
     };
     if (only) {

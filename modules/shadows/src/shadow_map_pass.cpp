@@ -31,7 +31,8 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
                                         {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                                         {gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                                         {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                                        {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                                        {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                        {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
                                        0});
   depth_pipeline_ = factory.graphics(d);
   alpha_depth_pipeline_ = alpha_depth_pipeline(ctx, d);
@@ -86,6 +87,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
         .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, frame.shadow_term.view())
+        .storage_image(gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, frame.gbuffer.albedo)
         .push(ctx_, cmd, resolve_pipeline_);
     vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
   }
