@@ -205,6 +205,23 @@ foreach(bad bad_json bad_field bad_shape bad_shadow_flag bad_animation bad_scrip
                    "${expect}" $<TARGET_FILE:walkthrough> ${args})
   set_tests_properties(walkthrough_rejects_${bad} PROPERTIES LABELS unit ENVIRONMENT ENGINE_VALIDATION=1)
 endforeach()
+# shadow_bench --scale/--offset: a scene float cannot hold is refused in one line naming the option.
+set(bench_bad_scale_0 "--scale 0" "--scale must be positive")
+set(bench_bad_scale_nan "--scale nan" "--scale 'nan': expected a finite number")
+set(bench_bad_scale_huge "--scale 1e30" "--scale/--offset scale 1e+30")
+set(bench_bad_offset_inf "--offset inf,0,0" "--offset 'inf': expected a finite number")
+set(bench_bad_offset_far "--offset 1e8,0,0" "out of float's reach")
+set(bench_bad_offset_two "--offset 1,2" "--offset '1,2': expected X,Y,Z")
+foreach(bad scale_0 scale_nan scale_huge offset_inf offset_far offset_two)
+  list(GET bench_bad_${bad} 0 option)
+  list(GET bench_bad_${bad} 1 expect)
+  separate_arguments(option)
+  add_test(NAME shadow_bench_refuses_${bad}
+           COMMAND sh -c "out=$(\"$@\" 2>&1); rc=$?; echo \"$out\"; \
+[ $rc -ne 0 ] && [ $(printf '%s\\n' \"$out\" | wc -l) -eq 1 ] && printf '%s' \"$out\" | grep -qF -- \"$0\""
+                   "${expect}" $<TARGET_FILE:shadow_bench> --scene contact --size 32x32 --frames 1 --warmup 0 ${option})
+  set_tests_properties(shadow_bench_refuses_${bad} PROPERTIES LABELS unit ENVIRONMENT ENGINE_DEVICE=lavapipe)
+endforeach()
 # A headless tour of every shipped level at a small size, with moving casters and a moving sun.
 file(GLOB SHIPPED_LEVELS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/content/levels/*.json)
 foreach(level ${SHIPPED_LEVELS})
