@@ -12,46 +12,6 @@ void check(VkResult r, const char* what) {
   if (r != VK_SUCCESS) throw std::runtime_error(std::string(what) + " failed (VkResult " + std::to_string(int(r)) + ")");
 }
 
-namespace {
-
-bool has(const std::vector<std::string>& list, const std::string& name) {
-  return std::find(list.begin(), list.end(), name) != list.end();
-}
-
-}  // namespace
-
-void FeatureChain::link(const std::vector<std::string>& extensions) {
-  void* next = nullptr;
-  auto push = [&](auto& s, const char* extension) {
-    if (extension && !has(extensions, extension)) return;
-    s.pNext = next;
-    next = &s;
-  };
-  push(rq, VK_KHR_RAY_QUERY_EXTENSION_NAME);
-  push(rtp, VK_KHR_RAY_TRACING_PIPELINE_EXTENSION_NAME);
-  push(as, VK_KHR_ACCELERATION_STRUCTURE_EXTENSION_NAME);
-  push(bary, VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME);
-  push(f13, nullptr);
-  push(f12, nullptr);
-  f2.pNext = next;
-}
-
-VkBool32* FeatureChain::find(const std::string& name) {
-#define FEATURE(s, member) \
-  if (name == #member) return &s.member;
-  FEATURE(f2.features, geometryShader) FEATURE(f2.features, fragmentStoresAndAtomics)
-  FEATURE(f2.features, vertexPipelineStoresAndAtomics) FEATURE(f2.features, shaderInt64)
-  FEATURE(f2.features, shaderStorageImageWriteWithoutFormat) FEATURE(f2.features, depthClamp)
-  FEATURE(f2.features, fillModeNonSolid) FEATURE(f2.features, independentBlend)
-  FEATURE(f2.features, pipelineStatisticsQuery) FEATURE(f12, scalarBlockLayout) FEATURE(f12, hostQueryReset)
-  FEATURE(f12, shaderInt8) FEATURE(f12, storageBuffer8BitAccess) FEATURE(f12, bufferDeviceAddress)
-  FEATURE(f13, synchronization2) FEATURE(f13, dynamicRendering) FEATURE(f13, maintenance4)
-  FEATURE(bary, fragmentShaderBarycentric) FEATURE(as, accelerationStructure) FEATURE(rtp, rayTracingPipeline)
-  FEATURE(rq, rayQuery)
-#undef FEATURE
-  return nullptr;
-}
-
 VKAPI_ATTR VkBool32 VKAPI_CALL Device::on_message(VkDebugUtilsMessageSeverityFlagBitsEXT,
                                                   VkDebugUtilsMessageTypeFlagsEXT,
                                                   const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
@@ -117,15 +77,8 @@ Device::Device(const DeviceOptions& options) {
   if (!physical) throw std::runtime_error("no Vulkan 1.3 device of kind '" + options.device + "'");
 
   // What the shadow module needs: every required item, and the optional ones this device has.
-  const shadows::DeviceRequirements req = shadows::device_requirements(physical);
-  if (!req.missing.empty()) throw std::runtime_error(req.missing);
-  for (const auto* list : {&req.required_extensions, &req.optional_extensions})
-    for (const auto& e : *list)
-      if (!has(options.leave_out, e.name)) device_extensions.push_back(e.name);
-  for (const auto* list : {&req.required_features, &req.optional_features})
-    for (const auto& f : *list)
-      if (VkBool32* bit = enabled.find(f.name)) *bit = VK_TRUE;
-  enabled.link(device_extensions);
+  setup = std::make_unique<shadows::DeviceSetup>(physical, options.leave_out);
+  if (!setup->missing().empty()) throw std::runtime_error(setup->missing());
 
   uint32_t families = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(physical, &families, nullptr);
@@ -140,14 +93,12 @@ Device::Device(const DeviceOptions& options) {
   queue_info.queueFamilyIndex = family;
   queue_info.queueCount = 1;
   queue_info.pQueuePriorities = &priority;
-  std::vector<const char*> names;
-  for (const auto& e : device_extensions) names.push_back(e.c_str());
   VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
-  device_info.pNext = &enabled.f2;
+  device_info.pNext = setup->features();
   device_info.queueCreateInfoCount = 1;
   device_info.pQueueCreateInfos = &queue_info;
-  device_info.enabledExtensionCount = uint32_t(names.size());
-  device_info.ppEnabledExtensionNames = names.data();
+  device_info.enabledExtensionCount = setup->extension_count();
+  device_info.ppEnabledExtensionNames = setup->extension_names();
   check(vkCreateDevice(physical, &device_info, nullptr, &device), "vkCreateDevice");
   vkGetDeviceQueue(device, family, 0, &queue);
 }
@@ -172,8 +123,7 @@ shadows::ContextDesc Device::context_desc(uint32_t frames_in_flight, const shado
   desc.get_instance_proc_addr = vkGetInstanceProcAddr;
   desc.get_device_proc_addr = vkGetDeviceProcAddr;
   desc.enabled_instance_extensions = instance_extensions;
-  desc.enabled_device_extensions = device_extensions;
-  desc.enabled_features = &enabled.f2;
+  setup->describe(desc);
   desc.frames_in_flight = frames_in_flight;
   desc.settings = settings;
   return desc;

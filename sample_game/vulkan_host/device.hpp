@@ -2,6 +2,7 @@
 // The host's own Vulkan objects: instance, device with what the shadow module asks for, and the few
 // buffer and image helpers the program needs. Plain Vulkan; no engine header.
 #include <atomic>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,22 +16,8 @@ struct DeviceOptions {
   std::string device;            // "gpu", "lavapipe" or empty: a GPU if there is one, else lavapipe
   bool validation = false;       // the Khronos layer, every message counted (and printed as "[vulkan] ...")
   bool sync_validation = false;  // with the layer's synchronization checks
-  // Device extensions the module asks for that this host leaves out (tests of the module's errors).
+  // Extensions or feature bits the module asks for that this host leaves out (tests of its errors).
   std::vector<std::string> leave_out;
-};
-
-// Every feature structure the module may name, linked into vkCreateDevice where its extension is on.
-struct FeatureChain {
-  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-  VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR bary{
-      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR};
-  VkPhysicalDeviceAccelerationStructureFeaturesKHR as{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR};
-  VkPhysicalDeviceRayTracingPipelineFeaturesKHR rtp{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR};
-  VkPhysicalDeviceRayQueryFeaturesKHR rq{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_QUERY_FEATURES_KHR};
-  void link(const std::vector<std::string>& extensions);  // pNext chain of what `extensions` allow
-  VkBool32* find(const std::string& name);                 // the member named so, or null
 };
 
 class Device {
@@ -51,8 +38,8 @@ class Device {
   uint32_t family = 0;
   VkQueue queue = VK_NULL_HANDLE;
   std::string name;
-  std::vector<std::string> instance_extensions, device_extensions;
-  FeatureChain enabled;
+  std::vector<std::string> instance_extensions;
+  std::unique_ptr<shadows::DeviceSetup> setup;  // the module's features and extensions, as created
 
  private:
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;

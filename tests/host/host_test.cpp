@@ -847,3 +847,107 @@ TEST(HostDevice, WithoutPushDescriptorCreateThrowsNamingIt) {
 }
 
 }  // namespace
+
+namespace {
+
+// The structures a features chain holds, by sType (null when absent).
+template <typename T>
+const T* find_in_chain(const VkPhysicalDeviceFeatures2* root, VkStructureType type) {
+  for (auto* s = static_cast<const VkBaseInStructure*>(root->pNext); s; s = s->pNext)
+    if (s->sType == type) return reinterpret_cast<const T*>(s);
+  return nullptr;
+}
+
+std::string add_features_error(shadows::DeviceSetup& setup, const VkPhysicalDeviceFeatures2& chain) {
+  try {
+    setup.add_features(chain);
+  } catch (const shadows::Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+// DeviceSetup: the module's chain and extensions, with a host's own extension and bits merged in
+// (a Vulkan 1.1 bit, a structure promoted into 1.2), create a device that the validation layer
+// accepts and Context::create runs on.
+TEST(HostDevice, DeviceSetupCreatesADeviceTheContextAccepts) {
+  vulkan_host::Device host({.device = test_device(), .validation = true});
+  shadows::DeviceSetup setup(host.physical);
+  ASSERT_EQ(setup.missing(), "");
+  for (const shadows::DeviceRequirement& item : setup.optional_items()) EXPECT_FALSE(item.unlocks.empty()) << item.name;
+  setup.add_extension(VK_KHR_SHADER_CLOCK_EXTENSION_NAME);
+  VkPhysicalDeviceTimelineSemaphoreFeatures timeline{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_TIMELINE_SEMAPHORE_FEATURES};
+  timeline.timelineSemaphore = VK_TRUE;
+  VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES, &timeline};
+  f11.shaderDrawParameters = VK_TRUE;
+  VkPhysicalDeviceFeatures2 mine{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f11};
+  mine.features.samplerAnisotropy = VK_TRUE;
+  setup.add_features(mine);
+
+  const VkPhysicalDeviceFeatures2* chain = setup.features();
+  EXPECT_TRUE(chain->features.samplerAnisotropy);
+  const auto* f12 = find_in_chain<VkPhysicalDeviceVulkan12Features>(chain, VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES);
+  const auto* f13 = find_in_chain<VkPhysicalDeviceVulkan13Features>(chain, VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES);
+  const auto* merged11 = find_in_chain<VkPhysicalDeviceVulkan11Features>(chain, VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES);
+  ASSERT_TRUE(f12 && f13 && merged11);
+  EXPECT_TRUE(f12->timelineSemaphore);
+  EXPECT_TRUE(merged11->shaderDrawParameters);
+  EXPECT_TRUE(f13->synchronization2 && f13->dynamicRendering);
+  std::vector<std::string> names(setup.extension_names(), setup.extension_names() + setup.extension_count());
+  EXPECT_NE(std::find(names.begin(), names.end(), "VK_KHR_push_descriptor"), names.end());
+  EXPECT_NE(std::find(names.begin(), names.end(), VK_KHR_SHADER_CLOCK_EXTENSION_NAME), names.end());
+
+  const float priority = 1.0f;
+  VkDeviceQueueCreateInfo queue_info{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+  queue_info.queueFamilyIndex = host.family;
+  queue_info.queueCount = 1;
+  queue_info.pQueuePriorities = &priority;
+  VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+  info.pNext = setup.features();
+  info.queueCreateInfoCount = 1;
+  info.pQueueCreateInfos = &queue_info;
+  info.enabledExtensionCount = setup.extension_count();
+  info.ppEnabledExtensionNames = setup.extension_names();
+  VkDevice device = VK_NULL_HANDLE;
+  ASSERT_EQ(vkCreateDevice(host.physical, &info, nullptr, &device), VK_SUCCESS);
+  {
+    shadows::ContextDesc desc = host.context_desc(2, shadows::Settings{});
+    desc.device = device;
+    vkGetDeviceQueue(device, host.family, 0, &desc.queue);
+    setup.describe(desc);
+    std::unique_ptr<shadows::Context> context;
+    ASSERT_NO_THROW(context = shadows::Context::create(desc));
+    const shadows::Capabilities caps = context->capabilities();
+    EXPECT_TRUE(caps.of(shadows::Technique::Izb).available) << caps.of(shadows::Technique::Izb).reason;
+    EXPECT_TRUE(caps.of(shadows::Technique::Hybrid).available) << caps.of(shadows::Technique::Hybrid).reason;
+  }
+  vkDestroyDevice(device, nullptr);
+  EXPECT_EQ(host.validation_messages(), 0u);
+}
+
+// What DeviceSetup::add_features cannot merge is refused in one line naming it.
+TEST(HostDevice, DeviceSetupRefusesWhatItCannotMergeInOneLine) {
+  vulkan_host::Device host({.device = test_device(), .validation = true});
+  shadows::DeviceSetup setup(host.physical, {VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME});
+  VkPhysicalDeviceRobustness2FeaturesEXT robustness{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ROBUSTNESS_2_FEATURES_EXT};
+  VkPhysicalDeviceFeatures2 unknown{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &robustness};
+  VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR bary{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR};
+  bary.fragmentShaderBarycentric = VK_TRUE;
+  VkPhysicalDeviceFeatures2 without_extension{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &bary};
+  VkPhysicalDeviceFeatures2 wrong_root{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  const std::pair<const VkPhysicalDeviceFeatures2*, std::string> cases[] = {
+      {&unknown, "sType " + std::to_string(int(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ROBUSTNESS_2_FEATURES_EXT))},
+      {&without_extension, VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME},
+      {&wrong_root, "VkPhysicalDeviceFeatures2"}};
+  for (const auto& [chain, names] : cases) {
+    const std::string what = add_features_error(setup, *chain);
+    EXPECT_NE(what.find(names), std::string::npos) << "message: '" << what << "'";
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  // A feature left out stays off; the chain holds only structures of listed extensions.
+  EXPECT_EQ(find_in_chain<VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR>(
+                setup.features(), VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR),
+            nullptr);
+}

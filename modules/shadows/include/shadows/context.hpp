@@ -1,8 +1,8 @@
 #pragma once
 // The shadow module on a host's own Vulkan device: the API a studio's renderer uses.
 //
-//   // before vkCreateDevice: what to enable
-//   shadows::DeviceRequirements req = shadows::device_requirements(physical_device);
+//   // before vkCreateDevice: what to enable (DeviceSetup fills the chain and the extension list)
+//   shadows::DeviceSetup setup(physical_device);
 //   // once
 //   auto shadows = shadows::Context::create({.instance = ..., .device = ..., .frames_in_flight = 2, ...});
 //   shadows::MeshId rock = shadows->register_mesh({.positions = {...}, .indices = {...}, ...});
@@ -81,6 +81,64 @@ struct DeviceRequirements {
   std::string missing;  // empty when the device can run the module; else the one-line reason
 };
 SHADOWS_API DeviceRequirements device_requirements(VkPhysicalDevice physical_device);
+
+struct ContextDesc;
+
+// What vkCreateDevice needs for the module, in a few lines:
+//
+//   shadows::DeviceSetup setup(physical_device);          // required items + the optional ones it has
+//   if (!setup.missing().empty()) fail(setup.missing());
+//   setup.add_extension(VK_KHR_SWAPCHAIN_EXTENSION_NAME);  // the host's own wishes, if any
+//   setup.add_features(my_features2);                      // (a chain rooted at VkPhysicalDeviceFeatures2)
+//   VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+//   info.pNext = setup.features();
+//   info.enabledExtensionCount = setup.extension_count();
+//   info.ppEnabledExtensionNames = setup.extension_names();
+//   ... vkCreateDevice ...;  setup.describe(context_desc);  // the lists ContextDesc wants
+//
+// It owns every structure and string it hands out (valid while it lives, until its next add_*): a
+// VkPhysicalDeviceFeatures2 chained to VkPhysicalDeviceVulkan11/12/13Features and, where their
+// extensions are in the list, the fragment shader barycentric, acceleration structure, ray tracing
+// pipeline and ray query structures. Optional items are taken where the device has them (each with
+// what it unlocks in optional_items()); `leave_out` names extensions or feature bits not to take
+// (a required one left out gives a device the module refuses, which tests use).
+class SHADOWS_API DeviceSetup {
+ public:
+  explicit DeviceSetup(VkPhysicalDevice physical_device, const std::vector<std::string>& leave_out = {});
+  ~DeviceSetup();
+  DeviceSetup(DeviceSetup&&) noexcept;
+  DeviceSetup& operator=(DeviceSetup&&) noexcept;
+  DeviceSetup(const DeviceSetup&) = delete;
+  DeviceSetup& operator=(const DeviceSetup&) = delete;
+
+  // Empty when the device can run the module; else one line saying what it lacks.
+  const std::string& missing() const;
+  // The optional extensions and feature bits taken, each with what it unlocks.
+  const std::vector<DeviceRequirement>& optional_items() const;
+
+  // Adds a device extension of the host's (no effect when already listed).
+  DeviceSetup& add_extension(const char* name);
+  // ORs in the bits the host sets in its own chain: VkPhysicalDeviceFeatures2 (its `features`), the
+  // Vulkan 1.1/1.2/1.3 structures, the structures promoted into them that the module knows
+  // (synchronization2, dynamic rendering, maintenance4, buffer device address, scalar block layout,
+  // host query reset, timeline semaphore, 8-bit storage, float16/int8, descriptor indexing) and the
+  // four extension structures above. Throws shadows::Error, one line naming it, for any other
+  // structure (a host chains those itself after features()) or for bits of an extension structure
+  // whose extension is not listed (add_extension first).
+  DeviceSetup& add_features(const VkPhysicalDeviceFeatures2& host_chain);
+
+  // For VkDeviceCreateInfo::pNext (pEnabledFeatures stays null).
+  const VkPhysicalDeviceFeatures2* features() const;
+  const char* const* extension_names() const;
+  uint32_t extension_count() const;
+  // Sets desc.enabled_device_extensions and desc.enabled_features (this object must outlive
+  // Context::create, which reads the chain).
+  void describe(ContextDesc& desc) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 struct ContextDesc {
   VkInstance instance = VK_NULL_HANDLE;
