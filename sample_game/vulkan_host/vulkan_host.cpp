@@ -648,6 +648,7 @@ Result run(const Options& o) {
     completed(frame);
   }
   r.csm_status = module->stats().csm_status;
+  r.light_stats = module->stats().lights;
 
   // ----- The last frame, for the PNG and for tests that trace the same scene.
   const FrameCapture& last = r.frames.back();

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "shadows/settings.hpp"
+
 namespace vulkan_host {
 
 struct Options {
@@ -83,6 +85,7 @@ struct Result {
   std::vector<FrameCapture> frames;  // capture_every_frame: all, in order; else the last one
   std::string csm_status;            // Stats::csm_status after the last frame (izb+csm: whether the prepass ran)
   uint64_t csm_culled = 0;           // Stats::csm_culled_points, summed over the frames whose statistics came back
+  std::vector<shadows::Stats::LightStats> light_stats;  // report_completed: Stats::lights after the last frame
 };
 
 Result run(const Options& options);  // throws std::exception (one line) on any failure

@@ -325,9 +325,22 @@ TEST_P(HostLights, EveryLightOfEveryFrameMatchesTheReference) {
   o.frames = 4;
   o.frames_in_flight = 2;
   o.capture_every_frame = true;
+  o.report_completed = true;
   const Result r = vulkan_host::run(o);
   EXPECT_EQ(r.validation_messages, 0u);
   expect_every_frame_matches(r, o.spp, o.frames);
+  // Every light says which trace and CSM prepass ran for it: the sun what the probes chose, a spot or
+  // point light the compute passes its grid takes.
+  ASSERT_EQ(r.light_stats.size(), 3u);
+  for (const auto& light : r.light_stats) {
+    SCOPED_TRACE(light.kind);
+    EXPECT_FALSE(light.trace_choice.backend.empty());
+    if (light.kind != "directional") {
+      EXPECT_EQ(light.trace_choice.backend, "compute");
+      EXPECT_NE(light.trace_choice.reason.find(light.kind), std::string::npos) << light.trace_choice.reason;
+    }
+    EXPECT_EQ(light.csm_choice.backend.empty(), GetParam().mode == "izb");
+  }
 }
 INSTANTIATE_TEST_SUITE_P(Modes, HostLights,
                          ::testing::Values(LightsCase{"izb", 1}, LightsCase{"izb+csm", 1}, LightsCase{"izb", 32}),

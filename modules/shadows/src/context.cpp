@@ -730,6 +730,15 @@ void ContextImpl::complete_slot(Slot& slot) {
   if (t == Technique::RayTraced && ray_traced_) ray_traced_->after_frame(rt_records, index);
   if (!rt_records.empty()) fresh = rt_records.back();
   else if (!izb_records.empty()) fresh = izb_records.back();
+  // A spot or point light's grid is traced (and CSM-culled) by the compute passes whatever the probes
+  // chose for the sun: its records report that choice.
+  const auto local_choice = [&](const std::string& kind) {
+    return Stats::BackendChoice{"compute", "a " + kind + " light's perspective grid takes the compute passes"};
+  };
+  if (!izb_records.empty() && !slot.lights.empty() && slot.lights.back().kind != "directional") {
+    fresh.trace_choice = local_choice(slot.lights.back().kind);
+    if (slot.csm) fresh.csm_choice = local_choice(slot.lights.back().kind);
+  }
   if ((t == Technique::Cascades || t == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh, index);
   if (collect_stats_) {
     const std::vector<PassTime> times = pass_times();
@@ -749,6 +758,8 @@ void ContextImpl::complete_slot(Slot& slot) {
         l.csm_culled += s.csm_culled;
         l.node_overflow += s.node_overflow;
         l.list_length_max = std::max(l.list_length_max, s.list_length_max);
+        l.trace_choice = r.kind == "directional" ? s.trace_choice : local_choice(r.kind);
+        if (slot.csm) l.csm_choice = r.kind == "directional" ? s.csm_choice : local_choice(r.kind);
       }
       for (uint32_t k = r.rt_first; k < r.rt_first + r.rt_count && k < rt_records.size(); ++k) {
         l.lit_candidates += rt_records[k].lit_candidates;

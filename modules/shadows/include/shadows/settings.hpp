@@ -240,6 +240,10 @@ struct Stats {
     uint64_t rays_traced = 0;        // rt
     uint64_t rays_occluded = 0;      // rt
     double gpu_ms = 0.0;             // the light's passes: its "light i" region, or "shadows" for one light
+    // IZB: the trace's and the CSM prepass's backends for this light (a spot or point light's
+    // perspective grid always takes the compute passes, and says so); empty for other techniques.
+    BackendChoice trace_choice;
+    BackendChoice csm_choice;
   };
   std::vector<LightStats> lights;
 };
