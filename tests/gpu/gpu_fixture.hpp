@@ -18,6 +18,24 @@ inline std::string test_device() {
   return d && *d ? d : "lavapipe";
 }
 
+// One technique of a per-technique sweep: its name, the technique, IZB samples per pixel, CSM prepass.
+struct TechniqueCase {
+  const char* name;
+  shadows::Technique technique;
+  uint32_t spp;
+  bool csm;
+  // `base` with this case's technique, samples and prepass.
+  shadows::Settings applied_to(shadows::Settings base) const {
+    base.technique = technique;
+    base.izb.samples_per_pixel = spp;
+    base.izb.csm = csm;
+    return base;
+  }
+  // Frames to render before reading: the automatic CSM choice takes effect on the frame after the one
+  // that measured it.
+  int frames() const { return csm ? 2 : 1; }
+};
+
 class GpuTest : public ::testing::Test {
  protected:
   void SetUp() override {

@@ -22,13 +22,6 @@ void PrintTo(const HostInputsCase& c, std::ostream* os) { *os << c.scene << " vi
 
 class HostInputsTest : public GpuTest, public ::testing::WithParamInterface<HostInputsCase> {};
 
-struct Technique {
-  const char* name;
-  shadows::Technique technique;
-  uint32_t spp;
-  bool csm;
-};
-
 TEST_P(HostInputsTest, EveryTechniqueMatchesTheNativePathBitForBit) {
   const HostInputsCase& c = GetParam();
   auto& r = make_renderer(c.scene, c.view, c.size, c.size);
@@ -41,23 +34,19 @@ TEST_P(HostInputsTest, EveryTechniqueMatchesTheNativePathBitForBit) {
   base.shadow_map.size = 512;
   base.cascades.map_size = 512;
   auto module = shadows::install(r, base);
-  const Technique techniques[] = {{"izb", shadows::Technique::Izb, 1, false},
+  const TechniqueCase techniques[] = {{"izb", shadows::Technique::Izb, 1, false},
                                   {"izb+csm", shadows::Technique::Izb, 1, true},
                                   {"izb 32 spp", shadows::Technique::Izb, 32, false},
                                   {"sm", shadows::Technique::ShadowMap, 1, false},
                                   {"cascades", shadows::Technique::Cascades, 1, false},
                                   {"hybrid", shadows::Technique::Hybrid, 1, false}};
-  for (const Technique& t : techniques) {
+  for (const TechniqueCase& t : techniques) {
     SCOPED_TRACE(t.name);
     std::vector<float> visibility[2];
     for (int host = 0; host < 2; ++host) {
       module->set_host_inputs(host == 1);
-      module->settings() = base;
-      module->settings().technique = t.technique;
-      module->settings().izb.samples_per_pixel = t.spp;
-      module->settings().izb.csm = t.csm;
-      // The automatic CSM choice takes effect on the frame after the one that measured it.
-      for (int f = 0; f < (t.csm ? 2 : 1); ++f) r.render_frame(0.0f);
+      module->settings() = t.applied_to(base);
+      for (int f = 0; f < t.frames(); ++f) r.render_frame(0.0f);
       visibility[host] = module->read_visibility();
       // The path taken: the input pass runs exactly when the G-buffer is handed over as host inputs.
       bool input_pass = false;

@@ -23,13 +23,7 @@ namespace {
 constexpr double kOffsetBand = 2.0 / 8192.0;
 constexpr uint32_t kSize = 128;
 
-struct Technique {
-  const char* name;
-  shadows::Technique technique;
-  uint32_t spp;
-  bool csm;
-};
-constexpr Technique kTechniques[] = {{"izb", shadows::Technique::Izb, 1, false},
+const TechniqueCase kTechniques[] = {{"izb", shadows::Technique::Izb, 1, false},
                                      {"izb+csm", shadows::Technique::Izb, 1, true},
                                      {"izb 32 spp", shadows::Technique::Izb, 32, false},
                                      {"rt", shadows::Technique::RayTraced, 1, false},
@@ -141,14 +135,11 @@ TEST_P(IndependentReferenceTest, EveryLightOfEveryTechniqueIsWithinTheTrueBounds
     module->set_light(light.module);
     truth[0] = tracer.independent_visibility(camera, light.truth, 1, kOffsetBand);
     truth[1] = tracer.independent_visibility(camera, light.truth, 32, kOffsetBand);
-    for (const Technique& t : kTechniques) {
+    for (const TechniqueCase& t : kTechniques) {
       SCOPED_TRACE(t.name);
       if (!module->supported(t.technique, nullptr)) continue;  // rt: a ray tracing device only
-      module->settings() = base;
-      module->settings().technique = t.technique;
-      module->settings().izb.samples_per_pixel = t.spp;
-      module->settings().izb.csm = t.csm;
-      for (int f = 0; f < (t.csm ? 2 : 1); ++f) r.render_frame(0.0f);
+      module->settings() = t.applied_to(base);
+      for (int f = 0; f < t.frames(); ++f) r.render_frame(0.0f);
       const reference::ShadingPoints points = support::capture_shading_points(r);
       const Tally tally = compare(module->read_visibility(), truth[t.spp == 32 ? 1 : 0], points);
       std::printf("%-8s %-18s %-11s covered %6zu other surface %4zu compared %6zu (lit %6zu shadowed %6zu) outside %4zu, by %.2e\n",

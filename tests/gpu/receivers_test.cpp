@@ -10,13 +10,6 @@
 
 namespace {
 
-struct Technique {
-  const char* name;
-  shadows::Technique technique;
-  uint32_t spp;
-  bool csm;
-};
-
 TEST_F(GpuTest, SurfacesThatReceiveNoShadowAreLitInEveryTechnique) {
   auto& r = make_renderer("contact", 1, 128, 128);
   shadows::Settings base;
@@ -26,7 +19,7 @@ TEST_F(GpuTest, SurfacesThatReceiveNoShadowAreLitInEveryTechnique) {
   scene_->registry.each<engine::Name, engine::ShadowCaster>(
       [&](engine::Entity, engine::Name& name, engine::ShadowCaster& c) { casters.emplace_back(name.value, &c); });
   ASSERT_GT(casters.size(), 2u);
-  const Technique techniques[] = {{"izb", shadows::Technique::Izb, 1, false},
+  const TechniqueCase techniques[] = {{"izb", shadows::Technique::Izb, 1, false},
                                   {"izb+csm", shadows::Technique::Izb, 1, true},
                                   {"izb 32 spp", shadows::Technique::Izb, 32, false},
                                   {"sm", shadows::Technique::ShadowMap, 1, false},
@@ -36,19 +29,16 @@ TEST_F(GpuTest, SurfacesThatReceiveNoShadowAreLitInEveryTechnique) {
   // Who receives: everything; everything but the ground; the ground alone.
   enum { kAll, kGroundOff, kGroundOnly, kCases };
   const char* case_names[kCases] = {"all receive", "ground off", "ground alone"};
-  for (const Technique& t : techniques) {
+  for (const TechniqueCase& t : techniques) {
     SCOPED_TRACE(t.name);
     if (!module->supported(t.technique, nullptr)) continue;  // rt: a ray tracing device only
-    module->settings() = base;
-    module->settings().technique = t.technique;
-    module->settings().izb.samples_per_pixel = t.spp;
-    module->settings().izb.csm = t.csm;
+    module->settings() = t.applied_to(base);
     // Facing pixels in shadow (visibility < 1): on the ground, and elsewhere.
     size_t ground[kCases] = {}, others[kCases] = {};
     for (int c = 0; c < kCases; ++c) {
       for (auto& [name, caster] : casters)
         caster->receives_shadow = c == kAll || (c == kGroundOff) == (name != "ground");
-      for (int f = 0; f < (t.csm ? 2 : 1); ++f) r.render_frame(0.0f);
+      for (int f = 0; f < t.frames(); ++f) r.render_frame(0.0f);
       const std::vector<float> visibility = module->read_visibility();
       const reference::ShadingPoints points = support::capture_shading_points(r);
       const glm::vec3 to_sun = -r.frame_view().light_direction;

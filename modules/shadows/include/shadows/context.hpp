@@ -121,7 +121,7 @@ class SHADOWS_API DeviceSetup {
   // ORs in the bits the host sets in its own chain: VkPhysicalDeviceFeatures2 (its `features`), the
   // Vulkan 1.1/1.2/1.3 structures, the structures promoted into them that the module knows
   // (synchronization2, dynamic rendering, maintenance4, buffer device address, scalar block layout,
-  // host query reset, timeline semaphore, 8-bit storage, float16/int8, descriptor indexing) and the
+  // host query reset, timeline semaphore, 8-bit storage, float16/int8) and the
   // four extension structures above. Throws shadows::Error, one line naming it, for any other
   // structure (a host chains those itself after features()) or for bits of an extension structure
   // whose extension is not listed (add_extension first).
