@@ -1,5 +1,8 @@
 #include "engine/core/components.hpp"
 
+#include <shared/bounds.h>
+#include <shared/material.h>
+
 namespace engine {
 
 glm::mat4 rebased(const glm::mat4& world, const glm::dvec3& shift) {
@@ -22,24 +25,12 @@ Aabb Aabb::transformed(const glm::mat4& m) const {
   Aabb out;
   if (!valid()) return out;
   // Rotations make any corner a potential extreme, so all eight are transformed.
-  for (int i = 0; i < 8; ++i) {
-    const glm::vec3 corner{(i & 1) ? max.x : min.x, (i & 2) ? max.y : min.y, (i & 4) ? max.z : min.z};
-    out.extend(glm::vec3(m * glm::vec4(corner, 1.0f)));
-  }
+  for (uint32_t i = 0; i < 8; ++i) out.extend(glm::vec3(m * glm::vec4(gpu_shared::box_corner(min, max, i), 1.0f)));
   return out;
 }
 
 bool Aabb::outside_clip(const glm::mat4& clip, const glm::vec4& ndc, float min_w) const {
-  if (!valid()) return false;  // unknown extent: never culled
-  // Bit k set: every corner so far lies beyond plane k (left, right, bottom, top, near).
-  uint32_t beyond_all = 0x1f;
-  for (int i = 0; i < 8 && beyond_all; ++i) {
-    const glm::vec4 c = clip * glm::vec4((i & 1) ? max.x : min.x, (i & 2) ? max.y : min.y, (i & 4) ? max.z : min.z, 1.0f);
-    const uint32_t beyond = (c.x < ndc.x * c.w ? 1u : 0u) | (c.x > ndc.z * c.w ? 2u : 0u) |
-                            (c.y < ndc.y * c.w ? 4u : 0u) | (c.y > ndc.w * c.w ? 8u : 0u) | (c.w < min_w ? 16u : 0u);
-    beyond_all &= beyond;
-  }
-  return beyond_all != 0;
+  return valid() && gpu_shared::box_outside_clip(clip, min, max, ndc, min_w);  // unknown extent: never culled
 }
 
 void MeshData::compute_bounds() {
@@ -58,10 +49,6 @@ uint32_t alpha_threshold(const Material& m) {
   return alpha_threshold(m.alpha_mode == AlphaMode::Blend ? 0.5f : m.alpha_cutoff, m.base_color.a);
 }
 
-uint32_t alpha_threshold(float cutoff, float scale) {
-  for (uint32_t byte = 0; byte < 256; ++byte)
-    if (scale * float(byte) / 255.0f >= cutoff) return byte;
-  return 256;
-}
+uint32_t alpha_threshold(float cutoff, float scale) { return gpu_shared::alpha_threshold_byte(cutoff, scale); }
 
 }  // namespace engine

@@ -1,4 +1,4 @@
-#include "engine/gpu/context.hpp"
+#include "gpu/context.hpp"
 
 #include <algorithm>
 #include <cstdio>

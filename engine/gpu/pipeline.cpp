@@ -1,11 +1,9 @@
-#include "engine/gpu/pipeline.hpp"
+#include "gpu/pipeline.hpp"
 
 #include <algorithm>
 #include <fstream>
 #include <mutex>
 #include <unistd.h>
-
-#include "engine/core/components.hpp"
 
 namespace engine::gpu {
 
@@ -185,11 +183,11 @@ Pipeline PipelineFactory::graphics(const GraphicsPipelineDesc& desc) const {
   shaders.add(desc.geometry_shader, VK_SHADER_STAGE_GEOMETRY_BIT);
   shaders.add(desc.fragment_shader, VK_SHADER_STAGE_FRAGMENT_BIT);
 
-  VkVertexInputBindingDescription vb{0, sizeof(Vertex), VK_VERTEX_INPUT_RATE_VERTEX};
+  VkVertexInputBindingDescription vb{0, kStandardVertexStride, VK_VERTEX_INPUT_RATE_VERTEX};
   VkVertexInputAttributeDescription attrs[3] = {
-      {0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, position)},
-      {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(Vertex, normal)},
-      {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(Vertex, uv)},
+      {0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0},   // position
+      {1, 0, VK_FORMAT_R32G32B32_SFLOAT, 12},  // normal
+      {2, 0, VK_FORMAT_R32G32_SFLOAT, 24},     // uv
   };
   VkPipelineVertexInputStateCreateInfo vertex_input{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
   if (desc.vertex_input != VertexInput::None) {

@@ -1,4 +1,4 @@
-#include "engine/gpu/profiler.hpp"
+#include "gpu/profiler.hpp"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "engine/gpu/resources.hpp"
+#include "gpu/resources.hpp"
 
 #include <stdexcept>
 

@@ -1,4 +1,4 @@
-#include "engine/gpu/vk_check.hpp"
+#include "gpu/vk_check.hpp"
 
 #include <filesystem>
 

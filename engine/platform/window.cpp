@@ -14,8 +14,8 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_vulkan.h>
 
-#include "engine/gpu/profiler.hpp"
-#include "engine/gpu/resources.hpp"
+#include "gpu/profiler.hpp"
+#include "gpu/resources.hpp"
 
 namespace engine::platform {
 

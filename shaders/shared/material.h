@@ -40,8 +40,17 @@ SHARED_INLINE uint texel_word(SHARED_IN(uvec4) header, SHARED_IN(vec2) uv) {
   return header.x + uint(y) * uint(width) + uint(x);
 }
 
-// An alpha test's answer from the texel's alpha byte: kept when alpha >= threshold (see
-// engine::alpha_threshold; 0 keeps everything, 256 nothing).
+// The least texel alpha byte (0..255) an alpha test keeps for a texture alpha scaled by `scale` (the
+// base colour's alpha) against `cutoff`: scale * byte / 255 >= cutoff. 256: nothing is kept; 0:
+// everything. Computed once on the CPU so that every shader and the reference compare integers.
+SHARED_INLINE uint alpha_threshold_byte(float cutoff, float scale) {
+  for (uint byte = 0u; byte < 256u; ++byte)
+    if (scale * float(byte) / 255.0f >= cutoff) return byte;
+  return 256u;
+}
+
+// An alpha test's answer from the texel's alpha byte: kept when alpha >= threshold
+// (alpha_threshold_byte; 0 keeps everything, 256 nothing).
 SHARED_INLINE bool alpha_byte_kept(uint texel, uint threshold) { return (texel >> 24u) >= threshold; }
 
 SHARED_END

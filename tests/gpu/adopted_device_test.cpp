@@ -11,8 +11,8 @@
 
 #include <shared/cascades.h>
 
-#include "engine/gpu/pipeline.hpp"
-#include "engine/gpu/resources.hpp"
+#include "gpu/pipeline.hpp"
+#include "gpu/resources.hpp"
 #include "gpu_fixture.hpp"
 
 namespace {

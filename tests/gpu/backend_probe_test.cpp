@@ -3,7 +3,7 @@
 #include <string>
 
 #include "backend_probe.hpp"
-#include "engine/gpu/profiler.hpp"
+#include "gpu/profiler.hpp"
 #include "gpu_fixture.hpp"
 
 namespace {

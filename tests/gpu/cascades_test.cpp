@@ -30,10 +30,10 @@ class CascadesFeature {
   const shadows::detail::View& view() const {
     return static_cast<shadows::detail::ContextImpl&>(module_->context()).last_view();
   }
-  engine::Aabb casters() const {
-    engine::Aabb bounds;
+  shadows::detail::Aabb casters() const {
+    shadows::detail::Aabb bounds;
     for (const auto& d : renderer_.draws())
-      if (d.shadow.casts_shadow) bounds.extend(d.bounds);
+      if (d.shadow.casts_shadow && d.bounds.valid()) bounds.extend(d.bounds.min), bounds.extend(d.bounds.max);
     return bounds;
   }
 

@@ -3,7 +3,7 @@
 #include <set>
 
 #include "engine/assets/procedural_scenes.hpp"
-#include "engine/gpu/profiler.hpp"
+#include "gpu/profiler.hpp"
 #include "gpu_fixture.hpp"
 
 namespace {

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "engine/assets/scene.hpp"
-#include "engine/gpu/context.hpp"
+#include "gpu/context.hpp"
 #include "engine/render/renderer.hpp"
 #include "shadows_engine/shadows_engine.hpp"
 

@@ -7,7 +7,7 @@
 
 #include "frame_capture.hpp"
 #include "gpu_fixture.hpp"
-#include "engine/gpu/resources.hpp"
+#include "gpu/resources.hpp"
 #include "shadows_engine/shadows_engine.hpp"
 
 namespace {

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "engine/assets/scene.hpp"
-#include "engine/gpu/context.hpp"
+#include "gpu/context.hpp"
 #include "engine/render/renderer.hpp"
 #include "shadows_engine/shadows_engine.hpp"
 

@@ -9,7 +9,7 @@
 #include <imgui.h>
 
 #include "engine/assets/scene.hpp"
-#include "engine/gpu/context.hpp"
+#include "gpu/context.hpp"
 #include "engine/platform/window.hpp"
 #include "engine/render/renderer.hpp"
 

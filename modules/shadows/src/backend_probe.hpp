@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/gpu/profiler.hpp"
+#include "gpu/profiler.hpp"
 #include "frame.hpp"
 #include "shadows/settings.hpp"
 

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "engine/gpu/resources.hpp"
+#include "gpu/resources.hpp"
 
 namespace shadows::detail {
 

@@ -2,7 +2,7 @@
 // Barriers between the module's own passes. Each names the stages the passes run on this device
 // (geometry and ray tracing stages only where enabled) and the accesses they make; none is an
 // ALL_COMMANDS barrier.
-#include "engine/gpu/context.hpp"
+#include "gpu/context.hpp"
 
 namespace shadows::detail {
 

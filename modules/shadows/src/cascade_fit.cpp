@@ -8,7 +8,7 @@
 
 namespace shadows::detail {
 
-CascadeFit fit_cascades(const View& view, const CascadeSettings& settings, const engine::Aabb& casters) {
+CascadeFit fit_cascades(const View& view, const CascadeSettings& settings, const Aabb& casters) {
   CascadeFit fit;
   fit.count = std::clamp(settings.count, 1u, kMaxCascadeCount);
   const float near_plane = std::max(view.near_plane, 1e-3f);

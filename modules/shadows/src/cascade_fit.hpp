@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <glm/glm.hpp>
 
-#include "engine/core/components.hpp"
+#include "scene_types.hpp"
 #include "frame.hpp"
 #include "shadows/settings.hpp"
 
@@ -28,6 +28,6 @@ struct CascadeFit {
 
 // Fits `settings.count` cascades to `view`'s frustum up to settings.max_distance. `casters` (world
 // bounds of every shadow caster) pulls each cascade's near depth toward the light so no caster is clipped.
-CascadeFit fit_cascades(const View& view, const CascadeSettings& settings, const engine::Aabb& casters);
+CascadeFit fit_cascades(const View& view, const CascadeSettings& settings, const Aabb& casters);
 
 }  // namespace shadows::detail

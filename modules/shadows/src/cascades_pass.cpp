@@ -227,7 +227,7 @@ struct CascadesPass::Impl {
     glm::vec3 corners[8];
     view_slice_corners(view, c == 0 ? fit.splits[0] : fit.blend_start[c - 1], fit.splits[c + 1], corners);
     glm::vec4 r = texel_bounds(lvp, corners, 8, size);
-    const engine::Aabb scene = scene_bounds(frame);
+    const Aabb scene = scene_bounds(frame);
     if (scene.valid()) {
       glm::vec3 box[8];
       for (int i = 0; i < 8; ++i)

@@ -553,8 +553,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     d.alpha_threshold = mesh.alpha_threshold;
     d.base_color_texture = mesh.texture;
     d.shadow.casts_shadow = in.casts_shadow;
-    d.shadow.csm = in.csm == CsmMode::On ? engine::CsmChoice::On : in.csm == CsmMode::Off ? engine::CsmChoice::Off
-                                                                                         : engine::CsmChoice::Auto;
+    d.shadow.csm = in.csm == CsmMode::On ? CsmChoice::On : in.csm == CsmMode::Off ? CsmChoice::Off : CsmChoice::Auto;
     d.bounds = mesh.bounds.transformed(d.world);
     draws_.push_back(std::move(d));
   }

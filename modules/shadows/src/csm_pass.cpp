@@ -9,7 +9,7 @@
 #include <sstream>
 #include <tuple>
 
-#include "engine/gpu/profiler.hpp"
+#include "gpu/profiler.hpp"
 #include "light_space.hpp"
 #include "shared/csm.h"
 #include "shared/izb.h"
@@ -18,16 +18,17 @@ namespace shadows::detail {
 
 using namespace engine::gpu;
 
-CsmChoiceMeasure measure_csm_suitability(const engine::MeshData& mesh, const glm::mat4& world,
+CsmChoiceMeasure measure_csm_suitability(std::span<const glm::vec3> positions, std::span<const uint32_t> indices,
+                                         const glm::mat4& world,
                                          const glm::vec3& light_direction, float texel_size) {
   CsmChoiceMeasure out;
   const glm::mat3 to_light = glm::mat3(light_view_matrix(light_direction));
   const double circumradius = 0.70710678 * texel_size;
   double coverable = 0.0;
-  for (size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+  for (size_t i = 0; i + 2 < indices.size(); i += 3) {
     glm::dvec2 p[3];
     for (int k = 0; k < 3; ++k) {
-      const glm::vec3 w = glm::vec3(world * glm::vec4(mesh.vertices[mesh.indices[i + k]].position, 1.0f));
+      const glm::vec3 w = glm::vec3(world * glm::vec4(positions[indices[i + k]], 1.0f));
       p[k] = glm::dvec2(to_light * w);
     }
     const double area = 0.5 * std::abs((p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[2].x - p[0].x) * (p[1].y - p[0].y));
@@ -230,7 +231,7 @@ struct CsmPass::Impl {
   // points, so the CPU uses the casters' light-space extent, an upper bound (decisions err toward
   // leaving a mesh out, never toward a wrong shadow).
   float estimate_texel_size(const Frame& frame, uint32_t resolution) const {
-    const engine::Aabb box = caster_bounds(frame);
+    const Aabb box = caster_bounds(frame);
     if (!box.valid()) return 1.0f;
     const glm::mat4 view = light_view_matrix(frame.view.light_direction);
     glm::vec2 lo(1e30f), hi(-1e30f);
@@ -260,15 +261,15 @@ struct CsmPass::Impl {
       if (d.alpha_tested()) {
         // The CSM writes a texel only where one triangle provably covers all of it; an alpha-tested
         // triangle has holes wherever its texture says so, so it can prove nothing.
-        decision.automatic = d.shadow.csm == engine::CsmChoice::Auto;
+        decision.automatic = d.shadow.csm == CsmChoice::Auto;
         decision.reason = "out: alpha-tested material (cut-outs cannot prove full texel coverage)";
-        if (d.shadow.csm == engine::CsmChoice::On && warned_alpha_forced.insert(d.id).second)
+        if (d.shadow.csm == CsmChoice::On && warned_alpha_forced.insert(d.id).second)
           std::cerr << "warning: entity '" << decision.name
                     << "' is forced into the CSM but its material is alpha-tested; it stays out\n";
-      } else if (d.shadow.csm == engine::CsmChoice::On) {
+      } else if (d.shadow.csm == CsmChoice::On) {
         decision.in_csm = true;
         decision.reason = "on: chosen for the entity";
-      } else if (d.shadow.csm == engine::CsmChoice::Off) {
+      } else if (d.shadow.csm == CsmChoice::Off) {
         decision.reason = "off: chosen for the entity";
       } else {
         decision.automatic = true;

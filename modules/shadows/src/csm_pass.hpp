@@ -2,9 +2,10 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
 
-#include "engine/gpu/resources.hpp"
+#include "gpu/resources.hpp"
 #include "frame.hpp"
 #include "shadows/settings.hpp"
 
@@ -15,13 +16,15 @@ namespace shadows::detail {
 // The measure: of the mesh's area projected along the light, the share that lies at least a
 // circumscribed texel radius (√2/2 texel) inside its triangle's edges — the area that can be fully
 // covered. `texel_size` is the world size of one CSM texel. The module measures on the GPU
-// (csm_measure.comp, the same formula in float); this CPU version is the tests' reference.
+// (csm_measure.comp, the same formula in float); this CPU version (object-space positions and a
+// triangle list of indices into them) is the tests' reference.
 struct CsmChoiceMeasure {
   double coverable_share = 0.0;
   double projected_area = 0.0;
   uint64_t triangles = 0;
 };
-CsmChoiceMeasure measure_csm_suitability(const engine::MeshData& mesh, const glm::mat4& world,
+CsmChoiceMeasure measure_csm_suitability(std::span<const glm::vec3> positions, std::span<const uint32_t> indices,
+                                         const glm::mat4& world,
                                          const glm::vec3& light_direction, float texel_size);
 // Entities whose coverable share reaches this enter the CSM under CsmChoice::Auto.
 // A fifth is enough: a mesh's CSM raster cost is small next to the trace work each culled point saves.

@@ -3,7 +3,7 @@
 // by cmake/embed_spirv.cmake). Registered with engine::gpu before the first pipeline is created.
 #include <span>
 
-#include "engine/gpu/pipeline.hpp"
+#include "gpu/pipeline.hpp"
 
 namespace shadows::detail {
 

@@ -4,10 +4,10 @@
 #include <string>
 #include <vector>
 
-#include "engine/core/components.hpp"
-#include "engine/gpu/pipeline.hpp"
-#include "engine/gpu/profiler.hpp"
-#include "engine/gpu/resources.hpp"
+#include "scene_types.hpp"
+#include "gpu/pipeline.hpp"
+#include "gpu/profiler.hpp"
+#include "gpu/resources.hpp"
 
 namespace shadows::detail {
 
@@ -46,7 +46,7 @@ struct MeshRange {
   uint32_t vertex_count = 0;
 };
 
-// Every registered mesh in one vertex buffer (engine::Vertex layout: position, normal, uv) and one
+// Every registered mesh in one vertex buffer (StoredVertex: position, normal, uv) and one
 // 32-bit index buffer, plus the alpha textures in the material-texture word layout (shared/material.h).
 class Geometry {
  public:
@@ -73,8 +73,8 @@ struct DrawItem {
   uint32_t alpha_threshold = 0;               // engine::alpha_threshold (0: not alpha-tested)
   uint32_t base_color_texture = 0xffffffffu;  // texture index in Geometry::textures(), or none
   bool alpha_tested() const { return alpha_threshold != 0; }
-  engine::ShadowCaster shadow;
-  engine::Aabb bounds;  // world space (invalid: unbounded)
+  CasterFlags shadow;
+  Aabb bounds;  // world space (invalid: unbounded)
 };
 
 // The last conservative shadow map, for tests and tools.

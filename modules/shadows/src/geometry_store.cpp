@@ -93,7 +93,7 @@ MeshId GeometryStore::add(const MeshDesc& m) {
                 VK_IMAGE_USAGE_SAMPLED_BIT, kReadLayouts, std::nullopt);
     if (texture_count_ >= kMaxTextures)
       throw Error("shadows: " + what + ".alpha_texture: more than " + std::to_string(kMaxTextures) + " alpha textures");
-    info.alpha_threshold = engine::alpha_threshold(m.alpha_cutoff, m.alpha_scale);
+    info.alpha_threshold = gpu_shared::alpha_threshold_byte(m.alpha_cutoff, m.alpha_scale);
     info.texture = texture_count_++;
   }
   if (!(m.bounds_min[0] <= m.bounds_max[0] && m.bounds_min[1] <= m.bounds_max[1] && m.bounds_min[2] <= m.bounds_max[2]))

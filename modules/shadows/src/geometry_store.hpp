@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/gpu/pipeline.hpp"
+#include "gpu/pipeline.hpp"
 #include "frame.hpp"
 #include "shadows/context.hpp"
 
@@ -16,7 +16,7 @@ struct MeshInfo {
   std::string name;
   uint32_t alpha_threshold = 0;
   uint32_t texture = 0xffffffffu;
-  engine::Aabb bounds;  // object space; invalid: unbounded
+  Aabb bounds;  // object space; invalid: unbounded
   bool live = false;
 };
 

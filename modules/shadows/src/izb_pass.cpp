@@ -10,7 +10,7 @@
 
 #include "backend_probe.hpp"
 #include "csm_pass.hpp"
-#include "engine/gpu/profiler.hpp"
+#include "gpu/profiler.hpp"
 #include "light_space.hpp"
 #include "shared/frame.h"
 #include "shared/izb.h"
@@ -784,7 +784,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   // (so what lies nearer never counts, local_light.h), far at its range (no point it reaches is
   // farther, nor anything between such a point and the light).
   glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
-  const engine::Aabb depth_box = scene_bounds(frame);  // casters and receivers
+  const Aabb depth_box = scene_bounds(frame);  // casters and receivers
   float near_d = 0.0f, far_d = 1.0f;
   float tan_half = 0.0f;
   if (spot) {
@@ -987,9 +987,9 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
                                                      : frame.view.far_plane;
     glm::vec3 corners[8];
     view_slice_corners(frame.view, frame.view.near_plane, reach, corners);
-    engine::Aabb box;
+    Aabb box;
     for (const glm::vec3& c : corners) box.extend(c);
-    const engine::Aabb scene = scene_bounds(frame);
+    const Aabb scene = scene_bounds(frame);
     if (scene.valid()) box = {glm::max(box.min, scene.min), glm::min(box.max, scene.max)};
     if (!box.valid()) return glm::mat4(0.0f);  // nothing to receive: every caster culled
     // The shadow-ray offset and rounding may carry a node slightly outside.

@@ -2,7 +2,7 @@
 #include <memory>
 
 #include "cascades_pass.hpp"
-#include "engine/gpu/resources.hpp"
+#include "gpu/resources.hpp"
 #include "frame.hpp"
 #include "shadows/settings.hpp"
 

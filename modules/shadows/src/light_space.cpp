@@ -26,7 +26,7 @@ glm::mat4 spot_view_projection(const View& view) {
   return glm::perspectiveRH_ZO(2.0f * std::min(half_angle, 1.55f), 1.0f, near_plane, view.light_range) * light_view;
 }
 
-glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box, float margin) {
+glm::mat4 fit_orthographic(const glm::mat4& light_view, const Aabb& box, float margin) {
   glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
   for (int i = 0; i < 8; ++i) {
     glm::vec3 corner((i & 1) ? box.max.x : box.min.x, (i & 2) ? box.max.y : box.min.y,
@@ -41,15 +41,15 @@ glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box,
   return glm::orthoRH_ZO(lo.x, hi.x, lo.y, hi.y, -hi.z, -lo.z);
 }
 
-engine::Aabb caster_bounds(const Frame& frame) {
-  engine::Aabb bounds;
+Aabb caster_bounds(const Frame& frame) {
+  Aabb bounds;
   for (const auto& d : frame.draws)
     if (d.shadow.casts_shadow) bounds.extend(d.bounds);
   return bounds;
 }
 
-engine::Aabb scene_bounds(const Frame& frame) {
-  engine::Aabb bounds;
+Aabb scene_bounds(const Frame& frame) {
+  Aabb bounds;
   for (const auto& d : frame.draws) bounds.extend(d.bounds);
   return bounds;
 }

@@ -6,8 +6,8 @@
 
 #include <glm/glm.hpp>
 
-#include "engine/core/components.hpp"
-#include "engine/gpu/pipeline.hpp"
+#include "scene_types.hpp"
+#include "gpu/pipeline.hpp"
 #include "frame.hpp"
 
 namespace shadows::detail {
@@ -17,16 +17,16 @@ glm::mat4 light_view_matrix(const glm::vec3& light_direction);
 
 // Orthographic projection (Vulkan depth 0..1, 0 nearest the light) enclosing `box` seen through
 // `light_view`, with `margin` world units of slack on every side.
-glm::mat4 fit_orthographic(const glm::mat4& light_view, const engine::Aabb& box, float margin = 0.0f);
+glm::mat4 fit_orthographic(const glm::mat4& light_view, const Aabb& box, float margin = 0.0f);
 // A spot light's world -> Vulkan clip transform (depth 0 near .. 1 at its range): a square perspective
 // frustum from its position along its direction that holds its outer cone. Casters nearer than the
 // near plane (a thousandth of the range, at least the light's radius) are clipped.
 glm::mat4 spot_view_projection(const View& view);
 
 // World bounds of every shadow-casting draw.
-engine::Aabb caster_bounds(const Frame& frame);
+Aabb caster_bounds(const Frame& frame);
 // Bounds of everything drawn (every receiver lies inside).
-engine::Aabb scene_bounds(const Frame& frame);
+Aabb scene_bounds(const Frame& frame);
 // The eight corners of the camera frustum between view depths d0 and d1 (near quad first).
 void view_slice_corners(const View& view, float d0, float d1, glm::vec3 corners[8]);
 

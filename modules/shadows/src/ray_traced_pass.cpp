@@ -3,8 +3,8 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "engine/gpu/pipeline.hpp"
-#include "engine/gpu/profiler.hpp"
+#include "gpu/pipeline.hpp"
+#include "gpu/profiler.hpp"
 #include "shared/ray_traced.h"
 
 namespace shadows::detail {
@@ -168,7 +168,7 @@ struct RayTracedPass::Impl {
       tri = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR};
       tri.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
       tri.vertexData.deviceAddress = geometry.vertices().device_address();  // + firstVertex * stride
-      tri.vertexStride = sizeof(engine::Vertex);
+      tri.vertexStride = sizeof(StoredVertex);
       tri.maxVertex = mesh.vertex_count - 1;  // relative to firstVertex
       tri.indexType = VK_INDEX_TYPE_UINT32;
       tri.indexData.deviceAddress = geometry.indices().device_address();  // + primitiveOffset

@@ -1,7 +1,7 @@
 #pragma once
 #include <memory>
 
-#include "engine/gpu/resources.hpp"
+#include "gpu/resources.hpp"
 #include "frame.hpp"
 #include "shadows/settings.hpp"
 

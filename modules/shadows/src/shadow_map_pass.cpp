@@ -50,7 +50,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
   VkCommandBuffer cmd = frame.cmd;
   const glm::mat4 light_vp = frame.view.local_light ? spot_view_projection(frame.view) : [&] {
     const glm::mat4 light_view = light_view_matrix(frame.view.light_direction);
-    const engine::Aabb bounds = caster_bounds(frame);
+    const Aabb bounds = caster_bounds(frame);
     return fit_orthographic(light_view, bounds, 0.01f * glm::length(bounds.extent())) * light_view;
   }();
 

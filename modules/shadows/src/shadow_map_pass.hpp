@@ -1,5 +1,5 @@
 #pragma once
-#include "engine/gpu/resources.hpp"
+#include "gpu/resources.hpp"
 #include "frame.hpp"
 #include "shadows/settings.hpp"
 

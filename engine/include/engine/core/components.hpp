@@ -1,5 +1,6 @@
 #pragma once
 // The components every part of the engine and its modules agree on.
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -64,7 +65,8 @@ struct Vertex {
   glm::vec3 normal;
   glm::vec2 uv;
 };
-static_assert(sizeof(Vertex) == 32);
+// The layout gpu::VertexInput::StandardVertex reads.
+static_assert(sizeof(Vertex) == 32 && offsetof(Vertex, normal) == 12 && offsetof(Vertex, uv) == 24);
 
 // CPU copy of a triangle mesh, kept after upload: the reference tracer, the automatic CSM choice and
 // the tests read it.

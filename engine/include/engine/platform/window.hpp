@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/gpu/context.hpp"
+#include "gpu/context.hpp"
 #include "engine/render/renderer.hpp"
 
 struct GLFWwindow;

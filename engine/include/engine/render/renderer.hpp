@@ -11,10 +11,10 @@
 
 #include "engine/assets/scene.hpp"
 #include "engine/core/material_textures.hpp"
-#include "engine/gpu/context.hpp"
-#include "engine/gpu/pipeline.hpp"
-#include "engine/gpu/profiler.hpp"
-#include "engine/gpu/resources.hpp"
+#include "gpu/context.hpp"
+#include "gpu/pipeline.hpp"
+#include "gpu/profiler.hpp"
+#include "gpu/resources.hpp"
 
 namespace engine {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/gpu/context.hpp"
+#include "gpu/context.hpp"
 
 namespace engine::gpu {
 

@@ -12,7 +12,7 @@
 
 #include <vulkan/vulkan.h>
 
-#include "engine/gpu/vk_check.hpp"
+#include "gpu/vk_check.hpp"
 
 namespace engine::gpu {
 

@@ -9,8 +9,8 @@
 #include <vector>
 #include <memory>
 
-#include "engine/gpu/context.hpp"
-#include "engine/gpu/resources.hpp"
+#include "gpu/context.hpp"
+#include "gpu/resources.hpp"
 
 namespace engine::gpu {
 
@@ -91,7 +91,11 @@ struct ComputePipelineDesc {
   std::vector<SpecializationConstant> specialization;
 };
 
-enum class VertexInput { None, StandardVertex /* engine::Vertex: position, normal, uv */, PositionOnly };
+// StandardVertex: one binding of kStandardVertexStride bytes, float3 position at 0, float3 normal at
+// 12, float2 uv at 24 (the engine's and the shadow module's vertex buffers); PositionOnly: its
+// position alone.
+enum class VertexInput { None, StandardVertex, PositionOnly };
+inline constexpr uint32_t kStandardVertexStride = 32;
 
 enum class ConservativeMode { Off, Overestimate, Underestimate };
 

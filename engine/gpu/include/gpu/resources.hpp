@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "engine/gpu/context.hpp"
+#include "gpu/context.hpp"
 
 namespace engine::gpu {
 
