@@ -4,12 +4,12 @@ find_package(nlohmann_json 3 CONFIG REQUIRED)
 add_library(shadow_test_support STATIC support/frame_capture.cpp)
 target_include_directories(shadow_test_support PUBLIC support)
 target_link_libraries(shadow_test_support PUBLIC engine_gpu shadows_engine shadow_reference)
-engine_target_warnings(shadow_test_support)
+target_strict_warnings(shadow_test_support)
 
 # The benchmark: headless, no window-system libraries (it runs on GPU machines without a display).
 add_executable(shadow_bench bench/shadow_bench.cpp)
 target_link_libraries(shadow_bench PRIVATE shadow_test_support nlohmann_json::nlohmann_json)
-engine_target_warnings(shadow_bench)
+target_strict_warnings(shadow_bench)
 
 # GPU tests on lavapipe with the validation layer on.
 file(GLOB GPU_TEST_SOURCES CONFIGURE_DEPENDS gpu/*.cpp)
@@ -18,7 +18,7 @@ target_link_libraries(gpu_tests PRIVATE shadow_test_support GTest::gtest_main)
 # The backend probe is tested directly (modules/shadows/src/backend_probe.hpp, the module's own header).
 target_include_directories(gpu_tests PRIVATE ${PROJECT_SOURCE_DIR}/modules/shadows/src)
 target_compile_definitions(gpu_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
-engine_target_warnings(gpu_tests)
+target_strict_warnings(gpu_tests)
 # Discovered tests take a flat PROPERTIES list: one label and one ENVIRONMENT entry each (a CMake list
 # there would be split into keys and values). The layer is on either way: the GPU fixture forces it.
 #
@@ -82,7 +82,7 @@ set_tests_properties(syncval_gpu_suite PROPERTIES LABELS long TIMEOUT 14400 ENVI
 add_executable(world_scale_tests scale/world_scale_test.cpp)
 target_link_libraries(world_scale_tests PRIVATE shadow_test_support GTest::gtest_main)
 target_compile_definitions(world_scale_tests PRIVATE ENGINE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
-engine_target_warnings(world_scale_tests)
+target_strict_warnings(world_scale_tests)
 gtest_discover_tests(world_scale_tests DISCOVERY_TIMEOUT 60
                      PROPERTIES LABELS scale TIMEOUT 1800 ENVIRONMENT ENGINE_VALIDATION=1)
 
@@ -331,7 +331,7 @@ endif()
 # allocations must stay flat after warm-up. Long: under the `long` label, which .ci/run leaves out.
 add_executable(shadow_soak soak/soak.cpp)
 target_link_libraries(shadow_soak PRIVATE engine_gpu shadows_engine)
-engine_target_warnings(shadow_soak)
+target_strict_warnings(shadow_soak)
 add_test(NAME soak_contact_10000_frames COMMAND $<TARGET_FILE:shadow_soak> --frames 10000 --size 64x48)
 set_tests_properties(soak_contact_10000_frames PROPERTIES LABELS "long;soak" TIMEOUT 14400
                      ENVIRONMENT "ENGINE_DEVICE=lavapipe")
@@ -346,7 +346,7 @@ add_test(NAME vulkan_host_writes_png
 set_tests_properties(vulkan_host_writes_png PROPERTIES LABELS gpu FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
 add_executable(host_tests host/host_test.cpp)
 target_link_libraries(host_tests PRIVATE vulkan_host_app shadow_reference GTest::gtest_main)
-engine_target_warnings(host_tests)
+target_strict_warnings(host_tests)
 # The host path's smoke set: every refusal, several lights in one record, frames in flight, a few of
 # the input matrix's pairings (CPU code the sanitizer run protects); the rest of it in label gpu.
 set(HOST_SMOKE_FILTER "HostBadInput.*:HostDevice.*:Modes/HostLights.*/izb_1spp:Slots/HostFramesInFlight.*/2_in_flight:\
