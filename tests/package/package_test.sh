@@ -9,10 +9,79 @@
 #   package_test.sh version STATE               find_package(shadows 1.0 CONFIG) succeeds,
 #                                               find_package(shadows 99 CONFIG) fails cleanly
 #   package_test.sh cleanup STATE               removes the temporary folder
+# Two steps stand alone (a temporary folder of their own, removed at exit; STATE is unused):
+#   package_test.sh module_only - SOURCE_ROOT PNG_CHECK
+#                       configures modules/shadows by itself with the engine's other dependencies
+#                       hidden from CMake and pkg-config, builds and installs it, checks that it
+#                       compiled nothing outside modules/shadows, engine/gpu and its build folder, then
+#                       builds the raw-Vulkan host against that prefix and runs it
+#   package_test.sh add_subdirectory - SOURCE_ROOT PNG_CHECK
+#                       builds the host with the module's sources added by add_subdirectory, the
+#                       same dependencies hidden, and runs it
 set -euo pipefail
 step=$1 state=$2
 shift 2
 fail() { echo "package_test: $*" >&2; exit 1; }
+
+# Runs the host built in $1 from an unrelated directory with no shader folder and checks its PNG ($2).
+run_host() {
+  local host_build=$1 png_check=$2 run_dir=$1/../run
+  [[ ! -e $host_build/shaders ]] || fail "a shaders/ folder lies beside the host"
+  mkdir -p "$run_dir"
+  (cd "$run_dir" &&
+    env -u ENGINE_SHADER_DIR ENGINE_DEVICE=lavapipe "$host_build/vulkan_host" --device lavapipe --validation --size 160x90 \
+      --frames 3 --mode izb+csm --out host.png &&
+    "$png_check" host.png --min-size 160x90 --min-colors 8) || fail "the host did not run cleanly"
+}
+
+# What a build of the module alone may see: of pkg-config's files, only those named (Vulkan's, and
+# stb's for the host's PNG output); of CMake packages, none of the engine's, tests' or window's.
+hide_engine_dependencies() {  # hide_engine_dependencies DIR PC_NAME...
+  local dir=$1
+  shift
+  mkdir -p "$dir"
+  for pc in "$@"; do ln -sf "$(pkg-config --variable=pcfiledir "$pc")/$pc.pc" "$dir/$pc.pc"; done
+  export PKG_CONFIG_LIBDIR=$dir PKG_CONFIG_PATH=
+  hidden_packages=()
+  for pkg in TinyGLTF nlohmann_json embree GTest glfw3 imgui; do hidden_packages+=("-DCMAKE_DISABLE_FIND_PACKAGE_$pkg=ON"); done
+}
+
+case $step in
+module_only | add_subdirectory)
+  root=$(realpath "$1") png_check=$(realpath "$2")
+  work=$(mktemp -d "${TMPDIR:-/tmp}/shadows_alone.XXXXXX")
+  trap 'rm -rf "$work"' EXIT
+  example=$root/sample_game/vulkan_host
+  if [[ $step == module_only ]]; then
+    (
+      hide_engine_dependencies "$work/pc" vulkan
+      cmake -S "$root/modules/shadows" -B "$work/module" -DCMAKE_BUILD_TYPE=Release -DSHADOWS_WARNINGS_AS_ERRORS=ON \
+        -DCMAKE_EXPORT_COMPILE_COMMANDS=ON "${hidden_packages[@]}" >"$work/configure.log" 2>&1 ||
+        { cat "$work/configure.log"; fail "configuring modules/shadows on its own failed"; }
+      cmake --build "$work/module" -j2 >"$work/build.log" 2>&1 || { tail -40 "$work/build.log"; fail "building modules/shadows on its own failed"; }
+      cmake --install "$work/module" --prefix "$work/prefix" >"$work/install.log" || fail "installing modules/shadows failed"
+    ) || exit 1
+    # Every compiled file is the module's, the helper layer's or generated in the build folder.
+    outside=$(grep -o '"file": *"[^"]*"' "$work/module/compile_commands.json" | sed 's/.*"\([^"]*\)"$/\1/' |
+              grep -vE "^($root/modules/shadows/src/|$root/engine/gpu/|$work/module/)" || true)
+    [[ -z $outside ]] || fail "the module's build compiled files outside modules/shadows and engine/gpu: $outside"
+    echo "compiled: $(grep -c '"file"' "$work/module/compile_commands.json") files; installed: $(cd "$work/prefix" && find . -type f | wc -l) files"
+    cmake -S "$example" -B "$work/host" -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_BUILD_TYPE=Release >"$work/host_configure.log" 2>&1 ||
+      { cat "$work/host_configure.log"; fail "configuring the host against the module's prefix failed"; }
+  else
+    (
+      hide_engine_dependencies "$work/pc" vulkan stb
+      cmake -S "$example" -B "$work/host" -DCMAKE_BUILD_TYPE=Release -DVULKAN_HOST_SHADOWS_SOURCE_DIR="$root/modules/shadows" \
+        "${hidden_packages[@]}" >"$work/host_configure.log" 2>&1
+    ) || { cat "$work/host_configure.log"; fail "configuring the host with add_subdirectory(modules/shadows) failed"; }
+  fi
+  cmake --build "$work/host" -j2 >"$work/host_build.log" 2>&1 || { tail -40 "$work/host_build.log"; fail "building the host failed"; }
+  run_host "$work/host" "$png_check"
+  echo "package_test: $step ok"
+  exit 0
+  ;;
+esac
+
 if [[ $step != install ]]; then
   [[ -f $state ]] || fail "no installed prefix (the install step did not run)"
   work=$(cat "$state")
@@ -59,12 +128,7 @@ host)
     fail "the out-of-tree build refers to the project's tree outside the example's folder"
   fi
   cmake --build "$work/host" -j2 >"$work/host_build.log" 2>&1 || { tail -40 "$work/host_build.log"; fail "building the host failed"; }
-  [[ ! -e $work/host/shaders ]] || fail "a shaders/ folder lies beside the host"
-  mkdir -p "$work/run"
-  cd "$work/run"
-  env -u ENGINE_SHADER_DIR ENGINE_DEVICE=lavapipe "$work/host/vulkan_host" --device lavapipe --validation --size 160x90 \
-    --frames 3 --mode izb+csm --out host.png
-  "$png_check" host.png --min-size 160x90 --min-colors 8
+  run_host "$work/host" "$png_check"
   ;;
 version)
   prefix=$work/prefix
