@@ -16,7 +16,8 @@ The parsing is a brace-matching heuristic, not a C++ parser:
     body;
   - braces inside a function body (blocks, lambdas, initializer lists) belong to that function:
     a lambda counts as part of its enclosing function and is not reported on its own; a class
-    defined inside a function counts only toward the function.
+    defined inside a function counts only toward the function. A lambda stored in a variable at
+    namespace scope (auto f = [] { ... };) is not a function body and is not reported.
 --exclude takes file paths (as given under DIR, or just the file name) whose findings are printed
 as excluded and do not fail the check.
 """
@@ -26,7 +27,7 @@ import re
 import sys
 
 CLASS_RE = re.compile(r"(?:^|[\s;{}])(?:template\s*<[^;{}]*>\s*)?(class|struct|union)\s+(?:\[\[[^\]]*\]\]\s*)?(?:alignas\s*\([^)]*\)\s*)?([A-Za-z_][\w:]*)?")
-NAMESPACE_RE = re.compile(r"(?:^|[\s;{}])(namespace|extern\s+\"C\"|extern\s+\"C\+\+\")")
+NAMESPACE_RE = re.compile(r"(?:^|[\s;{}])(namespace|extern\s+\"[^\"]*\")")  # literals are blanked first
 ENUM_RE = re.compile(r"(?:^|[\s;{}])enum\b")
 FUNC_NAME_RE = re.compile(r"([~A-Za-z_][\w:<>~]*(?:operator\s*[^\s(]+)?)\s*\($")
 
@@ -121,6 +122,26 @@ def classify(head):
     return "other", None
 
 
+def in_initializer_list(head):
+    """Whether a '{' after `head` initializes a member in a constructor's initializer list (S() : b_{2})."""
+    h = head.rstrip()
+    if not h or not (h[-1].isalnum() or h[-1] in "_>"):
+        return False
+    depth, close = 0, -1
+    for idx, ch in enumerate(h):
+        if ch == "(":
+            depth += 1
+        elif ch == ")":
+            depth -= 1
+            if depth == 0:
+                close = idx
+                break
+    if close < 0:
+        return False
+    rest = h[close + 1:]
+    return re.search(r"(?<!:):(?!:)", rest) is not None
+
+
 def scan(path, text):
     """Yields (kind, name, first line, line count) for each class and top-level function body."""
     clean = strip_comments_and_strings(text)
@@ -132,12 +153,18 @@ def scan(path, text):
             line += 1
         elif ch == "{":
             in_function = any(k == "function" for k, _, _ in stack)
-            kind, name = ("other", None) if in_function else classify(clean[head_start:i])
+            head = clean[head_start:i]
+            if not in_function and in_initializer_list(head):
+                stack.append(("init", None, line))  # a member's brace initializer: the head goes on
+                continue
+            kind, name = ("other", None) if in_function else classify(head)
             stack.append((kind, name, line))
             head_start = i + 1
         elif ch == "}":
             if stack:
                 kind, name, first = stack.pop()
+                if kind == "init":
+                    continue
                 if kind in ("class", "function"):
                     yield kind, name, first, line - first + 1
             head_start = i + 1
