@@ -38,6 +38,7 @@
 #include <glm/gtc/packing.hpp>
 
 #include "cascade_fit.hpp"
+#include "cascade_pipelines.hpp"
 #include "light_space.hpp"
 #include "shared/cascades.h"
 #include "shared/izb.h"
@@ -49,7 +50,6 @@ namespace gs = gpu_shared;
 
 namespace {
 
-constexpr VkFormat kMapFormat = VK_FORMAT_D32_SFLOAT;
 // A neighbour step steeper than this many texels of depth per texel counts as an edge.
 constexpr float kEdgeSlopeTexels = 2.0f;
 
@@ -70,10 +70,54 @@ glm::vec4 texel_bounds(const glm::mat4& light_view_projection, const glm::vec3* 
   return r;
 }
 
+// Per-pixel rotations (cos, sin) from a fixed seed, so frames and runs are reproducible.
+Image create_rotation_texture(Context& ctx) {
+  constexpr uint32_t n = gs::kRotationTileSize;
+  std::mt19937 rng(0x0c5ca1du);
+  std::uniform_real_distribution<float> angle(0.0f, 6.2831853f);
+  std::vector<uint32_t> texels(n * n);
+  for (auto& t : texels) {
+    const float a = angle(rng);
+    t = glm::packHalf2x16(glm::vec2(std::cos(a), std::sin(a)));
+  }
+  Buffer staging(ctx, texels.size() * 4, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "cascade rotation staging");
+  staging.write(texels.data(), texels.size() * 4);
+  Image rotation(ctx, {n, n}, VK_FORMAT_R16G16_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                   "cascade rotation");
+  ctx.immediate_submit([&](VkCommandBuffer cmd) {
+    rotation.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
+                        VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    copy.imageExtent = {n, n, 1};
+    vkCmdCopyBufferToImage(cmd, staging.handle(), rotation.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  });
+  return rotation;
+}
+
+// Refuses a device without what the cascades' shaders need, before anything is made on it.
+Context& with_cascade_features(Context& c) {
+  if (!c.features().subgroup_arithmetic_compute_fragment)
+    throw VulkanError("the cascades need subgroup arithmetic in compute shaders, which " + c.device_name() +
+                      " lacks");
+  return c;
+}
+
 }  // namespace
 
 struct CascadesPass::Impl {
-  explicit Impl(Context& c) : ctx(c) {}
+  explicit Impl(Context& c) : ctx(with_cascade_features(c)), rotation(create_rotation_texture(c)), pipelines(c) {
+    params = Buffer(c, sizeof(gs::CascadeParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                    false, "cascade params");
+    counters = Buffer(c, gs::CASCADE_COUNTER_WORDS * 4,
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                          VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                      false, "cascade counters");
+    nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "cascade nearest");
+    no_input_list = Buffer(c, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade input list placeholder");
+  }
 
   Context& ctx;
   uint32_t map_size = 0;
@@ -92,115 +136,17 @@ struct CascadesPass::Impl {
   Buffer counters;    // host-readable: counters + indirect dispatch args
   Buffer blur_list;
   Sampler nearest;
-  Pipeline depth_pipeline[2];  // [cull_front_faces]
-  Pipeline alpha_depth;  // alpha-tested casters, either culling setting
-  Pipeline edges_pipeline[2];  // [neighbourhoods]
-  // [stage][masking][debug], created on first use.
-  Pipeline filter_pipelines[4][3][3];
+  CascadePipelines pipelines;
   Buffer no_input_list;  // bound where the classify stage runs over the frame
-  Pipeline args_pipeline;
-  Pipeline blur_pipeline[2];  // [apply]
   CascadeFit fit;
   ReadbackRing readback;
   bool blur_enabled = false;
-
-  void create_pipelines() {
-    PipelineFactory factory(ctx);
-    for (int cull = 0; cull < 2; ++cull) {
-      GraphicsPipelineDesc d;
-      d.name = cull ? "cascade depth (front culled)" : "cascade depth";
-      d.vertex_shader = "cascade_depth.vert";
-      d.vertex_input = VertexInput::PositionOnly;
-      d.push_constant_size = sizeof(gs::CascadeDepthPush);
-      d.depth_format = kMapFormat;
-      d.depth_compare = VK_COMPARE_OP_LESS_OR_EQUAL;
-      // The light projection keeps y up, which mirrors winding in Vulkan's y-down framebuffer: faces
-      // turned toward the light arrive clockwise, hence front = clockwise.
-      d.front_face = VK_FRONT_FACE_CLOCKWISE;
-      d.cull_mode = cull ? VK_CULL_MODE_FRONT_BIT : VK_CULL_MODE_NONE;
-      d.depth_bias = true;
-      depth_pipeline[cull] = factory.graphics(d);
-      if (!cull) alpha_depth = alpha_depth_pipeline(ctx, d);
-    }
-    for (uint32_t neighbourhoods = 0; neighbourhoods < 2; ++neighbourhoods)
-      edges_pipeline[neighbourhoods] =
-          factory.compute({"cascade_edges.comp",
-                           {{gs::CASCADE_MASK_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-                            {gs::CASCADE_MASK_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                            {gs::CASCADE_MASK_BINDING_MASKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                            {gs::CASCADE_MASK_BINDING_NEIGHBOURHOODS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
-                           sizeof(gs::CascadeMaskPush),
-                           {{0, neighbourhoods}}});
-    args_pipeline = factory.compute(
-        {"cascade_dispatch_args.comp", {{gs::CASCADE_ARGS_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}, 0});
-    for (uint32_t apply = 0; apply < 2; ++apply)
-      blur_pipeline[apply] = factory.compute({"cascade_blur.comp",
-                                              {{gs::CASCADE_BLUR_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                               {gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                               {gs::CASCADE_BLUR_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                               {gs::CASCADE_BLUR_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                                               {gs::CASCADE_BLUR_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                                               {gs::CASCADE_BLUR_BINDING_BLURRED, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
-                                              sizeof(gs::CascadeBlurPush),
-                                              {{0, apply}}});
-  }
-
-  const Pipeline& filter_pipeline(uint32_t stage, uint32_t masking, uint32_t debug) {
-    Pipeline& pipeline = filter_pipelines[stage][masking][debug];
-    if (pipeline.valid()) return pipeline;
-    PipelineFactory factory(ctx);
-    pipeline = factory.compute(
-        {"cascade_filter.comp",
-         {{gs::CASCADE_FILTER_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-          {gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-          {gs::CASCADE_FILTER_BINDING_DEPTH, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-          {gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_ROTATION, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-          {gs::CASCADE_FILTER_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-          {gs::CASCADE_FILTER_BINDING_OVERLAY, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-          {gs::CASCADE_FILTER_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_BLUR_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_WORK_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_INPUT_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-          {gs::CASCADE_FILTER_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
-         0,
-         {{0, stage}, {1, masking}, {2, debug}}});
-    return pipeline;
-  }
-
-  // Per-pixel rotations (cos, sin) from a fixed seed, so frames and runs are reproducible.
-  void create_rotation_texture() {
-    constexpr uint32_t n = gs::kRotationTileSize;
-    std::mt19937 rng(0x0c5ca1du);
-    std::uniform_real_distribution<float> angle(0.0f, 6.2831853f);
-    std::vector<uint32_t> texels(n * n);
-    for (auto& t : texels) {
-      const float a = angle(rng);
-      t = glm::packHalf2x16(glm::vec2(std::cos(a), std::sin(a)));
-    }
-    Buffer staging(ctx, texels.size() * 4, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "cascade rotation staging");
-    staging.write(texels.data(), texels.size() * 4);
-    rotation = Image(ctx, {n, n}, VK_FORMAT_R16G16_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                     "cascade rotation");
-    ctx.immediate_submit([&](VkCommandBuffer cmd) {
-      rotation.transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0, VK_PIPELINE_STAGE_2_TRANSFER_BIT,
-                          VK_ACCESS_2_TRANSFER_WRITE_BIT);
-      VkBufferImageCopy copy{};
-      copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-      copy.imageExtent = {n, n, 1};
-      vkCmdCopyBufferToImage(cmd, staging.handle(), rotation.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
-      memory_barrier(cmd, VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-    });
-  }
 
   void ensure_maps(VkCommandBuffer cmd, uint32_t size) {
     if (map_size == size) return;
     map_size = size;
     // Always kMaxCascades layers: the views stay 2D arrays whatever the cascade count.
-    depth = Image(ctx, {size, size}, kMapFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+    depth = Image(ctx, {size, size}, kCascadeMapFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                   "cascade depth", 1, kMaxCascadeCount);
     to_general(ctx, cmd, depth);
   }
@@ -303,15 +249,21 @@ struct CascadesPass::Impl {
   void record_dispatch_args(VkCommandBuffer cmd) const {
     memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-    args_pipeline.bind(cmd);
+    pipelines.args.bind(cmd);
     DescriptorWriter()
         .storage_buffer(gs::CASCADE_ARGS_BINDING_COUNTERS, counters.handle())
-        .push(ctx, cmd, args_pipeline);
+        .push(ctx, cmd, pipelines.args);
     vkCmdDispatch(cmd, 1, 1, 1);
     memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                    VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                    VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   }
+
+  // Mask and neighbourhood buffers for every cascade's rectangle.
+  void ensure_masks(const gs::CascadeParams& p, const std::array<glm::ivec4, kMaxCascadeCount>& rects);
+  void record_masks(Frame& frame, const CascadeSettings& s, const std::array<glm::ivec4, kMaxCascadeCount>& rects);
+  void record_filter(Frame& frame, const gs::CascadeParams& p, Image& out, const PixelList* only);
+  void record_blur(Frame& frame, Image& out);
 
   // Each cascade is drawn only over the texels its receivers can read (the mask rectangle, which
   // already holds the kernel, the offsets and a border, in map texels): the rest of a layer is never
@@ -321,7 +273,7 @@ struct CascadesPass::Impl {
                     const std::array<glm::ivec4, kMaxCascadeCount>& rects) {
     VkCommandBuffer cmd = frame.cmd;
     ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_depth");
-    const Pipeline& pipeline = depth_pipeline[s.cull_front_faces ? 1 : 0];
+    const Pipeline& pipeline = pipelines.depth[s.cull_front_faces ? 1 : 0];
     for (uint32_t c = 0; c < fit.count; ++c) {
       const glm::ivec4 r = rects[c];
       if (r.z < r.x || r.w < r.y) continue;  // no receiver reads this cascade
@@ -344,28 +296,126 @@ struct CascadesPass::Impl {
             pipeline.push_constants(cmd, push);
           },
           CasterSet::Opaque, outside);
-      draw_alpha_casters(ctx, cmd, frame, alpha_depth, fit.light_view_projection[c], outside);
+      draw_alpha_casters(ctx, cmd, frame, pipelines.alpha_depth, fit.light_view_projection[c], outside);
       vkCmdEndRendering(cmd);
     }
   }
 };
 
-CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {
-  if (!ctx.features().subgroup_arithmetic_compute_fragment)
-    throw VulkanError("the cascades need subgroup arithmetic in compute shaders, which " + ctx.device_name() +
-                      " lacks");
-  Impl& m = *impl_;
-  m.params = Buffer(ctx, sizeof(gs::CascadeParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                    false, "cascade params");
-  m.counters = Buffer(ctx, gs::CASCADE_COUNTER_WORDS * 4,
-                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
-                          VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                      false, "cascade counters");
-  m.nearest = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "cascade nearest");
-  m.no_input_list = Buffer(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade input list placeholder");
-  m.create_pipelines();
-  m.create_rotation_texture();
+// Replaced buffers outlive the frames in flight that use them (Context::defer_releases).
+void CascadesPass::Impl::ensure_masks(const gs::CascadeParams& p, const std::array<glm::ivec4, kMaxCascadeCount>& rects) {
+  const VkDeviceSize texels = std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + [&] {
+    const glm::ivec4 r = rects[kMaxCascadeCount - 1];
+    return r.z >= r.x && r.w >= r.y ? VkDeviceSize(r.z - r.x + 1) * VkDeviceSize(r.w - r.y + 1) : VkDeviceSize(0);
+  }(), 1);
+  if (texels > mask_capacity) {
+    mask_capacity = texels + texels / 4;
+    masks = Buffer(ctx, mask_capacity * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade masks");
+    neighbourhoods = Buffer(ctx, mask_capacity * 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                            "cascade mask neighbourhoods");
+  }
 }
+
+// One dispatch per cascade over the texels its receivers can read, at the one level it uses; then the
+// same over their neighbourhoods.
+void CascadesPass::Impl::record_masks(Frame& frame, const CascadeSettings& s,
+                                      const std::array<glm::ivec4, kMaxCascadeCount>& rects) {
+  VkCommandBuffer cmd = frame.cmd;
+  const bool extent = s.masking == Masking::DepthExtent;
+  ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_masks");
+  for (uint32_t combined = 0; combined < 2; ++combined) {
+    if (combined)
+      memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    const Pipeline& pipeline = pipelines.edges[combined];
+    pipeline.bind(cmd);
+    for (uint32_t c = 0; c < fit.count; ++c) {
+      const glm::ivec4 rect = rects[c];
+      if (rect.z < rect.x || rect.w < rect.y) continue;
+      DescriptorWriter()
+          .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, params.handle())
+          .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, depth.view(), nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+          .storage_buffer(gs::CASCADE_MASK_BINDING_MASKS, masks.handle())
+          .storage_buffer(gs::CASCADE_MASK_BINDING_NEIGHBOURHOODS, neighbourhoods.handle())
+          .push(ctx, cmd, pipeline);
+      pipeline.push_constants(cmd, gs::CascadeMaskPush{c, extent ? 1u : 0u, 0u, 0u});
+      vkCmdDispatch(cmd, uint32_t(rect.z - rect.x + 8) / 8, uint32_t(rect.w - rect.y + 8) / 8, 1);
+    }
+  }
+  pass_barrier(frame.ctx, cmd);
+}
+
+// The filter's stages: classify (over the frame, or over `only`'s list), then the kernel and band
+// lists it made, with indirect dispatches.
+void CascadesPass::Impl::record_filter(Frame& frame, const gs::CascadeParams& p, Image& out, const PixelList* only) {
+  VkCommandBuffer cmd = frame.cmd;
+  ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_filter");
+  const uint32_t masking = p.mode.x, debug_view = p.mode.z;
+  auto bind_filter = [&](uint32_t stage) {
+    const Pipeline& pipeline = pipelines.filter(stage, masking, debug_view);
+    pipeline.bind(cmd);
+    DescriptorWriter()
+        .uniform_buffer(gs::CASCADE_FILTER_BINDING_PARAMS, params.handle())
+        .storage_image(gs::CASCADE_FILTER_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
+        .storage_image(gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
+        .sampled_image(gs::CASCADE_FILTER_BINDING_DEPTH, depth.view(), nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
+        .storage_buffer(gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, neighbourhoods.handle())
+        .sampled_image(gs::CASCADE_FILTER_BINDING_ROTATION, rotation.view(), nearest.handle(),
+                       VK_IMAGE_LAYOUT_GENERAL)
+        .storage_image(gs::CASCADE_FILTER_BINDING_SHADOW_TERM, out.view())
+        .storage_image(gs::CASCADE_FILTER_BINDING_OVERLAY, frame.overlay.view())
+        .storage_buffer(gs::CASCADE_FILTER_BINDING_COUNTERS, counters.handle())
+        .storage_buffer(gs::CASCADE_FILTER_BINDING_BLUR_LIST, blur_list.handle())
+        .storage_buffer(gs::CASCADE_FILTER_BINDING_WORK_LIST, work_list.handle())
+        .storage_buffer(gs::CASCADE_FILTER_BINDING_INPUT_LIST, only ? only->entries : no_input_list.handle())
+        .storage_buffer(gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, only ? only->counters : no_input_list.handle())
+        .storage_image(gs::CASCADE_FILTER_BINDING_RECEIVERS, frame.gbuffer.albedo)
+        .push(ctx, cmd, pipeline);
+  };
+  if (only) {
+    bind_filter(gs::CASCADE_STAGE_CLASSIFY_LIST);
+    vkCmdDispatchIndirect(cmd, only->counters, VkDeviceSize(only->count_word + 1) * 4);
+  } else {
+    bind_filter(gs::CASCADE_STAGE_CLASSIFY);
+    // 8x8 invocations of 2x2 pixels each.
+    vkCmdDispatch(cmd, (frame.view.extent.width + 15) / 16, (frame.view.extent.height + 15) / 16, 1);
+  }
+  record_dispatch_args(cmd);
+  // The two lists hold different pixels: their stages need no barrier between them.
+  bind_filter(gs::CASCADE_STAGE_KERNEL);
+  vkCmdDispatchIndirect(cmd, counters.handle(), gs::CASCADE_COUNTER_DISPATCH_KERNEL * 4);
+  bind_filter(gs::CASCADE_STAGE_BAND);
+  vkCmdDispatchIndirect(cmd, counters.handle(), gs::CASCADE_COUNTER_DISPATCH_BAND * 4);
+}
+
+// 5x5 on the pixels whose taps disagreed, into a side buffer, then written back.
+void CascadesPass::Impl::record_blur(Frame& frame, Image& out) {
+  VkCommandBuffer cmd = frame.cmd;
+  ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_blur");
+  record_dispatch_args(cmd);
+  gs::CascadeBlurPush push{glm::vec4(frame.view.camera_position, 1.0f),
+                           glm::uvec4(frame.view.extent.width, frame.view.extent.height, 0u, 0u)};
+  for (int apply = 0; apply < 2; ++apply) {
+    if (apply)
+      memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                     VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                     VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    const Pipeline& pipeline = pipelines.blur[apply];
+    pipeline.bind(cmd);
+    DescriptorWriter()
+        .storage_image(gs::CASCADE_BLUR_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
+        .storage_image(gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
+        .storage_image(gs::CASCADE_BLUR_BINDING_SHADOW_TERM, out.view())
+        .storage_buffer(gs::CASCADE_BLUR_BINDING_COUNTERS, counters.handle())
+        .storage_buffer(gs::CASCADE_BLUR_BINDING_BLUR_LIST, blur_list.handle())
+        .storage_buffer(gs::CASCADE_BLUR_BINDING_BLURRED, blurred.handle())
+        .push(ctx, cmd, pipeline);
+    pipeline.push_constants(cmd, push);
+    vkCmdDispatchIndirect(cmd, counters.handle(), gs::CASCADE_COUNTER_DISPATCH_BLUR * 4);
+  }
+}
+
+CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
 
 CascadesPass::~CascadesPass() = default;
 
@@ -384,112 +434,16 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& 
   gs::CascadeParams p = m.make_params(frame, s, debug, &levels, &rects);
   if (only) p.mode.w = only->count_word;
   record_update(m.ctx, cmd, m.params, &p, sizeof(p));
-  // Replaced buffers outlive the frames in flight that use them (Context::defer_releases).
-  const VkDeviceSize texels = std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + [&] {
-    const glm::ivec4 r = rects[kMaxCascadeCount - 1];
-    return r.z >= r.x && r.w >= r.y ? VkDeviceSize(r.z - r.x + 1) * VkDeviceSize(r.w - r.y + 1) : VkDeviceSize(0);
-  }(), 1);
-  if (texels > m.mask_capacity) {
-    m.mask_capacity = texels + texels / 4;
-    m.masks = Buffer(m.ctx, m.mask_capacity * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade masks");
-    m.neighbourhoods = Buffer(m.ctx, m.mask_capacity * 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
-                              "cascade mask neighbourhoods");
-  }
+  m.ensure_masks(p, rects);
   m.blur_enabled = settings.blur;
 
   vkCmdFillBuffer(cmd, m.counters.handle(), 0, gs::CASCADE_COUNTER_WORDS * 4, 0);
   m.record_depth(frame, settings, levels, rects);
   pass_barrier(frame.ctx, cmd);
-  if (s.masking != Masking::Off) {
-    const bool extent = s.masking == Masking::DepthExtent;
-    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_masks");
-    // One dispatch per cascade over the texels its receivers can read, at the one level it uses; then
-    // the same over their neighbourhoods.
-    for (uint32_t neighbourhoods = 0; neighbourhoods < 2; ++neighbourhoods) {
-      if (neighbourhoods)
-        memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                       VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-      const Pipeline& pipeline = m.edges_pipeline[neighbourhoods];
-      pipeline.bind(cmd);
-      for (uint32_t c = 0; c < m.fit.count; ++c) {
-        const glm::ivec4 rect = rects[c];
-        if (rect.z < rect.x || rect.w < rect.y) continue;
-        DescriptorWriter()
-            .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, m.params.handle())
-            .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-            .storage_buffer(gs::CASCADE_MASK_BINDING_MASKS, m.masks.handle())
-            .storage_buffer(gs::CASCADE_MASK_BINDING_NEIGHBOURHOODS, m.neighbourhoods.handle())
-            .push(m.ctx, cmd, pipeline);
-        pipeline.push_constants(cmd, gs::CascadeMaskPush{c, extent ? 1u : 0u, 0u, 0u});
-        vkCmdDispatch(cmd, uint32_t(rect.z - rect.x + 8) / 8, uint32_t(rect.w - rect.y + 8) / 8, 1);
-      }
-    }
-    pass_barrier(frame.ctx, cmd);
-  }
-  {
-    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_filter");
-    const uint32_t masking = p.mode.x, debug_view = p.mode.z;
-    auto bind_filter = [&](uint32_t stage) {
-      const Pipeline& pipeline = m.filter_pipeline(stage, masking, debug_view);
-      pipeline.bind(cmd);
-      DescriptorWriter()
-          .uniform_buffer(gs::CASCADE_FILTER_BINDING_PARAMS, m.params.handle())
-          .storage_image(gs::CASCADE_FILTER_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
-          .storage_image(gs::CASCADE_FILTER_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
-          .sampled_image(gs::CASCADE_FILTER_BINDING_DEPTH, m.depth.view(), m.nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
-          .storage_buffer(gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, m.neighbourhoods.handle())
-          .sampled_image(gs::CASCADE_FILTER_BINDING_ROTATION, m.rotation.view(), m.nearest.handle(),
-                         VK_IMAGE_LAYOUT_GENERAL)
-          .storage_image(gs::CASCADE_FILTER_BINDING_SHADOW_TERM, out.view())
-          .storage_image(gs::CASCADE_FILTER_BINDING_OVERLAY, frame.overlay.view())
-          .storage_buffer(gs::CASCADE_FILTER_BINDING_COUNTERS, m.counters.handle())
-          .storage_buffer(gs::CASCADE_FILTER_BINDING_BLUR_LIST, m.blur_list.handle())
-          .storage_buffer(gs::CASCADE_FILTER_BINDING_WORK_LIST, m.work_list.handle())
-          .storage_buffer(gs::CASCADE_FILTER_BINDING_INPUT_LIST, only ? only->entries : m.no_input_list.handle())
-          .storage_buffer(gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, only ? only->counters : m.no_input_list.handle())
-          .storage_image(gs::CASCADE_FILTER_BINDING_RECEIVERS, frame.gbuffer.albedo)
-          .push(m.ctx, cmd, pipeline);
-    };
-    if (only) {
-      bind_filter(gs::CASCADE_STAGE_CLASSIFY_LIST);
-      vkCmdDispatchIndirect(cmd, only->counters, VkDeviceSize(only->count_word + 1) * 4);
-    } else {
-      bind_filter(gs::CASCADE_STAGE_CLASSIFY);
-      // 8x8 invocations of 2x2 pixels each.
-      vkCmdDispatch(cmd, (frame.view.extent.width + 15) / 16, (frame.view.extent.height + 15) / 16, 1);
-    }
-    m.record_dispatch_args(cmd);
-    // The two lists hold different pixels: their stages need no barrier between them.
-    bind_filter(gs::CASCADE_STAGE_KERNEL);
-    vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH_KERNEL * 4);
-    bind_filter(gs::CASCADE_STAGE_BAND);
-    vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH_BAND * 4);
-  }
+  if (s.masking != Masking::Off) m.record_masks(frame, s, rects);
+  m.record_filter(frame, p, out, only);
   pass_barrier(frame.ctx, cmd);
-  if (settings.blur) {
-    ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "cascade_blur");
-    m.record_dispatch_args(cmd);
-    gs::CascadeBlurPush push{glm::vec4(frame.view.camera_position, 1.0f),
-                             glm::uvec4(frame.view.extent.width, frame.view.extent.height, 0u, 0u)};
-    for (int apply = 0; apply < 2; ++apply) {
-      if (apply)
-        memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-      const Pipeline& pipeline = m.blur_pipeline[apply];
-      pipeline.bind(cmd);
-      DescriptorWriter()
-          .storage_image(gs::CASCADE_BLUR_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
-          .storage_image(gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
-          .storage_image(gs::CASCADE_BLUR_BINDING_SHADOW_TERM, out.view())
-          .storage_buffer(gs::CASCADE_BLUR_BINDING_COUNTERS, m.counters.handle())
-          .storage_buffer(gs::CASCADE_BLUR_BINDING_BLUR_LIST, m.blur_list.handle())
-          .storage_buffer(gs::CASCADE_BLUR_BINDING_BLURRED, m.blurred.handle())
-          .push(m.ctx, cmd, pipeline);
-      pipeline.push_constants(cmd, push);
-      vkCmdDispatchIndirect(cmd, m.counters.handle(), gs::CASCADE_COUNTER_DISPATCH_BLUR * 4);
-    }
-  }
+  if (settings.blur) m.record_blur(frame, out);
   pass_barrier(frame.ctx, cmd);
   // The counters are read on the host once this frame has completed.
   m.readback.record_copy(frame, m.counters, gs::CASCADE_COUNTER_WORDS * 4, pass_shader_stages(m.ctx),

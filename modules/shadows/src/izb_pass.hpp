@@ -8,11 +8,13 @@
 
 namespace shadows::detail {
 
-class CsmPass;
+struct IzbState;
 
-// The frustum-traced irregular z-buffer: light frustum fit, (CSM culling), IZB build, conservative
-// frustum trace, overflow fallback and resolve into the shadow term. One object owns all of it; the
-// stages live in their own shaders and are recorded in order by record().
+// The frustum-traced irregular z-buffer: light frustum fit, (lit map and CSM culling), IZB build,
+// conservative frustum trace, overflow fallback and resolve into the shadow term. Each step lives in
+// its own shaders (izb_*) and its own source file (izb_frustum, izb_lit_map, izb_csm_prepass,
+// izb_build, izb_trace, izb_resolve, izb_hybrid, izb_stats); record() plans the frame (izb_plan) and
+// records them in order over the state they share (izb_state).
 class IzbPass {
  public:
   explicit IzbPass(engine::gpu::Context& ctx);
@@ -38,8 +40,7 @@ class IzbPass {
   LitMapSnapshot read_lit_map();
 
  private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<IzbState> state_;
 };
 
 }  // namespace shadows::detail

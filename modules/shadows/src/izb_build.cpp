@@ -1,0 +1,63 @@
+#include "barriers.hpp"
+#include "izb_build.hpp"
+
+#include <algorithm>
+
+#include "gpu/profiler.hpp"
+
+namespace shadows::detail {
+
+using namespace engine::gpu;
+
+namespace {
+
+// Counting sort: counts (the build's) -> prefix sum -> scatter into contiguous ranges.
+void record_counting_sort(IzbState& s, Frame& frame, const gpu_shared::IzbComputePush& push) {
+  VkCommandBuffer cmd = frame.cmd;
+  const uint32_t blocks = s.res.scan_blocks;
+  for (uint32_t step = 0; step < 3; ++step) {
+    pass_barrier(frame.ctx, cmd);
+    gpu_shared::IzbComputePush scan_push = push;
+    scan_push.mode = step;
+    const uint32_t rows = (blocks + gpu_shared::kIzbDispatchRow - 1) / gpu_shared::kIzbDispatchRow;
+    if (step == 1) s.dispatch(cmd, frame, s.p->scan, scan_push, 1);
+    else s.dispatch(cmd, frame, s.p->scan, scan_push, std::min(blocks, gpu_shared::kIzbDispatchRow), rows);
+  }
+  pass_barrier(frame.ctx, cmd);
+  s.dispatch_pixels(cmd, frame, s.p->scatter, push);
+}
+
+}  // namespace
+
+void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan) {
+  VkCommandBuffer cmd = frame.cmd;
+  vkCmdFillBuffer(cmd, s.res.counters.handle(), 0, VK_WHOLE_SIZE, 0);
+  if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, VK_WHOLE_SIZE, 0);
+  else vkCmdFillBuffer(cmd, s.res.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
+  vkCmdFillBuffer(cmd, s.res.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
+  pass_barrier(frame.ctx, cmd);
+}
+
+void record_izb_build(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
+                      const gpu_shared::IzbComputePush& push) {
+  VkCommandBuffer cmd = frame.cmd;
+  ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_build");
+  {
+    OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "build_classify");
+    s.dispatch_pixels(cmd, frame, s.p->build, push);
+  }
+  if (plan.sorted) record_counting_sort(s, frame, push);
+  pass_barrier(frame.ctx, cmd);
+  // A CPU device sizes the lists' dispatches in a pass of their own (izb_list_dispatch.comp), then
+  // inserts the listed pixels' nodes where the build runs in two steps.
+  if (plan.listed_resolve && plan.cpu) {
+    OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "build_insert");
+    s.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_RESOLVE);
+    if (s.p->build_insert.valid()) {
+      s.dispatch_indirect(cmd, frame, s.p->build_insert, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
+      pass_barrier(frame.ctx, cmd);
+    }
+  }
+}
+
+}  // namespace shadows::detail

@@ -1,0 +1,16 @@
+#pragma once
+#include "frame.hpp"
+#include "izb_plan.hpp"
+#include "izb_state.hpp"
+#include "shadows/settings.hpp"
+
+namespace shadows::detail {
+
+// Clears what every record starts from: the counters, the lists' heads or counts, the farthest depths.
+void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan);
+// The IZB build: each pixel's node(s) into its texels' linked lists or, sorted, counted, prefix-summed
+// and scattered into contiguous ranges (izb_build.comp, izb_scan.comp, izb_scatter.comp).
+void record_izb_build(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
+                      const gpu_shared::IzbComputePush& push);
+
+}  // namespace shadows::detail

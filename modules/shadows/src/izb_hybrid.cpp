@@ -1,0 +1,42 @@
+#include "barriers.hpp"
+#include "izb_hybrid.hpp"
+
+#include "gpu/profiler.hpp"
+
+namespace shadows::detail {
+
+using namespace engine::gpu;
+
+void IzbResources::ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid) {
+  // A frame may shadow the sun with the hybrid and then a local light with the plain IZB: the
+  // hybrid's images stay until the extent changes.
+  if (!hybrid && soft_term.valid()) return;
+  const VkExtent2D want = hybrid ? e : VkExtent2D{1, 1};
+  if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height) return;
+  hybrid_extent = want;
+  soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                    "izb hybrid soft term");
+  // -1 (not filtered) everywhere; the blend restores that after each frame (izb_hybrid_blend.comp).
+  to_general(ctx, cmd, soft_term);
+  const VkClearColorValue unfiltered{{-1.0f, 0.0f, 0.0f, 0.0f}};
+  const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  vkCmdClearColorImage(cmd, soft_term.handle(), VK_IMAGE_LAYOUT_GENERAL, &unfiltered, 1, &range);
+  pass_barrier(ctx, cmd);
+  hybrid_list = Buffer(ctx, VkDeviceSize(want.width) * want.height * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                       "izb hybrid pixel list");
+}
+
+PixelList izb_hybrid_list(const IzbResources& res) {
+  return {res.hybrid_list.handle(), res.counters.handle(), gpu_shared::IZB_COUNTER_HYBRID};
+}
+
+void record_hybrid_blend(IzbState& s, Frame& frame) {
+  VkCommandBuffer cmd = frame.cmd;
+  const Pipeline& blend = s.pipelines.hybrid_blend();
+  ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "hybrid_blend");
+  blend.bind(cmd);
+  s.push_all(cmd, frame, blend);
+  vkCmdDispatchIndirect(cmd, s.res.counters.handle(), (gpu_shared::IZB_COUNTER_HYBRID + 1) * 4);
+}
+
+}  // namespace shadows::detail

@@ -1,0 +1,128 @@
+#include "barriers.hpp"
+#include "izb_resources.hpp"
+
+#include <algorithm>
+
+#include "izb_frustum.hpp"
+#include "shared/izb.h"
+
+namespace shadows::detail {
+
+using namespace engine::gpu;
+
+IzbResources::IzbResources(Context& c) : ctx(c) {
+  params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                  false, "izb params");
+  make_frame_data(0);
+  const VkDeviceSize counter_bytes = gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t);
+  counters = Buffer(c, counter_bytes,
+                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                        VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
+                    false, "izb counters");
+  nearest = Sampler(c, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "izb nearest");
+}
+
+void IzbResources::make_frame_data(VkDeviceSize fit_groups) {
+  frame_data = Buffer(ctx, (gpu_shared::kIzbPartialsAt + fit_groups) * 16,
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
+                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                      false, "izb frame and fit bounds per workgroup");
+}
+
+void IzbResources::ensure_buffers(const Frame& frame, const IzbSettings& s) {
+  const uint32_t spp = s.samples_per_pixel == 32 ? 32 : 1;
+  if (resolution != s.resolution) ensure_grid(frame.cmd, s.resolution);
+  const VkExtent2D e = frame.view.extent;
+  if (e.width != extent.width || e.height != extent.height || spp != samples) ensure_view(e, spp);
+  ensure_node_pool(s, VkDeviceSize(e.width) * e.height, spp);
+}
+
+// Per texel of the grid: list heads or counts, farthest node depths, the compute CSM and lit map.
+void IzbResources::ensure_grid(VkCommandBuffer cmd, uint32_t grid_resolution) {
+  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  resolution = grid_resolution;
+  const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
+  heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
+  list_counts = Buffer(ctx, texels * 4, usage, false, "izb sorted list counts");
+  scan_blocks = uint32_t((texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock);
+  list_cursor = Buffer(ctx, (texels + scan_blocks) * 4, usage, false, "izb sorted list fill cursors and block sums");
+  tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
+  // The compute CSM's depths, then the lit map's texels, texel corners and tile records (izb.h;
+  // one binding for all).
+  const VkDeviceSize tile_words = 8 * VkDeviceSize(tiles_per_side) * tiles_per_side;
+  const VkDeviceSize lit_words = gpu_shared::izb_lit_tile_records_at(resolution) + tile_words;
+  csm_texels = Buffer(ctx, lit_words * 4,
+                      usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, false,
+                      "csm compute depths and lit map");
+  csm_texels.make_texel_view(VK_FORMAT_R32_UINT,
+                             std::min<VkDeviceSize>(lit_words, ctx.properties().limits.maxTexelBufferElements), 4);
+  // Per texel, then per tile (tile_farthest_index): the farthest node depth.
+  farthest = Buffer(ctx, (texels + VkDeviceSize(tiles_per_side) * tiles_per_side) * 4,
+                    usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "izb farthest node depth per texel and tile");
+  trace_depth = Image(ctx, {resolution, resolution}, VK_FORMAT_D32_SFLOAT,
+                      VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                      "izb trace depth (farthest node)");
+  to_general(ctx, cmd, trace_depth);
+}
+
+// Per pixel of the view: the visibility mask, its state, overflow list, occluder distance and
+// light-space data, and the fit's per-workgroup bounds.
+void IzbResources::ensure_view(VkExtent2D e, uint32_t spp) {
+  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  const VkDeviceSize pixels = VkDeviceSize(e.width) * e.height;
+  extent = e;
+  samples = spp;
+  mask = Buffer(ctx, pixels * 4, usage, false, "izb visibility mask");
+  pixel_state = Buffer(ctx, pixels * 4, usage, false, "izb pixel state");
+  overflow_list = Buffer(ctx, pixels * 4, usage, false, "izb overflow pixels");
+  occluder_distance = Buffer(ctx, pixels * 4, usage, false, "izb nearest occluder distance");
+  make_frame_data(VkDeviceSize(fit_columns(e.width)) * fit_rows(e.height));
+  const uint32_t stride = spp == 32 ? gpu_shared::kIzbQuadFloats32 : gpu_shared::kIzbQuadFloats1;
+  quads = Buffer(ctx, pixels * stride * 4, usage, false, "izb pixel light-space data");
+  pool_size = 0;
+}
+
+void IzbResources::ensure_node_pool(const IzbSettings& s, VkDeviceSize pixels, uint32_t spp) {
+  uint64_t wanted;
+  if (s.brute_force) {
+    wanted = 0;
+  } else if (s.node_pool_override) {
+    wanted = s.node_pool_override;
+  } else {
+    // 1 spp needs at most one node per pixel. At 32 spp a μQuad spans about (texels per pixel)
+    // texels, at least one; the pool then grows to the measured demand if a frame overflows.
+    const double texels_per_pixel = double(s.resolution) * s.resolution / double(pixels);
+    const double per_pixel = spp == 32 ? std::max(2.0, 2.0 * texels_per_pixel) : 1.0;
+    wanted = std::max<uint64_t>(uint64_t(double(pixels) * per_pixel * s.node_pool_factor), 1024);
+    wanted = std::max(wanted, pool_demand);
+    // Never beyond one storage buffer's range: insertions past it take the exact overflow fallback.
+    wanted = std::min<uint64_t>(wanted, ctx.properties().limits.maxStorageBufferRange / 8);
+  }
+  if (wanted != pool_size || !nodes.valid()) {
+    pool_size = wanted;
+    nodes = Buffer(ctx, std::max<uint64_t>(pool_size, 1) * 8,
+                   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "izb nodes");
+  }
+}
+
+void IzbResources::ensure_work_lists(bool used, uint32_t triangle_count) {
+  auto ensure = [&](IzbWorkList& list, uint64_t initial, VkDeviceSize stride, const char* name) {
+    const uint64_t want = used ? std::max(initial, list.demand) : 1;
+    if (list.buffer.valid() && want <= list.capacity) return;
+    list.capacity = want;
+    list.buffer = Buffer(ctx, want * stride, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, name);
+  };
+  const uint64_t tiles = uint64_t(tiles_per_side) * tiles_per_side;
+  ensure(records, std::max<uint64_t>(uint64_t(triangle_count) * 2, 16384), 16, "izb tile-row records");
+  ensure(tile_pairs, std::max<uint64_t>({uint64_t(triangle_count) * 4, tiles * 4, 65536}), 8, "izb tile pairs");
+  ensure(pairs, std::max<uint64_t>({uint64_t(triangle_count) * 4, uint64_t(resolution) * resolution / 2, 65536}), 8,
+         "izb texel pairs");
+}
+
+void IzbResources::ensure_resolve_list(VkExtent2D e, bool listed) {
+  const VkDeviceSize want = listed ? VkDeviceSize(e.width) * e.height * 4 : 4;
+  if (resolve_list.valid() && resolve_list.size() >= want) return;
+  resolve_list = Buffer(ctx, want, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb resolve pixel list");
+}
+
+}  // namespace shadows::detail

@@ -1,0 +1,67 @@
+#pragma once
+#include <cstdint>
+
+#include "gpu/resources.hpp"
+#include "frame.hpp"
+#include "shadows/settings.hpp"
+
+namespace shadows::detail {
+
+// A compute trace / CSM work list (see izb.h), grown to the demand a frame measured.
+struct IzbWorkList {
+  engine::gpu::Buffer buffer;
+  uint64_t capacity = 0, demand = 0;
+};
+
+// The IZB's buffers and images: per grid (lists, farthest depths, lit map), per view (pixels' nodes
+// and light-space data), the node pool and the work lists. Every pass binds all of them (izb_bindings()).
+struct IzbResources {
+  explicit IzbResources(engine::gpu::Context& c);
+
+  // Sizes everything for this frame's grid, view and sample count, and the node pool for `s`.
+  void ensure_buffers(const Frame& frame, const IzbSettings& s);
+  // The compute passes' work lists: first sized from the scene and grid, then grown to the demand a
+  // frame measured (a frame that overflows still finishes exactly, only slower). Unused (raster
+  // passes only): small placeholders keep every binding valid.
+  void ensure_work_lists(bool used, uint32_t triangle_count);
+  // Frame-sized where the resolve is listed; otherwise a placeholder keeps the binding valid.
+  void ensure_resolve_list(VkExtent2D e, bool listed);
+  // Frame-sized in hybrid; otherwise 1x1 placeholders keep the bindings valid (izb_hybrid.cpp).
+  void ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid);
+  // Whether csm_texels' texel view reaches all of its words (IZB_FLAG_LIT_FETCH).
+  bool lit_view_whole() const { return csm_texels.size() / 4 <= ctx.properties().limits.maxTexelBufferElements; }
+
+  engine::gpu::Context& ctx;
+  engine::gpu::Buffer list_counts, list_cursor;  // the cursors' buffer also holds the prefix sum's block sums
+  uint32_t scan_blocks = 0;
+  // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (frame-sized where it is on, else a placeholder).
+  engine::gpu::Buffer resolve_list;
+  // Hybrid: the cascades' term and the pixels that blend toward it (frame-sized only in hybrid).
+  engine::gpu::Image soft_term;
+  engine::gpu::Buffer hybrid_list;
+  VkExtent2D hybrid_extent{};
+  engine::gpu::Image trace_depth;
+  engine::gpu::Buffer params, counters;
+  // The frame the fit writes (IzbFrame), then its per-workgroup bounds from vec4 kIzbPartialsAt on
+  // (izb.h): storage for the fit, a uniform buffer's range for the passes after it.
+  engine::gpu::Buffer frame_data;
+  ReadbackRing counters_readback;
+  engine::gpu::Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, occluder_distance;
+  engine::gpu::Buffer csm_texels;
+  IzbWorkList records, tile_pairs, pairs;
+  uint32_t tiles_per_side = 0;
+  engine::gpu::Sampler nearest;
+  uint32_t resolution = 0;
+  uint32_t samples = 0;
+  VkExtent2D extent{};
+  uint64_t pool_size = 0;
+  uint64_t pool_demand = 0;
+
+ private:
+  void make_frame_data(VkDeviceSize fit_groups);
+  void ensure_grid(VkCommandBuffer cmd, uint32_t grid_resolution);
+  void ensure_view(VkExtent2D e, uint32_t spp);
+  void ensure_node_pool(const IzbSettings& s, VkDeviceSize pixels, uint32_t spp);
+};
+
+}  // namespace shadows::detail
