@@ -32,6 +32,74 @@ ImageInput image_input(engine::gpu::Image& image) {
   return in;
 }
 
+struct TextureImage {
+  engine::gpu::Image image;
+  ImageInput input;
+  AlphaWrap wrap_u = AlphaWrap::Repeat, wrap_v = AlphaWrap::Repeat;
+};
+
+// An engine texture (entry `index` of the packed texture words) as a sampled image, as a host has them.
+TextureImage upload_texture(engine::gpu::Context& ctx, const std::vector<uint32_t>& words, uint32_t index) {
+  const uint32_t* header = &words[1 + gpu_shared::kTextureHeaderWords * index];
+  const VkExtent2D extent{header[1], header[2]};
+  TextureImage t;
+  t.image = engine::gpu::Image(ctx, extent, VK_FORMAT_R8G8B8A8_UNORM,
+                               VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, "shadows adapter texture");
+  const VkDeviceSize bytes = VkDeviceSize(extent.width) * extent.height * 4;
+  engine::gpu::Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "shadows adapter texture staging");
+  staging.write(&words[header[0]], bytes);
+  // Set-up work before the frame is recorded, as any host uploads its textures.
+  ctx.immediate_submit([&](VkCommandBuffer cmd) {
+    t.image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
+                       VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    VkBufferImageCopy copy{};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    copy.imageExtent = {extent.width, extent.height, 1};
+    vkCmdCopyBufferToImage(cmd, staging.handle(), t.image.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
+    t.image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                       VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                       VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+  });
+  t.input = image_input(t.image);
+  t.input.layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+  t.wrap_u = AlphaWrap(header[3] & 0xffu);
+  t.wrap_v = AlphaWrap((header[3] >> 8) & 0xffu);
+  return t;
+}
+
+// The renderer's G-buffer and camera as the module's frame inputs (lights, instances and outputs not
+// yet set). Its own shading points, normals and receiver flags are in the module's formats: read in
+// place, no input pass, unless `host_inputs` asks for the input pass (the depth and normals are then
+// converted; otherwise only checked).
+FrameDesc frame_inputs(engine::FrameContext& frame, bool smooth_terminator, bool host_inputs) {
+  engine::GBuffer& g = frame.gbuffer;
+  FrameDesc f;
+  // The renderer's frame index: the module's slot (frame_index % F) is then the renderer's, and the
+  // shared profiler's last collected frame is the one that last used the slot (backend probes).
+  f.frame_index = frame.view.frame_index;
+  f.depth = image_input(g.depth);
+  f.normals.image = image_input(g.normal);
+  f.normals.facing_camera = true;
+  f.geometric_normals.image = image_input(g.geometric_normal);
+  f.geometric_normals.facing_camera = true;
+  f.facing_in_alpha = true;  // gbuffer.frag's light-facing decision
+  if (smooth_terminator) f.terminator_offset = image_input(g.terminator_offset);
+  f.receiver_mask = image_input(g.albedo);
+  f.receiver_channel = 3;
+  if (!host_inputs) {
+    f.native.world_position = image_input(g.world_position);
+    f.native.geometric_normal = image_input(g.geometric_normal);
+    f.native.receives = image_input(g.albedo);
+  }
+  std::memcpy(f.camera.view, glm::value_ptr(frame.view.view), sizeof(f.camera.view));
+  std::memcpy(f.camera.projection, glm::value_ptr(frame.view.projection), sizeof(f.camera.projection));
+  f.camera.reversed_z = true;
+  for (int k = 0; k < 3; ++k) f.origin[k] = frame.view.origin[k];
+  f.camera.near_plane = frame.view.near_plane;
+  f.camera.far_plane = frame.view.far_plane;
+  return f;
+}
+
 class EngineShadowModule final : public ShadowModule {
  public:
   EngineShadowModule(engine::Renderer& renderer, const Settings& settings) : renderer_(renderer) {
@@ -92,74 +160,9 @@ class EngineShadowModule final : public ShadowModule {
 
   void record(engine::FrameContext& frame) override {
     if (geometry_ != &frame.geometry) on_scene(frame.ctx, *renderer_.scene(), frame.geometry);
-    instances_.clear();
-    for (const auto& d : frame.draws) {
-      const engine::Mesh* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
-      Instance in;
-      in.mesh = mesh_for(frame, d, mesh);
-      std::memcpy(in.world, glm::value_ptr(d.world), sizeof(in.world));
-      in.casts_shadow = d.shadow.casts_shadow;
-      in.csm = d.shadow.csm == engine::CsmChoice::On ? CsmMode::On
-               : d.shadow.csm == engine::CsmChoice::Off ? CsmMode::Off
-                                                        : CsmMode::Auto;
-      in.id = instance_id_of(d.entity);
-      const auto* name = frame.registry.try_get<engine::Name>(d.entity);
-      in.name = name ? name->value.c_str() : "";
-      instances_.push_back(in);
-    }
-
-    engine::GBuffer& g = frame.gbuffer;
-    FrameDesc f;
-    // The renderer's frame index: the module's slot (frame_index % F) is then the renderer's, and the
-    // shared profiler's last collected frame is the one that last used the slot (backend probes).
-    f.frame_index = frame.view.frame_index;
-    f.depth = image_input(g.depth);
-    f.normals.image = image_input(g.normal);
-    f.normals.facing_camera = true;
-    f.geometric_normals.image = image_input(g.geometric_normal);
-    f.geometric_normals.facing_camera = true;
-    f.facing_in_alpha = true;  // gbuffer.frag's light-facing decision
-    if (renderer_.smooth_terminator()) f.terminator_offset = image_input(g.terminator_offset);
-    f.receiver_mask = image_input(g.albedo);
-    f.receiver_channel = 3;
-    // The renderer's own shading points, normals and receiver flags are in the module's formats: read
-    // in place, no input pass (the depth and normals above are then only checked).
-    if (!host_inputs_) {
-      f.native.world_position = image_input(g.world_position);
-      f.native.geometric_normal = image_input(g.geometric_normal);
-      f.native.receives = image_input(g.albedo);
-    }
-    std::memcpy(f.camera.view, glm::value_ptr(frame.view.view), sizeof(f.camera.view));
-    std::memcpy(f.camera.projection, glm::value_ptr(frame.view.projection), sizeof(f.camera.projection));
-    f.camera.reversed_z = true;
-    for (int k = 0; k < 3; ++k) f.origin[k] = frame.view.origin[k];
-    f.camera.near_plane = frame.view.near_plane;
-    f.camera.far_plane = frame.view.far_plane;
-    // The sun into the renderer's shadow term, then each local light into its own; a night without
-    // sunlight shadows the local lights alone. set_light() replaces them all with one light.
-    lights_.clear();
-    outputs_.clear();
-    const bool sun_lit = glm::length(frame.view.light_radiance) > 0.0f || frame.view.local_lights.empty();
-    if (light_) {
-      // set_light() takes scene-space positions (as Transform places lights): rebased to the frame's
-      // origin like the rest, Scene::origin included.
-      Light light = *light_;
-      const glm::dvec3 shift = renderer_.scene()->origin - frame.view.origin;
-      for (int k = 0; k < 3; ++k) light.position[k] = float(double(light.position[k]) + shift[k]);
-      lights_.push_back(light);
-      outputs_.push_back(image_input(frame.shadow_term));
-    } else {
-      if (sun_lit) {
-        Light sun;
-        std::memcpy(sun.direction, glm::value_ptr(frame.view.light_direction), sizeof(sun.direction));
-        lights_.push_back(sun);
-        outputs_.push_back(image_input(frame.shadow_term));
-      }
-      for (size_t i = 0; i < frame.view.local_lights.size(); ++i) {
-        lights_.push_back(light_of(frame.view.local_lights[i]));
-        outputs_.push_back(image_input(frame.local_shadow_terms[i]));
-      }
-    }
+    gather_instances(frame);
+    FrameDesc f = frame_inputs(frame, renderer_.smooth_terminator(), host_inputs_);
+    const bool sun_lit = gather_lights(frame);
     // The debug overlay shows the nearest local light's passes when one is shadowed (the lamps a
     // player stands by at night), else the sun's.
     f.overlay_light = (!light_ && sun_lit && lights_.size() > 1) ? 1u : 0u;
@@ -206,6 +209,55 @@ class EngineShadowModule final : public ShadowModule {
   }
 
  private:
+  // The frame's draws as the module's instances (instances_).
+  void gather_instances(engine::FrameContext& frame) {
+    instances_.clear();
+    for (const auto& d : frame.draws) {
+      const engine::Mesh* mesh = frame.registry.try_get<engine::Mesh>(d.entity);
+      Instance in;
+      in.mesh = mesh_for(frame, d, mesh);
+      std::memcpy(in.world, glm::value_ptr(d.world), sizeof(in.world));
+      in.casts_shadow = d.shadow.casts_shadow;
+      in.csm = d.shadow.csm == engine::CsmChoice::On ? CsmMode::On
+               : d.shadow.csm == engine::CsmChoice::Off ? CsmMode::Off
+                                                        : CsmMode::Auto;
+      in.id = instance_id_of(d.entity);
+      const auto* name = frame.registry.try_get<engine::Name>(d.entity);
+      in.name = name ? name->value.c_str() : "";
+      instances_.push_back(in);
+    }
+  }
+
+  // The frame's lights and their shadow terms (lights_, outputs_); whether the sun is among them.
+  bool gather_lights(engine::FrameContext& frame) {
+    // The sun into the renderer's shadow term, then each local light into its own; a night without
+    // sunlight shadows the local lights alone. set_light() replaces them all with one light.
+    lights_.clear();
+    outputs_.clear();
+    const bool sun_lit = glm::length(frame.view.light_radiance) > 0.0f || frame.view.local_lights.empty();
+    if (light_) {
+      // set_light() takes scene-space positions (as Transform places lights): rebased to the frame's
+      // origin like the rest, Scene::origin included.
+      Light light = *light_;
+      const glm::dvec3 shift = renderer_.scene()->origin - frame.view.origin;
+      for (int k = 0; k < 3; ++k) light.position[k] = float(double(light.position[k]) + shift[k]);
+      lights_.push_back(light);
+      outputs_.push_back(image_input(frame.shadow_term));
+    } else {
+      if (sun_lit) {
+        Light sun;
+        std::memcpy(sun.direction, glm::value_ptr(frame.view.light_direction), sizeof(sun.direction));
+        lights_.push_back(sun);
+        outputs_.push_back(image_input(frame.shadow_term));
+      }
+      for (size_t i = 0; i < frame.view.local_lights.size(); ++i) {
+        lights_.push_back(light_of(frame.view.local_lights[i]));
+        outputs_.push_back(image_input(frame.local_shadow_terms[i]));
+      }
+    }
+    return sun_lit;
+  }
+
   // One host mesh per (mesh, texture, alpha threshold): the module keeps alpha tests per mesh, the
   // engine per draw.
   MeshId mesh_for(engine::FrameContext& frame, const engine::DrawItem& d, const engine::Mesh* mesh) {
@@ -248,42 +300,10 @@ class EngineShadowModule final : public ShadowModule {
     return id;
   }
 
-  struct TextureImage {
-    engine::gpu::Image image;
-    ImageInput input;
-    AlphaWrap wrap_u = AlphaWrap::Repeat, wrap_v = AlphaWrap::Repeat;
-  };
-
-  // An engine texture (one entry of the packed texture words) as a sampled image, as a host has them.
   const TextureImage& texture(engine::FrameContext& frame, uint32_t index) {
     if (auto it = textures_.find(index); it != textures_.end()) return it->second;
-    const auto& words = frame.geometry.texture_table().words();
-    const uint32_t* header = &words[1 + gpu_shared::kTextureHeaderWords * index];
-    const VkExtent2D extent{header[1], header[2]};
-    engine::gpu::Context& ctx = renderer_.context();
-    TextureImage t;
-    t.image = engine::gpu::Image(ctx, extent, VK_FORMAT_R8G8B8A8_UNORM,
-                                 VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, "shadows adapter texture");
-    const VkDeviceSize bytes = VkDeviceSize(extent.width) * extent.height * 4;
-    engine::gpu::Buffer staging(ctx, bytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "shadows adapter texture staging");
-    staging.write(&words[header[0]], bytes);
-    // Set-up work before the frame is recorded, as any host uploads its textures.
-    ctx.immediate_submit([&](VkCommandBuffer cmd) {
-      t.image.transition(cmd, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_NONE, 0,
-                         VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-      VkBufferImageCopy copy{};
-      copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-      copy.imageExtent = {extent.width, extent.height, 1};
-      vkCmdCopyBufferToImage(cmd, staging.handle(), t.image.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
-      t.image.transition(cmd, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
-                         VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                         VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
-    });
-    t.input = image_input(t.image);
-    t.input.layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-    t.wrap_u = AlphaWrap(header[3] & 0xffu);
-    t.wrap_v = AlphaWrap((header[3] >> 8) & 0xffu);
-    return textures_.emplace(index, std::move(t)).first->second;
+    return textures_.emplace(index, upload_texture(renderer_.context(), frame.geometry.texture_table().words(), index))
+        .first->second;
   }
 
   engine::Renderer& renderer_;
