@@ -197,6 +197,10 @@ Result run(const Options& o) {
   Device d({.device = o.device, .validation = o.validation, .sync_validation = o.sync_validation});
   const VkDevice dev = d.device;
   auto module = shadows::Context::create(d.context_desc(F, *settings));
+  if (o.output_term != "occlusion" && o.output_term != "combined")
+    throw std::runtime_error("unknown output term '" + o.output_term + "' (occlusion or combined)");
+  const shadows::OutputTerm output_term =
+      o.output_term == "combined" ? shadows::OutputTerm::Combined : shadows::OutputTerm::Occlusion;
   const shadows::Capability can = module->capabilities().of(settings->technique);
   if (!can.available) throw std::runtime_error(can.reason);
   module->set_collect_stats(o.report_completed);
@@ -229,8 +233,11 @@ Result run(const Options& o) {
     desc.indices = mesh_buffers[m].input(vertex_bytes);
     desc.index_type = index_types[m];
     desc.index_count = uint32_t(mesh.indices.size());
-    std::memcpy(desc.bounds_min, &mesh.min, 12);
-    std::memcpy(desc.bounds_max, &mesh.max, 12);
+    if (o.mesh_bounds) {
+      desc.bounds.emplace();
+      std::memcpy(desc.bounds->min, &mesh.min, 12);
+      std::memcpy(desc.bounds->max, &mesh.max, 12);
+    }
     mesh_ids[m] = module->register_mesh(desc);
   }
 
@@ -576,6 +583,7 @@ Result run(const Options& o) {
     fd.instance_count = uint32_t(instances.size());
     fd.output = visibility[0].input(VK_IMAGE_LAYOUT_GENERAL);
     fd.light_outputs = light_outputs.empty() ? nullptr : light_outputs.data();
+    fd.output_term = output_term;
     module->record(cmd, fd);
 
     // Lighting: albedo * (ambient + sun * the first light's visibility), into the lit frame (written

@@ -41,6 +41,10 @@ struct Options {
   std::string output_format = "r8";    // the module's outputs: r8 (R8_UNORM), r16f or r32f
   bool terminator_offset = false;      // an R16G16B16A16_SFLOAT offset of kTerminatorOffset along the normal
   bool receiver_mask = false;          // the albedo's alpha as the receiver mask: a tile in the pillar's shadow receives none
+  // FrameDesc::output_term: "occlusion" (the module's default; this host's lighting applies N.L itself)
+  // or "combined" (0 also where a light does not reach or face a point: what the reference traces).
+  std::string output_term = "occlusion";
+  bool mesh_bounds = true;             // MeshDesc::bounds given; false: absent, computed by the module on the device
 };
 
 // The terminator offset the host writes with Options::terminator_offset: this far along the outward normal.

@@ -718,7 +718,15 @@ TEST_F(HostBadInput, EveryContextDescRefusalNamesItsField) {
       {[](shadows::ContextDesc& d) { d.api_version = VK_API_VERSION_1_2; }, "ContextDesc.api_version is 1.2"},
       {[](shadows::ContextDesc& d) { d.enabled_features = nullptr; }, "ContextDesc.enabled_features is null"},
       {[](shadows::ContextDesc& d) { d.queue_family = 99; }, "ContextDesc.queue_family 99 is out of range"},
-      {[](shadows::ContextDesc& d) { d.enabled_device_extensions.clear(); }, "ContextDesc.enabled_device_extensions lacks VK_KHR_"},
+      {[](shadows::ContextDesc& d) { d.enabled_device_extension_count = 0; }, "ContextDesc.enabled_device_extension_names lacks VK_KHR_"},
+      {[](shadows::ContextDesc& d) { d.enabled_device_extension_names = nullptr; },
+       "ContextDesc.enabled_device_extension_names is null with enabled_device_extension_count " +
+           std::to_string(valid.enabled_device_extension_count)},
+      {[](shadows::ContextDesc& d) {
+         d.enabled_instance_extension_names = nullptr;
+         d.enabled_instance_extension_count = 1;
+       },
+       "ContextDesc.enabled_instance_extension_names is null with enabled_instance_extension_count 1"},
   };
   for (const auto& [mutate, argument] : cases) {
     SCOPED_TRACE(argument);
@@ -800,9 +808,7 @@ TEST_F(HostBadInput, EveryMeshDescRefusalNamesItsField) {
   valid.vertex_count = 3;
   valid.indices = buffer.input(64);
   valid.index_count = 3;
-  const float lo[3] = {-1, 1, -1}, hi[3] = {1, 1, 1};
-  std::memcpy(valid.bounds_min, lo, 12);
-  std::memcpy(valid.bounds_max, hi, 12);
+  valid.bounds = shadows::MeshBounds{{-1, 1, -1}, {1, 1, 1}};
   using Mutation = std::function<void(shadows::MeshDesc&)>;
   const std::vector<std::pair<Mutation, std::string>> cases = {
       {[](shadows::MeshDesc& m) { m.index_count = 0; }, "MeshDesc 'tri'.index_count is 0"},
@@ -831,7 +837,10 @@ TEST_F(HostBadInput, EveryMeshDescRefusalNamesItsField) {
          m.uvs = buffer.input(128);
        },
        "MeshDesc 'tri'.alpha_texture.usage lacks VK_IMAGE_USAGE_SAMPLED_BIT"},
-      {[](shadows::MeshDesc& m) { m.bounds_min[1] = 2.0f; }, "MeshDesc 'tri'.bounds_min/bounds_max are not a box"},
+      {[](shadows::MeshDesc& m) { m.bounds->min[1] = 2.0f; }, "MeshDesc 'tri'.bounds is not a box"},
+      {[](shadows::MeshDesc& m) { m.bounds->max[2] = std::numeric_limits<float>::infinity(); },
+       "MeshDesc 'tri'.bounds has a value that is not finite"},
+      {[](shadows::MeshDesc& m) { m.bounds->min[0] = std::nanf(""); }, "MeshDesc 'tri'.bounds has a value that is not finite"},
   };
   for (const auto& [mutate, argument] : cases) {
     SCOPED_TRACE(argument);
