@@ -97,7 +97,7 @@ struct FrameLights {
   std::vector<shadows::Light> module;
   std::vector<HostLight> host;
 };
-FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun) {
+FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun, float range_scale) {
   FrameLights out;
   for (const std::string& kind : kinds) {
     shadows::Light l;
@@ -111,14 +111,14 @@ FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, boo
       l.type = shadows::LightType::Spot;
       std::memcpy(l.direction, &d, 12);
       std::memcpy(l.position, &position, 12);
-      l.range = 12.0f;
+      l.range = 12.0f * range_scale;
       l.inner_cone = 0.45f;
       l.outer_cone = 0.6f;
     } else if (kind == "point") {
       const glm::vec3 position(0.5f, 3.4f, -0.6f);
       l.type = shadows::LightType::Point;
       std::memcpy(l.position, &position, 12);
-      l.range = 9.0f;
+      l.range = 9.0f * range_scale;
     } else {
       throw std::runtime_error("unknown light '" + kind + "' (sun, spot or point)");
     }
@@ -474,7 +474,7 @@ Result run(const Options& o) {
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun);
+    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun, o.local_range_scale);
     const bool capture = o.capture_every_frame || frame + 1 == o.frames;
 
     // G-buffer. Earlier frames read it (module, lighting, capture copies); their contents are discarded.

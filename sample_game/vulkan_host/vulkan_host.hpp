@@ -26,6 +26,7 @@ struct Options {
   // visibility lights the frame; the others go to FrameDesc::light_outputs).
   std::vector<std::string> lights = {"sun"};
   bool moving_sun = false;        // the sun turns a little every frame (frame 0 as when still)
+  float local_range_scale = 1.0f;  // scales the spot and point lights' ranges (below 1: ground they no longer reach)
   bool capture_every_frame = false;  // Result::frames holds every frame, not only the last
   // Calls Context::frame_completed() for each frame whose fence it has waited for, as a host that
   // knows its frames' completion does (statistics and the automatic choices' measures come back then).

@@ -138,6 +138,7 @@ vulkan_host::Options options(const std::string& mode, uint32_t view, uint32_t sp
   o.spp = spp;
   o.device = test_device();
   o.validation = true;
+  o.output_term = "combined";  // the reference traces the combined term (0 where a light does not reach or face)
   return o;
 }
 
@@ -823,6 +824,11 @@ TEST_F(HostBadInput, EveryMeshDescRefusalNamesItsField) {
       {[](shadows::MeshDesc& m) { m.index_type = VK_INDEX_TYPE_NONE_KHR; }, "MeshDesc 'tri'.index_type"},
       {[](shadows::MeshDesc& m) { m.indices.buffer = VK_NULL_HANDLE; }, "MeshDesc 'tri'.indices.buffer is VK_NULL_HANDLE"},
       {[](shadows::MeshDesc& m) { m.indices.size = 8; }, "MeshDesc 'tri'.indices.size is 8"},
+      {[](shadows::MeshDesc& m) {
+         m.index_type = VK_INDEX_TYPE_UINT16;
+         m.indices.size = 6;
+       },
+       "MeshDesc 'tri'.indices.size is 6 bytes, the mesh needs 8"},
       {[&](shadows::MeshDesc& m) { m.alpha_texture = extra_.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL); },
        "MeshDesc 'tri'.uvs is required with an alpha_texture"},
       {[&](shadows::MeshDesc& m) {
@@ -851,6 +857,198 @@ TEST_F(HostBadInput, EveryMeshDescRefusalNamesItsField) {
   shadows::Instance instance;
   instance.mesh = module_->register_mesh(valid);
   expect_valid_frame({instance});
+  vulkan_host::destroy(*device_, buffer);
+}
+
+// ----- Capabilities per light type, and record() refusing exactly what they mark unavailable.
+
+constexpr shadows::Light kPointLight{.type = shadows::LightType::Point, .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f};
+
+class HostLightCapabilities : public HostBadInput {};
+
+// A spot light with the raster trace: capabilities() says it is unavailable and why, and record()
+// refuses it with that reason, naming the light.
+TEST_F(HostLightCapabilities, SpotLightRasterTraceIsUnavailableWithTheReasonRecordGives) {
+  const shadows::Capabilities caps = module_->capabilities();
+  const shadows::LightCapabilities& spot = caps.of(shadows::LightType::Spot);
+  EXPECT_TRUE(spot.of(shadows::Technique::Izb).available);
+  EXPECT_TRUE(spot.compute_trace.available);
+  ASSERT_FALSE(spot.raster_trace.available);
+  EXPECT_NE(spot.raster_trace.reason.find("spot light"), std::string::npos) << spot.raster_trace.reason;
+  module_->settings().izb.trace = shadows::PassBackend::Raster;
+  shadows::FrameDesc f = frame_;
+  f.lights = &kSpotLight;
+  expect_refused(f, "FrameDesc.lights[0] (a spot light) with Settings.izb.trace raster: " + spot.raster_trace.reason);
+}
+
+// Every light type against every IZB path (trace raster or compute; no CSM, or each CSM test with each
+// backend): record() refuses exactly where capabilities() marks a path unavailable, with its reason,
+// and records everything else. The sun's entry is the device-wide one.
+TEST_F(HostLightCapabilities, RecordRefusesExactlyWhatCapabilitiesMarkUnavailable) {
+  const shadows::Capabilities caps = module_->capabilities();
+  const shadows::LightCapabilities& sun = caps.of(shadows::LightType::Directional);
+  for (int t = 0; t < 6; ++t) EXPECT_EQ(sun.technique[t].available, caps.technique[t].available);
+  for (int t = 0; t < 4; ++t) EXPECT_EQ(sun.csm_test[t].available, caps.csm_test[t].available);
+  const std::pair<const shadows::Light*, const char*> lights[] = {
+      {&sun_, "directional"}, {&kSpotLight, "spot"}, {&kPointLight, "point"}};
+  size_t refused = 0, recorded = 0;
+  for (const auto& [light, kind] : lights) {
+    const shadows::LightCapabilities& l = caps.of(light->type);
+    for (shadows::PassBackend trace : {shadows::PassBackend::Raster, shadows::PassBackend::Compute})
+      for (int csm = -1; csm < 8; ++csm) {
+        shadows::Settings s = valid_settings_;
+        s.izb.trace = trace;
+        s.izb.csm = csm >= 0;
+        const auto test = shadows::CsmTest(std::max(csm, 0) / 2);
+        s.izb.csm_test = test;
+        s.izb.csm_backend = csm % 2 ? shadows::PassBackend::Raster : shadows::PassBackend::Compute;
+        const bool raster_only = test == shadows::CsmTest::BarycentricHw || test == shadows::CsmTest::InnerHw;
+        if (raster_only && csm % 2 == 0) continue;  // those tests are raster work whatever the backend
+        // The first unavailable path the settings ask for, as context.hpp's LightCapabilities orders them.
+        const shadows::Capability* missing = nullptr;
+        if (trace == shadows::PassBackend::Raster && !l.raster_trace.available) missing = &l.raster_trace;
+        else if (s.izb.csm && !l.of(test).available) missing = &l.of(test);
+        else if (s.izb.csm && !raster_only && csm % 2 && !l.raster_csm.available) missing = &l.raster_csm;
+        SCOPED_TRACE(testing::Message() << kind << " trace " << shadows::backend_name(trace) << " csm " << csm);
+        module_->settings() = s;
+        shadows::FrameDesc f = frame_;
+        f.lights = light;
+        f.frame_index = next_frame_++;
+        if (missing) {
+          ++refused;
+          EXPECT_FALSE(missing->reason.empty());
+          expect_refused(f, missing->reason);
+        } else {
+          ++recorded;
+          std::string what;
+          submit([&](VkCommandBuffer cmd) { what = error_of([&] { module_->record(cmd, f); }); });
+          EXPECT_EQ(what, "") << "capabilities() marks every path available";
+          fill_output(VK_IMAGE_LAYOUT_GENERAL);
+        }
+      }
+  }
+  module_->settings() = valid_settings_;
+  std::printf("[ measure ] %zu combinations refused, %zu recorded\n", refused, recorded);
+  EXPECT_GT(refused, 0u);
+  EXPECT_GT(recorded, 0u);
+}
+
+// ----- Mesh bounds computed on the device (MeshDesc::bounds absent).
+
+class HostMeshBounds : public HostBadInput {
+ protected:
+  // A mesh of `count` vertices written at `stride` bytes from byte `offset` of its own buffer (float3,
+  // or float4 with a w that is never a coordinate), with `indices` after them; returns the buffer.
+  vulkan_host::Buffer write_mesh(shadows::MeshDesc& mesh, const std::vector<glm::vec3>& positions, bool float4,
+                                 uint32_t stride, uint32_t offset, bool indices16) {
+    const uint32_t count = uint32_t(positions.size());
+    const VkDeviceSize index_offset = (offset + VkDeviceSize(count) * stride + 15) / 16 * 16;
+    const uint32_t index_count = 3 * count;
+    // 16-bit indices are read as whole words: an odd count is padded to one (MeshDesc::indices).
+    vulkan_host::Buffer buffer = vulkan_host::make_buffer(
+        *device_, (index_offset + index_count * (indices16 ? 2 : 4) + 3) / 4 * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+    auto* bytes = static_cast<uint8_t*>(buffer.mapped);
+    std::memset(bytes, 0xff, buffer.size);  // NaN between the positions: read, it would show
+    for (uint32_t i = 0; i < count; ++i) {
+      std::memcpy(bytes + offset + size_t(i) * stride, &positions[i], 12);
+      const float w = i % 2 ? std::numeric_limits<float>::infinity() : -1.0e30f;
+      if (float4) std::memcpy(bytes + offset + size_t(i) * stride + 12, &w, 4);
+    }
+    for (uint32_t k = 0; k < index_count; ++k) {
+      const uint32_t index = (k * 7u) % count;
+      if (indices16) reinterpret_cast<uint16_t*>(bytes + index_offset)[k] = uint16_t(index);
+      else reinterpret_cast<uint32_t*>(bytes + index_offset)[k] = index;
+    }
+    mesh.positions = buffer.input(offset);
+    mesh.positions.size = VkDeviceSize(count - 1) * stride + (float4 ? 16 : 12);
+    mesh.position_format = float4 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32G32B32_SFLOAT;
+    mesh.position_stride = stride;
+    mesh.vertex_count = count;
+    mesh.indices = buffer.input(index_offset);
+    mesh.index_type = indices16 ? VK_INDEX_TYPE_UINT16 : VK_INDEX_TYPE_UINT32;
+    mesh.index_count = index_count;
+    return buffer;
+  }
+};
+
+// Positions spread over several orders of magnitude and both signs, from a fixed seed.
+std::vector<glm::vec3> scattered_positions(uint32_t count, uint32_t seed) {
+  std::vector<glm::vec3> out(count);
+  uint32_t state = seed;
+  auto next = [&] {
+    state = state * 1664525u + 1013904223u;
+    const float unit = float(state >> 8) / float(1u << 24);  // [0, 1)
+    const float magnitude = std::pow(10.0f, float(int(state % 7u)) - 3.0f);
+    return (unit * 2.0f - 1.0f) * magnitude;
+  };
+  for (glm::vec3& p : out) p = {next(), next(), next()};
+  return out;
+}
+
+// The bounds the device computes are the CPU's min and max over the positions, exactly (a min or max
+// only picks one of its inputs), for float3 and float4 positions at unusual strides and offsets, 16-
+// and 32-bit indices, several workgroups or one vertex; given bounds come back as given; meshes with
+// computed bounds then import and cast in a valid frame.
+TEST_F(HostMeshBounds, ComputedOnTheDeviceEqualTheCpuMinAndMax) {
+  struct Case {
+    const char* name;
+    std::vector<glm::vec3> positions;
+    bool float4;
+    uint32_t stride, offset;
+    bool indices16;
+  };
+  std::vector<Case> cases = {
+      {"float3 stride 20 u16", scattered_positions(1000, 1u), false, 20, 0, true},
+      {"float4 stride 36 offset 12 u16", scattered_positions(333, 2u), true, 36, 12, true},
+      {"float3 stride 12 offset 4 u32", scattered_positions(65, 3u), false, 12, 4, false},
+      {"float4 stride 16 u32", scattered_positions(64, 4u), true, 16, 0, false},
+      {"one vertex repeated", std::vector<glm::vec3>(5, glm::vec3(-2.5f, 0.0f, 1.0e-20f)), false, 24, 8, true},
+  };
+  cases[2].positions[17] = {-0.0f, 7.0e5f, -3.0e-7f};  // signed zero and an extreme
+  std::vector<vulkan_host::Buffer> buffers;
+  std::vector<shadows::Instance> instances;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    shadows::MeshDesc mesh;
+    mesh.name = c.name;
+    buffers.push_back(write_mesh(mesh, c.positions, c.float4, c.stride, c.offset, c.indices16));
+    ASSERT_FALSE(mesh.bounds.has_value());
+    const shadows::MeshId id = module_->register_mesh(mesh);
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+    for (const glm::vec3& p : c.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    const shadows::MeshBounds b = module_->mesh_bounds(id);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(b.min[k], lo[k]) << "axis " << k;
+      EXPECT_EQ(b.max[k], hi[k]) << "axis " << k;
+    }
+    instances.push_back({.mesh = id});
+  }
+  // Given bounds are kept as given (wider than the positions here).
+  shadows::MeshDesc given;
+  given.name = "given";
+  buffers.push_back(write_mesh(given, scattered_positions(10, 5u), false, 12, 0, false));
+  given.bounds = shadows::MeshBounds{{-2000, -2000, -2000}, {3000, 3000, 3000}};
+  const shadows::MeshBounds kept = module_->mesh_bounds(module_->register_mesh(given));
+  EXPECT_EQ(kept.min[1], -2000.0f);
+  EXPECT_EQ(kept.max[2], 3000.0f);
+  expect_one_line_naming(error_of([&] { module_->mesh_bounds(shadows::kNoMesh); }), "mesh_bounds: mesh id");
+  expect_valid_frame(instances);
+  for (vulkan_host::Buffer& b : buffers) vulkan_host::destroy(*device_, b);
+}
+
+// Without bounds, a position that is not finite is refused naming MeshDesc.positions (a w that is not
+// finite is not a position); the context stays usable.
+TEST_F(HostMeshBounds, NonFinitePositionIsRefusedWhenBoundsAreComputed) {
+  std::vector<glm::vec3> positions = scattered_positions(100, 6u);
+  positions[70].y = std::numeric_limits<float>::quiet_NaN();
+  shadows::MeshDesc mesh;
+  mesh.name = "nan";
+  vulkan_host::Buffer buffer = write_mesh(mesh, positions, true, 16, 0, true);
+  expect_mesh_refused(mesh, "MeshDesc 'nan'.positions hold a value that is not finite");
+  positions[70].y = -std::numeric_limits<float>::infinity();
+  vulkan_host::destroy(*device_, buffer);
+  buffer = write_mesh(mesh, positions, false, 12, 0, true);
+  expect_mesh_refused(mesh, "MeshDesc 'nan'.positions hold a value that is not finite");
   vulkan_host::destroy(*device_, buffer);
 }
 

@@ -83,7 +83,9 @@ MeshId GeometryStore::add(const MeshDesc& m) {
   if (m.index_type != VK_INDEX_TYPE_UINT16 && m.index_type != VK_INDEX_TYPE_UINT32)
     throw Error("shadows: " + what + ".index_type must be VK_INDEX_TYPE_UINT16 or VK_INDEX_TYPE_UINT32");
   const uint32_t index_bytes = m.index_type == VK_INDEX_TYPE_UINT16 ? 2 : 4;
-  check_buffer(m.indices, what + ".indices", VkDeviceSize(m.index_count) * index_bytes, index_bytes == 2);
+  // 16-bit indices are read as whole 4-byte words: the region must reach the end of the last word.
+  const VkDeviceSize index_end = m.indices.offset + VkDeviceSize(m.index_count) * index_bytes;
+  check_buffer(m.indices, what + ".indices", (index_end + 3) / 4 * 4 - m.indices.offset, index_bytes == 2);
   MeshInfo info;
   info.name = m.name;
   if (m.alpha_texture.present()) {
@@ -268,11 +270,11 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
     // Indices: 16-bit ones may start at an odd half-word; the shader takes the half from stride_words.
     const VkDeviceSize index_base = m.indices.offset / alignment * alignment;
     const VkDeviceSize index_delta = m.indices.offset - index_base;
+    // Whole words, within the region add() checked (its end rounded down to a word).
+    const VkDeviceSize index_range = (index_delta + m.indices.size) / 4 * 4;
     DescriptorWriter()
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.indices.buffer, index_base,
-                        (index_delta + m.indices.size + 3) / 4 * 4)
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.indices.buffer, index_base,
-                        (index_delta + m.indices.size + 3) / 4 * 4)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.indices.buffer, index_base, index_range)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.indices.buffer, index_base, index_range)
         .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
         .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
         .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle())

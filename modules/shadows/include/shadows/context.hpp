@@ -221,7 +221,9 @@ struct MeshDesc {
   VkFormat position_format = VK_FORMAT_R32G32B32_SFLOAT;
   uint32_t position_stride = 12;
   uint32_t vertex_count = 0;
-  // Triangle list; VK_INDEX_TYPE_UINT16 or UINT32. index_count a positive multiple of 3.
+  // Triangle list; VK_INDEX_TYPE_UINT16 or UINT32. index_count a positive multiple of 3. 16-bit indices
+  // are read as 4-byte words: offset + size must reach offset + 2 * index_count rounded up to a
+  // multiple of 4 (an odd index_count at the very end of a buffer needs 2 bytes of padding there).
   BufferInput indices;
   VkIndexType index_type = VK_INDEX_TYPE_UINT32;
   uint32_t index_count = 0;
