@@ -350,6 +350,127 @@ INSTANTIATE_TEST_SUITE_P(Modes, HostLights,
                                   std::to_string(info.param.spp) + "spp";
                          });
 
+// ----- What the output holds: OutputTerm::Occlusion (the default) and OutputTerm::Combined.
+
+// Where a captured point lies against a light: lit (reached and facing), or why not. Margins keep
+// rounding (the module rebuilds its points from the same depth, in float) from moving a point across.
+enum class Reach { Lit, OutsideCone, OutOfRange, FacingAway, Unsure };
+Reach classify(const reference::ShadingPoints& sp, size_t i, const vulkan_host::HostLight& light) {
+  const glm::vec3 p(sp.position[i]), n(sp.normal[i]);
+  const auto facing = [](float cosine) { return cosine > 0.02f ? Reach::Lit : cosine < -0.02f ? Reach::FacingAway : Reach::Unsure; };
+  const glm::vec3 direction = glm::make_vec3(light.direction.data());
+  if (light.kind == "sun") return facing(glm::dot(n, -direction));
+  const glm::vec3 position = glm::make_vec3(light.position.data());
+  // Facing away first: such a point is 0 in Combined wherever it lies.
+  const Reach faces = facing(glm::dot(n, glm::normalize(position - p)));
+  if (faces == Reach::FacingAway) return faces;
+  const float distance = glm::distance(p, position);
+  if (distance > light.range * 1.01f) return Reach::OutOfRange;
+  if (distance > light.range * 0.99f) return Reach::Unsure;
+  if (light.kind == "spot") {
+    const float angle = std::acos(std::clamp(glm::dot(glm::normalize(p - position), direction), -1.0f, 1.0f));
+    if (angle > light.outer_cone + 0.01f) return Reach::OutsideCone;
+    if (angle > light.outer_cone - 0.01f) return Reach::Unsure;
+  }
+  return faces;
+}
+
+// The same frame with each term, a sun, a spot and a point light (their ranges cut so that ground lies
+// beyond them): points outside the spot's cone, beyond a light's range or facing away from it are
+// exactly 1 in Occlusion and exactly 0 in Combined; points the light reaches and faces hold the same
+// term in both, occluded ones 0 (the combined term matches Embree, within the sun suite's bound).
+TEST(HostOutputTerm, OutsideReachOrFacingAwayIsOneInOcclusionAndZeroInCombined) {
+  // Per light (sun, spot, point), over both views: the points of each Reach, and the occluded ones.
+  size_t counts[3][5] = {}, occluded[3] = {};
+  for (uint32_t view : {0u, 1u}) {
+    SCOPED_TRACE(testing::Message() << "view " << view);
+    vulkan_host::Options o = options("izb", view, 1);
+    o.width = o.height = 160;
+    o.lights = {"sun", "spot", "point"};
+    o.local_range_scale = 0.6f;
+    o.frames = 1;
+    o.frames_in_flight = 1;
+    const Result combined = vulkan_host::run(o);
+    o.output_term = "occlusion";
+    const Result occlusion = vulkan_host::run(o);
+    EXPECT_EQ(combined.validation_messages + occlusion.validation_messages, 0u);
+    const vulkan_host::FrameCapture& fc = combined.frames.back();
+    const vulkan_host::FrameCapture& fo = occlusion.frames.back();
+    ASSERT_EQ(fc.depth, fo.depth) << "not the same frame";
+    ASSERT_EQ(fc.lights.size(), 3u);
+    for (size_t l = 0; l < fc.lights.size(); ++l) {
+      const vulkan_host::HostLight& light = fc.lights[l];
+      SCOPED_TRACE(light.kind);
+      const reference::ShadingPoints sp = shading_points(fc, combined.width, combined.height, light);
+      size_t differing = 0, not_one = 0, not_zero = 0, background_not_lit = 0;
+      for (size_t i = 0; i < fc.depth.size(); ++i) {
+        const float vc = fc.visibility[l][i], vo = fo.visibility[l][i];
+        if (!sp.covered(i)) {
+          background_not_lit += vc != 1.0f || vo != 1.0f;
+          continue;
+        }
+        const Reach r = classify(sp, i, light);
+        ++counts[l][int(r)];
+        if (r == Reach::Lit) {
+          differing += vc != vo;
+          occluded[l] += vc == 0.0f && vo == 0.0f;
+        } else if (r != Reach::Unsure) {
+          not_one += vo != 1.0f;
+          not_zero += vc != 0.0f;
+        }
+      }
+      EXPECT_EQ(not_one, 0u) << "Occlusion: points the light does not reach or face are not 1";
+      EXPECT_EQ(not_zero, 0u) << "Combined: points the light does not reach or face are not 0";
+      EXPECT_EQ(differing, 0u) << "points the light reaches and faces differ between the terms";
+      EXPECT_EQ(background_not_lit, 0u);
+      const reference::Comparison cmp = compare_with_embree(fc, combined.width, combined.height, l, 1);
+      EXPECT_EQ(cmp.coverage_disagreements, 0u);
+      EXPECT_LE(cmp.mismatch_rate, 0.0002);
+    }
+  }
+  // Every case was seen: the checks above can fail.
+  const char* kinds[3] = {"sun", "spot", "point"};
+  for (size_t l = 0; l < 3; ++l) {
+    SCOPED_TRACE(kinds[l]);
+    const size_t* c = counts[l];
+    std::printf("[ measure ] %-5s lit %zu (occluded %zu), outside cone %zu, out of range %zu, facing away %zu, unsure %zu\n",
+                kinds[l], c[0], occluded[l], c[1], c[2], c[3], c[4]);
+    EXPECT_GT(occluded[l], 0u);
+    EXPECT_GT(c[int(Reach::FacingAway)], 0u);
+    if (l > 0) {
+      EXPECT_GT(c[int(Reach::OutOfRange)], 0u);
+    }
+    if (l == 1) {
+      EXPECT_GT(c[int(Reach::OutsideCone)], 0u);
+    }
+  }
+}
+
+// Meshes registered without bounds (computed on the device) give the frame the CPU's bounds give, bit
+// for bit, for every light, in techniques whose light spaces are fitted to them.
+class HostAbsentBounds : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(HostAbsentBounds, FrameEqualsTheOneWithGivenBounds) {
+  vulkan_host::Options o = options(GetParam(), 0, 1);
+  o.width = o.height = 128;
+  o.lights = {"sun", "spot", "point"};
+  o.frames = 2;
+  o.frames_in_flight = 1;
+  const Result given = vulkan_host::run(o);
+  o.mesh_bounds = false;
+  const Result absent = vulkan_host::run(o);
+  EXPECT_EQ(given.validation_messages + absent.validation_messages, 0u);
+  ASSERT_EQ(given.frames.back().visibility.size(), 3u);
+  for (size_t l = 0; l < 3; ++l) {
+    SCOPED_TRACE(given.frames.back().lights[l].kind);
+    const std::vector<float>& v = given.frames.back().visibility[l];
+    EXPECT_GT(size_t(std::count(v.begin(), v.end(), 0.0f)), 0u) << "no shadow to compare";
+    EXPECT_EQ(v, absent.frames.back().visibility[l]);
+  }
+}
+INSTANTIATE_TEST_SUITE_P(Modes, HostAbsentBounds, ::testing::Values("izb", "cascades"),
+                         [](const auto& info) { return info.param; });
+
 // ----- Bad host input: one-line shadows::Error naming the argument, nothing recorded, no message.
 
 class HostBadInput : public ::testing::Test {
