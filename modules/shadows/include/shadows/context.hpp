@@ -238,8 +238,8 @@ struct MeshDesc {
   float alpha_scale = 1.0f;  // the texture's alpha is multiplied by this first (glTF's base colour factor)
   AlphaWrap wrap_u = AlphaWrap::Repeat, wrap_v = AlphaWrap::Repeat;
   // Object-space bounds of the positions, which the light-space fits and culling use (on the CPU).
-  // Given: finite, min <= max on every axis, holding every position (refused otherwise, naming
-  // MeshDesc.bounds). Absent (std::nullopt, the default): register_mesh() computes them on the device
+  // Given: finite with min <= max on every axis (refused otherwise, naming MeshDesc.bounds), and
+  // holding every position (not checked: a box too small lets casters be culled where they reach). Absent (std::nullopt, the default): register_mesh() computes them on the device
   // before it returns: one compute dispatch (min and max over all vertex_count positions, exact)
   // submitted to ContextDesc::queue, which it waits for, and the 24 bytes read back. The positions
   // must then hold their data when register_mesh() is called (written by the host, or by device work
@@ -403,7 +403,7 @@ struct Capability {
 struct LightCapabilities {
   Capability technique[6];  // indexed by Technique
   // The IZB's paths (Technique::Izb and Hybrid; a local light's grid is traced by compute passes only):
-  Capability raster_trace;   // IzbSettings::trace Raster (Auto never takes an unavailable path)
+  Capability raster_trace;   // IzbSettings::trace Raster
   Capability compute_trace;  // IzbSettings::trace Compute
   Capability raster_csm;     // the CSM prepass as raster work: IzbSettings::csm_backend Raster
   Capability compute_csm;    // the CSM prepass as compute work (csm_test hertel or bary)
