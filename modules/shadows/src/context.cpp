@@ -238,7 +238,13 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
 // adopted engine::gpu::Context then releases what it deferred.
 ContextImpl::~ContextImpl() = default;
 
+// Fixed by the device and what the host enabled: made once, on first use (record() checks against it).
 Capabilities ContextImpl::capabilities() const {
+  if (!capabilities_) capabilities_ = find_capabilities();
+  return *capabilities_;
+}
+
+Capabilities ContextImpl::find_capabilities() const {
   Capabilities c;
   auto& self = const_cast<ContextImpl&>(*this);
   const engine::gpu::DeviceFeatures& features = gpu_->features();
@@ -324,8 +330,8 @@ void ContextImpl::check_paths(const Light& light, const std::string& name) const
   const bool raster_csm = izb.csm_backend == PassBackend::Raster && izb.csm_test != CsmTest::BarycentricHw &&
                           izb.csm_test != CsmTest::InnerHw;
   if (izb.trace != PassBackend::Raster && !izb.csm) return;  // nothing that may be missing
-  const Capabilities caps = capabilities();
-  const LightCapabilities& l = caps.of(light.type);
+  if (!capabilities_) capabilities_ = find_capabilities();
+  const LightCapabilities& l = capabilities_->of(light.type);
   const char* kind = light.type == LightType::Spot ? "spot" : light.type == LightType::Point ? "point" : "directional";
   const auto refuse = [&](const std::string& setting, const Capability& cap) {
     if (!cap.available)

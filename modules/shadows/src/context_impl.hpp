@@ -68,6 +68,7 @@ class ContextImpl final : public Context {
   void clear_term_and_overlay(VkCommandBuffer cmd);
   void validate_light(const Light& light, const std::string& name) const;
   void check_paths(const Light& light, const std::string& name) const;
+  Capabilities find_capabilities() const;
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
   void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool with_overlay,
@@ -99,6 +100,7 @@ class ContextImpl final : public Context {
   engine::gpu::Sampler nearest_;
   engine::gpu::Pipeline inputs_pipeline_;
   // [R8, R16F, R32F][HOST_OUTPUT_* bits, at most 7], made on first use (output_pipeline).
+  mutable std::optional<Capabilities> capabilities_;  // capabilities(), made once
   engine::gpu::Pipeline output_pipelines_[3][16];  // by format, HOST_OUTPUT_* bits
   const engine::gpu::Pipeline& output_pipeline(int format, uint32_t what);
   engine::gpu::Image dummy_input_;              // bound where an optional input is absent
