@@ -1109,7 +1109,7 @@ std::vector<glm::vec3> scattered_positions(uint32_t count, uint32_t seed) {
 // The bounds the device computes are the CPU's min and max over the positions, exactly (a min or max
 // only picks one of its inputs), for float3 and float4 positions at unusual strides and offsets, 16-
 // and 32-bit indices, several workgroups or one vertex; given bounds come back as given; meshes with
-// computed bounds then import and cast in a valid frame.
+// computed bounds then import in a valid frame.
 TEST_F(HostMeshBounds, ComputedOnTheDeviceEqualTheCpuMinAndMax) {
   struct Case {
     const char* name;
@@ -1153,6 +1153,9 @@ TEST_F(HostMeshBounds, ComputedOnTheDeviceEqualTheCpuMinAndMax) {
   EXPECT_EQ(kept.min[1], -2000.0f);
   EXPECT_EQ(kept.max[2], 3000.0f);
   expect_one_line_naming(error_of([&] { module_->mesh_bounds(shadows::kNoMesh); }), "mesh_bounds: mesh id");
+  // The next frame imports them; as casters of a frame with no shading points they would only cost
+  // time on a CPU device (their scattered triangles span a 2000-unit box).
+  for (shadows::Instance& instance : instances) instance.casts_shadow = false;
   expect_valid_frame(instances);
   for (vulkan_host::Buffer& b : buffers) vulkan_host::destroy(*device_, b);
 }
