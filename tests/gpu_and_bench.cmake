@@ -347,9 +347,10 @@ set_tests_properties(vulkan_host_writes_png PROPERTIES LABELS gpu FAIL_REGULAR_E
 add_executable(host_tests host/host_test.cpp)
 target_link_libraries(host_tests PRIVATE vulkan_host_app shadow_reference GTest::gtest_main)
 target_strict_warnings(host_tests)
-# The host path's smoke set: every refusal, several lights in one record, frames in flight, a few of
-# the input matrix's pairings (CPU code the sanitizer run protects); the rest of it in label gpu.
-set(HOST_SMOKE_FILTER "HostBadInput.*:HostDevice.*:Modes/HostLights.*/izb_1spp:Slots/HostFramesInFlight.*/2_in_flight:\
+# The host path's smoke set: every refusal (capabilities per light type, mesh bounds computed on the
+# device included), several lights in one record, frames in flight, a few of the input matrix's
+# pairings (CPU code the sanitizer run protects); the rest of it in label gpu.
+set(HOST_SMOKE_FILTER "HostBadInput.*:HostDevice.*:HostLightCapabilities.*:HostMeshBounds.*:Modes/HostLights.*/izb_1spp:Slots/HostFramesInFlight.*/2_in_flight:\
 Pairs/HostInputMatrix.*/0_*:Pairs/HostInputMatrix.*/5_*:Pairs/HostInputMatrix.*/10_*:Pairs/HostInputMatrix.*/15_*:\
 Pairs/HostInputMatrix.*/17_*:Modes/HostMatchesEmbree.*/izb_csm_view0_1spp")
 gtest_discover_tests(host_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "${HOST_SMOKE_FILTER}"

@@ -50,7 +50,7 @@ Device::Device(const DeviceOptions& options) {
   info.enabledExtensionCount = uint32_t(extensions.size());
   info.ppEnabledExtensionNames = extensions.data();
   check(vkCreateInstance(&info, nullptr, &instance), "vkCreateInstance (is the validation layer installed?)");
-  for (const char* e : extensions) instance_extensions.emplace_back(e);
+  instance_extensions = extensions;
   if (validation) {
     auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
         vkGetInstanceProcAddr(instance, "vkCreateDebugUtilsMessengerEXT"));
@@ -122,7 +122,8 @@ shadows::ContextDesc Device::context_desc(uint32_t frames_in_flight, const shado
   desc.queue = queue;
   desc.get_instance_proc_addr = vkGetInstanceProcAddr;
   desc.get_device_proc_addr = vkGetDeviceProcAddr;
-  desc.enabled_instance_extensions = instance_extensions;
+  desc.enabled_instance_extension_names = instance_extensions.data();
+  desc.enabled_instance_extension_count = uint32_t(instance_extensions.size());
   setup->describe(desc);
   desc.frames_in_flight = frames_in_flight;
   desc.settings = settings;

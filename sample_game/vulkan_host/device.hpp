@@ -38,7 +38,7 @@ class Device {
   uint32_t family = 0;
   VkQueue queue = VK_NULL_HANDLE;
   std::string name;
-  std::vector<std::string> instance_extensions;
+  std::vector<const char*> instance_extensions;  // the array vkCreateInstance took (static names)
   std::unique_ptr<shadows::DeviceSetup> setup;  // the module's features and extensions, as created
 
  private:

@@ -3,7 +3,7 @@
 //               [--view 0|1] [--device gpu|lavapipe] [--validation] [--frames-in-flight 1..8]
 //               [--lights sun,spot,point] [--moving-sun] [--depth d32|d24s8|d32s8|d16] [--reversed-z]
 //               [--normals oct|xyz] [--view-normals] [--geometric-normals] [--facing-in-alpha]
-//               [--output r8|r16f|r32f]
+//               [--output r8|r16f|r32f] [--output-term occlusion|combined] [--no-mesh-bounds]
 // Exits non-zero on any error, and on any validation message when the layer is on (--validation,
 // ENGINE_VALIDATION=1 or ENGINE_SYNC_VALIDATION=1).
 #include <cstdio>
@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
     if (arg == "--view-normals") { o.view_space_normals = true; continue; }
     if (arg == "--geometric-normals") { o.geometric_normals = true; continue; }
     if (arg == "--facing-in-alpha") { o.facing_in_alpha = o.geometric_normals = true; continue; }
+    if (arg == "--no-mesh-bounds") { o.mesh_bounds = false; continue; }
     if (!value) ok = false;
     else if (arg == "--out") out = value;
     else if (arg == "--frames") ok = (o.frames = unsigned(std::atoi(value))) > 0;
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
     else if (arg == "--depth") o.depth_format = value;
     else if (arg == "--normals") o.normals = value;
     else if (arg == "--output") o.output_format = value;
+    else if (arg == "--output-term") o.output_term = value;
     else if (arg == "--lights") {
       o.lights.clear();
       for (std::string list = value; !list.empty();) {

@@ -97,7 +97,7 @@ struct FrameLights {
   std::vector<shadows::Light> module;
   std::vector<HostLight> host;
 };
-FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun) {
+FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun, float range_scale) {
   FrameLights out;
   for (const std::string& kind : kinds) {
     shadows::Light l;
@@ -111,14 +111,14 @@ FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, boo
       l.type = shadows::LightType::Spot;
       std::memcpy(l.direction, &d, 12);
       std::memcpy(l.position, &position, 12);
-      l.range = 12.0f;
+      l.range = 12.0f * range_scale;
       l.inner_cone = 0.45f;
       l.outer_cone = 0.6f;
     } else if (kind == "point") {
       const glm::vec3 position(0.5f, 3.4f, -0.6f);
       l.type = shadows::LightType::Point;
       std::memcpy(l.position, &position, 12);
-      l.range = 9.0f;
+      l.range = 9.0f * range_scale;
     } else {
       throw std::runtime_error("unknown light '" + kind + "' (sun, spot or point)");
     }
@@ -197,6 +197,10 @@ Result run(const Options& o) {
   Device d({.device = o.device, .validation = o.validation, .sync_validation = o.sync_validation});
   const VkDevice dev = d.device;
   auto module = shadows::Context::create(d.context_desc(F, *settings));
+  if (o.output_term != "occlusion" && o.output_term != "combined")
+    throw std::runtime_error("unknown output term '" + o.output_term + "' (occlusion or combined)");
+  const shadows::OutputTerm output_term =
+      o.output_term == "combined" ? shadows::OutputTerm::Combined : shadows::OutputTerm::Occlusion;
   const shadows::Capability can = module->capabilities().of(settings->technique);
   if (!can.available) throw std::runtime_error(can.reason);
   module->set_collect_stats(o.report_completed);
@@ -229,8 +233,11 @@ Result run(const Options& o) {
     desc.indices = mesh_buffers[m].input(vertex_bytes);
     desc.index_type = index_types[m];
     desc.index_count = uint32_t(mesh.indices.size());
-    std::memcpy(desc.bounds_min, &mesh.min, 12);
-    std::memcpy(desc.bounds_max, &mesh.max, 12);
+    if (o.mesh_bounds) {
+      desc.bounds.emplace();
+      std::memcpy(desc.bounds->min, &mesh.min, 12);
+      std::memcpy(desc.bounds->max, &mesh.max, 12);
+    }
     mesh_ids[m] = module->register_mesh(desc);
   }
 
@@ -467,7 +474,7 @@ Result run(const Options& o) {
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun);
+    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun, o.local_range_scale);
     const bool capture = o.capture_every_frame || frame + 1 == o.frames;
 
     // G-buffer. Earlier frames read it (module, lighting, capture copies); their contents are discarded.
@@ -576,6 +583,7 @@ Result run(const Options& o) {
     fd.instance_count = uint32_t(instances.size());
     fd.output = visibility[0].input(VK_IMAGE_LAYOUT_GENERAL);
     fd.light_outputs = light_outputs.empty() ? nullptr : light_outputs.data();
+    fd.output_term = output_term;
     module->record(cmd, fd);
 
     // Lighting: albedo * (ambient + sun * the first light's visibility), into the lit frame (written

@@ -26,6 +26,7 @@ struct Options {
   // visibility lights the frame; the others go to FrameDesc::light_outputs).
   std::vector<std::string> lights = {"sun"};
   bool moving_sun = false;        // the sun turns a little every frame (frame 0 as when still)
+  float local_range_scale = 1.0f;  // scales the spot and point lights' ranges (below 1: ground they no longer reach)
   bool capture_every_frame = false;  // Result::frames holds every frame, not only the last
   // Calls Context::frame_completed() for each frame whose fence it has waited for, as a host that
   // knows its frames' completion does (statistics and the automatic choices' measures come back then).
@@ -41,6 +42,10 @@ struct Options {
   std::string output_format = "r8";    // the module's outputs: r8 (R8_UNORM), r16f or r32f
   bool terminator_offset = false;      // an R16G16B16A16_SFLOAT offset of kTerminatorOffset along the normal
   bool receiver_mask = false;          // the albedo's alpha as the receiver mask: a tile in the pillar's shadow receives none
+  // FrameDesc::output_term: "occlusion" (the module's default; this host's lighting applies N.L itself)
+  // or "combined" (0 also where a light does not reach or face a point: what the reference traces).
+  std::string output_term = "occlusion";
+  bool mesh_bounds = true;             // MeshDesc::bounds given; false: absent, computed by the module on the device
 };
 
 // The terminator offset the host writes with Options::terminator_offset: this far along the outward normal.

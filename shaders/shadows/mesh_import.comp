@@ -8,10 +8,39 @@ layout(std430, set = 0, binding = MESH_IMPORT_BINDING_SOURCE) readonly buffer So
 layout(std430, set = 0, binding = MESH_IMPORT_BINDING_UVS) readonly buffer Uvs { uint uvs[]; };
 layout(std430, set = 0, binding = MESH_IMPORT_BINDING_VERTICES) writeonly buffer Vertices { float vertices[]; };
 layout(std430, set = 0, binding = MESH_IMPORT_BINDING_INDICES) writeonly buffer Indices { uint indices[]; };
+layout(std430, set = 0, binding = MESH_IMPORT_BINDING_BOUNDS) buffer Bounds { uint bounds[6]; };
+
+shared uint group_bounds[6];
+
+// MESH_IMPORT_BOUNDS: min and max of the positions as order-preserving keys (mesh_bounds_key), first
+// over the workgroup in shared memory, then one atomic per key and workgroup into the buffer. Exact:
+// a min or max only picks one of the inputs.
+void import_bounds() {
+  uint lane = gl_LocalInvocationIndex;
+  if (lane < 6u) group_bounds[lane] = lane < 3u ? kMeshBoundsEmptyMin : kMeshBoundsEmptyMax;
+  barrier();
+  uint i = gl_GlobalInvocationID.x;
+  if (i < push.count) {
+    uint src = push.src_word + i * push.stride_words;
+    for (uint c = 0u; c < 3u; ++c) {
+      uint key = mesh_bounds_key(source[src + c]);
+      atomicMin(group_bounds[c], key);
+      atomicMax(group_bounds[3u + c], key);
+    }
+  }
+  barrier();
+  if (lane < 3u) atomicMin(bounds[lane], group_bounds[lane]);
+  else if (lane < 6u) atomicMax(bounds[lane], group_bounds[lane]);
+}
 
 // A host mesh into the module's buffers: positions (and uvs) into the engine vertex layout (8 floats:
 // position, normal, uv; the normal is unused by the shadow passes and left 0), indices widened to 32 bits.
 void main() {
+  // A push constant: the same for the whole dispatch, so the barriers inside stay in uniform control flow.
+  if (push.mode == MESH_IMPORT_BOUNDS) {
+    import_bounds();
+    return;
+  }
   uint i = gl_GlobalInvocationID.x;
   if (i >= push.count) return;
   if (push.mode == MESH_IMPORT_VERTICES) {

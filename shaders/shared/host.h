@@ -50,6 +50,18 @@ SHARED_CONST uint HOST_OUTPUT_BINDING_OVERLAY_OUT = 3u;
 SHARED_CONST uint HOST_OUTPUT_COPY_OVERLAY = 1u;   // the host's overlay from the module's
 SHARED_CONST uint HOST_OUTPUT_ZERO_OVERLAY = 2u;   // the host's overlay as 0 (no debug view drew)
 SHARED_CONST uint HOST_OUTPUT_ALL_LIT = 4u;        // the host's output as 1 (no technique ran)
+SHARED_CONST uint HOST_OUTPUT_OCCLUSION = 8u;      // OutputTerm::Occlusion: 1 where the light does not reach or face
+SHARED_CONST uint HOST_OUTPUT_BINDING_WORLD_POSITION = 4u;    // the shading points the passes read
+SHARED_CONST uint HOST_OUTPUT_BINDING_GEOMETRIC_NORMAL = 5u;
+// The light the term is for (HostOutputPush::extent.z).
+SHARED_CONST uint HOST_OUTPUT_LIGHT_DIRECTIONAL = 0u;
+SHARED_CONST uint HOST_OUTPUT_LIGHT_SPOT = 1u;
+SHARED_CONST uint HOST_OUTPUT_LIGHT_POINT = 2u;
+struct HostOutputPush {
+  uvec4 extent;          // x, y: size; z: HOST_OUTPUT_LIGHT_*
+  vec4 light_position;   // xyz: as the passes take it (relative to the frame's origin); w: range
+  vec4 light_direction;  // xyz: a spot light's unit axis; w: its outer-cone cosine
+};
 
 // Mesh import: one thread per vertex (positions, uvs) or per index.
 struct MeshImportPush {
@@ -65,11 +77,25 @@ struct MeshImportPush {
 SHARED_CONST uint MESH_IMPORT_VERTICES = 0u;
 SHARED_CONST uint MESH_IMPORT_INDICES_32 = 1u;
 SHARED_CONST uint MESH_IMPORT_INDICES_16 = 2u;
+// Bounds of the positions (src_word, stride_words, count as for vertices) into MESH_IMPORT_BINDING_BOUNDS:
+// min xyz then max xyz, as mesh_bounds_key encodes them; the buffer starts at kMeshBoundsEmpty.
+SHARED_CONST uint MESH_IMPORT_BOUNDS = 3u;
 SHARED_CONST uint kNoUv = 0xffffffffu;
 SHARED_CONST uint MESH_IMPORT_BINDING_SOURCE = 0u;  // host positions or indices
 SHARED_CONST uint MESH_IMPORT_BINDING_UVS = 1u;
 SHARED_CONST uint MESH_IMPORT_BINDING_VERTICES = 2u;
 SHARED_CONST uint MESH_IMPORT_BINDING_INDICES = 3u;
+SHARED_CONST uint MESH_IMPORT_BINDING_BOUNDS = 4u;
+// A float as a uint whose unsigned order is the float's order (negative floats: every bit flipped;
+// the others: the sign bit set), so atomic min and max on the keys are min and max on the floats.
+SHARED_INLINE uint mesh_bounds_key(uint float_bits) {
+  return (float_bits & 0x80000000u) != 0u ? ~float_bits : float_bits | 0x80000000u;
+}
+SHARED_INLINE uint mesh_bounds_float_bits(uint key) {
+  return (key & 0x80000000u) != 0u ? key & 0x7fffffffu : ~key;
+}
+SHARED_CONST uint kMeshBoundsEmptyMin = 0xffffffffu;  // the min keys' start: above every key
+SHARED_CONST uint kMeshBoundsEmptyMax = 0u;           // the max keys' start: below every key
 
 // Texture import: one thread per texel, into the material-texture words (shared/material.h).
 struct TextureImportPush {
@@ -86,6 +112,7 @@ SHARED_END
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::HostInputs) == 2 * 64 + 4 * 16);
 static_assert(sizeof(gpu_shared::MeshImportPush) == 32);
+static_assert(sizeof(gpu_shared::HostOutputPush) == 48);
 static_assert(sizeof(gpu_shared::TextureImportPush) == 16);
 #endif
 #endif

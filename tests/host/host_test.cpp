@@ -138,6 +138,7 @@ vulkan_host::Options options(const std::string& mode, uint32_t view, uint32_t sp
   o.spp = spp;
   o.device = test_device();
   o.validation = true;
+  o.output_term = "combined";  // the reference traces the combined term (0 where a light does not reach or face)
   return o;
 }
 
@@ -348,6 +349,127 @@ INSTANTIATE_TEST_SUITE_P(Modes, HostLights,
                            return (info.param.mode == "izb" ? std::string("izb") : std::string("izb_csm")) + "_" +
                                   std::to_string(info.param.spp) + "spp";
                          });
+
+// ----- What the output holds: OutputTerm::Occlusion (the default) and OutputTerm::Combined.
+
+// Where a captured point lies against a light: lit (reached and facing), or why not. Margins keep
+// rounding (the module rebuilds its points from the same depth, in float) from moving a point across.
+enum class Reach { Lit, OutsideCone, OutOfRange, FacingAway, Unsure };
+Reach classify(const reference::ShadingPoints& sp, size_t i, const vulkan_host::HostLight& light) {
+  const glm::vec3 p(sp.position[i]), n(sp.normal[i]);
+  const auto facing = [](float cosine) { return cosine > 0.02f ? Reach::Lit : cosine < -0.02f ? Reach::FacingAway : Reach::Unsure; };
+  const glm::vec3 direction = glm::make_vec3(light.direction.data());
+  if (light.kind == "sun") return facing(glm::dot(n, -direction));
+  const glm::vec3 position = glm::make_vec3(light.position.data());
+  // Facing away first: such a point is 0 in Combined wherever it lies.
+  const Reach faces = facing(glm::dot(n, glm::normalize(position - p)));
+  if (faces == Reach::FacingAway) return faces;
+  const float distance = glm::distance(p, position);
+  if (distance > light.range * 1.01f) return Reach::OutOfRange;
+  if (distance > light.range * 0.99f) return Reach::Unsure;
+  if (light.kind == "spot") {
+    const float angle = std::acos(std::clamp(glm::dot(glm::normalize(p - position), direction), -1.0f, 1.0f));
+    if (angle > light.outer_cone + 0.01f) return Reach::OutsideCone;
+    if (angle > light.outer_cone - 0.01f) return Reach::Unsure;
+  }
+  return faces;
+}
+
+// The same frame with each term, a sun, a spot and a point light (their ranges cut so that ground lies
+// beyond them): points outside the spot's cone, beyond a light's range or facing away from it are
+// exactly 1 in Occlusion and exactly 0 in Combined; points the light reaches and faces hold the same
+// term in both, occluded ones 0 (the combined term matches Embree, within the sun suite's bound).
+TEST(HostOutputTerm, OutsideReachOrFacingAwayIsOneInOcclusionAndZeroInCombined) {
+  // Per light (sun, spot, point), over both views: the points of each Reach, and the occluded ones.
+  size_t counts[3][5] = {}, occluded[3] = {};
+  for (uint32_t view : {0u, 1u}) {
+    SCOPED_TRACE(testing::Message() << "view " << view);
+    vulkan_host::Options o = options("izb", view, 1);
+    o.width = o.height = 160;
+    o.lights = {"sun", "spot", "point"};
+    o.local_range_scale = 0.6f;
+    o.frames = 1;
+    o.frames_in_flight = 1;
+    const Result combined = vulkan_host::run(o);
+    o.output_term = "occlusion";
+    const Result occlusion = vulkan_host::run(o);
+    EXPECT_EQ(combined.validation_messages + occlusion.validation_messages, 0u);
+    const vulkan_host::FrameCapture& fc = combined.frames.back();
+    const vulkan_host::FrameCapture& fo = occlusion.frames.back();
+    ASSERT_EQ(fc.depth, fo.depth) << "not the same frame";
+    ASSERT_EQ(fc.lights.size(), 3u);
+    for (size_t l = 0; l < fc.lights.size(); ++l) {
+      const vulkan_host::HostLight& light = fc.lights[l];
+      SCOPED_TRACE(light.kind);
+      const reference::ShadingPoints sp = shading_points(fc, combined.width, combined.height, light);
+      size_t differing = 0, not_one = 0, not_zero = 0, background_not_lit = 0;
+      for (size_t i = 0; i < fc.depth.size(); ++i) {
+        const float vc = fc.visibility[l][i], vo = fo.visibility[l][i];
+        if (!sp.covered(i)) {
+          background_not_lit += vc != 1.0f || vo != 1.0f;
+          continue;
+        }
+        const Reach r = classify(sp, i, light);
+        ++counts[l][int(r)];
+        if (r == Reach::Lit) {
+          differing += vc != vo;
+          occluded[l] += vc == 0.0f && vo == 0.0f;
+        } else if (r != Reach::Unsure) {
+          not_one += vo != 1.0f;
+          not_zero += vc != 0.0f;
+        }
+      }
+      EXPECT_EQ(not_one, 0u) << "Occlusion: points the light does not reach or face are not 1";
+      EXPECT_EQ(not_zero, 0u) << "Combined: points the light does not reach or face are not 0";
+      EXPECT_EQ(differing, 0u) << "points the light reaches and faces differ between the terms";
+      EXPECT_EQ(background_not_lit, 0u);
+      const reference::Comparison cmp = compare_with_embree(fc, combined.width, combined.height, l, 1);
+      EXPECT_EQ(cmp.coverage_disagreements, 0u);
+      EXPECT_LE(cmp.mismatch_rate, 0.0002);
+    }
+  }
+  // Every case was seen: the checks above can fail.
+  const char* kinds[3] = {"sun", "spot", "point"};
+  for (size_t l = 0; l < 3; ++l) {
+    SCOPED_TRACE(kinds[l]);
+    const size_t* c = counts[l];
+    std::printf("[ measure ] %-5s lit %zu (occluded %zu), outside cone %zu, out of range %zu, facing away %zu, unsure %zu\n",
+                kinds[l], c[0], occluded[l], c[1], c[2], c[3], c[4]);
+    EXPECT_GT(occluded[l], 0u);
+    EXPECT_GT(c[int(Reach::FacingAway)], 0u);
+    if (l > 0) {
+      EXPECT_GT(c[int(Reach::OutOfRange)], 0u);
+    }
+    if (l == 1) {
+      EXPECT_GT(c[int(Reach::OutsideCone)], 0u);
+    }
+  }
+}
+
+// Meshes registered without bounds (computed on the device) give the frame the CPU's bounds give, bit
+// for bit, for every light, in techniques whose light spaces are fitted to them.
+class HostAbsentBounds : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(HostAbsentBounds, FrameEqualsTheOneWithGivenBounds) {
+  vulkan_host::Options o = options(GetParam(), 0, 1);
+  o.width = o.height = 128;
+  o.lights = {"sun", "spot", "point"};
+  o.frames = 2;
+  o.frames_in_flight = 1;
+  const Result given = vulkan_host::run(o);
+  o.mesh_bounds = false;
+  const Result absent = vulkan_host::run(o);
+  EXPECT_EQ(given.validation_messages + absent.validation_messages, 0u);
+  ASSERT_EQ(given.frames.back().visibility.size(), 3u);
+  for (size_t l = 0; l < 3; ++l) {
+    SCOPED_TRACE(given.frames.back().lights[l].kind);
+    const std::vector<float>& v = given.frames.back().visibility[l];
+    EXPECT_GT(size_t(std::count(v.begin(), v.end(), 0.0f)), 0u) << "no shadow to compare";
+    EXPECT_EQ(v, absent.frames.back().visibility[l]);
+  }
+}
+INSTANTIATE_TEST_SUITE_P(Modes, HostAbsentBounds, ::testing::Values("izb", "cascades"),
+                         [](const auto& info) { return info.param; });
 
 // ----- Bad host input: one-line shadows::Error naming the argument, nothing recorded, no message.
 
@@ -718,7 +840,15 @@ TEST_F(HostBadInput, EveryContextDescRefusalNamesItsField) {
       {[](shadows::ContextDesc& d) { d.api_version = VK_API_VERSION_1_2; }, "ContextDesc.api_version is 1.2"},
       {[](shadows::ContextDesc& d) { d.enabled_features = nullptr; }, "ContextDesc.enabled_features is null"},
       {[](shadows::ContextDesc& d) { d.queue_family = 99; }, "ContextDesc.queue_family 99 is out of range"},
-      {[](shadows::ContextDesc& d) { d.enabled_device_extensions.clear(); }, "ContextDesc.enabled_device_extensions lacks VK_KHR_"},
+      {[](shadows::ContextDesc& d) { d.enabled_device_extension_count = 0; }, "ContextDesc.enabled_device_extension_names lacks VK_KHR_"},
+      {[](shadows::ContextDesc& d) { d.enabled_device_extension_names = nullptr; },
+       "ContextDesc.enabled_device_extension_names is null with enabled_device_extension_count " +
+           std::to_string(valid.enabled_device_extension_count)},
+      {[](shadows::ContextDesc& d) {
+         d.enabled_instance_extension_names = nullptr;
+         d.enabled_instance_extension_count = 1;
+       },
+       "ContextDesc.enabled_instance_extension_names is null with enabled_instance_extension_count 1"},
   };
   for (const auto& [mutate, argument] : cases) {
     SCOPED_TRACE(argument);
@@ -800,9 +930,7 @@ TEST_F(HostBadInput, EveryMeshDescRefusalNamesItsField) {
   valid.vertex_count = 3;
   valid.indices = buffer.input(64);
   valid.index_count = 3;
-  const float lo[3] = {-1, 1, -1}, hi[3] = {1, 1, 1};
-  std::memcpy(valid.bounds_min, lo, 12);
-  std::memcpy(valid.bounds_max, hi, 12);
+  valid.bounds = shadows::MeshBounds{{-1, 1, -1}, {1, 1, 1}};
   using Mutation = std::function<void(shadows::MeshDesc&)>;
   const std::vector<std::pair<Mutation, std::string>> cases = {
       {[](shadows::MeshDesc& m) { m.index_count = 0; }, "MeshDesc 'tri'.index_count is 0"},
@@ -817,6 +945,11 @@ TEST_F(HostBadInput, EveryMeshDescRefusalNamesItsField) {
       {[](shadows::MeshDesc& m) { m.index_type = VK_INDEX_TYPE_NONE_KHR; }, "MeshDesc 'tri'.index_type"},
       {[](shadows::MeshDesc& m) { m.indices.buffer = VK_NULL_HANDLE; }, "MeshDesc 'tri'.indices.buffer is VK_NULL_HANDLE"},
       {[](shadows::MeshDesc& m) { m.indices.size = 8; }, "MeshDesc 'tri'.indices.size is 8"},
+      {[](shadows::MeshDesc& m) {
+         m.index_type = VK_INDEX_TYPE_UINT16;
+         m.indices.size = 6;
+       },
+       "MeshDesc 'tri'.indices.size is 6 bytes, the mesh needs 8"},
       {[&](shadows::MeshDesc& m) { m.alpha_texture = extra_.input(VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL); },
        "MeshDesc 'tri'.uvs is required with an alpha_texture"},
       {[&](shadows::MeshDesc& m) {
@@ -831,7 +964,10 @@ TEST_F(HostBadInput, EveryMeshDescRefusalNamesItsField) {
          m.uvs = buffer.input(128);
        },
        "MeshDesc 'tri'.alpha_texture.usage lacks VK_IMAGE_USAGE_SAMPLED_BIT"},
-      {[](shadows::MeshDesc& m) { m.bounds_min[1] = 2.0f; }, "MeshDesc 'tri'.bounds_min/bounds_max are not a box"},
+      {[](shadows::MeshDesc& m) { m.bounds->min[1] = 2.0f; }, "MeshDesc 'tri'.bounds is not a box"},
+      {[](shadows::MeshDesc& m) { m.bounds->max[2] = std::numeric_limits<float>::infinity(); },
+       "MeshDesc 'tri'.bounds has a value that is not finite"},
+      {[](shadows::MeshDesc& m) { m.bounds->min[0] = std::nanf(""); }, "MeshDesc 'tri'.bounds has a value that is not finite"},
   };
   for (const auto& [mutate, argument] : cases) {
     SCOPED_TRACE(argument);
@@ -842,6 +978,201 @@ TEST_F(HostBadInput, EveryMeshDescRefusalNamesItsField) {
   shadows::Instance instance;
   instance.mesh = module_->register_mesh(valid);
   expect_valid_frame({instance});
+  vulkan_host::destroy(*device_, buffer);
+}
+
+// ----- Capabilities per light type, and record() refusing exactly what they mark unavailable.
+
+constexpr shadows::Light kPointLight{.type = shadows::LightType::Point, .position = {0.0f, 3.0f, 0.0f}, .range = 10.0f};
+
+class HostLightCapabilities : public HostBadInput {};
+
+// A spot light with the raster trace: capabilities() says it is unavailable and why, and record()
+// refuses it with that reason, naming the light.
+TEST_F(HostLightCapabilities, SpotLightRasterTraceIsUnavailableWithTheReasonRecordGives) {
+  const shadows::Capabilities caps = module_->capabilities();
+  const shadows::LightCapabilities& spot = caps.of(shadows::LightType::Spot);
+  EXPECT_TRUE(spot.of(shadows::Technique::Izb).available);
+  EXPECT_TRUE(spot.compute_trace.available);
+  ASSERT_FALSE(spot.raster_trace.available);
+  EXPECT_NE(spot.raster_trace.reason.find("spot light"), std::string::npos) << spot.raster_trace.reason;
+  module_->settings().izb.trace = shadows::PassBackend::Raster;
+  shadows::FrameDesc f = frame_;
+  f.lights = &kSpotLight;
+  expect_refused(f, "FrameDesc.lights[0] (a spot light) with Settings.izb.trace raster: " + spot.raster_trace.reason);
+}
+
+// Every light type against every IZB path (trace raster or compute; no CSM, or each CSM test with each
+// backend): record() refuses exactly where capabilities() marks a path unavailable, with its reason,
+// and records everything else. The sun's entry is the device-wide one.
+TEST_F(HostLightCapabilities, RecordRefusesExactlyWhatCapabilitiesMarkUnavailable) {
+  const shadows::Capabilities caps = module_->capabilities();
+  const shadows::LightCapabilities& sun = caps.of(shadows::LightType::Directional);
+  for (int t = 0; t < 6; ++t) EXPECT_EQ(sun.technique[t].available, caps.technique[t].available);
+  for (int t = 0; t < 4; ++t) EXPECT_EQ(sun.csm_test[t].available, caps.csm_test[t].available);
+  const std::pair<const shadows::Light*, const char*> lights[] = {
+      {&sun_, "directional"}, {&kSpotLight, "spot"}, {&kPointLight, "point"}};
+  size_t refused = 0, recorded = 0;
+  for (const auto& [light, kind] : lights) {
+    const shadows::LightCapabilities& l = caps.of(light->type);
+    for (shadows::PassBackend trace : {shadows::PassBackend::Raster, shadows::PassBackend::Compute})
+      for (int csm = -1; csm < 8; ++csm) {
+        shadows::Settings s = valid_settings_;
+        s.izb.trace = trace;
+        s.izb.csm = csm >= 0;
+        const auto test = shadows::CsmTest(std::max(csm, 0) / 2);
+        s.izb.csm_test = test;
+        s.izb.csm_backend = csm % 2 ? shadows::PassBackend::Raster : shadows::PassBackend::Compute;
+        const bool raster_only = test == shadows::CsmTest::BarycentricHw || test == shadows::CsmTest::InnerHw;
+        if (raster_only && csm % 2 == 0) continue;  // those tests are raster work whatever the backend
+        // The first unavailable path the settings ask for, as context.hpp's LightCapabilities orders them.
+        const shadows::Capability* missing = nullptr;
+        if (trace == shadows::PassBackend::Raster && !l.raster_trace.available) missing = &l.raster_trace;
+        else if (s.izb.csm && !l.of(test).available) missing = &l.of(test);
+        else if (s.izb.csm && !raster_only && csm % 2 && !l.raster_csm.available) missing = &l.raster_csm;
+        SCOPED_TRACE(testing::Message() << kind << " trace " << shadows::backend_name(trace) << " csm " << csm);
+        module_->settings() = s;
+        shadows::FrameDesc f = frame_;
+        f.lights = light;
+        f.frame_index = next_frame_++;
+        if (missing) {
+          ++refused;
+          EXPECT_FALSE(missing->reason.empty());
+          expect_refused(f, missing->reason);
+        } else {
+          ++recorded;
+          std::string what;
+          submit([&](VkCommandBuffer cmd) { what = error_of([&] { module_->record(cmd, f); }); });
+          EXPECT_EQ(what, "") << "capabilities() marks every path available";
+          fill_output(VK_IMAGE_LAYOUT_GENERAL);
+        }
+      }
+  }
+  module_->settings() = valid_settings_;
+  std::printf("[ measure ] %zu combinations refused, %zu recorded\n", refused, recorded);
+  EXPECT_GT(refused, 0u);
+  EXPECT_GT(recorded, 0u);
+}
+
+// ----- Mesh bounds computed on the device (MeshDesc::bounds absent).
+
+class HostMeshBounds : public HostBadInput {
+ protected:
+  // A mesh of `count` vertices written at `stride` bytes from byte `offset` of its own buffer (float3,
+  // or float4 with a w that is never a coordinate), with `indices` after them; returns the buffer.
+  vulkan_host::Buffer write_mesh(shadows::MeshDesc& mesh, const std::vector<glm::vec3>& positions, bool float4,
+                                 uint32_t stride, uint32_t offset, bool indices16) {
+    const uint32_t count = uint32_t(positions.size());
+    const VkDeviceSize index_offset = (offset + VkDeviceSize(count) * stride + 15) / 16 * 16;
+    const uint32_t index_count = 3 * count;
+    // 16-bit indices are read as whole words: an odd count is padded to one (MeshDesc::indices).
+    vulkan_host::Buffer buffer = vulkan_host::make_buffer(
+        *device_, (index_offset + index_count * (indices16 ? 2 : 4) + 3) / 4 * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+    auto* bytes = static_cast<uint8_t*>(buffer.mapped);
+    std::memset(bytes, 0xff, buffer.size);  // NaN between the positions: read, it would show
+    for (uint32_t i = 0; i < count; ++i) {
+      std::memcpy(bytes + offset + size_t(i) * stride, &positions[i], 12);
+      const float w = i % 2 ? std::numeric_limits<float>::infinity() : -1.0e30f;
+      if (float4) std::memcpy(bytes + offset + size_t(i) * stride + 12, &w, 4);
+    }
+    for (uint32_t k = 0; k < index_count; ++k) {
+      const uint32_t index = (k * 7u) % count;
+      if (indices16) reinterpret_cast<uint16_t*>(bytes + index_offset)[k] = uint16_t(index);
+      else reinterpret_cast<uint32_t*>(bytes + index_offset)[k] = index;
+    }
+    mesh.positions = buffer.input(offset);
+    mesh.positions.size = VkDeviceSize(count - 1) * stride + (float4 ? 16 : 12);
+    mesh.position_format = float4 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32G32B32_SFLOAT;
+    mesh.position_stride = stride;
+    mesh.vertex_count = count;
+    mesh.indices = buffer.input(index_offset);
+    mesh.index_type = indices16 ? VK_INDEX_TYPE_UINT16 : VK_INDEX_TYPE_UINT32;
+    mesh.index_count = index_count;
+    return buffer;
+  }
+};
+
+// Positions spread over several orders of magnitude and both signs, from a fixed seed.
+std::vector<glm::vec3> scattered_positions(uint32_t count, uint32_t seed) {
+  std::vector<glm::vec3> out(count);
+  uint32_t state = seed;
+  auto next = [&] {
+    state = state * 1664525u + 1013904223u;
+    const float unit = float(state >> 8) / float(1u << 24);  // [0, 1)
+    const float magnitude = std::pow(10.0f, float(int(state % 7u)) - 3.0f);
+    return (unit * 2.0f - 1.0f) * magnitude;
+  };
+  for (glm::vec3& p : out) p = {next(), next(), next()};
+  return out;
+}
+
+// The bounds the device computes are the CPU's min and max over the positions, exactly (a min or max
+// only picks one of its inputs), for float3 and float4 positions at unusual strides and offsets, 16-
+// and 32-bit indices, several workgroups or one vertex; given bounds come back as given; meshes with
+// computed bounds then import in a valid frame.
+TEST_F(HostMeshBounds, ComputedOnTheDeviceEqualTheCpuMinAndMax) {
+  struct Case {
+    const char* name;
+    std::vector<glm::vec3> positions;
+    bool float4;
+    uint32_t stride, offset;
+    bool indices16;
+  };
+  std::vector<Case> cases = {
+      {"float3 stride 20 u16", scattered_positions(1000, 1u), false, 20, 0, true},
+      {"float4 stride 36 offset 12 u16", scattered_positions(333, 2u), true, 36, 12, true},
+      {"float3 stride 12 offset 4 u32", scattered_positions(65, 3u), false, 12, 4, false},
+      {"float4 stride 16 u32", scattered_positions(64, 4u), true, 16, 0, false},
+      {"one vertex repeated", std::vector<glm::vec3>(5, glm::vec3(-2.5f, 0.0f, 1.0e-20f)), false, 24, 8, true},
+  };
+  cases[2].positions[17] = {-0.0f, 7.0e5f, -3.0e-7f};  // signed zero and an extreme
+  std::vector<vulkan_host::Buffer> buffers;
+  std::vector<shadows::Instance> instances;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    shadows::MeshDesc mesh;
+    mesh.name = c.name;
+    buffers.push_back(write_mesh(mesh, c.positions, c.float4, c.stride, c.offset, c.indices16));
+    ASSERT_FALSE(mesh.bounds.has_value());
+    const shadows::MeshId id = module_->register_mesh(mesh);
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
+    for (const glm::vec3& p : c.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    const shadows::MeshBounds b = module_->mesh_bounds(id);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(b.min[k], lo[k]) << "axis " << k;
+      EXPECT_EQ(b.max[k], hi[k]) << "axis " << k;
+    }
+    instances.push_back({.mesh = id});
+  }
+  // Given bounds are kept as given (wider than the positions here).
+  shadows::MeshDesc given;
+  given.name = "given";
+  buffers.push_back(write_mesh(given, scattered_positions(10, 5u), false, 12, 0, false));
+  given.bounds = shadows::MeshBounds{{-2000, -2000, -2000}, {3000, 3000, 3000}};
+  const shadows::MeshBounds kept = module_->mesh_bounds(module_->register_mesh(given));
+  EXPECT_EQ(kept.min[1], -2000.0f);
+  EXPECT_EQ(kept.max[2], 3000.0f);
+  expect_one_line_naming(error_of([&] { module_->mesh_bounds(shadows::kNoMesh); }), "mesh_bounds: mesh id");
+  // The next frame imports them; as casters of a frame with no shading points they would only cost
+  // time on a CPU device (their scattered triangles span a 2000-unit box).
+  for (shadows::Instance& instance : instances) instance.casts_shadow = false;
+  expect_valid_frame(instances);
+  for (vulkan_host::Buffer& b : buffers) vulkan_host::destroy(*device_, b);
+}
+
+// Without bounds, a position that is not finite is refused naming MeshDesc.positions (a w that is not
+// finite is not a position); the context stays usable.
+TEST_F(HostMeshBounds, NonFinitePositionIsRefusedWhenBoundsAreComputed) {
+  std::vector<glm::vec3> positions = scattered_positions(100, 6u);
+  positions[70].y = std::numeric_limits<float>::quiet_NaN();
+  shadows::MeshDesc mesh;
+  mesh.name = "nan";
+  vulkan_host::Buffer buffer = write_mesh(mesh, positions, true, 16, 0, true);
+  expect_mesh_refused(mesh, "MeshDesc 'nan'.positions hold a value that is not finite");
+  positions[70].y = -std::numeric_limits<float>::infinity();
+  vulkan_host::destroy(*device_, buffer);
+  buffer = write_mesh(mesh, positions, false, 12, 0, true);
+  expect_mesh_refused(mesh, "MeshDesc 'nan'.positions hold a value that is not finite");
   vulkan_host::destroy(*device_, buffer);
 }
 

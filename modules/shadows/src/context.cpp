@@ -138,6 +138,23 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
   if (!desc.get_device_proc_addr) throw Error("shadows: ContextDesc.get_device_proc_addr is null");
   if (desc.frames_in_flight < 1 || desc.frames_in_flight > 8)
     throw Error("shadows: ContextDesc.frames_in_flight is " + std::to_string(desc.frames_in_flight) + " (1..8)");
+  // Vulkan-style name arrays (as VkDeviceCreateInfo takes them): copied, so the host's arrays need not
+  // outlive create().
+  const auto names = [](const char* const* array, uint32_t count, const char* field) {
+    if (count > 0 && !array)
+      throw Error(std::string("shadows: ContextDesc.") + field + "_names is null with " + field + "_count " +
+                  std::to_string(count));
+    std::vector<std::string> out;
+    for (uint32_t i = 0; i < count; ++i) {
+      if (!array[i]) throw Error(std::string("shadows: ContextDesc.") + field + "_names[" + std::to_string(i) + "] is null");
+      out.emplace_back(array[i]);
+    }
+    return out;
+  };
+  std::vector<std::string> instance_extensions =
+      names(desc.enabled_instance_extension_names, desc.enabled_instance_extension_count, "enabled_instance_extension");
+  std::vector<std::string> device_extensions =
+      names(desc.enabled_device_extension_names, desc.enabled_device_extension_count, "enabled_device_extension");
   if (!desc.enabled_features)
     throw Error("shadows: ContextDesc.enabled_features is null (give the VkPhysicalDeviceFeatures2 chain passed to "
                 "vkCreateDevice)");
@@ -149,8 +166,8 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
   adopted.queue = desc.queue;
   adopted.get_instance_proc_addr = desc.get_instance_proc_addr;
   adopted.get_device_proc_addr = desc.get_device_proc_addr;
-  adopted.enabled_instance_extensions = desc.enabled_instance_extensions;
-  adopted.enabled_device_extensions = desc.enabled_device_extensions;
+  adopted.enabled_instance_extensions = std::move(instance_extensions);
+  adopted.enabled_device_extensions = std::move(device_extensions);
   adopted.enabled_features = desc.enabled_features;
   adopted.api_version = desc.api_version;
   adopted.allocator = desc.allocator;
@@ -165,6 +182,11 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
     // The adoption names its own fields, which are the host's ContextDesc fields of the same names.
     std::string what = e.what();
     for (size_t at; (at = what.find("AdoptedDevice.")) != std::string::npos;) what.replace(at, 14, "ContextDesc.");
+    // Its extension lists are ContextDesc's name arrays.
+    for (const char* list : {"enabled_instance_extensions", "enabled_device_extensions"}) {
+      const std::string from = std::string(list), to = from.substr(0, from.size() - 1) + "_names";
+      for (size_t at = 0; (at = what.find(from, at)) != std::string::npos; at += to.size()) what.replace(at, from.size(), to);
+    }
     throw Error(what);
   }
   frames_in_flight_ = desc.frames_in_flight;
@@ -216,28 +238,71 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
 // adopted engine::gpu::Context then releases what it deferred.
 ContextImpl::~ContextImpl() = default;
 
+// Fixed by the device and what the host enabled: made once, on first use (record() checks against it).
 Capabilities ContextImpl::capabilities() const {
+  if (!capabilities_) capabilities_ = find_capabilities();
+  return *capabilities_;
+}
+
+Capabilities ContextImpl::find_capabilities() const {
   Capabilities c;
-  for (int t = 0; t < 6; ++t) {
-    Capability& cap = c.technique[t];
-    cap.available = true;
-    if (Technique(t) == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline) {
-      cap.available = false;
-      cap.reason = "shadows: Settings.technique rt: " + gpu_->features().ray_tracing_missing;
+  auto& self = const_cast<ContextImpl&>(*this);
+  const engine::gpu::DeviceFeatures& features = gpu_->features();
+  const auto unavailable = [](const std::string& reason) { return Capability{false, reason}; };
+  for (int type = 0; type < 3; ++type) {
+    LightCapabilities& l = c.light[type];
+    const bool local = LightType(type) != LightType::Directional;
+    const std::string kind = LightType(type) == LightType::Spot ? "spot" : "point";
+    for (int t = 0; t < 6; ++t) {
+      l.technique[t].available = true;
+      if (Technique(t) == Technique::RayTraced && !features.ray_tracing_pipeline)
+        l.technique[t] = unavailable("shadows: Settings.technique rt: " + features.ray_tracing_missing);
+    }
+    l.compute_trace.available = true;
+    l.compute_csm.available = true;
+    // A local light's perspective grid (its near plane, the casters behind it ray-tested apart) is
+    // set up, traced and culled by the compute passes alone.
+    if (local) {
+      l.raster_trace = unavailable("a " + kind + " light takes the IZB's compute trace: its perspective grid has no raster trace");
+      l.raster_csm = unavailable("a " + kind + " light takes the IZB's compute CSM (hertel or bary): its perspective grid has "
+                                 "no raster CSM");
+    } else if (!features.geometry_shader) {
+      // Both conservative rasterizers (software, and hardware reading gl_PrimitiveID) need them.
+      l.raster_trace = unavailable("the raster trace needs geometry shaders, which " + gpu_->device_name() + " lacks");
+      l.raster_csm = unavailable("the raster CSM (hertel or bary) needs geometry shaders, which " + gpu_->device_name() +
+                                 " lacks");
+    } else {
+      l.raster_trace.available = l.raster_csm.available = true;
+    }
+    for (int t = 0; t < 4; ++t) {
+      std::string why;
+      const bool raster_only = CsmTest(t) == CsmTest::BarycentricHw || CsmTest(t) == CsmTest::InnerHw;
+      if (local && raster_only) {
+        l.csm_test[t] = unavailable("a " + kind + " light takes the IZB's compute CSM (hertel or bary): " +
+                                    csm_test_name(CsmTest(t)) + " is raster work");
+      } else if (self.izb().csm_test_supported(CsmTest(t), &why)) {
+        l.csm_test[t].available = true;
+      } else {
+        l.csm_test[t] = unavailable("CSM test " + csm_test_name(CsmTest(t)) + " " + why);
+      }
     }
   }
-  auto& self = const_cast<ContextImpl&>(*this);
-  for (int t = 0; t < 4; ++t) {
-    std::string why;
-    c.csm_test[t].available = self.izb().csm_test_supported(CsmTest(t), &why);
-    c.csm_test[t].reason = c.csm_test[t].available ? "" : why;
-  }
+  const LightCapabilities& sun = c.light[int(LightType::Directional)];
+  std::copy(std::begin(sun.technique), std::end(sun.technique), std::begin(c.technique));
+  std::copy(std::begin(sun.csm_test), std::end(sun.csm_test), std::begin(c.csm_test));
   c.hardware_conservative_raster = self.izb().hardware_raster_available();
   return c;
 }
 
 MeshId ContextImpl::register_mesh(const MeshDesc& mesh) { return geometry_.add(mesh); }
 void ContextImpl::unregister_mesh(MeshId mesh) { geometry_.remove(mesh); }
+MeshBounds ContextImpl::mesh_bounds(MeshId mesh) const {
+  const MeshInfo* info = geometry_.find(mesh);
+  if (!info) throw Error("shadows: mesh_bounds: mesh id " + std::to_string(mesh) + " is not registered");
+  MeshBounds b;
+  for (int c = 0; c < 3; ++c) b.min[c] = info->bounds.min[c], b.max[c] = info->bounds.max[c];
+  return b;
+}
 
 void ContextImpl::validate_light(const Light& light, const std::string& name) const {
   if (light.type != LightType::Directional && light.type != LightType::Spot && light.type != LightType::Point)
@@ -246,7 +311,6 @@ void ContextImpl::validate_light(const Light& light, const std::string& name) co
   if (light.type != LightType::Point && !(glm::length(dir) > 0.5f && glm::length(dir) < 1.5f))
     throw Error("shadows: " + name + ".direction must be a unit vector");
   if (light.type != LightType::Directional) {
-    const char* kind = light.type == LightType::Spot ? "spot" : "point";
     if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))
       throw Error("shadows: " + name + ".position must be finite");
     if (!(light.range > 0.0f) || !std::isfinite(light.range))
@@ -254,15 +318,29 @@ void ContextImpl::validate_light(const Light& light, const std::string& name) co
     if (light.type == LightType::Spot &&
         !(light.inner_cone >= 0.0f && light.inner_cone < light.outer_cone && light.outer_cone <= 1.5707964f))
       throw Error("shadows: " + name + " cones must satisfy 0 <= inner_cone < outer_cone <= pi/2");
-    // The IZB's perspective grids are traced and culled by its compute passes only.
-    const IzbSettings& izb = settings_.izb;
-    if ((settings_.technique == Technique::Izb || settings_.technique == Technique::Hybrid) &&
-        (izb.trace == PassBackend::Raster ||
-         (izb.csm && (izb.csm_backend == PassBackend::Raster || izb.csm_test == CsmTest::BarycentricHw ||
-                      izb.csm_test == CsmTest::InnerHw))))
-      throw Error(std::string("shadows: a ") + kind + " light takes the IZB's compute trace and compute CSM (hertel or bary): "
-                  "Settings.izb.trace/csm_backend/csm_test ask for a raster pass");
   }
+  check_paths(light, name);
+}
+
+// The IZB's paths the settings ask for, against capabilities() for this light's type: whatever is
+// unavailable there is refused here, with the same reason.
+void ContextImpl::check_paths(const Light& light, const std::string& name) const {
+  const IzbSettings& izb = settings_.izb;
+  if (settings_.technique != Technique::Izb && settings_.technique != Technique::Hybrid) return;
+  const bool raster_csm = izb.csm_backend == PassBackend::Raster && izb.csm_test != CsmTest::BarycentricHw &&
+                          izb.csm_test != CsmTest::InnerHw;
+  if (izb.trace != PassBackend::Raster && !izb.csm) return;  // nothing that may be missing
+  if (!capabilities_) capabilities_ = find_capabilities();
+  const LightCapabilities& l = capabilities_->of(light.type);
+  const char* kind = light.type == LightType::Spot ? "spot" : light.type == LightType::Point ? "point" : "directional";
+  const auto refuse = [&](const std::string& setting, const Capability& cap) {
+    if (!cap.available)
+      throw Error("shadows: " + name + " (a " + kind + " light) with " + setting + ": " + cap.reason);
+  };
+  if (izb.trace == PassBackend::Raster) refuse("Settings.izb.trace raster", l.raster_trace);
+  if (!izb.csm) return;
+  refuse("Settings.izb.csm_test " + csm_test_name(izb.csm_test), l.of(izb.csm_test));
+  if (raster_csm) refuse("Settings.izb.csm_backend raster", l.raster_csm);
 }
 
 void ContextImpl::validate(const FrameDesc& f) const {
@@ -292,6 +370,8 @@ void ContextImpl::validate(const FrameDesc& f) const {
   }
   check_image(f.output, "FrameDesc.output", {VK_FORMAT_R8_UNORM, VK_FORMAT_R16_SFLOAT, VK_FORMAT_R32_SFLOAT},
               VK_IMAGE_USAGE_STORAGE_BIT, {VK_IMAGE_LAYOUT_GENERAL}, extent);
+  if (f.output_term != OutputTerm::Occlusion && f.output_term != OutputTerm::Combined)
+    throw Error("shadows: FrameDesc.output_term " + std::to_string(uint32_t(f.output_term)) + " is not an OutputTerm");
   if (f.overlay.present())
     check_image(f.overlay, "FrameDesc.overlay", {VK_FORMAT_R8G8B8A8_UNORM}, VK_IMAGE_USAGE_STORAGE_BIT,
                 {VK_IMAGE_LAYOUT_GENERAL}, extent);
@@ -456,18 +536,21 @@ const engine::gpu::Pipeline& ContextImpl::output_pipeline(int format, uint32_t w
   pipeline = engine::gpu::PipelineFactory(*gpu_).compute(
       {.shader = shaders[format],
        .bindings = {storage(gs::HOST_OUTPUT_BINDING_TERM), storage(gs::HOST_OUTPUT_BINDING_OVERLAY),
-                    storage(gs::HOST_OUTPUT_BINDING_OUT), storage(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT)},
-       .push_constant_size = 16,
+                    storage(gs::HOST_OUTPUT_BINDING_OUT), storage(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT),
+                    storage(gs::HOST_OUTPUT_BINDING_WORLD_POSITION), storage(gs::HOST_OUTPUT_BINDING_GEOMETRIC_NORMAL)},
+       .push_constant_size = sizeof(gs::HostOutputPush),
        .specialization = {{0, what}}});
   return pipeline;
 }
 
-void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool with_overlay) {
+void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool with_overlay,
+                                const ShadingInputs& inputs, const View& view) {
   // Every pass's writes of the term and overlay, visible to the copy into the host's images.
   memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
   namespace gs = gpu_shared;
   uint32_t what = settings_.technique == Technique::Off ? gs::HOST_OUTPUT_ALL_LIT : 0u;
+  if (f.output_term == OutputTerm::Occlusion) what |= gs::HOST_OUTPUT_OCCLUSION;
   // The overlay is FrameDesc::overlay_light's (the other lights leave the host's overlay alone).
   if (f.overlay.present() && with_overlay)
     what |= settings_.debug != DebugView::None ? gs::HOST_OUTPUT_COPY_OVERLAY : gs::HOST_OUTPUT_ZERO_OVERLAY;
@@ -479,8 +562,17 @@ void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const I
       .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY, overlay_.view())
       .storage_image(gs::HOST_OUTPUT_BINDING_OUT, output.view)
       .storage_image(gs::HOST_OUTPUT_BINDING_OVERLAY_OUT, f.overlay.present() ? f.overlay.view : overlay_.view())
+      .storage_image(gs::HOST_OUTPUT_BINDING_WORLD_POSITION, inputs.world_position)
+      .storage_image(gs::HOST_OUTPUT_BINDING_GEOMETRIC_NORMAL, inputs.geometric_normal)
       .push(*gpu_, cmd, p);
-  const glm::uvec4 push(extent_.width, extent_.height, 0u, 0u);
+  // The light as set_light() handed it to the passes (a point light's whole sphere, not a face).
+  gs::HostOutputPush push{};
+  const uint32_t kind = !view.local_light                ? gs::HOST_OUTPUT_LIGHT_DIRECTIONAL
+                        : view.light_cos_outer <= -1.0f ? gs::HOST_OUTPUT_LIGHT_POINT
+                                                         : gs::HOST_OUTPUT_LIGHT_SPOT;
+  push.extent = glm::uvec4(extent_.width, extent_.height, kind, 0u);
+  push.light_position = glm::vec4(view.light_position, view.light_range);
+  push.light_direction = glm::vec4(view.light_direction, view.light_cos_outer);
   p.push_constants(cmd, push);
   vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
 }
@@ -604,7 +696,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
                 slot_index, frames_in_flight_};
     record_technique(frame);
     engine::gpu::ScopedGpuRegion output_region(*gpu_, profiler, cmd, "host_output");
-    record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light);
+    record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light, inputs, view);
     records.izb_count = (izb_ ? izb_->records_so_far(slot_index, f.frame_index) : 0u) - records.izb_first;
     records.rt_count = (ray_traced_ ? ray_traced_->records_so_far(slot_index, f.frame_index) : 0u) - records.rt_first;
     slot.lights.push_back(std::move(records));

@@ -24,6 +24,7 @@ class ContextImpl final : public Context {
   Settings& settings() override { return settings_; }
   MeshId register_mesh(const MeshDesc& mesh) override;
   void unregister_mesh(MeshId mesh) override;
+  MeshBounds mesh_bounds(MeshId mesh) const override;
   void record(VkCommandBuffer cmd, const FrameDesc& frame) override;
   void frame_completed(uint64_t frame_index) override;
   void set_collect_stats(bool enabled) override { collect_stats_ = enabled; }
@@ -66,9 +67,12 @@ class ContextImpl final : public Context {
   void restart_term(VkCommandBuffer cmd);
   void clear_term_and_overlay(VkCommandBuffer cmd);
   void validate_light(const Light& light, const std::string& name) const;
+  void check_paths(const Light& light, const std::string& name) const;
+  Capabilities find_capabilities() const;
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
-  void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool with_overlay);
+  void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool with_overlay,
+                     const ShadingInputs& inputs, const View& view);
   void complete_slot(Slot& slot);
   void add_memory(Stats& s, Technique technique, bool csm) const;
   IzbPass& izb();
@@ -96,7 +100,8 @@ class ContextImpl final : public Context {
   engine::gpu::Sampler nearest_;
   engine::gpu::Pipeline inputs_pipeline_;
   // [R8, R16F, R32F][HOST_OUTPUT_* bits, at most 7], made on first use (output_pipeline).
-  engine::gpu::Pipeline output_pipelines_[3][8];
+  mutable std::optional<Capabilities> capabilities_;  // capabilities(), made once
+  engine::gpu::Pipeline output_pipelines_[3][16];  // by format, HOST_OUTPUT_* bits
   const engine::gpu::Pipeline& output_pipeline(int format, uint32_t what);
   engine::gpu::Image dummy_input_;              // bound where an optional input is absent
   bool targets_fresh_ = false;                  // just created: UNDEFINED until the first barrier

@@ -234,7 +234,8 @@ const char* const* DeviceSetup::extension_names() const { return impl_->extensio
 uint32_t DeviceSetup::extension_count() const { return uint32_t(impl_->extension_names.size()); }
 
 void DeviceSetup::describe(ContextDesc& desc) const {
-  desc.enabled_device_extensions = impl_->extensions;
+  desc.enabled_device_extension_names = impl_->extension_names.data();
+  desc.enabled_device_extension_count = uint32_t(impl_->extension_names.size());
   desc.enabled_features = &impl_->f2;
 }
 

@@ -1,6 +1,7 @@
 #include "geometry_store.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include <shared/host.h>
@@ -49,8 +50,10 @@ void GeometryStore::init(engine::gpu::Context& ctx, bool ray_tracing) {
        .bindings = {{gpu_shared::MESH_IMPORT_BINDING_SOURCE, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
                     {gpu_shared::MESH_IMPORT_BINDING_UVS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
                     {gpu_shared::MESH_IMPORT_BINDING_VERTICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                    {gpu_shared::MESH_IMPORT_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+                    {gpu_shared::MESH_IMPORT_BINDING_INDICES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                    {gpu_shared::MESH_IMPORT_BINDING_BOUNDS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
        .push_constant_size = sizeof(gpu_shared::MeshImportPush)});
+  bounds_ = Buffer(ctx, 6 * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "shadows mesh bounds readback");
   texture_import_ = engine::gpu::PipelineFactory(ctx).compute(
       {.shader = "texture_import.comp",
        .bindings = {{gpu_shared::TEXTURE_IMPORT_BINDING_SOURCE, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
@@ -80,7 +83,9 @@ MeshId GeometryStore::add(const MeshDesc& m) {
   if (m.index_type != VK_INDEX_TYPE_UINT16 && m.index_type != VK_INDEX_TYPE_UINT32)
     throw Error("shadows: " + what + ".index_type must be VK_INDEX_TYPE_UINT16 or VK_INDEX_TYPE_UINT32");
   const uint32_t index_bytes = m.index_type == VK_INDEX_TYPE_UINT16 ? 2 : 4;
-  check_buffer(m.indices, what + ".indices", VkDeviceSize(m.index_count) * index_bytes, index_bytes == 2);
+  // 16-bit indices are read as whole 4-byte words: the region must reach the end of the last word.
+  const VkDeviceSize index_end = m.indices.offset + VkDeviceSize(m.index_count) * index_bytes;
+  check_buffer(m.indices, what + ".indices", (index_end + 3) / 4 * 4 - m.indices.offset, index_bytes == 2);
   MeshInfo info;
   info.name = m.name;
   if (m.alpha_texture.present()) {
@@ -94,13 +99,23 @@ MeshId GeometryStore::add(const MeshDesc& m) {
     if (texture_count_ >= kMaxTextures)
       throw Error("shadows: " + what + ".alpha_texture: more than " + std::to_string(kMaxTextures) + " alpha textures");
     info.alpha_threshold = gpu_shared::alpha_threshold_byte(m.alpha_cutoff, m.alpha_scale);
-    info.texture = texture_count_++;
+    info.texture = texture_count_;
   }
-  if (!(m.bounds_min[0] <= m.bounds_max[0] && m.bounds_min[1] <= m.bounds_max[1] && m.bounds_min[2] <= m.bounds_max[2]))
-    throw Error("shadows: " + what + ".bounds_min/bounds_max are not a box (min <= max on every axis)");
-  info.bounds.extend(glm::vec3(m.bounds_min[0], m.bounds_min[1], m.bounds_min[2]));
-  info.bounds.extend(glm::vec3(m.bounds_max[0], m.bounds_max[1], m.bounds_max[2]));
+  if (m.bounds) {
+    const MeshBounds& b = *m.bounds;
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(b.min[c]) || !std::isfinite(b.max[c]))
+        throw Error("shadows: " + what + ".bounds has a value that is not finite");
+    if (!(b.min[0] <= b.max[0] && b.min[1] <= b.max[1] && b.min[2] <= b.max[2]))
+      throw Error("shadows: " + what + ".bounds is not a box (min <= max on every axis)");
+    info.bounds.extend(glm::vec3(b.min[0], b.min[1], b.min[2]));
+    info.bounds.extend(glm::vec3(b.max[0], b.max[1], b.max[2]));
+  } else {
+    // Last: every other field is checked before anything is submitted.
+    info.bounds = device_bounds(m, what);
+  }
   info.live = true;
+  if (m.alpha_texture.present()) ++texture_count_;  // only once nothing can refuse the mesh
   const MeshId id = MeshId(meshes_.size());
   MeshRange range;
   range.first_index = index_count_;
@@ -126,6 +141,59 @@ void GeometryStore::remove(MeshId id) {
   meshes_[id].live = false;
   // Not yet imported: nothing will read the host's buffers.
   std::erase_if(pending_, [&](const Pending& p) { return p.id == id; });
+}
+
+std::pair<VkDeviceSize, VkDeviceSize> GeometryStore::bind_region(const BufferInput& in, uint32_t& word) const {
+  const VkDeviceSize alignment = ctx_->properties().limits.minStorageBufferOffsetAlignment;
+  const VkDeviceSize base = in.offset / alignment * alignment;
+  word = uint32_t((in.offset - base) / 4);
+  return {base, in.offset - base + in.size};
+}
+
+// The positions' min and max, by the import shader's MESH_IMPORT_BOUNDS pass on the adopted queue,
+// waited for and read back (MeshDesc::bounds documents the cost and what the host must guarantee).
+Aabb GeometryStore::device_bounds(const MeshDesc& m, const std::string& what) {
+  uint32_t* keys = bounds_.as<uint32_t>();
+  for (int c = 0; c < 3; ++c) keys[c] = gpu_shared::kMeshBoundsEmptyMin, keys[3 + c] = gpu_shared::kMeshBoundsEmptyMax;
+  ctx_->immediate_submit([&](VkCommandBuffer cmd) {
+    // Earlier work on this queue (the host's uploads of the positions, frames binding the readback)
+    // finishes its writes before the pass reads and writes.
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    uint32_t position_word = 0;
+    const auto [base, range] = bind_region(m.positions, position_word);
+    import_.bind(cmd);
+    DescriptorWriter()
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.positions.buffer, base, range)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.positions.buffer, base, range)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle())
+        .push(*ctx_, cmd, import_);
+    gpu_shared::MeshImportPush push{};
+    push.mode = gpu_shared::MESH_IMPORT_BOUNDS;
+    push.src_word = position_word;
+    push.stride_words = m.position_stride / 4;
+    push.count = m.vertex_count;
+    push.uv_word = gpu_shared::kNoUv;
+    import_.push_constants(cmd, push);
+    vkCmdDispatch(cmd, groups(m.vertex_count, 64), 1, 1);
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+  });
+  float values[6];
+  for (int k = 0; k < 6; ++k) {
+    const uint32_t bits = gpu_shared::mesh_bounds_float_bits(keys[k]);
+    std::memcpy(&values[k], &bits, 4);
+    if (!std::isfinite(values[k]))
+      throw Error("shadows: " + what + ".positions hold a value that is not finite (bounds absent, computed from them)");
+  }
+  Aabb box;
+  box.min = glm::vec3(values[0], values[1], values[2]);
+  box.max = glm::vec3(values[3], values[4], values[5]);
+  return box;
 }
 
 const MeshInfo* GeometryStore::find(MeshId id) const {
@@ -169,12 +237,6 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
 
   const VkDeviceSize alignment = ctx_->properties().limits.minStorageBufferOffsetAlignment;
-  // A host region bound at its offset rounded down to the alignment; the shader starts `word` in.
-  auto bind_region = [&](const BufferInput& in, uint32_t& word) {
-    const VkDeviceSize base = in.offset / alignment * alignment;
-    word = uint32_t((in.offset - base) / 4);
-    return std::pair<VkDeviceSize, VkDeviceSize>(base, in.offset - base + in.size);
-  };
   import_.bind(cmd);
   for (const auto& p : pending_) {
     const MeshRange& range = geometry_.meshes_[p.id];
@@ -185,7 +247,8 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
     DescriptorWriter writer;
     writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.positions.buffer, pos_base, pos_range)
         .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle());
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle());
     push.uv_word = gpu_shared::kNoUv;
     if (m.uvs.buffer != VK_NULL_HANDLE) {
       const auto [uv_base, uv_range] = bind_region(m.uvs, uv_word);
@@ -207,13 +270,14 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
     // Indices: 16-bit ones may start at an odd half-word; the shader takes the half from stride_words.
     const VkDeviceSize index_base = m.indices.offset / alignment * alignment;
     const VkDeviceSize index_delta = m.indices.offset - index_base;
+    // Whole words, within the region add() checked (its end rounded down to a word).
+    const VkDeviceSize index_range = (index_delta + m.indices.size) / 4 * 4;
     DescriptorWriter()
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.indices.buffer, index_base,
-                        (index_delta + m.indices.size + 3) / 4 * 4)
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.indices.buffer, index_base,
-                        (index_delta + m.indices.size + 3) / 4 * 4)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.indices.buffer, index_base, index_range)
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.indices.buffer, index_base, index_range)
         .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
         .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
+        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle())
         .push(*ctx_, cmd, import_);
     gpu_shared::MeshImportPush ipush{};
     ipush.src_word = uint32_t(index_delta / 4);

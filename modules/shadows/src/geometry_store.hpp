@@ -4,6 +4,7 @@
 // passes. Buffers only grow; a replaced buffer outlives the frames in flight that used it
 // (engine::gpu::Context::defer_releases).
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gpu/pipeline.hpp"
@@ -23,7 +24,9 @@ struct MeshInfo {
 class GeometryStore {
  public:
   void init(engine::gpu::Context& ctx, bool ray_tracing);
-  MeshId add(const MeshDesc& mesh);  // throws shadows::Error naming the field
+  // Throws shadows::Error naming the field. A mesh without bounds has them computed on the device
+  // first (a submission to the adopted queue, waited for).
+  MeshId add(const MeshDesc& mesh);
   void remove(MeshId mesh);
   const MeshInfo* find(MeshId mesh) const;
   // Records the queued imports into `cmd`.
@@ -40,6 +43,9 @@ class GeometryStore {
             const char* name, VkCommandBuffer cmd);
 
   VkPipelineStageFlags2 geometry_readers() const;
+  Aabb device_bounds(const MeshDesc& mesh, const std::string& what);
+  // A host region bound at its offset rounded down to the device's alignment; the shader starts `word` in.
+  std::pair<VkDeviceSize, VkDeviceSize> bind_region(const BufferInput& in, uint32_t& word) const;
 
   engine::gpu::Context* ctx_ = nullptr;
   VkBufferUsageFlags geometry_usage_ = 0;
@@ -51,6 +57,9 @@ class GeometryStore {
   engine::gpu::Pipeline import_;
   engine::gpu::Pipeline texture_import_;
   engine::gpu::Sampler nearest_;
+  // MESH_IMPORT_BINDING_BOUNDS: the bounds dispatch's result, read back by the CPU (bound, unused, by
+  // the other import dispatches).
+  engine::gpu::Buffer bounds_;
 };
 
 }  // namespace shadows::detail

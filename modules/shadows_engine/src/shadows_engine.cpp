@@ -77,6 +77,10 @@ FrameDesc frame_inputs(engine::FrameContext& frame, bool smooth_terminator, bool
   // The renderer's frame index: the module's slot (frame_index % F) is then the renderer's, and the
   // shared profiler's last collected frame is the one that last used the slot (backend probes).
   f.frame_index = frame.view.frame_index;
+  // The combined term, as before the choice existed: the renderer's lighting relies on it for points
+  // whose geometric normal turns away while the shading normal still faces the light, and the GPU
+  // tests compare it with the reference's combined term.
+  f.output_term = OutputTerm::Combined;
   f.depth = image_input(g.depth);
   f.normals.image = image_input(g.normal);
   f.normals.facing_camera = true;
@@ -112,8 +116,14 @@ class EngineShadowModule final : public ShadowModule {
     desc.queue = ctx.queue();
     desc.get_instance_proc_addr = vkGetInstanceProcAddr;
     desc.get_device_proc_addr = vkGetDeviceProcAddr;
-    desc.enabled_instance_extensions = ctx.enabled_instance_extensions();
-    desc.enabled_device_extensions = ctx.enabled_device_extensions();
+    // Name arrays as vkCreateInstance/vkCreateDevice took them; create() copies them.
+    std::vector<const char*> instance_extensions, device_extensions;
+    for (const std::string& e : ctx.enabled_instance_extensions()) instance_extensions.push_back(e.c_str());
+    for (const std::string& e : ctx.enabled_device_extensions()) device_extensions.push_back(e.c_str());
+    desc.enabled_instance_extension_names = instance_extensions.data();
+    desc.enabled_instance_extension_count = uint32_t(instance_extensions.size());
+    desc.enabled_device_extension_names = device_extensions.data();
+    desc.enabled_device_extension_count = uint32_t(device_extensions.size());
     desc.enabled_features = ctx.enabled_features();
     desc.masked_features = ctx.masked_features();
     // As many as the renderer: it waits for frame N - F before recording frame N and reports each
@@ -280,8 +290,10 @@ class EngineShadowModule final : public ShadowModule {
     if (mesh && mesh->data)
       for (const auto& v : mesh->data->vertices) bounds.extend(v.position);
     if (!bounds.valid()) bounds.extend(glm::vec3(0.0f));
-    std::memcpy(m.bounds_min, &bounds.min, sizeof(m.bounds_min));
-    std::memcpy(m.bounds_max, &bounds.max, sizeof(m.bounds_max));
+    // Given from the CPU copy the engine keeps anyway: no readback at registration.
+    m.bounds.emplace();
+    std::memcpy(m.bounds->min, &bounds.min, sizeof(m.bounds->min));
+    std::memcpy(m.bounds->max, &bounds.max, sizeof(m.bounds->max));
     if (d.alpha_tested() && d.base_color_texture != gpu_shared::kNoTexture) {
       m.uvs = {frame.geometry.vertices().handle(), first_vertex + offsetof(engine::Vertex, uv),
                VkDeviceSize(range.vertex_count) * sizeof(engine::Vertex) - offsetof(engine::Vertex, uv), kGeometryUsage};

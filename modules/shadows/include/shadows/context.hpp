@@ -30,7 +30,9 @@
 //     srcStageMask = COMPUTE_SHADER, srcAccessMask = SHADER_STORAGE_WRITE.
 //   - Host mesh buffers are read by compute shaders (storage-buffer reads) in the first record() after
 //     register_mesh(), so they must hold their data, visible to COMPUTE_SHADER / SHADER_STORAGE_READ,
-//     until that frame's commands have executed.
+//     until that frame's commands have executed. A mesh registered without bounds has its positions
+//     read once more inside register_mesh(), by a submission of the module's own to ContextDesc::queue
+//     that it waits for (MeshDesc::bounds).
 //   - Inside record() the module orders its own resources with barriers that name their stages and
 //     accesses; it records no barrier on a host resource and no ALL_COMMANDS barrier.
 //   - The command buffer must support compute and graphics (a queue of the family given at creation),
@@ -47,6 +49,7 @@
 // recorded. The context stays usable.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -94,9 +97,9 @@ struct ContextDesc;
 //   info.pNext = setup.features();
 //   info.enabledExtensionCount = setup.extension_count();
 //   info.ppEnabledExtensionNames = setup.extension_names();
-//   ... vkCreateDevice ...;  setup.describe(context_desc);  // the lists ContextDesc wants
+//   ... vkCreateDevice ...;  setup.describe(context_desc);  // the arrays and chain ContextDesc wants
 //
-// It owns every structure and string it hands out (valid while it lives, until its next add_*): a
+// It owns every structure, string and array it hands out (valid while it lives, until its next add_*): a
 // VkPhysicalDeviceFeatures2 chained to VkPhysicalDeviceVulkan11/12/13Features and, where their
 // extensions are in the list, the fragment shader barycentric, acceleration structure, ray tracing
 // pipeline and ray query structures. Optional items are taken where the device has them (each with
@@ -131,8 +134,10 @@ class SHADOWS_API DeviceSetup {
   const VkPhysicalDeviceFeatures2* features() const;
   const char* const* extension_names() const;
   uint32_t extension_count() const;
-  // Sets desc.enabled_device_extensions and desc.enabled_features (this object must outlive
-  // Context::create, which reads the chain).
+  // Sets desc.enabled_device_extension_names / enabled_device_extension_count (pointing at this
+  // object's own array, extension_names()) and desc.enabled_features (features()). They stay valid
+  // while this object lives and until its next add_*: it must outlive Context::create, which copies
+  // the names and reads the chain; the context keeps no pointer into it afterwards.
   void describe(ContextDesc& desc) const;
 
  private:
@@ -145,14 +150,24 @@ struct ContextDesc {
   VkPhysicalDevice physical_device = VK_NULL_HANDLE;
   VkDevice device = VK_NULL_HANDLE;
   uint32_t queue_family = 0;  // a family with graphics and compute; record()'s command buffers come from it
-  VkQueue queue = VK_NULL_HANDLE;  // used only at creation, for one-off uploads (it waits for them)
+  // Used only for one-off work the module waits for: uploads at creation, and register_mesh() of a
+  // mesh without bounds (MeshDesc::bounds).
+  VkQueue queue = VK_NULL_HANDLE;
   PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;  // required
   PFN_vkGetDeviceProcAddr get_device_proc_addr = nullptr;      // required
-  // What the host enabled: the module uses exactly these (a feature the device has but the host did not
-  // enable counts as absent, and the techniques that need it say so in capabilities()).
-  std::vector<std::string> enabled_instance_extensions;
-  std::vector<std::string> enabled_device_extensions;
-  const VkPhysicalDeviceFeatures2* enabled_features = nullptr;  // the chain given to vkCreateDevice
+  // What the host enabled, as it gave them to vkCreateInstance and vkCreateDevice
+  // (VkInstanceCreateInfo::ppEnabledExtensionNames / VkDeviceCreateInfo::ppEnabledExtensionNames and
+  // their counts): the module uses exactly these (a feature the device has but the host did not enable
+  // counts as absent, and the techniques that need it say so in capabilities()). Each array holds
+  // `count` null-terminated names; it may be null only with a count of 0 (a null array with a nonzero
+  // count is refused naming the field). create() copies the names: the arrays need not outlive it.
+  const char* const* enabled_instance_extension_names = nullptr;
+  uint32_t enabled_instance_extension_count = 0;
+  const char* const* enabled_device_extension_names = nullptr;
+  uint32_t enabled_device_extension_count = 0;
+  // The VkPhysicalDeviceFeatures2 chain given to vkCreateDevice (its pNext); required. Read by
+  // create() only.
+  const VkPhysicalDeviceFeatures2* enabled_features = nullptr;
   uint32_t api_version = VK_API_VERSION_1_3;                    // the instance's apiVersion (>= 1.3)
   const VkAllocationCallbacks* allocator = nullptr;             // for every object the module creates
   VkPipelineCache pipeline_cache = VK_NULL_HANDLE;              // for every pipeline it creates
@@ -189,8 +204,15 @@ inline constexpr MeshId kNoMesh = 0xffffffffu;
 
 enum class AlphaWrap : uint32_t { Repeat = 0, ClampToEdge = 1, MirroredRepeat = 2 };
 
+// An axis-aligned box in a mesh's object space.
+struct MeshBounds {
+  float min[3] = {0.0f, 0.0f, 0.0f};
+  float max[3] = {0.0f, 0.0f, 0.0f};
+};
+
 // A caster mesh, registered once. The module copies (and converts) it into its own buffers during the
-// next record(); the host's buffers must stay valid until that frame has executed.
+// next record(); the host's buffers must stay valid until that frame has executed. Without `bounds`,
+// register_mesh() also reads the positions at once, on the device (see `bounds`).
 struct MeshDesc {
   std::string name;                     // for statistics and messages
   // Positions: VK_FORMAT_R32G32B32_SFLOAT or R32G32B32A32_SFLOAT (w ignored), `stride` bytes apart
@@ -199,7 +221,9 @@ struct MeshDesc {
   VkFormat position_format = VK_FORMAT_R32G32B32_SFLOAT;
   uint32_t position_stride = 12;
   uint32_t vertex_count = 0;
-  // Triangle list; VK_INDEX_TYPE_UINT16 or UINT32. index_count a positive multiple of 3.
+  // Triangle list; VK_INDEX_TYPE_UINT16 or UINT32. index_count a positive multiple of 3. 16-bit indices
+  // are read as 4-byte words: offset + size must reach offset + 2 * index_count rounded up to a
+  // multiple of 4 (an odd index_count at the very end of a buffer needs 2 bytes of padding there).
   BufferInput indices;
   VkIndexType index_type = VK_INDEX_TYPE_UINT32;
   uint32_t index_count = 0;
@@ -213,9 +237,16 @@ struct MeshDesc {
   float alpha_cutoff = 0.5f;
   float alpha_scale = 1.0f;  // the texture's alpha is multiplied by this first (glTF's base colour factor)
   AlphaWrap wrap_u = AlphaWrap::Repeat, wrap_v = AlphaWrap::Repeat;
-  // Object-space bounds of the positions (required): the light-space fits and culling use them.
-  float bounds_min[3] = {1.0f, 1.0f, 1.0f};
-  float bounds_max[3] = {-1.0f, -1.0f, -1.0f};
+  // Object-space bounds of the positions, which the light-space fits and culling use (on the CPU).
+  // Given: finite with min <= max on every axis (refused otherwise, naming MeshDesc.bounds), and
+  // holding every position (not checked: a box too small lets casters be culled where they reach). Absent (std::nullopt, the default): register_mesh() computes them on the device
+  // before it returns: one compute dispatch (min and max over all vertex_count positions, exact)
+  // submitted to ContextDesc::queue, which it waits for, and the 24 bytes read back. The positions
+  // must then hold their data when register_mesh() is called (written by the host, or by device work
+  // that has completed), and the queue must not be in use by another thread during the call (as for
+  // vkQueueSubmit). A non-finite position is then refused, naming MeshDesc.positions. Either way the
+  // bounds the module uses are what Context::mesh_bounds() returns.
+  std::optional<MeshBounds> bounds;
 };
 
 // Whether an instance enters the conservative shadow map prepass.
@@ -238,8 +269,9 @@ enum class LightType : uint32_t { Directional, Spot, Point };
 // within a light's range), ShadowMap with one perspective map, Cascades with the same map PCF-filtered,
 // RayTraced with rays toward its position. A point light is six such cones around the axes (its
 // Stats::lights entry sums them). A local light shadows the points it reaches: within
-// `range` of `position` and, for a spot light, inside its outer cone; every other point, and every
-// point whose geometric normal turns away from the light, is written 0. Shadow rays run from the
+// `range` of `position` and, for a spot light, inside its outer cone. What the output holds at every
+// other point, and at every point whose geometric normal turns away from the light, is chosen by
+// FrameDesc::output_term (1 by default; 0 with OutputTerm::Combined). Shadow rays run from the
 // point (pushed off its surface as for the sun) toward `position`, and occluders closer to the light
 // than its bulb, 1/1000 of its range (its bulb and housing), do not count (shaders/shared/local_light.h).
 struct Light {
@@ -292,6 +324,19 @@ struct Camera {
 
 constexpr uint32_t kMaxLightsPerRecord = 8;
 
+// What FrameDesc::output (and light_outputs) hold per pixel, for every technique and light type.
+enum class OutputTerm : uint32_t {
+  // Occlusion only (the default): 1 wherever nothing blocks the light, including points a local light
+  // does not reach (outside its range or a spot light's outer cone), points whose geometric normal
+  // turns away from the light, background and points that receive no shadow; only real occlusion
+  // lowers it. The host's lighting applies its own range, cone and facing terms (N.L, attenuation).
+  Occlusion,
+  // Occlusion times reach and facing: 0 also where the light does not reach (outside its range or
+  // cone) and where the point faces away from it, as this engine's renderer multiplies each light by
+  // it. Receiver-masked points that face the light stay 1.
+  Combined,
+};
+
 struct FrameDesc {
   uint64_t frame_index = 0;  // increases by one per record(); slot = frame_index % frames_in_flight
   // Depth: D32_SFLOAT, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT or D16_UNORM, SAMPLED usage. A pixel at
@@ -314,7 +359,7 @@ struct FrameDesc {
   // Float format.
   ImageInput terminator_offset;
   // Optional receiver mask: channel `receiver_channel` > 0.5 receives shadows; others stay lit (1), except
-  // that a point facing away from the light is 0 whether it receives or not.
+  // that with OutputTerm::Combined a point facing away from the light is 0 whether it receives or not.
   ImageInput receiver_mask;
   uint32_t receiver_channel = 3;
   // Optional, for a host whose G-buffer already holds the shading points in the module's own formats
@@ -336,8 +381,9 @@ struct FrameDesc {
   const Instance* instances = nullptr;  // every caster this frame
   uint32_t instance_count = 0;
   // Visibility (1 lit .. 0 shadowed), per pixel of depth: R8_UNORM, R16_SFLOAT or R32_SFLOAT with
-  // STORAGE usage, GENERAL layout, extent equal to depth's.
+  // STORAGE usage, GENERAL layout, extent equal to depth's. Every pixel is written, as `output_term` says.
   ImageInput output;
+  OutputTerm output_term = OutputTerm::Occlusion;  // for output and every light_outputs image
   // With light_count > 1: light_count - 1 more images, as `output`, for lights[1..].
   const ImageInput* light_outputs = nullptr;
   // Optional debug overlay (Settings::debug) of lights[overlay_light]: R8G8B8A8_UNORM, STORAGE usage,
@@ -346,17 +392,34 @@ struct FrameDesc {
   uint32_t overlay_light = 0;  // < light_count
 };
 
-// What each technique can do on this device, with the one-line reason where not.
+// Whether something can run on this device, with the one-line reason where not.
 struct Capability {
   bool available = false;
   std::string reason;  // empty when available
 };
+// What the module can do for one light type (LightType) on this device. record() refuses exactly what
+// is unavailable here, for a light of this type, with the settings that ask for it, in a line that
+// names the light (FrameDesc.lights[i]) and carries `reason`; everything available records.
+struct LightCapabilities {
+  Capability technique[6];  // indexed by Technique
+  // The IZB's paths (Technique::Izb and Hybrid; a local light's grid is traced by compute passes only):
+  Capability raster_trace;   // IzbSettings::trace Raster
+  Capability compute_trace;  // IzbSettings::trace Compute
+  Capability raster_csm;     // the CSM prepass as raster work: IzbSettings::csm_backend Raster
+  Capability compute_csm;    // the CSM prepass as compute work (csm_test hertel or bary)
+  Capability csm_test[4];    // indexed by CsmTest, with IzbSettings::csm
+  const Capability& of(Technique t) const { return technique[static_cast<int>(t)]; }
+  const Capability& of(CsmTest t) const { return csm_test[static_cast<int>(t)]; }
+};
 struct Capabilities {
+  // The directional light's (light[LightType::Directional] holds the same), kept for hosts with a sun only.
   Capability technique[6];  // indexed by Technique
   Capability csm_test[4];   // indexed by CsmTest
   bool hardware_conservative_raster = false;
+  LightCapabilities light[3];  // indexed by LightType
   const Capability& of(Technique t) const { return technique[static_cast<int>(t)]; }
   const Capability& of(CsmTest t) const { return csm_test[static_cast<int>(t)]; }
+  const LightCapabilities& of(LightType t) const { return light[static_cast<int>(t)]; }
 };
 
 class SHADOWS_API Context {
@@ -373,6 +436,9 @@ class SHADOWS_API Context {
   // drawn; its space in the module's buffers is not reused (a new context compacts after a level change).
   virtual MeshId register_mesh(const MeshDesc& mesh) = 0;
   virtual void unregister_mesh(MeshId mesh) = 0;
+  // The object-space bounds a registered mesh is fitted and culled with: MeshDesc::bounds as given, or
+  // those computed on the device at registration. Throws shadows::Error for an id not registered.
+  virtual MeshBounds mesh_bounds(MeshId mesh) const = 0;
 
   // Records the frame's shadow passes into `cmd` (see the synchronization contract above). Throws
   // shadows::Error before recording anything when an argument is invalid.
