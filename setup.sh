@@ -9,7 +9,7 @@ packages=(
   build-essential cmake pkg-config
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools
   libglm-dev libglfw3-dev libimgui-dev libtinygltf-dev libgtest-dev libstb-dev nlohmann-json3-dev
-  libembree-dev xvfb xauth
+  libembree-dev xvfb xauth python3
   clang libclang-rt-dev
 )
 missing=()

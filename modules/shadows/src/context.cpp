@@ -127,9 +127,11 @@ void check_image(const ImageInput& image, const std::string& name, std::initiali
 
 // ---------------------------------------------------------------------------------------------------
 
-ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
-  // Every pipeline of the module is created after this, from the SPIR-V inside the library.
-  engine::gpu::register_embedded_shaders(embedded_shaders());
+namespace {
+
+// The host's device as the helper layer's context, after checking every ContextDesc field it reads;
+// its refusals name ContextDesc's fields.
+std::unique_ptr<engine::gpu::Context> adopt_host_device(const ContextDesc& desc) {
   if (desc.instance == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.instance is VK_NULL_HANDLE");
   if (desc.physical_device == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.physical_device is VK_NULL_HANDLE");
   if (desc.device == VK_NULL_HANDLE) throw Error("shadows: ContextDesc.device is VK_NULL_HANDLE");
@@ -175,7 +177,7 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
   adopted.count_validation_messages = desc.count_validation_messages;
   adopted.masked_features = desc.masked_features;
   try {
-    gpu_ = std::make_unique<engine::gpu::Context>(adopted);
+    return std::make_unique<engine::gpu::Context>(adopted);
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
@@ -189,6 +191,14 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
     }
     throw Error(what);
   }
+}
+
+}  // namespace
+
+ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
+  // Every pipeline of the module is created after this, from the SPIR-V inside the library.
+  engine::gpu::register_embedded_shaders(embedded_shaders());
+  gpu_ = adopt_host_device(desc);
   frames_in_flight_ = desc.frames_in_flight;
   // Resources the passes replace (pools growing, a resize) may still be read by frames in flight.
   gpu_->defer_releases(true);
@@ -595,22 +605,10 @@ void ContextImpl::restart_term(VkCommandBuffer cmd) {
   clear_term_and_overlay(cmd);
 }
 
-void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
-  if (cmd == VK_NULL_HANDLE) throw Error("shadows: record: cmd is VK_NULL_HANDLE");
-  validate(f);
-  Slot& slot = slots_[f.frame_index % frames_in_flight_];
-  // The host's promise: the frame recorded in this slot frames_in_flight frames ago has completed.
-  if (slot.frame) complete_slot(slot);
-  if (f.frame_index >= frames_in_flight_) gpu_->release_through(f.frame_index - frames_in_flight_);
-  gpu_->set_recording_frame(f.frame_index);
+namespace {
 
-  engine::gpu::GpuProfiler& profiler = external_profiler_ ? *external_profiler_ : *slot.profiler;
-  if (!external_profiler_) profiler.begin_frame(cmd);
-  engine::gpu::ScopedGpuRegion region(*gpu_, profiler, cmd, "shadows");
-
-  geometry_.record_imports(cmd);
-
-  View& view = view_;
+// The host's camera of this record into the module's view (reversed Z whatever the host's convention).
+void set_camera(View& view, const FrameDesc& f) {
   view.view = glm::make_mat4(f.camera.view);
   glm::mat4 projection = glm::make_mat4(f.camera.projection);
   if (!f.camera.reversed_z) {
@@ -631,12 +629,15 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   view.far_plane = f.camera.far_plane;
   view.extent = f.depth.extent;
   view.frame_index = f.frame_index;
+}
 
-  draws_.clear();
-  draws_.reserve(f.instance_count);
+// The record's instances as the module's caster draws, with world bounds.
+void collect_draws(const FrameDesc& f, const GeometryStore& geometry, std::vector<DrawItem>& draws) {
+  draws.clear();
+  draws.reserve(f.instance_count);
   for (uint32_t i = 0; i < f.instance_count; ++i) {
     const Instance& in = f.instances[i];
-    const MeshInfo& mesh = *geometry_.find(in.mesh);
+    const MeshInfo& mesh = *geometry.find(in.mesh);
     DrawItem d;
     d.id = in.id;
     d.name = in.name ? in.name : mesh.name;
@@ -647,8 +648,30 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     d.shadow.casts_shadow = in.casts_shadow;
     d.shadow.csm = in.csm == CsmMode::On ? CsmChoice::On : in.csm == CsmMode::Off ? CsmChoice::Off : CsmChoice::Auto;
     d.bounds = mesh.bounds.transformed(d.world);
-    draws_.push_back(std::move(d));
+    draws.push_back(std::move(d));
   }
+}
+
+}  // namespace
+
+void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
+  if (cmd == VK_NULL_HANDLE) throw Error("shadows: record: cmd is VK_NULL_HANDLE");
+  validate(f);
+  Slot& slot = slots_[f.frame_index % frames_in_flight_];
+  // The host's promise: the frame recorded in this slot frames_in_flight frames ago has completed.
+  if (slot.frame) complete_slot(slot);
+  if (f.frame_index >= frames_in_flight_) gpu_->release_through(f.frame_index - frames_in_flight_);
+  gpu_->set_recording_frame(f.frame_index);
+
+  engine::gpu::GpuProfiler& profiler = external_profiler_ ? *external_profiler_ : *slot.profiler;
+  if (!external_profiler_) profiler.begin_frame(cmd);
+  engine::gpu::ScopedGpuRegion region(*gpu_, profiler, cmd, "shadows");
+
+  geometry_.record_imports(cmd);
+
+  View& view = view_;
+  set_camera(view, f);
+  collect_draws(f, geometry_, draws_);
 
   ensure_targets(f.depth.extent);
   // With shadows off nothing reads the inputs: the output pass writes the host's image lit. Native

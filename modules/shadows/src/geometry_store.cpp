@@ -213,12 +213,9 @@ void GeometryStore::grow(Buffer& buffer, VkDeviceSize bytes, VkDeviceSize used, 
   buffer = std::move(grown);  // the old one is released once the frames that used it completed
 }
 
-void GeometryStore::record_imports(VkCommandBuffer cmd) {
-  if (pending_.empty()) return;
-  // Previous frames read these buffers (and may still run): their reads finish before this frame's
-  // copies and imports write.
-  memory_barrier(cmd, geometry_readers(), 0,
-                 VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
+// The vertex, index and texture buffers grown to hold the pending meshes, what earlier meshes stored
+// copied over.
+void GeometryStore::grow_for_pending(VkCommandBuffer cmd) {
   uint32_t first_pending_vertex = UINT32_MAX, first_pending_index = UINT32_MAX;
   for (const auto& p : pending_) {
     first_pending_vertex = std::min(first_pending_vertex, uint32_t(geometry_.meshes_[p.id].vertex_offset));
@@ -232,68 +229,68 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
   const VkDeviceSize textures_used = geometry_.textures_.size();
   grow(geometry_.textures_, texture_bytes, std::min<VkDeviceSize>(textures_used, texture_bytes), geometry_usage_,
        "shadows alpha textures", cmd);
-  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
-                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
+}
 
+// One pending mesh's positions, uvs and indices into the module's buffers (import_ bound).
+void GeometryStore::import_mesh(VkCommandBuffer cmd, const Pending& p) {
   const VkDeviceSize alignment = ctx_->properties().limits.minStorageBufferOffsetAlignment;
-  import_.bind(cmd);
-  for (const auto& p : pending_) {
-    const MeshRange& range = geometry_.meshes_[p.id];
-    const MeshDesc& m = p.desc;
-    gpu_shared::MeshImportPush push{};
-    uint32_t position_word = 0, uv_word = 0;
-    const auto [pos_base, pos_range] = bind_region(m.positions, position_word);
-    DescriptorWriter writer;
-    writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.positions.buffer, pos_base, pos_range)
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle());
-    push.uv_word = gpu_shared::kNoUv;
-    if (m.uvs.buffer != VK_NULL_HANDLE) {
-      const auto [uv_base, uv_range] = bind_region(m.uvs, uv_word);
-      writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.uvs.buffer, uv_base, uv_range);
-      push.uv_word = uv_word;
-      push.uv_stride_words = m.uv_stride / 4;
-    } else {
-      writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.positions.buffer, pos_base, pos_range);
-    }
-    writer.push(*ctx_, cmd, import_);
-    push.mode = gpu_shared::MESH_IMPORT_VERTICES;
-    push.src_word = position_word;
-    push.stride_words = m.position_stride / 4;
-    push.count = m.vertex_count;
-    push.dst_first = uint32_t(range.vertex_offset);
-    import_.push_constants(cmd, push);
-    vkCmdDispatch(cmd, groups(m.vertex_count, 64), 1, 1);
-
-    // Indices: 16-bit ones may start at an odd half-word; the shader takes the half from stride_words.
-    const VkDeviceSize index_base = m.indices.offset / alignment * alignment;
-    const VkDeviceSize index_delta = m.indices.offset - index_base;
-    // Whole words, within the region add() checked (its end rounded down to a word).
-    const VkDeviceSize index_range = (index_delta + m.indices.size) / 4 * 4;
-    DescriptorWriter()
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.indices.buffer, index_base, index_range)
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.indices.buffer, index_base, index_range)
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle())
-        .push(*ctx_, cmd, import_);
-    gpu_shared::MeshImportPush ipush{};
-    ipush.src_word = uint32_t(index_delta / 4);
-    ipush.count = m.index_count;
-    ipush.dst_first = range.first_index;
-    ipush.uv_word = gpu_shared::kNoUv;
-    if (m.index_type == VK_INDEX_TYPE_UINT16) {
-      ipush.mode = gpu_shared::MESH_IMPORT_INDICES_16;
-      ipush.stride_words = uint32_t((index_delta / 2) & 1u);
-    } else {
-      ipush.mode = gpu_shared::MESH_IMPORT_INDICES_32;
-    }
-    import_.push_constants(cmd, ipush);
-    vkCmdDispatch(cmd, groups(m.index_count, 64), 1, 1);
+  const MeshRange& range = geometry_.meshes_[p.id];
+  const MeshDesc& m = p.desc;
+  gpu_shared::MeshImportPush push{};
+  uint32_t position_word = 0, uv_word = 0;
+  const auto [pos_base, pos_range] = bind_region(m.positions, position_word);
+  DescriptorWriter writer;
+  writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.positions.buffer, pos_base, pos_range)
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle());
+  push.uv_word = gpu_shared::kNoUv;
+  if (m.uvs.buffer != VK_NULL_HANDLE) {
+    const auto [uv_base, uv_range] = bind_region(m.uvs, uv_word);
+    writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.uvs.buffer, uv_base, uv_range);
+    push.uv_word = uv_word;
+    push.uv_stride_words = m.uv_stride / 4;
+  } else {
+    writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.positions.buffer, pos_base, pos_range);
   }
-  // Alpha textures: texels by compute, headers and the count by updates.
+  writer.push(*ctx_, cmd, import_);
+  push.mode = gpu_shared::MESH_IMPORT_VERTICES;
+  push.src_word = position_word;
+  push.stride_words = m.position_stride / 4;
+  push.count = m.vertex_count;
+  push.dst_first = uint32_t(range.vertex_offset);
+  import_.push_constants(cmd, push);
+  vkCmdDispatch(cmd, groups(m.vertex_count, 64), 1, 1);
+
+  // Indices: 16-bit ones may start at an odd half-word; the shader takes the half from stride_words.
+  const VkDeviceSize index_base = m.indices.offset / alignment * alignment;
+  const VkDeviceSize index_delta = m.indices.offset - index_base;
+  // Whole words, within the region add() checked (its end rounded down to a word).
+  const VkDeviceSize index_range = (index_delta + m.indices.size) / 4 * 4;
+  DescriptorWriter()
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.indices.buffer, index_base, index_range)
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.indices.buffer, index_base, index_range)
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle())
+      .push(*ctx_, cmd, import_);
+  gpu_shared::MeshImportPush ipush{};
+  ipush.src_word = uint32_t(index_delta / 4);
+  ipush.count = m.index_count;
+  ipush.dst_first = range.first_index;
+  ipush.uv_word = gpu_shared::kNoUv;
+  if (m.index_type == VK_INDEX_TYPE_UINT16) {
+    ipush.mode = gpu_shared::MESH_IMPORT_INDICES_16;
+    ipush.stride_words = uint32_t((index_delta / 2) & 1u);
+  } else {
+    ipush.mode = gpu_shared::MESH_IMPORT_INDICES_32;
+  }
+  import_.push_constants(cmd, ipush);
+  vkCmdDispatch(cmd, groups(m.index_count, 64), 1, 1);
+}
+
+// The pending meshes' alpha textures: texels by compute, headers and the count by updates.
+void GeometryStore::import_textures(VkCommandBuffer cmd) {
   struct Header {
     VkDeviceSize offset;
     uint32_t words[4];
@@ -323,6 +320,21 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
   for (const Header& h : headers)
     vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), h.offset, sizeof(h.words), h.words);
   vkCmdUpdateBuffer(cmd, geometry_.textures_.handle(), 0, 4, &texture_count_);
+}
+
+void GeometryStore::record_imports(VkCommandBuffer cmd) {
+  if (pending_.empty()) return;
+  // Previous frames read these buffers (and may still run): their reads finish before this frame's
+  // copies and imports write.
+  memory_barrier(cmd, geometry_readers(), 0,
+                 VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
+  grow_for_pending(cmd);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  import_.bind(cmd);
+  for (const auto& p : pending_) import_mesh(cmd, p);
+  import_textures(cmd);
   // The imports' writes, visible to every reader of the geometry later in this frame.
   memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,

@@ -39,6 +39,9 @@ class GeometryStore {
     MeshDesc desc;
     uint32_t texture_first_word = 0;
   };
+  void grow_for_pending(VkCommandBuffer cmd);
+  void import_mesh(VkCommandBuffer cmd, const Pending& p);
+  void import_textures(VkCommandBuffer cmd);
   void grow(engine::gpu::Buffer& buffer, VkDeviceSize bytes, VkDeviceSize used, VkBufferUsageFlags usage,
             const char* name, VkCommandBuffer cmd);
 
