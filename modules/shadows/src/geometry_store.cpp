@@ -165,13 +165,7 @@ Aabb GeometryStore::device_bounds(const MeshDesc& m, const std::string& what) {
     uint32_t position_word = 0;
     const auto [base, range] = bind_region(m.positions, position_word);
     import_.bind(cmd);
-    DescriptorWriter()
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.positions.buffer, base, range)
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.positions.buffer, base, range)
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
-        .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle())
-        .push(*ctx_, cmd, import_);
+    push_import_buffers(cmd, m.positions.buffer, base, range, m.positions.buffer, base, range);
     gpu_shared::MeshImportPush push{};
     push.mode = gpu_shared::MESH_IMPORT_BOUNDS;
     push.src_word = position_word;
@@ -194,6 +188,17 @@ Aabb GeometryStore::device_bounds(const MeshDesc& m, const std::string& what) {
   box.min = glm::vec3(values[0], values[1], values[2]);
   box.max = glm::vec3(values[3], values[4], values[5]);
   return box;
+}
+
+void GeometryStore::push_import_buffers(VkCommandBuffer cmd, VkBuffer source, VkDeviceSize base, VkDeviceSize range,
+                                        VkBuffer uvs, VkDeviceSize uv_base, VkDeviceSize uv_range) {
+  DescriptorWriter()
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, source, base, range)
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, uvs, uv_base, uv_range)
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
+      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle())
+      .push(*ctx_, cmd, import_);
 }
 
 const MeshInfo* GeometryStore::find(MeshId id) const {
@@ -239,21 +244,15 @@ void GeometryStore::import_mesh(VkCommandBuffer cmd, const Pending& p) {
   gpu_shared::MeshImportPush push{};
   uint32_t position_word = 0, uv_word = 0;
   const auto [pos_base, pos_range] = bind_region(m.positions, position_word);
-  DescriptorWriter writer;
-  writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.positions.buffer, pos_base, pos_range)
-      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
-      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
-      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle());
   push.uv_word = gpu_shared::kNoUv;
   if (m.uvs.buffer != VK_NULL_HANDLE) {
     const auto [uv_base, uv_range] = bind_region(m.uvs, uv_word);
-    writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.uvs.buffer, uv_base, uv_range);
+    push_import_buffers(cmd, m.positions.buffer, pos_base, pos_range, m.uvs.buffer, uv_base, uv_range);
     push.uv_word = uv_word;
     push.uv_stride_words = m.uv_stride / 4;
   } else {
-    writer.storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.positions.buffer, pos_base, pos_range);
+    push_import_buffers(cmd, m.positions.buffer, pos_base, pos_range, m.positions.buffer, pos_base, pos_range);
   }
-  writer.push(*ctx_, cmd, import_);
   push.mode = gpu_shared::MESH_IMPORT_VERTICES;
   push.src_word = position_word;
   push.stride_words = m.position_stride / 4;
@@ -267,13 +266,7 @@ void GeometryStore::import_mesh(VkCommandBuffer cmd, const Pending& p) {
   const VkDeviceSize index_delta = m.indices.offset - index_base;
   // Whole words, within the region add() checked (its end rounded down to a word).
   const VkDeviceSize index_range = (index_delta + m.indices.size) / 4 * 4;
-  DescriptorWriter()
-      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_SOURCE, m.indices.buffer, index_base, index_range)
-      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_UVS, m.indices.buffer, index_base, index_range)
-      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_VERTICES, geometry_.vertices_.handle())
-      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_INDICES, geometry_.indices_.handle())
-      .storage_buffer(gpu_shared::MESH_IMPORT_BINDING_BOUNDS, bounds_.handle())
-      .push(*ctx_, cmd, import_);
+  push_import_buffers(cmd, m.indices.buffer, index_base, index_range, m.indices.buffer, index_base, index_range);
   gpu_shared::MeshImportPush ipush{};
   ipush.src_word = uint32_t(index_delta / 4);
   ipush.count = m.index_count;

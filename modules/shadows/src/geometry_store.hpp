@@ -49,6 +49,10 @@ class GeometryStore {
   Aabb device_bounds(const MeshDesc& mesh, const std::string& what);
   // A host region bound at its offset rounded down to the device's alignment; the shader starts `word` in.
   std::pair<VkDeviceSize, VkDeviceSize> bind_region(const BufferInput& in, uint32_t& word) const;
+  // Pushes the import pass's five buffers: the source region, the uv region (in a pass reading no
+  // uvs, the source again) and the module's vertex, index and bounds buffers.
+  void push_import_buffers(VkCommandBuffer cmd, VkBuffer source, VkDeviceSize base, VkDeviceSize range,
+                           VkBuffer uvs, VkDeviceSize uv_base, VkDeviceSize uv_range);
 
   engine::gpu::Context* ctx_ = nullptr;
   VkBufferUsageFlags geometry_usage_ = 0;

@@ -50,10 +50,7 @@ CsmSnapshot read_csm(IzbState& s) {
   } else {
     snapshot.depth = s.csm->read_depth();
   }
-  const auto frame_bytes = read_buffer(s.ctx, s.res.frame_data);
-  gpu_shared::IzbFrame frame;
-  std::memcpy(&frame, frame_bytes.data(), sizeof(frame));
-  snapshot.light_view_projection = frame.light_view_projection;
+  snapshot.light_view_projection = s.read_light_view_projection();
   return snapshot;
 }
 

@@ -52,10 +52,7 @@ LitMapSnapshot read_lit_map(IzbState& s) {
     snapshot.tile_corner_depth.insert(snapshot.tile_corner_depth.end(), records.begin() + 8 * t + 2,
                                       records.begin() + 8 * t + 6);
   }
-  const auto frame_bytes = read_buffer(s.ctx, s.res.frame_data);
-  gpu_shared::IzbFrame frame;
-  std::memcpy(&frame, frame_bytes.data(), sizeof(frame));
-  snapshot.light_view_projection = frame.light_view_projection;
+  snapshot.light_view_projection = s.read_light_view_projection();
   return snapshot;
 }
 

@@ -1,6 +1,8 @@
 #include "barriers.hpp"
 #include "izb_state.hpp"
 
+#include <cstring>
+
 #include "gpu/profiler.hpp"
 
 namespace shadows::detail {
@@ -110,6 +112,13 @@ void IzbState::record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_sha
   pass_barrier(frame.ctx, cmd);
   OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_texels");
   dispatch_indirect(cmd, frame, tile_work.texel_bin, push, records_dispatch + 3u);
+}
+
+glm::mat4 IzbState::read_light_view_projection() const {
+  const auto bytes = read_buffer(ctx, res.frame_data);
+  gpu_shared::IzbFrame frame;
+  std::memcpy(&frame, bytes.data(), sizeof(frame));
+  return frame.light_view_projection;
 }
 
 }  // namespace shadows::detail

@@ -71,6 +71,8 @@ struct IzbState {
   // "<region>_tiles", "<region>_texels".
   void record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push, uint32_t mode,
                         const std::string& region, bool time_steps);
+  // The light view-projection the last frame's fit wrote (izb_fit.comp), for the snapshots.
+  glm::mat4 read_light_view_projection() const;
 
   engine::gpu::Context& ctx;
   IzbPipelineCache pipelines;
