@@ -68,13 +68,17 @@ struct Vertex {
 // The layout gpu::VertexInput::StandardVertex reads.
 static_assert(sizeof(Vertex) == 32 && offsetof(Vertex, normal) == 12 && offsetof(Vertex, uv) == 24);
 
+struct DeformData;  // engine/core/skinning.hpp
+
 // CPU copy of a triangle mesh, kept after upload: the reference tracer, the automatic CSM choice and
 // the tests read it.
 struct MeshData {
   std::string name;
   std::vector<Vertex> vertices;
   std::vector<uint32_t> indices;  // triangle list
-  Aabb bounds;
+  Aabb bounds;  // of the rest positions
+  // Skin and morph targets (engine/core/skinning.hpp); null for a rigid mesh.
+  std::shared_ptr<const DeformData> deform;
   void compute_bounds();
   size_t triangle_count() const { return indices.size() / 3; }
 };

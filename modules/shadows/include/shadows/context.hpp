@@ -252,6 +252,28 @@ struct MeshDesc {
 // Whether an instance enters the conservative shadow map prepass.
 enum class CsmMode : uint32_t { Auto, On, Off };
 
+// An instance's own object-space positions for this frame, replacing its mesh's (a skinned or morphed
+// caster: the host's skinning or morph output). Topology, uvs and the alpha test stay the registered
+// mesh's. The buffer region is read by compute shaders (storage-buffer reads) in the record() it is
+// given to, on the device: the host's writes to it must be visible to COMPUTE_SHADER /
+// SHADER_STORAGE_READ before that record()'s commands run, and it must hold them until they have
+// executed (the synchronization contract above). The module copies the positions into its own
+// buffers at the start of the frame's commands, so the host may overwrite the region once the frame
+// has executed. With Technique::RayTraced the instance's acceleration structure is refitted to them
+// every frame. CsmMode::Auto treats such an instance as dynamic (it never enters the CSM).
+struct DeformedPositions {
+  // Format and stride as MeshDesc::positions: R32G32B32_SFLOAT or R32G32B32A32_SFLOAT, `stride` a
+  // multiple of 4 at least the format's size; the region must hold vertex_count vertices.
+  BufferInput positions;
+  VkFormat format = VK_FORMAT_R32G32B32_SFLOAT;
+  uint32_t stride = 12;
+  uint32_t vertex_count = 0;  // must equal the mesh's MeshDesc::vertex_count
+  // A box in object space holding every position of this frame (finite, min <= max): the light-space
+  // fits and culling use it as they use MeshDesc::bounds. Not checked against the positions.
+  MeshBounds bounds;
+  bool present() const { return positions.buffer != VK_NULL_HANDLE; }
+};
+
 struct Instance {
   MeshId mesh = kNoMesh;
   float world[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  // object -> world
@@ -259,6 +281,8 @@ struct Instance {
   CsmMode csm = CsmMode::Auto;
   uint64_t id = 0;              // the host's identifier, echoed in Stats::csm_decisions
   const char* name = nullptr;   // for statistics and messages (null: the mesh's name)
+  // Optional (deformed.positions.buffer null: the mesh's registered positions, moved by `world`).
+  DeformedPositions deformed;
 };
 
 enum class LightType : uint32_t { Directional, Spot, Point };
