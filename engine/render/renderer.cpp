@@ -1,6 +1,7 @@
 #include "engine/render/renderer.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -9,7 +10,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <stb_image_write.h>
 
+#include "engine/core/skinning.hpp"
 #include "engine/core/transform_system.hpp"
+#include "mesh_deformer.hpp"
 #include "shared/frame.h"
 
 namespace engine {
@@ -49,9 +52,15 @@ SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
     vertices.insert(vertices.end(), mesh.data->vertices.begin(), mesh.data->vertices.end());
     indices.insert(indices.end(), mesh.data->indices.begin(), mesh.data->indices.end());
     mesh.gpu_mesh = static_cast<uint32_t>(meshes_.size());
+    range.rest_mesh = mesh.gpu_mesh;
     slots[mesh.data.get()] = mesh.gpu_mesh;
     meshes_.push_back(range);
   });
+  std::vector<uint32_t> deform_words;
+  add_deformed(registry, vertices, deform_words);
+  if (!deform_words.empty())
+    deform_data_ = upload_buffer(ctx, deform_words.data(), deform_words.size() * sizeof(uint32_t),
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "deform data");
   total_indices_ = indices.size();
   texture_table_ = MaterialTextureTable(registry);
   textures_ = upload_buffer(ctx, texture_table_.words().data(), texture_table_.words().size() * sizeof(uint32_t),
@@ -65,6 +74,55 @@ SceneGeometry::SceneGeometry(gpu::Context& ctx, Registry& registry) {
                             usage | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "scene vertices");
   indices_ = upload_buffer(ctx, indices.data(), indices.size() * sizeof(uint32_t),
                            usage | VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "scene indices");
+}
+
+void SceneGeometry::add_deformed(Registry& registry, std::vector<Vertex>& vertices, std::vector<uint32_t>& deform_words) {
+  // One copy of each mesh's skin and morph deltas, however many entities it deforms.
+  std::unordered_map<const DeformData*, std::pair<uint32_t, uint32_t>> words;
+  const auto append_vec3 = [&](const glm::vec3& v) {
+    for (int k = 0; k < 3; ++k) deform_words.push_back(std::bit_cast<uint32_t>(v[k]));
+  };
+  registry.each<Mesh>([&](Entity e, Mesh& mesh) {
+    if (!mesh.data || !mesh.data->deform || mesh.gpu_mesh == UINT32_MAX) return;
+    const DeformData& data = *mesh.data->deform;
+    const Skeleton* skeleton = registry.try_get<Skeleton>(e);
+    const bool skinned = data.skinned() && skeleton && !skeleton->joints.empty();
+    if (!skinned && data.morph_targets.empty()) return;
+    const uint32_t n = uint32_t(mesh.data->vertices.size());
+    auto [it, added] = words.try_emplace(&data, UINT32_MAX, 0u);
+    if (added) {
+      if (data.skinned()) {
+        it->second.first = uint32_t(deform_words.size());
+        for (uint32_t v = 0; v < n; ++v) {
+          for (int k = 0; k < 4; ++k) deform_words.push_back(data.joints[v][k]);
+          for (int k = 0; k < 4; ++k) deform_words.push_back(std::bit_cast<uint32_t>(data.weights[v][k]));
+        }
+      }
+      it->second.second = uint32_t(deform_words.size());
+      for (const MorphTarget& t : data.morph_targets)
+        for (uint32_t v = 0; v < n; ++v) {
+          append_vec3(t.position_deltas[v]);
+          append_vec3(t.normal_deltas.empty() ? glm::vec3(0.0f) : t.normal_deltas[v]);
+        }
+    }
+    DeformedMesh d;
+    d.entity = e;
+    d.rest_mesh = mesh.gpu_mesh;
+    d.mesh = uint32_t(meshes_.size());
+    d.skin_word = skinned ? it->second.first : UINT32_MAX;
+    d.morph_word = it->second.second;
+    d.target_count = uint32_t(data.morph_targets.size());
+    d.joint_count = skinned ? std::max<uint32_t>(data.joint_count, uint32_t(skeleton->joints.size())) : 0u;
+    GpuMeshRange own = meshes_[d.rest_mesh];
+    own.vertex_offset = int32_t(vertices.size());
+    own.deformed = uint32_t(deformed_.size());
+    own.rest_mesh = d.rest_mesh;
+    // Starts as the rest pose; skinning.comp rewrites positions and normals every frame.
+    vertices.insert(vertices.end(), mesh.data->vertices.begin(), mesh.data->vertices.end());
+    meshes_.push_back(own);
+    mesh.gpu_mesh = d.mesh;
+    deformed_.push_back(d);
+  });
 }
 
 Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent, uint32_t frames_in_flight)
@@ -123,6 +181,7 @@ Renderer::Renderer(gpu::Context& ctx, VkExtent2D extent, uint32_t frames_in_flig
   VK_CHECK(vkAllocateCommandBuffers(ctx.device(), &alloc, &frame_cmd_));
   VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
   VK_CHECK(vkCreateFence(ctx.device(), &fence_info, ctx.allocator(), &frame_fence_));
+  deformer_ = std::make_unique<MeshDeformer>(ctx, frames_in_flight_);
   create_targets();
 }
 
@@ -213,7 +272,12 @@ void Renderer::build_draw_list() {
     d.entity = e;
     d.world = rebased(t.world, shift);
     d.mesh = mesh.gpu_mesh;
-    if (mesh.data) d.bounds = mesh.data->bounds.transformed(d.world);
+    if (const GpuMeshRange& range = geometry_->mesh(d.mesh); range.deformed != UINT32_MAX) {
+      d.deformed_bounds = deformer_->bounds(range.deformed);
+      d.bounds = d.deformed_bounds.transformed(d.world);
+    } else if (mesh.data) {
+      d.bounds = mesh.data->bounds.transformed(d.world);
+    }
     if (const auto* m = scene_->registry.try_get<Material>(e)) {
       d.base_color = m->base_color;
       d.alpha_mode = m->alpha_mode;
@@ -283,6 +347,7 @@ void Renderer::update(float dt) {
     const glm::dmat3 rotation{glm::mat3(cam.view)};
     view[3] = glm::vec4(glm::vec3(-(rotation * eye)), 1.0f);
   }
+  deformer_->update(scene_->registry, *geometry_, uint32_t(next_frame_ % frames_in_flight_));
   build_draw_list();
   view_.view = view;
   view_.projection = cam.projection;
@@ -342,6 +407,7 @@ void Renderer::record_frame(VkCommandBuffer cmd) {
   const gpu::Buffer& frame_uniforms = frame_uniforms_[view_.frame_index % frames_in_flight_];
   {
     ScopedGpuRegion total(ctx_, profiler_, cmd, "frame");
+    deformer_->record(cmd, profiler_, *geometry_, uint32_t(view_.frame_index % frames_in_flight_));
     // G-buffer.
     {
       ScopedGpuRegion region(ctx_, profiler_, cmd, "gbuffer");

@@ -14,6 +14,8 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/assets/scene.hpp"
+#include "engine/core/animation.hpp"
+#include "engine/core/skinning.hpp"
 #include "engine/core/command_line.hpp"
 #include "engine/render/renderer.hpp"
 #include "frame_capture.hpp"
@@ -66,6 +68,7 @@ struct Options {
   bool sun = false;                  // --sun: a glTF lit by its own lights gets the default sun too
   double scale = 1.0;                // --scale: the scene scaled about the origin (engine::transform_scene)
   glm::dvec3 offset{0.0};            // --offset: then moved by this (world units)
+  std::optional<double> time;        // --time: the scene's animations posed at this time (seconds)
 };
 
 const char* kUsage =
@@ -77,6 +80,7 @@ const char* kUsage =
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
     "                    [--light sun|spot|point] [--scale S] [--offset X,Y,Z] [--large-world] [--sun]\n"
+    "                    [--time SECONDS]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
@@ -95,6 +99,8 @@ const char* kUsage =
     "  spot and point lights), one JSON reference entry per light; --light spot|point shadows that light alone.\n"
     "  --sun: a glTF lit by its own spot and point lights and no directional light is lit by them alone\n"
     "  unless --sun brings the default sun.\n"
+    "  --time SECONDS: the scene's animations (procedural ones, glTF clips, skinned and morphing meshes)\n"
+    "  posed at that time, so an animated frame is reproducible; without it the scene stays as loaded.\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
     "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
@@ -195,6 +201,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--sun") o.sun = true;
     else if (a == "--large-world") o.large_world = true;
     else if (a == "--scale") o.scale = parse_number(a, args.value());
+    else if (a == "--time") o.time = parse_number(a, args.value());
     else if (a == "--offset") {
       const std::string v = args.value();
       const auto items = split(v);
@@ -652,6 +659,10 @@ std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances,
   }
   engine::replicate_scene(*scene, instances);
   apply_csm_choice(*scene, o.csm_choice);
+  if (o.time) {
+    engine::update_animations(scene->registry, float(*o.time));
+    engine::update_clip_animations(scene->registry, float(*o.time));
+  }
   return scene;
 }
 

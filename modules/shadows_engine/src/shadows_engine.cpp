@@ -234,6 +234,8 @@ class EngineShadowModule final : public ShadowModule {
       in.id = instance_id_of(d.entity);
       const auto* name = frame.registry.try_get<engine::Name>(d.entity);
       in.name = name ? name->value.c_str() : "";
+      if (const engine::GpuMeshRange& range = frame.geometry.mesh(d.mesh); range.deformed != UINT32_MAX)
+        in.deformed = deformed_positions(frame, range, d.deformed_bounds);
       instances_.push_back(in);
     }
   }
@@ -268,14 +270,30 @@ class EngineShadowModule final : public ShadowModule {
     return sun_lit;
   }
 
+  // A deformed entity's vertices for this frame (skinning.comp's output in the renderer's vertex
+  // buffer, written before the G-buffer pass and made visible to compute reads by its barrier).
+  static DeformedPositions deformed_positions(engine::FrameContext& frame, const engine::GpuMeshRange& range,
+                                              const engine::Aabb& bounds) {
+    DeformedPositions p;
+    p.positions = {frame.geometry.vertices().handle(), VkDeviceSize(range.vertex_offset) * sizeof(engine::Vertex),
+                   VkDeviceSize(range.vertex_count) * sizeof(engine::Vertex), kGeometryUsage};
+    p.format = VK_FORMAT_R32G32B32_SFLOAT;
+    p.stride = sizeof(engine::Vertex);
+    p.vertex_count = range.vertex_count;
+    std::memcpy(p.bounds.min, &bounds.min, sizeof(p.bounds.min));
+    std::memcpy(p.bounds.max, &bounds.max, sizeof(p.bounds.max));
+    return p;
+  }
+
   // One host mesh per (mesh, texture, alpha threshold): the module keeps alpha tests per mesh, the
-  // engine per draw.
+  // engine per draw. A deformed entity's instance uses its mesh's rest vertices (same triangles and uvs).
   MeshId mesh_for(engine::FrameContext& frame, const engine::DrawItem& d, const engine::Mesh* mesh) {
-    const auto key = std::make_tuple(d.mesh, d.base_color_texture, d.alpha_threshold);
+    const uint32_t slot = frame.geometry.mesh(d.mesh).rest_mesh;
+    const auto key = std::make_tuple(slot, d.base_color_texture, d.alpha_threshold);
     if (auto it = meshes_.find(key); it != meshes_.end()) return it->second;
-    const engine::GpuMeshRange& range = frame.geometry.mesh(d.mesh);
+    const engine::GpuMeshRange& range = frame.geometry.mesh(slot);
     MeshDesc m;
-    m.name = mesh && mesh->data ? mesh->data->name : "mesh " + std::to_string(d.mesh);
+    m.name = mesh && mesh->data ? mesh->data->name : "mesh " + std::to_string(slot);
     const VkDeviceSize first_vertex = VkDeviceSize(range.vertex_offset) * sizeof(engine::Vertex);
     m.positions = {frame.geometry.vertices().handle(), first_vertex, VkDeviceSize(range.vertex_count) * sizeof(engine::Vertex),
                    kGeometryUsage};

@@ -1,5 +1,7 @@
 #include "reference/embree_tracer.hpp"
 
+#include "engine/core/skinning.hpp"
+
 #include <embree3/rtcore.h>
 #include <shared/local_light.h>
 #include <shared/shadow_common.h>
@@ -240,7 +242,10 @@ EmbreeTracer::EmbreeTracer(engine::Registry& registry, const glm::dvec3& shift) 
         const engine::MeshData& data = *mesh.data;
         const size_t base = vertices.size();
         const glm::mat4 world = engine::rebased(transform.world, shift);
-        for (const engine::Vertex& v : data.vertices) {
+        // A skinned or morphed mesh in its current pose, deformed on the CPU as skinning.comp does.
+        const std::vector<engine::Vertex> posed =
+            data.deform ? engine::posed_vertices(registry, e) : std::vector<engine::Vertex>{};
+        for (const engine::Vertex& v : data.deform ? posed : data.vertices) {
           vertices.push_back(glm::vec3(world * glm::vec4(v.position, 1.0f)));
         }
         const size_t whole = data.indices.size() / 3 * 3;

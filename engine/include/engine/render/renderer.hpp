@@ -25,6 +25,22 @@ struct GpuMeshRange {
   uint32_t index_count = 0;
   int32_t vertex_offset = 0;
   uint32_t vertex_count = 0;
+  // A deformable entity's own copy of its mesh's vertices, which skinning.comp rewrites every frame:
+  // its index in SceneGeometry::deformed(), and the slot of the mesh's rest vertices (the same
+  // triangles). UINT32_MAX / its own slot for every other mesh.
+  uint32_t deformed = UINT32_MAX;
+  uint32_t rest_mesh = UINT32_MAX;
+};
+
+// A deformable entity (MeshData::deform with a Skeleton or morph targets) and where its data lives.
+struct DeformedMesh {
+  Entity entity;
+  uint32_t mesh = 0;       // its own slot
+  uint32_t rest_mesh = 0;  // the slot of its mesh's rest vertices
+  uint32_t skin_word = UINT32_MAX;  // first word of its skin in deform_data(), UINT32_MAX unskinned
+  uint32_t morph_word = 0;          // first word of its morph deltas
+  uint32_t target_count = 0;
+  uint32_t joint_count = 0;
 };
 
 class SceneGeometry {
@@ -38,8 +54,16 @@ class SceneGeometry {
   const GpuMeshRange& mesh(uint32_t slot) const { return meshes_.at(slot); }
   size_t mesh_count() const { return meshes_.size(); }
   uint64_t triangle_count() const { return total_indices_ / 3; }
+  // Deformable entities, each with its own slot; their skins and morph deltas (shared/skinning.h's
+  // layout) in one storage buffer (null when there are none).
+  const std::vector<DeformedMesh>& deformed() const { return deformed_; }
+  const gpu::Buffer& deform_data() const { return deform_data_; }
 
  private:
+  void add_deformed(Registry& registry, std::vector<Vertex>& vertices, std::vector<uint32_t>& deform_words);
+
+  std::vector<DeformedMesh> deformed_;
+  gpu::Buffer deform_data_;
   gpu::Buffer vertices_;
   gpu::Buffer indices_;
   gpu::Buffer textures_;
@@ -61,6 +85,9 @@ struct DrawItem {
   bool alpha_tested() const { return alpha_threshold != 0; }
   ShadowCaster shadow;  // defaults when the entity has none
   Aabb bounds;          // world space
+  // A deformed entity's (SceneGeometry::mesh(mesh).deformed set): this frame's box around its
+  // deformed vertices, in object space.
+  Aabb deformed_bounds;
 };
 
 // A spot or point light the lighting pass adds beside the sun, with its own shadow term.
@@ -138,6 +165,8 @@ class RenderFeature {
   // Draws the feature's ImGui controls (windowed mode only).
   virtual void draw_ui() {}
 };
+
+class MeshDeformer;  // engine/render/mesh_deformer.hpp
 
 class Renderer {
  public:
@@ -243,6 +272,7 @@ class Renderer {
   gpu::Pipeline lighting_pipeline_;        // the sun alone
   gpu::Pipeline local_lighting_pipeline_;  // the sun and FrameView::local_lights
   gpu::GpuProfiler profiler_;
+  std::unique_ptr<MeshDeformer> deformer_;  // poses and deforms SceneGeometry::deformed() each frame
   VkCommandBuffer frame_cmd_ = VK_NULL_HANDLE;
   VkFence frame_fence_ = VK_NULL_HANDLE;
 };
