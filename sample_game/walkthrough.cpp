@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/core/animation.hpp"
+#include "engine/core/skinning.hpp"
 #include "engine/core/transform_system.hpp"
 
 namespace walkthrough {
@@ -407,7 +408,33 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
   ImGui::SetNextWindowSize(ImVec2(std::min(560.0f, vp->Size.x * 0.45f), 0), ImGuiCond_FirstUseEver);
   ImGui::Begin("Objects: shadow flags and the CSM decision");
   object_table(renderer, module);
+  if (renderer.scene()) {
+    const auto characters = animated_meshes(*renderer.scene());
+    if (!characters.empty()) {
+      ImGui::Separator();
+      ImGui::TextUnformatted("Skinned and morphing meshes (deformed on the GPU each frame)");
+      for (const auto& c : characters)
+        ImGui::Text("%s: %u joints, %u morph targets, %llu triangles", c.name.c_str(), c.joints, c.morph_targets,
+                    (unsigned long long)c.triangles);
+    }
+  }
   ImGui::End();
+}
+
+std::vector<AnimatedMeshInfo> animated_meshes(engine::Scene& scene) {
+  std::vector<AnimatedMeshInfo> out;
+  scene.registry.each<engine::Mesh>([&](engine::Entity e, engine::Mesh& mesh) {
+    if (!mesh.data || !mesh.data->deform) return;
+    AnimatedMeshInfo info;
+    const auto* name = scene.registry.try_get<engine::Name>(e);
+    info.name = name ? name->value : mesh.data->name;
+    const auto* skeleton = scene.registry.try_get<engine::Skeleton>(e);
+    info.joints = skeleton ? uint32_t(skeleton->joints.size()) : 0u;
+    info.morph_targets = uint32_t(mesh.data->deform->morph_targets.size());
+    info.triangles = mesh.data->triangle_count();
+    out.push_back(std::move(info));
+  });
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------

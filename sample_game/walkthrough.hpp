@@ -47,6 +47,15 @@ glm::vec3 sun_direction(const glm::vec3& noon_direction, float hours);
 // smooth at dawn and dusk.
 float daylight(float hours);
 
+// A skinned or morphing mesh of the scene, as the panel lists it.
+struct AnimatedMeshInfo {
+  std::string name;
+  uint32_t joints = 0;
+  uint32_t morph_targets = 0;
+  uint64_t triangles = 0;
+};
+std::vector<AnimatedMeshInfo> animated_meshes(engine::Scene& scene);
+
 struct SceneEntry {
   std::string label;
   std::string source;  // procedural name, .gltf or .json path

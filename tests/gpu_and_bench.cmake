@@ -69,7 +69,7 @@ IzbTest.DebugOverlays*:CascadesTest.MaskingMatchesUnmaskedAndSavesWork:CascadesT
 Levels/DynamicSceneTest.*:RayTracedTest.EveryLightOfAFrame*:RayTracedTest.IzbSpotLightTraces*:\
 Lights/LocalLightTest.ShadowMapsOfTheLight/*:MaterialsTest.SmoothTerminator*:GpuTest.HeadlessImageShowsLitGeometry:\
 Scenes/IzbSceneTest.ComputeAndRasterPassesAgreeBitForBit/contact_view0:Scenes/IzbSceneTest.ThirtyTwoSamples*/contact_view0:\
-Views/CanopyTest.*/view0_256:AdoptedDeviceTest.RunsOnTheHostDeviceAndLeavesItAlive:Scenes/HostInputsTest.*/contact_view0")
+Views/CanopyTest.*/view0_256:Clips/AnimatedCastersTest.*:AdoptedDeviceTest.RunsOnTheHostDeviceAndLeavesItAlive:Scenes/HostInputsTest.*/contact_view0")
 gtest_discover_tests(gpu_tests DISCOVERY_TIMEOUT 60 TEST_PREFIX syncval. TEST_FILTER "${SYNCVAL_FILTER}"
                      PROPERTIES LABELS syncval TIMEOUT 900 ENVIRONMENT ENGINE_SYNC_VALIDATION=1)
 add_test(NAME syncval_gpu_suite COMMAND gpu_tests)
