@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -69,6 +70,7 @@ struct Options {
   double scale = 1.0;                // --scale: the scene scaled about the origin (engine::transform_scene)
   glm::dvec3 offset{0.0};            // --offset: then moved by this (world units)
   std::optional<double> time;        // --time: the scene's animations posed at this time (seconds)
+  bool rigid = false;                // --rigid: skinned and morphing meshes drawn rigid in their rest pose
 };
 
 const char* kUsage =
@@ -80,7 +82,7 @@ const char* kUsage =
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
     "                    [--light sun|spot|point] [--scale S] [--offset X,Y,Z] [--large-world] [--sun]\n"
-    "                    [--time SECONDS]\n"
+    "                    [--time SECONDS] [--rigid]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
@@ -101,6 +103,8 @@ const char* kUsage =
     "  unless --sun brings the default sun.\n"
     "  --time SECONDS: the scene's animations (procedural ones, glTF clips, skinned and morphing meshes)\n"
     "  posed at that time, so an animated frame is reproducible; without it the scene stays as loaded.\n"
+    "  --rigid: skinned and morphing meshes become rigid meshes in their rest pose (nothing is deformed):\n"
+    "  the static frame an animated one is compared with.\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
     "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
@@ -202,6 +206,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--large-world") o.large_world = true;
     else if (a == "--scale") o.scale = parse_number(a, args.value());
     else if (a == "--time") o.time = parse_number(a, args.value());
+    else if (a == "--rigid") o.rigid = true;
     else if (a == "--offset") {
       const std::string v = args.value();
       const auto items = split(v);
@@ -648,6 +653,21 @@ void print_header() {
               "spp", "total_ms", "frame_ms", "mismatch", "false_shad", "cov_mae", "mem_MiB");
 }
 
+// Every deformable mesh as a rigid one in its rest pose (copies sharing one MeshData stay shared).
+void make_rigid(engine::Scene& scene) {
+  std::map<const engine::MeshData*, std::shared_ptr<const engine::MeshData>> rigid;
+  scene.registry.each<engine::Mesh>([&](engine::Entity, engine::Mesh& mesh) {
+    if (!mesh.data || !mesh.data->deform) return;
+    auto& copy = rigid[mesh.data.get()];
+    if (!copy) {
+      auto data = std::make_shared<engine::MeshData>(*mesh.data);
+      data->deform.reset();
+      copy = std::move(data);
+    }
+    mesh.data = copy;
+  });
+}
+
 std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances, const Options& o) {
   auto scene = engine::load_scene(name, o.detail);
   if (o.sun) engine::enable_default_sun(*scene);
@@ -659,6 +679,7 @@ std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances,
   }
   engine::replicate_scene(*scene, instances);
   apply_csm_choice(*scene, o.csm_choice);
+  if (o.rigid) make_rigid(*scene);
   if (o.time) {
     engine::update_animations(scene->registry, float(*o.time));
     engine::update_clip_animations(scene->registry, float(*o.time));
