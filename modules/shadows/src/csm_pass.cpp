@@ -243,7 +243,6 @@ struct CsmPass::Impl {
     }
     return std::max(hi.x - lo.x, hi.y - lo.y) / float(resolution);
   }
-
   std::set<uint64_t> warned_alpha_forced;  // instances already warned about
 
   void choose(const Frame& frame, uint32_t resolution) {
