@@ -1,5 +1,6 @@
 #include "vulkan_host.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -43,6 +44,23 @@ MeshData unit_cube() {
         m.vertices.push_back({0.5f * (n + c.x * u + c.y * v), n});
       for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.indices.push_back(base + i);
     }
+  return m;
+}
+
+// The cube in shape `shape` (Options::cube_shapes): 0 as is, 1 sheared along x with height, 2 tapered
+// toward its top (normals kept: the G-buffer shades it as the cube).
+MeshData shaped_cube(uint32_t shape) {
+  MeshData m = unit_cube();
+  if (shape > 2) throw std::runtime_error("unknown cube shape " + std::to_string(shape) + " (0, 1 or 2)");
+  m.min = glm::vec3(1.0e30f);
+  m.max = glm::vec3(-1.0e30f);
+  for (Vertex& v : m.vertices) {
+    const float height = v.position.y + 0.5f;  // 0 at the bottom, 1 at the top
+    if (shape == 1) v.position.x += 0.6f * height;
+    if (shape == 2) v.position.x *= 1.0f - 0.7f * height, v.position.z *= 1.0f - 0.7f * height;
+    m.min = glm::min(m.min, v.position);
+    m.max = glm::max(m.max, v.position);
+  }
   return m;
 }
 
@@ -208,7 +226,21 @@ Result run(const Options& o) {
   // ----- Meshes: one buffer per mesh (interleaved position + normal, then indices), also the module's input.
   const VkBufferUsageFlags mesh_usage =
       VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-  const MeshData meshes[2] = {ground_quad(), unit_cube()};
+  const auto shape_of = [&](uint32_t frame) {
+    return o.cube_shapes.empty() ? 0u : o.cube_shapes[std::min<size_t>(frame, o.cube_shapes.size() - 1)];
+  };
+  const MeshData meshes[2] = {ground_quad(), shaped_cube(o.deformed_cubes ? 0 : shape_of(0))};
+  // The cube in each shape, as the G-buffer draws it and deformed instances hand it to the module
+  // (vertices, then the 32-bit indices at the cube's index offset).
+  const MeshData shapes[3] = {shaped_cube(0), shaped_cube(1), shaped_cube(2)};
+  Buffer shape_buffers[3];
+  for (uint32_t k = 0; k < 3; ++k) {
+    const VkDeviceSize vertex_bytes = shapes[k].vertices.size() * sizeof(Vertex);
+    shape_buffers[k] = make_buffer(d, vertex_bytes + shapes[k].indices.size() * 4, mesh_usage);
+    auto* bytes = static_cast<uint8_t*>(shape_buffers[k].mapped);
+    std::memcpy(bytes, shapes[k].vertices.data(), vertex_bytes);
+    std::memcpy(bytes + vertex_bytes, shapes[k].indices.data(), shapes[k].indices.size() * 4);
+  }
   const VkIndexType index_types[2] = {VK_INDEX_TYPE_UINT16, VK_INDEX_TYPE_UINT32};
   Buffer mesh_buffers[2];
   VkDeviceSize index_offsets[2];
@@ -446,7 +478,8 @@ Result run(const Options& o) {
     f.lights = c.lights;
     for (const Object& obj : c.objects)
       for (uint32_t index : meshes[obj.mesh].indices) {
-        const glm::vec3 p(obj.world * glm::vec4(meshes[obj.mesh].vertices[index].position, 1.0f));
+        const MeshData& mesh = obj.mesh == 1 ? shapes[shape_of(c.frame)] : meshes[obj.mesh];
+        const glm::vec3 p(obj.world * glm::vec4(mesh.vertices[index].position, 1.0f));
         f.caster_triangles.insert(f.caster_triangles.end(), {p.x, p.y, p.z});
       }
     if (c.frame + 1 == o.frames) {
@@ -520,20 +553,32 @@ Result run(const Options& o) {
     const VkWriteDescriptorSet frame_write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, VK_NULL_HANDLE, 0, 0, 1,
                                            VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, nullptr, &frame_buffer, nullptr};
     push_descriptors(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, draw_layout, 0, 1, &frame_write);
-    const std::vector<Object> objects = scene_at(frame);
+    const std::vector<Object> objects = scene_at(o.still ? 0 : frame);
     std::vector<shadows::Instance> instances(objects.size());
+    const uint32_t shape = shape_of(frame);
     for (size_t i = 0; i < objects.size(); ++i) {
       const Object& obj = objects[i];
       const glm::mat4 rows = glm::transpose(obj.world);
       const DrawPush push{view_projection, {rows[0], rows[1], rows[2]}, obj.albedo};
       vkCmdPushConstants(cmd, draw_layout, draw_push.stageFlags, 0, sizeof(push), &push);
       const VkDeviceSize zero = 0;
-      vkCmdBindVertexBuffers(cmd, 0, 1, &mesh_buffers[obj.mesh].buffer, &zero);
-      vkCmdBindIndexBuffer(cmd, mesh_buffers[obj.mesh].buffer, index_offsets[obj.mesh], index_types[obj.mesh]);
+      const VkBuffer drawn = obj.mesh == 1 ? shape_buffers[shape].buffer : mesh_buffers[obj.mesh].buffer;
+      vkCmdBindVertexBuffers(cmd, 0, 1, &drawn, &zero);
+      vkCmdBindIndexBuffer(cmd, drawn, index_offsets[obj.mesh], index_types[obj.mesh]);
       vkCmdDrawIndexed(cmd, uint32_t(meshes[obj.mesh].indices.size()), 1, 0, 0, 0);
       instances[i].mesh = mesh_ids[obj.mesh];
       std::memcpy(instances[i].world, glm::value_ptr(obj.world), 64);
       instances[i].id = i;
+      if (obj.mesh != 1) continue;
+      instances[i].csm = o.cube_csm;
+      if (!o.deformed_cubes) continue;
+      // The shape's positions straight from the host's vertex buffer (written once, before any frame).
+      shadows::DeformedPositions& deformed = instances[i].deformed;
+      deformed.positions = {drawn, 0, shapes[shape].vertices.size() * sizeof(Vertex), mesh_usage};
+      deformed.stride = sizeof(Vertex);
+      deformed.vertex_count = uint32_t(shapes[shape].vertices.size());
+      std::memcpy(deformed.bounds.min, &shapes[shape].min, 12);
+      std::memcpy(deformed.bounds.max, &shapes[shape].max, 12);
     }
     vkCmdEndRendering(cmd);
 
@@ -657,6 +702,7 @@ Result run(const Options& o) {
   }
   r.csm_status = module->stats().csm_status;
   r.light_stats = module->stats().lights;
+  r.csm_decisions = module->stats().csm_decisions;
 
   // ----- The last frame, for the PNG and for tests that trace the same scene.
   const FrameCapture& last = r.frames.back();
@@ -688,6 +734,7 @@ Result run(const Options& o) {
     for (Buffer& b : c.visibility) destroy(d, b);
   }
   for (Buffer& b : mesh_buffers) destroy(d, b);
+  for (Buffer& b : shape_buffers) destroy(d, b);
   r.validation_messages = d.validation_messages();
   return r;
 }

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "shadows/context.hpp"
 #include "shadows/settings.hpp"
 
 namespace vulkan_host {
@@ -46,6 +47,15 @@ struct Options {
   // or "combined" (0 also where a light does not reach or face a point: what the reference traces).
   std::string output_term = "occlusion";
   bool mesh_bounds = true;             // MeshDesc::bounds given; false: absent, computed by the module on the device
+  // Deforming casters. The cubes' shape of each frame, cube_shapes[min(frame, size - 1)] (empty: 0): 0
+  // the unit cube, 1 sheared along x with height, 2 tapered toward its top; the G-buffer draws it.
+  // With deformed_cubes the cube is registered as the unit cube and every cube instance hands the
+  // module its shape's positions (Instance::deformed: the host's vertex buffer, position and normal
+  // interleaved, stride 24); otherwise the cube is registered in frame 0's shape and drawn rigidly.
+  std::vector<uint32_t> cube_shapes;
+  bool deformed_cubes = false;
+  shadows::CsmMode cube_csm = shadows::CsmMode::Auto;  // the cube instances' Instance::csm
+  bool still = false;                                   // every frame the scene of frame 0 (nothing slides)
 };
 
 // The terminator offset the host writes with Options::terminator_offset: this far along the outward normal.
@@ -91,6 +101,7 @@ struct Result {
   std::string csm_status;            // Stats::csm_status after the last frame (izb+csm: whether the prepass ran)
   uint64_t csm_culled = 0;           // Stats::csm_culled_points, summed over the frames whose statistics came back
   std::vector<shadows::Stats::LightStats> light_stats;  // report_completed: Stats::lights after the last frame
+  std::vector<shadows::CsmDecision> csm_decisions;      // Stats::csm_decisions after the last frame
 };
 
 Result run(const Options& options);  // throws std::exception (one line) on any failure

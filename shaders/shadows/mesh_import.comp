@@ -35,6 +35,7 @@ void import_bounds() {
 
 // A host mesh into the module's buffers: positions (and uvs) into the engine vertex layout (8 floats:
 // position, normal, uv; the normal is unused by the shadow passes and left 0), indices widened to 32 bits.
+// MESH_IMPORT_POSITIONS rewrites the positions alone (a deformed instance's slot, its uvs kept).
 void main() {
   // A push constant: the same for the whole dispatch, so the barriers inside stay in uniform control flow.
   if (push.mode == MESH_IMPORT_BOUNDS) {
@@ -43,7 +44,11 @@ void main() {
   }
   uint i = gl_GlobalInvocationID.x;
   if (i >= push.count) return;
-  if (push.mode == MESH_IMPORT_VERTICES) {
+  if (push.mode == MESH_IMPORT_POSITIONS) {
+    uint src = push.src_word + i * push.stride_words;
+    uint dst = (push.dst_first + i) * 8u;
+    for (uint c = 0u; c < 3u; ++c) vertices[dst + c] = uintBitsToFloat(source[src + c]);
+  } else if (push.mode == MESH_IMPORT_VERTICES) {
     uint src = push.src_word + i * push.stride_words;
     uint dst = (push.dst_first + i) * 8u;
     for (uint c = 0u; c < 3u; ++c) vertices[dst + c] = uintBitsToFloat(source[src + c]);

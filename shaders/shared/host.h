@@ -80,6 +80,9 @@ SHARED_CONST uint MESH_IMPORT_INDICES_16 = 2u;
 // Bounds of the positions (src_word, stride_words, count as for vertices) into MESH_IMPORT_BINDING_BOUNDS:
 // min xyz then max xyz, as mesh_bounds_key encodes them; the buffer starts at kMeshBoundsEmpty.
 SHARED_CONST uint MESH_IMPORT_BOUNDS = 3u;
+// Positions only (a deformed instance's, Instance::deformed): src_word, stride_words, count and dst_first
+// as for vertices; the stored normal and uv are left as they are.
+SHARED_CONST uint MESH_IMPORT_POSITIONS = 4u;
 SHARED_CONST uint kNoUv = 0xffffffffu;
 SHARED_CONST uint MESH_IMPORT_BINDING_SOURCE = 0u;  // host positions or indices
 SHARED_CONST uint MESH_IMPORT_BINDING_UVS = 1u;

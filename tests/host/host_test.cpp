@@ -1295,3 +1295,182 @@ TEST(HostDevice, DeviceSetupRefusesWhatItCannotMergeInOneLine) {
                 setup.features(), VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR),
             nullptr);
 }
+
+// ----- Deformed instances (Instance::deformed): positions of the frame's own from a host buffer.
+
+class HostDeformed : public HostBadInput {};
+
+// Every refusal of a present DeformedPositions: one line naming the field, nothing recorded; then a
+// frame with a valid deformed instance records (and the fixture counts no validation message).
+TEST_F(HostDeformed, EveryRefusalNamesItsField) {
+  vulkan_host::Buffer buffer = vulkan_host::make_buffer(*device_, 256, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  auto* bytes = static_cast<uint8_t*>(buffer.mapped);
+  const float triangle[9] = {-1, 1, -1, 1, 1, -1, 0, 1, 1};
+  std::memcpy(bytes, triangle, sizeof(triangle));
+  for (uint32_t i = 0; i < 3; ++i) reinterpret_cast<uint32_t*>(bytes + 64)[i] = i;
+  // The deformed positions: float4 at byte 128, 16 apart.
+  for (uint32_t i = 0; i < 3; ++i) {
+    const float p[4] = {triangle[3 * i], triangle[3 * i + 1] + 0.5f, triangle[3 * i + 2], 1.0f};
+    std::memcpy(bytes + 128 + 16 * i, p, 16);
+  }
+  shadows::MeshDesc mesh;
+  mesh.name = "tri";
+  mesh.positions = buffer.input();
+  mesh.vertex_count = 3;
+  mesh.indices = buffer.input(64);
+  mesh.index_count = 3;
+  mesh.bounds = shadows::MeshBounds{{-1, 1, -1}, {1, 1, 1}};
+  const shadows::MeshId id = module_->register_mesh(mesh);
+  shadows::DeformedPositions valid;
+  valid.positions = {buffer.buffer, 128, 48, buffer.usage};
+  valid.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+  valid.stride = 16;
+  valid.vertex_count = 3;
+  valid.bounds = shadows::MeshBounds{{-1, 1.5f, -1}, {1, 1.5f, 1}};
+  using Mutation = std::function<void(shadows::DeformedPositions&)>;
+  const std::string field = "FrameDesc.instances[1].deformed.";
+  const std::vector<std::pair<Mutation, std::string>> cases = {
+      {[](auto& d) { d.positions.usage = VK_BUFFER_USAGE_VERTEX_BUFFER_BIT; }, field + "positions.usage lacks"},
+      {[](auto& d) { d.format = VK_FORMAT_R16G16B16A16_SFLOAT; }, field + "format"},
+      {[](auto& d) { d.stride = 10; }, field + "stride 10 is not a multiple of 4"},
+      {[](auto& d) { d.stride = 12; }, field + "stride 12 is smaller than the format's 16 bytes"},
+      {[](auto& d) { d.format = VK_FORMAT_R32G32B32_SFLOAT, d.stride = 8; }, field + "stride 8 is smaller"},
+      {[](auto& d) { d.positions.offset = 130; }, field + "positions.offset 130 is not a multiple of 4"},
+      {[](auto& d) { d.vertex_count = 4; }, field + "vertex_count 4 differs from the mesh's 3"},
+      {[](auto& d) { d.positions.size = 40; }, field + "positions.size is 40"},
+      {[](auto& d) { d.bounds.max[2] = std::numeric_limits<float>::infinity(); }, field + "bounds has a value that is not finite"},
+      {[](auto& d) { d.bounds.min[1] = std::numeric_limits<float>::quiet_NaN(); }, field + "bounds has a value that is not finite"},
+      {[](auto& d) { d.bounds.min[0] = 2.0f; }, field + "bounds is not a box"},
+  };
+  std::vector<shadows::Instance> instances(2);
+  instances[0].mesh = instances[1].mesh = id;
+  for (const auto& [mutate, expected] : cases) {
+    SCOPED_TRACE(expected);
+    instances[1].deformed = valid;
+    mutate(instances[1].deformed);
+    shadows::FrameDesc f = frame_;
+    f.frame_index = next_frame_++;
+    f.instances = instances.data();
+    f.instance_count = 2;
+    expect_refused(f, expected);
+  }
+  instances[1].deformed = valid;
+  expect_valid_frame(instances);
+  instances[0].deformed = valid;  // two deformed instances of the mesh: a second slot
+  expect_valid_frame(instances);
+  expect_valid_frame(instances);
+  vulkan_host::destroy(*device_, buffer);
+}
+
+vulkan_host::Options deformed_options(const std::string& mode, uint32_t spp) {
+  vulkan_host::Options o = options(mode, 0, spp);
+  o.width = o.height = 128;
+  o.frames = 4;
+  o.frames_in_flight = 3;
+  o.capture_every_frame = true;
+  o.cube_csm = shadows::CsmMode::On;  // the same CSM choice for both (Auto keeps deformed ones out)
+  return o;
+}
+
+size_t shadowed(const std::vector<float>& v) { return size_t(std::count_if(v.begin(), v.end(), [](float x) { return x < 1.0f; })); }
+
+// A cube registered as the unit cube and drawn with a sheared cube's positions (every cube instance
+// deformed, five of them) shadows every frame bit for bit as the sheared cube registered and drawn
+// rigidly, in every technique lavapipe runs.
+TEST_F(HostDeformed, DeformedPositionsEqualARegisteredMeshWithThem) {
+  const std::vector<std::pair<std::string, uint32_t>> cases = {{"izb", 1},     {"izb+csm", 1}, {"sm", 1},
+                                                               {"cascades", 1}, {"hybrid", 1},  {"izb", 32},
+                                                               {"izb+csm", 32}, {"hybrid", 32}};
+  for (const auto& [mode, spp] : cases) {
+    SCOPED_TRACE(mode + " " + std::to_string(spp) + " spp");
+    vulkan_host::Options o = deformed_options(mode, spp);
+    o.cube_shapes = {1};
+    const Result rigid = vulkan_host::run(o);
+    o.deformed_cubes = true;
+    const Result deformed = vulkan_host::run(o);
+    o.deformed_cubes = false;
+    o.cube_shapes = {0};
+    const Result unit = vulkan_host::run(o);
+    EXPECT_EQ(rigid.validation_messages + deformed.validation_messages + unit.validation_messages, 0u);
+    ASSERT_EQ(rigid.frames.size(), 4u);
+    ASSERT_EQ(deformed.frames.size(), 4u);
+    for (size_t k = 0; k < 4; ++k) {
+      const std::vector<float>& v = rigid.frames[k].visibility[0];
+      EXPECT_GT(shadowed(v), 0u) << "no shadow to compare";
+      EXPECT_TRUE(v == deformed.frames[k].visibility[0]) << "frame " << k << " differs";
+    }
+    // The shape shows: the unit cube's shadows differ.
+    EXPECT_NE(unit.frames.back().visibility[0], deformed.frames.back().visibility[0]);
+  }
+}
+
+// One deformed instance set, frame after frame, to different positions: each frame shadows its own
+// (a still scene: only the positions change), and the first positions again give the first frame's
+// output bit for bit. Three frames in flight, several lights, no validation message.
+TEST_F(HostDeformed, ShadowFollowsThePositionsEachFrame) {
+  for (const std::string mode : {"izb", "sm", "hybrid"}) {
+    SCOPED_TRACE(mode);
+    vulkan_host::Options o = deformed_options(mode, 1);
+    o.frames = 5;
+    o.still = true;
+    o.deformed_cubes = true;
+    o.cube_csm = shadows::CsmMode::Auto;
+    o.cube_shapes = {1, 2, 1, 0, 2};
+    o.lights = {"sun", "spot"};
+    const Result r = vulkan_host::run(o);
+    EXPECT_EQ(r.validation_messages, 0u);
+    ASSERT_EQ(r.frames.size(), 5u);
+    for (size_t l = 0; l < 2; ++l) {
+      SCOPED_TRACE("light " + std::to_string(l));
+      const auto& v = [&](size_t k) -> const std::vector<float>& { return r.frames[k].visibility[l]; };
+      EXPECT_GT(shadowed(v(0)), 0u);
+      EXPECT_NE(v(0), v(1));
+      EXPECT_TRUE(v(0) == v(2)) << "the first positions again give another output";
+      EXPECT_NE(v(0), v(3));
+      EXPECT_NE(v(1), v(3));
+      EXPECT_TRUE(v(1) == v(4)) << "the second positions again give another output";
+    }
+  }
+}
+
+// CsmMode::Auto never puts a deformed instance in the CSM (it is dynamic), with the reason saying so;
+// CsmMode::On still does.
+TEST_F(HostDeformed, AutoCsmTreatsDeformedInstancesAsDynamic) {
+  vulkan_host::Options o = deformed_options("izb+csm", 1);
+  o.capture_every_frame = false;
+  o.frames = 5;
+  o.cube_csm = shadows::CsmMode::Auto;
+  o.cube_shapes = {1};
+  o.still = true;
+  const Result rigid = vulkan_host::run(o);
+  o.deformed_cubes = true;
+  const Result deformed = vulkan_host::run(o);
+  o.cube_csm = shadows::CsmMode::On;
+  const Result forced = vulkan_host::run(o);
+  EXPECT_EQ(rigid.validation_messages + deformed.validation_messages + forced.validation_messages, 0u);
+  // Instances 1..5 are the cubes (0 the ground).
+  ASSERT_EQ(deformed.csm_decisions.size(), 6u);
+  ASSERT_EQ(forced.csm_decisions.size(), 6u);
+  ASSERT_EQ(rigid.csm_decisions.size(), 6u);
+  size_t rigid_in = 0;
+  for (const shadows::CsmDecision& d : deformed.csm_decisions) {
+    SCOPED_TRACE(d.instance_id);
+    const bool cube = d.instance_id != 0;
+    if (cube) {
+      EXPECT_FALSE(d.in_csm) << d.reason;
+      EXPECT_TRUE(d.automatic);
+      EXPECT_NE(d.reason.find("deformed"), std::string::npos) << d.reason;
+    } else {
+      EXPECT_EQ(d.reason.find("deformed"), std::string::npos) << d.reason;
+    }
+  }
+  for (const shadows::CsmDecision& d : rigid.csm_decisions) {
+    EXPECT_EQ(d.reason.find("deformed"), std::string::npos) << d.reason;
+    rigid_in += d.instance_id != 0 && d.in_csm;
+  }
+  std::printf("[ measure ] rigid cubes Auto puts in the CSM: %zu of 5\n", rigid_in);
+  for (const shadows::CsmDecision& d : forced.csm_decisions)
+    if (d.instance_id != 0) {
+      EXPECT_TRUE(d.in_csm) << d.reason;
+    }
+}

@@ -97,6 +97,26 @@ void check_buffer(const BufferInput& b, const std::string& name, VkDeviceSize mi
                 std::to_string(minimum));
 }
 
+void check_deformed(const DeformedPositions& d, const std::string& name, uint32_t mesh_vertex_count) {
+  if (d.format != VK_FORMAT_R32G32B32_SFLOAT && d.format != VK_FORMAT_R32G32B32A32_SFLOAT)
+    throw Error("shadows: " + name + ".format is " + format_name(d.format) +
+                " (VK_FORMAT_R32G32B32_SFLOAT or R32G32B32A32_SFLOAT)");
+  const uint32_t position_bytes = d.format == VK_FORMAT_R32G32B32_SFLOAT ? 12 : 16;
+  if (d.stride % 4) throw Error("shadows: " + name + ".stride " + std::to_string(d.stride) + " is not a multiple of 4");
+  if (d.stride < position_bytes)
+    throw Error("shadows: " + name + ".stride " + std::to_string(d.stride) + " is smaller than the format's " +
+                std::to_string(position_bytes) + " bytes");
+  if (d.vertex_count != mesh_vertex_count)
+    throw Error("shadows: " + name + ".vertex_count " + std::to_string(d.vertex_count) + " differs from the mesh's " +
+                std::to_string(mesh_vertex_count) + " (MeshDesc::vertex_count)");
+  check_buffer(d.positions, name + ".positions", VkDeviceSize(d.vertex_count - 1) * d.stride + position_bytes);
+  for (int c = 0; c < 3; ++c)
+    if (!std::isfinite(d.bounds.min[c]) || !std::isfinite(d.bounds.max[c]))
+      throw Error("shadows: " + name + ".bounds has a value that is not finite");
+  if (!(d.bounds.min[0] <= d.bounds.max[0] && d.bounds.min[1] <= d.bounds.max[1] && d.bounds.min[2] <= d.bounds.max[2]))
+    throw Error("shadows: " + name + ".bounds is not a box (min <= max on every axis)");
+}
+
 void check_image(const ImageInput& image, const std::string& name, std::initializer_list<VkFormat> formats,
                  VkImageUsageFlags usage, std::initializer_list<VkImageLayout> layouts,
                  std::optional<VkExtent2D> extent) {
@@ -411,6 +431,9 @@ void ContextImpl::validate(const FrameDesc& f) const {
     if (!geometry_.find(f.instances[i].mesh))
       throw Error("shadows: FrameDesc.instances[" + std::to_string(i) + "].mesh " + std::to_string(f.instances[i].mesh) +
                   " is not a registered mesh");
+    if (f.instances[i].deformed.present())
+      check_deformed(f.instances[i].deformed, "FrameDesc.instances[" + std::to_string(i) + "].deformed",
+                     geometry_.find(f.instances[i].mesh)->vertex_count);
   }
   if (!(f.camera.near_plane > 0.0f) || !(f.camera.far_plane > f.camera.near_plane))
     throw Error("shadows: FrameDesc.camera near_plane/far_plane must satisfy 0 < near < far");
@@ -631,8 +654,10 @@ void set_camera(View& view, const FrameDesc& f) {
   view.frame_index = f.frame_index;
 }
 
-// The record's instances as the module's caster draws, with world bounds.
-void collect_draws(const FrameDesc& f, const GeometryStore& geometry, std::vector<DrawItem>& draws) {
+// The record's instances as the module's caster draws, with world bounds; `entries`: each one's mesh
+// table entry (GeometryStore::record_deformed), a deformed instance's slot bounded by its own box.
+void collect_draws(const FrameDesc& f, const GeometryStore& geometry, const std::vector<uint32_t>& entries,
+                   std::vector<DrawItem>& draws) {
   draws.clear();
   draws.reserve(f.instance_count);
   for (uint32_t i = 0; i < f.instance_count; ++i) {
@@ -642,17 +667,37 @@ void collect_draws(const FrameDesc& f, const GeometryStore& geometry, std::vecto
     d.id = in.id;
     d.name = in.name ? in.name : mesh.name;
     d.world = glm::make_mat4(in.world);
-    d.mesh = in.mesh;
+    d.mesh = entries[i];
     d.alpha_threshold = mesh.alpha_threshold;
     d.base_color_texture = mesh.texture;
     d.shadow.casts_shadow = in.casts_shadow;
     d.shadow.csm = in.csm == CsmMode::On ? CsmChoice::On : in.csm == CsmMode::Off ? CsmChoice::Off : CsmChoice::Auto;
-    d.bounds = mesh.bounds.transformed(d.world);
+    d.shadow.deformed = in.deformed.present();
+    if (d.shadow.deformed) {
+      Aabb box;
+      box.extend(glm::make_vec3(in.deformed.bounds.min));
+      box.extend(glm::make_vec3(in.deformed.bounds.max));
+      d.bounds = box.transformed(d.world);
+    } else {
+      d.bounds = mesh.bounds.transformed(d.world);
+    }
     draws.push_back(std::move(d));
   }
 }
 
 }  // namespace
+
+// The geometry of the frame: the queued mesh imports, the deformed instances' positions into their
+// slots (a profiler region of their own), and the frame's draws.
+void ContextImpl::record_geometry(VkCommandBuffer cmd, const FrameDesc& f, engine::gpu::GpuProfiler& profiler) {
+  geometry_.record_imports(cmd);
+  std::optional<engine::gpu::ScopedGpuRegion> deformed_region;
+  for (uint32_t i = 0; i < f.instance_count && !deformed_region; ++i)
+    if (f.instances[i].deformed.present()) deformed_region.emplace(*gpu_, profiler, cmd, "deformed_import");
+  const std::vector<uint32_t>& entries = geometry_.record_deformed(cmd, f.instances, f.instance_count);
+  deformed_region.reset();
+  collect_draws(f, geometry_, entries, draws_);
+}
 
 void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   if (cmd == VK_NULL_HANDLE) throw Error("shadows: record: cmd is VK_NULL_HANDLE");
@@ -667,11 +712,9 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   if (!external_profiler_) profiler.begin_frame(cmd);
   engine::gpu::ScopedGpuRegion region(*gpu_, profiler, cmd, "shadows");
 
-  geometry_.record_imports(cmd);
-
+  record_geometry(cmd, f, profiler);
   View& view = view_;
   set_camera(view, f);
-  collect_draws(f, geometry_, draws_);
 
   ensure_targets(f.depth.extent);
   // With shadows off nothing reads the inputs: the output pass writes the host's image lit. Native

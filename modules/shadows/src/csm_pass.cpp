@@ -243,7 +243,6 @@ struct CsmPass::Impl {
     }
     return std::max(hi.x - lo.x, hi.y - lo.y) / float(resolution);
   }
-
   std::set<uint64_t> warned_alpha_forced;  // instances already warned about
 
   void choose(const Frame& frame, uint32_t resolution) {
@@ -271,6 +270,9 @@ struct CsmPass::Impl {
         decision.reason = "on: chosen for the entity";
       } else if (d.shadow.csm == CsmChoice::Off) {
         decision.reason = "off: chosen for the entity";
+      } else if (d.shadow.deformed) {  // a shape of each frame's own: dynamic, its measure would not hold
+        decision.automatic = true;
+        decision.reason = "out: deformed (positions of its own every frame: dynamic)";
       } else {
         decision.automatic = true;
         const MeasureKey key{d.world, frame.view.light_direction, texel};

@@ -44,17 +44,22 @@ struct MeshRange {
   uint32_t index_count = 0;
   int32_t vertex_offset = 0;
   uint32_t vertex_count = 0;
+  // A deformed slot (GeometryStore): a registered mesh's indices over vertices of its own, whose
+  // positions a deformed instance rewrites every frame it is drawn (Instance::deformed).
+  bool deformed = false;
 };
 
 // Every registered mesh in one vertex buffer (StoredVertex: position, normal, uv) and one
 // 32-bit index buffer, plus the alpha textures in the material-texture word layout (shared/material.h).
+// The mesh table holds the registered meshes' ranges and, among them in order of creation, the
+// deformed slots' (MeshRange::deformed); a DrawItem names its entry.
 class Geometry {
  public:
   const engine::gpu::Buffer& vertices() const { return vertices_; }
   const engine::gpu::Buffer& indices() const { return indices_; }
   const engine::gpu::Buffer& textures() const { return textures_; }
-  const MeshRange& mesh(uint32_t slot) const { return meshes_.at(slot); }
-  size_t mesh_count() const { return meshes_.size(); }
+  const MeshRange& mesh(uint32_t entry) const { return meshes_.at(entry); }
+  size_t mesh_count() const { return meshes_.size(); }  // table entries: meshes and deformed slots
 
  private:
   friend class GeometryStore;
@@ -69,7 +74,7 @@ struct DrawItem {
   uint64_t id = 0;  // the host's Instance::id
   std::string name;
   glm::mat4 world{1.0f};
-  uint32_t mesh = 0;                          // Geometry slot
+  uint32_t mesh = 0;                          // Geometry mesh table entry (a deformed slot for a deformed instance)
   uint32_t alpha_threshold = 0;               // engine::alpha_threshold (0: not alpha-tested)
   uint32_t base_color_texture = 0xffffffffu;  // texture index in Geometry::textures(), or none
   bool alpha_tested() const { return alpha_threshold != 0; }

@@ -115,6 +115,8 @@ MeshId GeometryStore::add(const MeshDesc& m) {
     info.bounds = device_bounds(m, what);
   }
   info.live = true;
+  info.vertex_count = m.vertex_count;
+  info.entry = uint32_t(geometry_.meshes_.size());
   if (m.alpha_texture.present()) ++texture_count_;  // only once nothing can refuse the mesh
   const MeshId id = MeshId(meshes_.size());
   MeshRange range;
@@ -223,8 +225,9 @@ void GeometryStore::grow(Buffer& buffer, VkDeviceSize bytes, VkDeviceSize used, 
 void GeometryStore::grow_for_pending(VkCommandBuffer cmd) {
   uint32_t first_pending_vertex = UINT32_MAX, first_pending_index = UINT32_MAX;
   for (const auto& p : pending_) {
-    first_pending_vertex = std::min(first_pending_vertex, uint32_t(geometry_.meshes_[p.id].vertex_offset));
-    first_pending_index = std::min(first_pending_index, geometry_.meshes_[p.id].first_index);
+    const MeshRange& range = geometry_.meshes_[meshes_[p.id].entry];
+    first_pending_vertex = std::min(first_pending_vertex, uint32_t(range.vertex_offset));
+    first_pending_index = std::min(first_pending_index, range.first_index);
   }
   grow(geometry_.vertices_, VkDeviceSize(vertex_count_) * 32, VkDeviceSize(first_pending_vertex) * 32,
        geometry_usage_ | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "shadows vertices", cmd);
@@ -239,7 +242,7 @@ void GeometryStore::grow_for_pending(VkCommandBuffer cmd) {
 // One pending mesh's positions, uvs and indices into the module's buffers (import_ bound).
 void GeometryStore::import_mesh(VkCommandBuffer cmd, const Pending& p) {
   const VkDeviceSize alignment = ctx_->properties().limits.minStorageBufferOffsetAlignment;
-  const MeshRange& range = geometry_.meshes_[p.id];
+  const MeshRange& range = geometry_.meshes_[meshes_[p.id].entry];
   const MeshDesc& m = p.desc;
   gpu_shared::MeshImportPush push{};
   uint32_t position_word = 0, uv_word = 0;
@@ -333,6 +336,94 @@ void GeometryStore::record_imports(VkCommandBuffer cmd) {
                  VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
                  geometry_readers(), kGeometryReads);
   pending_.clear();
+}
+
+// Each instance's table entry for this frame: a deformed one takes the next slot of its mesh, made
+// here where the mesh has no more (its range: the mesh's indices over new vertices at the buffer's end).
+uint32_t GeometryStore::assign_entries(const Instance* instances, uint32_t count,
+                                       std::vector<std::pair<uint32_t, uint32_t>>& fresh) {
+  const uint32_t first_new_vertex = vertex_count_;
+  entries_.assign(count, 0);
+  std::vector<uint32_t> taken(meshes_.size(), 0);  // deformed instances so far, per mesh
+  for (uint32_t i = 0; i < count; ++i) {
+    const Instance& in = instances[i];
+    MeshInfo& mesh = meshes_[in.mesh];
+    if (!in.deformed.present()) {
+      entries_[i] = mesh.entry;
+      continue;
+    }
+    uint32_t& k = taken[in.mesh];
+    if (k == mesh.deformed_slots.size()) {
+      MeshRange slot = geometry_.meshes_[mesh.entry];
+      slot.vertex_offset = int32_t(vertex_count_);
+      slot.deformed = true;
+      vertex_count_ += slot.vertex_count;
+      mesh.deformed_slots.push_back(uint32_t(geometry_.meshes_.size()));
+      fresh.push_back({mesh.entry, mesh.deformed_slots.back()});
+      geometry_.meshes_.push_back(slot);
+    }
+    entries_[i] = mesh.deformed_slots[k++];
+  }
+  return first_new_vertex;
+}
+
+// One deformed instance's host positions into its slot (import_ bound): positions only, the slot's
+// normals and uvs stay those copied from its mesh.
+void GeometryStore::import_positions(VkCommandBuffer cmd, const DeformedPositions& in, const MeshRange& slot) {
+  uint32_t position_word = 0;
+  const auto [base, range] = bind_region(in.positions, position_word);
+  push_import_buffers(cmd, in.positions.buffer, base, range, in.positions.buffer, base, range);
+  gpu_shared::MeshImportPush push{};
+  push.mode = gpu_shared::MESH_IMPORT_POSITIONS;
+  push.src_word = position_word;
+  push.stride_words = in.stride / 4;
+  push.count = slot.vertex_count;
+  push.dst_first = uint32_t(slot.vertex_offset);
+  push.uv_word = gpu_shared::kNoUv;
+  import_.push_constants(cmd, push);
+  vkCmdDispatch(cmd, groups(slot.vertex_count, 64), 1, 1);
+}
+
+const std::vector<uint32_t>& GeometryStore::record_deformed(VkCommandBuffer cmd, const Instance* instances,
+                                                            uint32_t count) {
+  std::vector<std::pair<uint32_t, uint32_t>> fresh;  // (mesh entry, new slot entry)
+  const uint32_t first_new_vertex = assign_entries(instances, count, fresh);
+  const bool any = std::any_of(instances, instances + count, [](const Instance& in) { return in.deformed.present(); });
+  if (!any) return entries_;
+  // Every earlier reader of the vertex buffer (this frame's imports' readers to come, and the previous
+  // frames' passes on the queue, which read the slots) finishes before the copies and imports write.
+  memory_barrier(cmd, geometry_readers() | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                 VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  if (!fresh.empty()) {
+    grow(geometry_.vertices_, VkDeviceSize(vertex_count_) * 32, VkDeviceSize(first_new_vertex) * 32,
+         geometry_usage_ | VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "shadows vertices", cmd);
+    // The grown buffer's copy lands before the new slots copy their meshes' vertices out of it.
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                   VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    std::vector<VkBufferCopy> copies;
+    for (const auto& [mesh, slot] : fresh) {
+      const MeshRange& from = geometry_.meshes_[mesh];
+      const MeshRange& to = geometry_.meshes_[slot];
+      copies.push_back({VkDeviceSize(from.vertex_offset) * 32, VkDeviceSize(to.vertex_offset) * 32,
+                        VkDeviceSize(to.vertex_count) * 32});
+    }
+    vkCmdCopyBuffer(cmd, geometry_.vertices_.handle(), geometry_.vertices_.handle(), uint32_t(copies.size()),
+                    copies.data());
+    // The slots' copied vertices are written before the imports overwrite their positions.
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+  }
+  import_.bind(cmd);
+  for (uint32_t i = 0; i < count; ++i)
+    if (instances[i].deformed.present()) import_positions(cmd, instances[i].deformed, geometry_.meshes_[entries_[i]]);
+  // The positions (and new slots' copies), visible to every reader of the geometry later in this frame:
+  // the passes' vertex fetch and storage reads, and acceleration-structure builds (SHADER_READ).
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_COPY_BIT,
+                 VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT, geometry_readers(),
+                 kGeometryReads | VK_ACCESS_2_SHADER_READ_BIT);
+  return entries_;
 }
 
 }  // namespace shadows::detail

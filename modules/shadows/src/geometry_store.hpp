@@ -3,6 +3,12 @@
 // mesh, the next record() converts it (positions, 16/32-bit indices, uvs, alpha texture) with compute
 // passes. Buffers only grow; a replaced buffer outlives the frames in flight that used it
 // (engine::gpu::Context::defer_releases).
+// Deformed instances (Instance::deformed) draw from deformed slots: per mesh, regions of the vertex
+// buffer of their own, each a mesh table entry with the mesh's indices. The k-th deformed instance of a
+// mesh in a frame uses its k-th slot, made on first need (the buffer grown, the mesh's stored vertices
+// copied in for their uvs); every frame the instance's host positions are imported into it. Slots are
+// never freed (as meshes' space is not): their count is the most deformed instances of the mesh in any
+// one frame so far.
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +25,9 @@ struct MeshInfo {
   uint32_t texture = 0xffffffffu;
   Aabb bounds;  // object space; invalid: unbounded
   bool live = false;
+  uint32_t vertex_count = 0;
+  uint32_t entry = 0;                   // its Geometry mesh table entry
+  std::vector<uint32_t> deformed_slots;  // the table entries of its deformed slots, in order
 };
 
 class GeometryStore {
@@ -31,6 +40,11 @@ class GeometryStore {
   const MeshInfo* find(MeshId mesh) const;
   // Records the queued imports into `cmd`.
   void record_imports(VkCommandBuffer cmd);
+  // After record_imports(): gives each deformed instance of the frame its slot (made where missing) and
+  // records the import of its host positions there, between barriers ordering the vertex buffer's
+  // earlier readers before the writes and the writes before this frame's readers. Returns, per
+  // instance, the mesh table entry it draws (its slot, or its mesh's); valid until the next call.
+  const std::vector<uint32_t>& record_deformed(VkCommandBuffer cmd, const Instance* instances, uint32_t count);
   Geometry& geometry() { return geometry_; }
 
  private:
@@ -42,6 +56,9 @@ class GeometryStore {
   void grow_for_pending(VkCommandBuffer cmd);
   void import_mesh(VkCommandBuffer cmd, const Pending& p);
   void import_textures(VkCommandBuffer cmd);
+  // The frame's table entries (entries_), new slots made; returns the first new slot's vertex (or vertex_count_).
+  uint32_t assign_entries(const Instance* instances, uint32_t count, std::vector<std::pair<uint32_t, uint32_t>>& fresh);
+  void import_positions(VkCommandBuffer cmd, const DeformedPositions& in, const MeshRange& slot);
   void grow(engine::gpu::Buffer& buffer, VkDeviceSize bytes, VkDeviceSize used, VkBufferUsageFlags usage,
             const char* name, VkCommandBuffer cmd);
 
@@ -59,6 +76,7 @@ class GeometryStore {
   Geometry geometry_;
   std::vector<MeshInfo> meshes_;
   std::vector<Pending> pending_;
+  std::vector<uint32_t> entries_;  // record_deformed()'s answer
   uint32_t vertex_count_ = 0, index_count_ = 0;
   uint32_t texture_count_ = 0, texel_words_ = 0;
   engine::gpu::Pipeline import_;

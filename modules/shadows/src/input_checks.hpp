@@ -19,5 +19,7 @@ void check_image(const ImageInput& image, const std::string& name, std::initiali
                  VkImageUsageFlags usage, std::initializer_list<VkImageLayout> layouts,
                  std::optional<VkExtent2D> extent);
 std::string format_name(VkFormat format);
+// Instance::deformed, present: format, stride, vertex_count (the mesh's), region and bounds.
+void check_deformed(const DeformedPositions& deformed, const std::string& name, uint32_t mesh_vertex_count);
 
 }  // namespace shadows::detail

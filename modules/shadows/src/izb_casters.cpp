@@ -19,9 +19,10 @@ VkPipelineStageFlags2 IzbCasters::triangle_readers() const {
 void IzbCasters::update(const Frame& frame, IzbPipelineCache& pipelines) {
   list_caster_draws(frame);
   ensure_draw_words();
-  if (table_unchanged()) return;
+  if (table_unchanged(frame.view.frame_index)) return;
   ensure_triangle_buffers();
   built_table_ = caster_table_;
+  built_frame_ = frame.view.frame_index;
   if (triangle_count == 0) return;
   upload_draw_bounds(frame);
   const Buffer& table = upload_table(frame);
@@ -32,11 +33,13 @@ void IzbCasters::list_caster_draws(const Frame& frame) {
   first_triangle.assign(frame.draws.size(), 0);
   caster_table_.clear();
   caster_items.clear();
+  draws_deformed_ = false;
   uint32_t caster_triangles = 0;
   for (size_t i = 0; i < frame.draws.size(); ++i) {
     const DrawItem& d = frame.draws[i];
     if (!d.shadow.casts_shadow) continue;
     const MeshRange& range = frame.geometry.mesh(d.mesh);
+    draws_deformed_ = draws_deformed_ || range.deformed;
     gpu_shared::IzbCasterDraw c{};
     c.world = d.world;
     c.first_index = range.first_index;
@@ -67,8 +70,10 @@ void IzbCasters::ensure_draw_words() {
   }
 }
 
-bool IzbCasters::table_unchanged() const {
-  // Mesh ranges are never reused (the geometry only grows), so an equal table means equal triangles.
+bool IzbCasters::table_unchanged(uint64_t frame_index) const {
+  // Mesh ranges are never reused (the geometry only grows), so an equal table means equal triangles,
+  // except over a deformed slot, whose positions (and bounds) are the frame's own: built once a frame.
+  if (draws_deformed_ && built_frame_ != frame_index) return false;
   const size_t table_bytes = caster_table_.size() * sizeof(gpu_shared::IzbCasterDraw);
   // (A frame without casters has empty tables, whose data() may be null: memcmp must not see them.)
   return triangles.valid() && built_table_.size() == caster_table_.size() &&

@@ -13,7 +13,8 @@ namespace shadows::detail {
 // its draw's first triangle plus the primitive index), written on the GPU from the module's geometry
 // and a table of the caster draws (izb_casters.comp); each triangle also knows its caster draw, for the
 // per-frame CSM choice, and what its alpha test needs. Rebuilt only when the table changed (casters
-// moved, came, went or changed material): moving casters cost a small table upload and one dispatch.
+// moved, came, went or changed material) or a caster is deformed (Instance::deformed: new positions
+// every frame): moving casters cost a small table upload and one dispatch.
 // Buffers only grow. Also finds each caster draw's first triangle (for the raster trace's push constants).
 class IzbCasters {
  public:
@@ -29,7 +30,7 @@ class IzbCasters {
  private:
   void list_caster_draws(const Frame& frame);
   void ensure_draw_words();
-  bool table_unchanged() const;
+  bool table_unchanged(uint64_t frame_index) const;
   void ensure_triangle_buffers();
   void upload_draw_bounds(const Frame& frame);
   const engine::gpu::Buffer& upload_table(const Frame& frame);
@@ -44,6 +45,8 @@ class IzbCasters {
   std::vector<gpu_shared::IzbCasterDraw> caster_table_;  // this frame's caster draws
   std::vector<gpu_shared::IzbCasterDraw> built_table_;   // the caster draws `triangles` was built from
   std::vector<engine::gpu::Buffer> caster_tables_;       // per frame-in-flight slot: the table the build read
+  bool draws_deformed_ = false;  // this frame's table holds a deformed slot: rebuilt every frame
+  uint64_t built_frame_ = ~uint64_t(0);  // the frame `triangles` was last built in
 };
 
 }  // namespace shadows::detail

@@ -1,6 +1,8 @@
 #include "ray_traced_pass.hpp"
 
+#include <algorithm>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 
 #include "gpu/pipeline.hpp"
@@ -82,7 +84,8 @@ VkTransformMatrixKHR to_transform(const glm::mat4& m) {
   return t;
 }
 
-// A fresh build of one geometry, tuned for tracing (both levels are built that way).
+// A fresh build of one geometry, tuned for tracing (both levels are built that way; deformed slots'
+// bottom levels may also be updated: kDeformedFlags).
 VkAccelerationStructureBuildGeometryInfoKHR build_info(VkAccelerationStructureTypeKHR type,
                                                        const VkAccelerationStructureGeometryKHR& geometry) {
   VkAccelerationStructureBuildGeometryInfoKHR info{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_GEOMETRY_INFO_KHR};
@@ -94,16 +97,50 @@ VkAccelerationStructureBuildGeometryInfoKHR build_info(VkAccelerationStructureTy
   return info;
 }
 
+// One mesh table entry as bottom-level geometry: opaque triangles straight from the module's shared
+// vertex and index buffers (the range's offsets go in the build range).
+VkAccelerationStructureGeometryKHR bottom_geometry(const Geometry& geometry, const MeshRange& mesh) {
+  VkAccelerationStructureGeometryKHR g{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
+  g.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
+  g.flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
+  auto& tri = g.geometry.triangles;
+  tri = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR};
+  tri.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
+  tri.vertexData.deviceAddress = geometry.vertices().device_address();  // + firstVertex * stride
+  tri.vertexStride = sizeof(StoredVertex);
+  tri.maxVertex = mesh.vertex_count - 1;  // relative to firstVertex
+  tri.indexType = VK_INDEX_TYPE_UINT32;
+  tri.indexData.deviceAddress = geometry.indices().device_address();  // + primitiveOffset
+  return g;
+}
+
+VkAccelerationStructureBuildRangeInfoKHR bottom_range(const MeshRange& mesh) {
+  VkAccelerationStructureBuildRangeInfoKHR range{};
+  range.primitiveCount = mesh.index_count / 3;
+  range.primitiveOffset = mesh.first_index * uint32_t(sizeof(uint32_t));
+  range.firstVertex = uint32_t(mesh.vertex_offset);
+  return range;
+}
+
+// A deformed slot's bottom level may be refitted (updated in place) to its positions of each frame.
+constexpr VkBuildAccelerationStructureFlagsKHR kDeformedFlags =
+    VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR | VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR;
+
 }  // namespace
 
 struct RayTracedPass::Impl {
   Context& ctx;
   Pipeline pipeline;
   ShaderBindingTable sbt;
-  // Bottom levels, one per SceneGeometry mesh slot (empty meshes have none).
+  // Bottom levels, one per Geometry mesh table entry (empty meshes have none): registered meshes built
+  // once, deformed slots built to be refitted (update_offsets: each one's part of update_scratch).
   std::vector<Structure> bottom;
   const Geometry* built_for = nullptr;
   VkBuffer built_vertices = VK_NULL_HANDLE;
+  size_t built_entries = 0;
+  std::vector<VkDeviceSize> update_offsets;
+  Scratch update_scratch;
+  std::optional<uint64_t> refitted_frame;  // the frame whose deformed slots are up to date
   Structure top;
   uint32_t top_capacity = 0;
   Scratch top_scratch;
@@ -144,52 +181,45 @@ struct RayTracedPass::Impl {
                       false, "rt counters");
   }
 
-  // One bottom level per mesh of the scene, built together in one submission (opaque triangles
-  // straight from the scene's shared vertex and index buffers).
+  // One bottom level per mesh table entry, built together in the frame's command buffer (deformed
+  // slots from their positions of this frame, ready to be refitted; the others once).
   void build_bottom_levels(VkCommandBuffer cmd, const Geometry& geometry) {
-    bottom.clear();
-    bottom.resize(geometry.mesh_count());
-    bottom_triangles = 0;
     const size_t n = geometry.mesh_count();
+    bottom.clear();
+    bottom.resize(n);
+    update_offsets.assign(n, 0);
+    bottom_triangles = 0;
     std::vector<VkAccelerationStructureGeometryKHR> geometries(n);
     std::vector<VkAccelerationStructureBuildGeometryInfoKHR> infos;
     std::vector<VkAccelerationStructureBuildRangeInfoKHR> ranges;
     std::vector<VkDeviceSize> scratch_offsets;
-    VkDeviceSize scratch_total = 0;
+    VkDeviceSize scratch_total = 0, update_total = 0;
     const VkDeviceSize scratch_alignment = std::max<VkDeviceSize>(ctx.features().scratch_offset_alignment, 1);
-    for (uint32_t slot = 0; slot < n; ++slot) {
-      const MeshRange& mesh = geometry.mesh(slot);
+    for (uint32_t entry = 0; entry < n; ++entry) {
+      const MeshRange& mesh = geometry.mesh(entry);
       if (mesh.index_count < 3 || mesh.vertex_count == 0) continue;
-      VkAccelerationStructureGeometryKHR& g = geometries[slot];
-      g = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_KHR};
-      g.geometryType = VK_GEOMETRY_TYPE_TRIANGLES_KHR;
-      g.flags = VK_GEOMETRY_OPAQUE_BIT_KHR;
-      auto& tri = g.geometry.triangles;
-      tri = {VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_GEOMETRY_TRIANGLES_DATA_KHR};
-      tri.vertexFormat = VK_FORMAT_R32G32B32_SFLOAT;
-      tri.vertexData.deviceAddress = geometry.vertices().device_address();  // + firstVertex * stride
-      tri.vertexStride = sizeof(StoredVertex);
-      tri.maxVertex = mesh.vertex_count - 1;  // relative to firstVertex
-      tri.indexType = VK_INDEX_TYPE_UINT32;
-      tri.indexData.deviceAddress = geometry.indices().device_address();  // + primitiveOffset
-
-      VkAccelerationStructureBuildGeometryInfoKHR info = build_info(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, g);
-      const uint32_t triangles = mesh.index_count / 3;
+      geometries[entry] = bottom_geometry(geometry, mesh);
+      VkAccelerationStructureBuildGeometryInfoKHR info =
+          build_info(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, geometries[entry]);
+      if (mesh.deformed) info.flags = kDeformedFlags;
+      const VkAccelerationStructureBuildRangeInfoKHR range = bottom_range(mesh);
       VkAccelerationStructureBuildSizesInfoKHR sizes{VK_STRUCTURE_TYPE_ACCELERATION_STRUCTURE_BUILD_SIZES_INFO_KHR};
-      ctx.rt.get_build_sizes(ctx.device(), VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR, &info, &triangles, &sizes);
-      bottom[slot] = Structure(ctx, VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, sizes.accelerationStructureSize,
-                               "rt bottom level " + std::to_string(slot));
-      info.dstAccelerationStructure = bottom[slot].handle;
+      ctx.rt.get_build_sizes(ctx.device(), VK_ACCELERATION_STRUCTURE_BUILD_TYPE_DEVICE_KHR, &info, &range.primitiveCount,
+                             &sizes);
+      bottom[entry] = Structure(ctx, VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, sizes.accelerationStructureSize,
+                                "rt bottom level " + std::to_string(entry));
+      info.dstAccelerationStructure = bottom[entry].handle;
       scratch_offsets.push_back(scratch_total);
       scratch_total += align_up(sizes.buildScratchSize, scratch_alignment);
+      if (mesh.deformed) {
+        update_offsets[entry] = update_total;
+        update_total += align_up(std::max<VkDeviceSize>(sizes.updateScratchSize, 1), scratch_alignment);
+      }
       infos.push_back(info);
-      VkAccelerationStructureBuildRangeInfoKHR range{};
-      range.primitiveCount = triangles;
-      range.primitiveOffset = mesh.first_index * uint32_t(sizeof(uint32_t));
-      range.firstVertex = uint32_t(mesh.vertex_offset);
       ranges.push_back(range);
-      bottom_triangles += triangles;
+      bottom_triangles += range.primitiveCount;
     }
+    if (update_total > 0) update_scratch.ensure(ctx, update_total, "rt bottom level update scratch");
     if (!infos.empty()) {
       // The structures keep their own storage; the scratch stays until the next build.
       Scratch& scratch = bottom_scratch;
@@ -209,6 +239,43 @@ struct RayTracedPass::Impl {
     }
     built_for = &geometry;
     built_vertices = geometry.vertices().handle();
+    built_entries = n;
+  }
+
+  // Refits the bottom levels of the deformed slots this frame's casters draw (mode UPDATE in place) to
+  // the positions the frame's deformed import wrote: its barrier made them visible to the builds.
+  void refit_deformed(VkCommandBuffer cmd, const Frame& frame) {
+    std::vector<uint32_t> entries;
+    for (const auto& d : frame.draws)
+      if (d.shadow.casts_shadow && d.mesh < bottom.size() && bottom[d.mesh].handle && frame.geometry.mesh(d.mesh).deformed &&
+          std::find(entries.begin(), entries.end(), d.mesh) == entries.end())
+        entries.push_back(d.mesh);
+    if (entries.empty()) return;
+    std::vector<VkAccelerationStructureGeometryKHR> geometries;
+    geometries.reserve(entries.size());
+    std::vector<VkAccelerationStructureBuildGeometryInfoKHR> infos;
+    std::vector<VkAccelerationStructureBuildRangeInfoKHR> ranges;
+    for (uint32_t entry : entries) {
+      const MeshRange& mesh = frame.geometry.mesh(entry);
+      geometries.push_back(bottom_geometry(frame.geometry, mesh));
+      VkAccelerationStructureBuildGeometryInfoKHR info =
+          build_info(VK_ACCELERATION_STRUCTURE_TYPE_BOTTOM_LEVEL_KHR, geometries.back());
+      info.flags = kDeformedFlags;
+      info.mode = VK_BUILD_ACCELERATION_STRUCTURE_MODE_UPDATE_KHR;
+      info.srcAccelerationStructure = info.dstAccelerationStructure = bottom[entry].handle;
+      info.scratchData.deviceAddress = update_scratch.address + update_offsets[entry];
+      infos.push_back(info);
+      ranges.push_back(bottom_range(mesh));
+    }
+    std::vector<const VkAccelerationStructureBuildRangeInfoKHR*> range_pointers;
+    for (const auto& range : ranges) range_pointers.push_back(&range);
+    // The previous frames' traces and builds reading these structures (and the update scratch) finish
+    // before they are rewritten; the top-level build's barrier then orders the refits before its reads.
+    memory_barrier(cmd, VK_PIPELINE_STAGE_2_RAY_TRACING_SHADER_BIT_KHR | VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
+                   VK_ACCESS_2_ACCELERATION_STRUCTURE_READ_BIT_KHR | VK_ACCESS_2_ACCELERATION_STRUCTURE_WRITE_BIT_KHR,
+                   VK_PIPELINE_STAGE_2_ACCELERATION_STRUCTURE_BUILD_BIT_KHR,
+                   VK_ACCESS_2_ACCELERATION_STRUCTURE_READ_BIT_KHR | VK_ACCESS_2_ACCELERATION_STRUCTURE_WRITE_BIT_KHR);
+    ctx.rt.cmd_build_acceleration_structures(cmd, uint32_t(infos.size()), infos.data(), range_pointers.data());
   }
 
   // Rebuilds the top level over every casting draw with its transform of this frame.
@@ -305,10 +372,15 @@ void RayTracedPass::scene_changed() {
 void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collect_stats) {
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
-  if (m.built_for != &frame.geometry || m.built_vertices != frame.geometry.vertices().handle())
-    m.build_bottom_levels(cmd, frame.geometry);
+  // Rebuilt when the vertex buffer moved or the mesh table grew (a mesh registered, a deformed slot
+  // made); else the deformed slots drawn are refitted, once a frame (the first of its records).
+  const bool rebuild = m.built_for != &frame.geometry || m.built_vertices != frame.geometry.vertices().handle() ||
+                       m.built_entries != frame.geometry.mesh_count();
+  if (rebuild) m.build_bottom_levels(cmd, frame.geometry);
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "rt_build");
+    if (!rebuild && m.refitted_frame != frame.view.frame_index) m.refit_deformed(cmd, frame);
+    m.refitted_frame = frame.view.frame_index;
     m.build_top_level(cmd, frame);
   }
   if (collect_stats) {

@@ -8,8 +8,10 @@
 namespace shadows::detail {
 
 // The "rt" technique: one hard shadow ray per shading point (or per μQuad sample at 32 spp) through
-// the ray tracing pipeline. Bottom-level structures are built once per mesh of the scene; the top
-// level is rebuilt every frame from the casters' current transforms, so moving casters work.
+// the ray tracing pipeline. Bottom-level structures are built once per mesh of the scene; those of
+// deformed slots (Instance::deformed) are refitted every frame they are drawn, to that frame's
+// positions. The top level is rebuilt every frame from the casters' current transforms, so moving
+// casters work.
 class RayTracedPass {
  public:
   // Throws std::runtime_error (one line naming the missing extension) where the device cannot trace.

@@ -42,6 +42,7 @@ enum class CsmChoice : uint32_t { Off, On, Auto };
 struct CasterFlags {
   bool casts_shadow = true;
   CsmChoice csm = CsmChoice::Auto;
+  bool deformed = false;  // positions of this frame's own (Instance::deformed): dynamic, never in the CSM under Auto
 };
 
 // One vertex of the module's vertex buffer (gpu::VertexInput::StandardVertex; mesh_import.comp writes it).

@@ -33,6 +33,11 @@
 //     until that frame's commands have executed. A mesh registered without bounds has its positions
 //     read once more inside register_mesh(), by a submission of the module's own to ContextDesc::queue
 //     that it waits for (MeshDesc::bounds).
+//   - Deformed positions (Instance::deformed) are read by compute shaders (storage-buffer reads) at
+//     the start of the record() they are given to, copied into the module's own buffers: the host's
+//     writes must be visible to COMPUTE_SHADER / SHADER_STORAGE_READ before that record()'s commands
+//     run, and the region must keep them until those commands have executed (the next frame's
+//     positions go to another region, or to this one once this frame has completed).
 //   - Inside record() the module orders its own resources with barriers that name their stages and
 //     accesses; it records no barrier on a host resource and no ALL_COMMANDS barrier.
 //   - The command buffer must support compute and graphics (a queue of the family given at creation),
@@ -260,7 +265,14 @@ enum class CsmMode : uint32_t { Auto, On, Off };
 // executed (the synchronization contract above). The module copies the positions into its own
 // buffers at the start of the frame's commands, so the host may overwrite the region once the frame
 // has executed. With Technique::RayTraced the instance's acceleration structure is refitted to them
-// every frame. CsmMode::Auto treats such an instance as dynamic (it never enters the CSM).
+// every frame. CsmMode::Auto treats such an instance as dynamic (it never enters the CSM); On still
+// puts it there.
+// Memory: the k-th deformed instance of a mesh in a frame draws from the mesh's k-th copy in the
+// module's vertex buffer, made the first frame a mesh has k deformed instances and kept for the
+// context's life (as a registered mesh's space: a new context compacts).
+// Refused (shadows::Error naming FrameDesc.instances[i].deformed.<field>): a format or stride other
+// than these, vertex_count other than the mesh's, a region too small or misaligned (as BufferInput),
+// bounds not finite or not a box.
 struct DeformedPositions {
   // Format and stride as MeshDesc::positions: R32G32B32_SFLOAT or R32G32B32A32_SFLOAT, `stride` a
   // multiple of 4 at least the format's size; the region must hold vertex_count vertices.
