@@ -17,6 +17,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include "engine/assets/scene.hpp"
+#include "engine/core/skinning.hpp"
 #include "engine/core/transform_system.hpp"
 
 namespace engine {
@@ -106,7 +107,16 @@ class Loader {
   std::vector<glm::vec3> read_vec3(int accessor, const std::string& what) const;
   std::vector<glm::vec2> read_texcoords(int accessor, const std::string& what) const;
   std::vector<uint32_t> read_indices(int accessor, const std::string& what) const;
+  std::vector<float> read_floats(int accessor, const std::string& what, int components) const;
   std::shared_ptr<const MeshData> build_primitive(int mesh_index, int primitive_index);
+  std::shared_ptr<const DeformData> build_deform(int mesh_index, int primitive_index, const std::vector<uint32_t>& source,
+                                                 const std::vector<Vertex>& vertices);
+  void read_skin_weights(const tinygltf::Primitive& prim, const std::string& label, size_t gltf_vertices,
+                         std::vector<glm::uvec4>& joints, std::vector<glm::vec4>& weights) const;
+  void add_skins_and_weights(Registry& r);
+  void add_animations(Scene& scene);
+  AnimationClip::Channel read_channel(const tinygltf::Animation& a, const tinygltf::AnimationChannel& c,
+                                      const std::string& label, size_t components) const;
   Transform node_transform(const tinygltf::Node& node, int node_index) const;
   Material material_for(int material_index, const std::string& what);
   std::shared_ptr<const Texture> texture_for(int texture_index, int material_index);
@@ -120,6 +130,8 @@ class Loader {
   bool in_memory_ = false;
   tinygltf::Model model_;
   std::map<std::pair<int, int>, std::shared_ptr<const MeshData>> primitive_cache_;
+  std::vector<Entity> node_entities_;               // by node index (kNullEntity: not in the scene)
+  std::vector<std::vector<Entity>> node_meshes_;   // by node index: the entities holding its primitives
   std::vector<std::pair<Entity, int>> camera_nodes_;  // node entity, camera index
   std::vector<Entity> sun_nodes_;                     // nodes holding a directional light
   size_t local_lights_ = 0;                           // spot and point lights
@@ -370,9 +382,12 @@ std::shared_ptr<const MeshData> Loader::build_primitive(int mesh_index, int prim
   auto data = std::make_shared<MeshData>();
   data->name = mesh.name.empty() ? "mesh_" + std::to_string(mesh_index) : mesh.name;
   if (mesh.primitives.size() > 1) data->name += "_" + std::to_string(primitive_index);
+  std::vector<uint32_t> source;  // per vertex of the mesh, its glTF vertex (per-vertex skin and morph data)
   if (!normals.empty()) {
     data->vertices.resize(vertex_count);
+    source.resize(vertex_count);
     for (size_t i = 0; i < vertex_count; ++i) {
+      source[i] = uint32_t(i);
       const float len = glm::length(normals[i]);
       data->vertices[i] = {positions[i], len > 0.0f ? normals[i] / len : glm::vec3(0.0f, 1.0f, 0.0f),
                            uvs.empty() ? glm::vec2(0.0f) : uvs[i]};
@@ -391,13 +406,253 @@ std::shared_ptr<const MeshData> Loader::build_primitive(int mesh_index, int prim
         const uint32_t src = indices[t + size_t(k)];
         data->indices.push_back(uint32_t(data->vertices.size()));
         data->vertices.push_back({positions[src], n, uvs.empty() ? glm::vec2(0.0f) : uvs[src]});
+        source.push_back(src);
       }
     }
   }
   data->compute_bounds();
+  data->deform = build_deform(mesh_index, primitive_index, source, data->vertices);
   std::shared_ptr<const MeshData> result = std::move(data);
   primitive_cache_[key] = result;
   return result;
+}
+
+// An accessor's elements as floats, `components` per element: FLOAT as stored (finite), integer
+// components as their value, or normalized to [0, 1] / [-1, 1] when the accessor says so.
+std::vector<float> Loader::read_floats(int accessor, const std::string& what, int components) const {
+  const AccessorSpan s = resolve_accessor(accessor, what);
+  const std::string label = what + " accessor " + std::to_string(accessor);
+  if (s.components != components) {
+    fail(label + " has " + std::to_string(s.components) + " components, expected " + std::to_string(components));
+  }
+  std::vector<float> out(s.count * size_t(components));
+  for (size_t i = 0; i < s.count; ++i) {
+    const unsigned char* p = s.data + i * s.stride;
+    for (int k = 0; k < components; ++k) {
+      float& v = out[i * size_t(components) + size_t(k)];
+      switch (s.component_type) {
+        case TINYGLTF_COMPONENT_TYPE_FLOAT:
+          std::memcpy(&v, p + 4 * k, 4);
+          if (!std::isfinite(v)) fail(label + " has a non-finite value at element " + std::to_string(i));
+          break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = float(p[k]) / (s.normalized ? 255.0f : 1.0f); break;
+        case TINYGLTF_COMPONENT_TYPE_BYTE: {
+          const float x = float(int8_t(p[k]));
+          v = s.normalized ? std::max(x / 127.0f, -1.0f) : x;
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+          uint16_t x;
+          std::memcpy(&x, p + 2 * k, 2);
+          v = float(x) / (s.normalized ? 65535.0f : 1.0f);
+          break;
+        }
+        case TINYGLTF_COMPONENT_TYPE_SHORT: {
+          int16_t x;
+          std::memcpy(&x, p + 2 * k, 2);
+          v = s.normalized ? std::max(float(x) / 32767.0f, -1.0f) : float(x);
+          break;
+        }
+        default:
+          fail(label + " has componentType " + std::to_string(s.component_type) + ", which this attribute cannot take");
+      }
+    }
+  }
+  return out;
+}
+
+// JOINTS_n / WEIGHTS_n per glTF vertex: the four largest influences of each (more are clamped, with a
+// warning line), weights normalised to sum 1 (a vertex without weight is bound to joint 0).
+void Loader::read_skin_weights(const tinygltf::Primitive& prim, const std::string& label, size_t gltf_vertices,
+                               std::vector<glm::uvec4>& joints, std::vector<glm::vec4>& weights) const {
+  std::vector<std::vector<float>> joint_sets, weight_sets;
+  for (int set = 0;; ++set) {
+    const auto j = prim.attributes.find("JOINTS_" + std::to_string(set));
+    const auto w = prim.attributes.find("WEIGHTS_" + std::to_string(set));
+    if (j == prim.attributes.end() || w == prim.attributes.end()) break;
+    const std::string n = std::to_string(set);
+    joint_sets.push_back(read_floats(j->second, label + " JOINTS_" + n, 4));
+    weight_sets.push_back(read_floats(w->second, label + " WEIGHTS_" + n, 4));
+    if (joint_sets.back().size() != gltf_vertices * 4 || weight_sets.back().size() != gltf_vertices * 4)
+      fail(label + " JOINTS_" + n + "/WEIGHTS_" + n + " do not have one element per vertex");
+  }
+  joints.assign(gltf_vertices, glm::uvec4(0));
+  weights.assign(gltf_vertices, glm::vec4(1.0f, 0.0f, 0.0f, 0.0f));
+  size_t clamped = 0;
+  for (size_t v = 0; v < gltf_vertices; ++v) {
+    std::vector<std::pair<float, uint32_t>> influences;
+    for (size_t set = 0; set < joint_sets.size(); ++set)
+      for (size_t k = 0; k < 4; ++k) {
+        const float w = weight_sets[set][v * 4 + k];
+        const float j = joint_sets[set][v * 4 + k];
+        if (w < 0.0f) fail(label + " WEIGHTS_" + std::to_string(set) + " has a negative weight at vertex " + std::to_string(v));
+        if (w > 0.0f) influences.push_back({w, uint32_t(j)});
+      }
+    std::stable_sort(influences.begin(), influences.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (influences.size() > kMaxJointsPerVertex) ++clamped, influences.resize(kMaxJointsPerVertex);
+    float sum = 0.0f;
+    for (const auto& [w, j] : influences) sum += w;
+    if (!(sum > 0.0f)) continue;
+    for (size_t k = 0; k < influences.size(); ++k) {
+      joints[v][int(k)] = influences[k].second;
+      weights[v][int(k)] = influences[k].first / sum;
+    }
+    for (size_t k = influences.size(); k < 4; ++k) weights[v][int(k)] = 0.0f;
+  }
+  if (clamped > 0)
+    std::cerr << file_ << ": warning: " << label << " has " << 4 * joint_sets.size()
+              << " joint weights per vertex; kept the 4 largest of each (" << clamped << " vertices clamped)\n";
+}
+
+// The primitive's skin weights and morph targets, per vertex of the mesh built from it (`source`
+// maps those to glTF vertices); null when it has neither.
+std::shared_ptr<const DeformData> Loader::build_deform(int mesh_index, int primitive_index,
+                                                       const std::vector<uint32_t>& source,
+                                                       const std::vector<Vertex>& vertices) {
+  const tinygltf::Mesh& mesh = model_.meshes[size_t(mesh_index)];
+  const tinygltf::Primitive& prim = mesh.primitives[size_t(primitive_index)];
+  const std::string label = "mesh " + std::to_string(mesh_index) + " primitive " + std::to_string(primitive_index);
+  const bool skinned = prim.attributes.count("JOINTS_0") && prim.attributes.count("WEIGHTS_0");
+  if (!skinned && prim.targets.empty()) return nullptr;
+  const size_t gltf_vertices = resolve_accessor(prim.attributes.at("POSITION"), label + " POSITION").count;
+  auto d = std::make_shared<DeformData>();
+  if (skinned) {
+    std::vector<glm::uvec4> joints;
+    std::vector<glm::vec4> weights;
+    read_skin_weights(prim, label, gltf_vertices, joints, weights);
+    for (size_t v = 0; v < source.size(); ++v) {
+      d->joints.push_back(joints[source[v]]);
+      d->weights.push_back(weights[source[v]]);
+      for (int k = 0; k < 4; ++k)
+        if (d->weights.back()[k] > 0.0f) d->joint_count = std::max(d->joint_count, d->joints.back()[k] + 1);
+    }
+    d->joint_bounds.assign(d->joint_count, Aabb{});
+    for (size_t v = 0; v < source.size(); ++v)
+      for (int k = 0; k < 4; ++k)
+        if (d->weights[v][k] > 0.0f) d->joint_bounds[d->joints[v][k]].extend(vertices[v].position);
+  }
+  for (size_t t = 0; t < prim.targets.size(); ++t) {
+    const std::string what = label + " target " + std::to_string(t);
+    MorphTarget target;
+    target.name = "target " + std::to_string(t);
+    const auto read = [&](const char* attribute, std::vector<glm::vec3>& out) {
+      const auto it = prim.targets[t].find(attribute);
+      if (it == prim.targets[t].end()) return;
+      const std::vector<glm::vec3> deltas = read_vec3(it->second, what + " " + attribute);
+      if (deltas.size() != gltf_vertices) fail(what + " " + attribute + " does not have one element per vertex");
+      for (uint32_t v : source) out.push_back(deltas[v]);
+    };
+    read("POSITION", target.position_deltas);
+    read("NORMAL", target.normal_deltas);
+    if (target.position_deltas.empty()) target.position_deltas.assign(source.size(), glm::vec3(0.0f));
+    d->morph_targets.push_back(std::move(target));
+  }
+  d->default_weights.assign(d->morph_targets.size(), 0.0f);
+  for (size_t t = 0; t < d->default_weights.size() && t < mesh.weights.size(); ++t)
+    d->default_weights[t] = std::isfinite(mesh.weights[t]) ? float(mesh.weights[t]) : 0.0f;
+  return d;
+}
+
+// Skeletons for the skinned nodes' meshes (a joint index past the skin's joints is refused) and morph
+// weights for the morphing ones (the node's weights, else the mesh's).
+void Loader::add_skins_and_weights(Registry& r) {
+  for (size_t n = 0; n < model_.nodes.size(); ++n) {
+    const tinygltf::Node& node = model_.nodes[n];
+    for (Entity part : node_meshes_[n]) {
+      const DeformData* d = r.get<Mesh>(part).data->deform.get();
+      if (!d) continue;
+      if (!d->morph_targets.empty()) {
+        MorphWeights w{d->default_weights};
+        if (node.weights.size() == w.weights.size())
+          for (size_t t = 0; t < w.weights.size(); ++t) w.weights[t] = float(node.weights[t]);
+        r.emplace<MorphWeights>(part, std::move(w));
+      }
+      if (!d->skinned() || node.skin < 0) continue;
+      const std::string label = "node " + std::to_string(n) + " skin " + std::to_string(node.skin);
+      if (size_t(node.skin) >= model_.skins.size()) fail(label + " out of range (" + std::to_string(model_.skins.size()) + " skins)");
+      const tinygltf::Skin& skin = model_.skins[size_t(node.skin)];
+      if (d->joint_count > skin.joints.size())
+        fail(label + ": mesh '" + r.get<Mesh>(part).data->name + "' uses joint index " + std::to_string(d->joint_count - 1) +
+             ", but the skin has " + std::to_string(skin.joints.size()) + " joints");
+      Skeleton skeleton;
+      for (int j : skin.joints) {
+        if (j < 0 || size_t(j) >= node_entities_.size() || node_entities_[size_t(j)] == kNullEntity)
+          fail(label + " joint node " + std::to_string(j) + " is not in the scene");
+        skeleton.joints.push_back(node_entities_[size_t(j)]);
+      }
+      skeleton.inverse_bind.assign(skin.joints.size(), glm::mat4(1.0f));
+      if (skin.inverseBindMatrices >= 0) {
+        const std::vector<float> m = read_floats(skin.inverseBindMatrices, label + " inverseBindMatrices", 16);
+        if (m.size() != 16 * skin.joints.size()) fail(label + " inverseBindMatrices has not one matrix per joint");
+        for (size_t j = 0; j < skin.joints.size(); ++j) skeleton.inverse_bind[j] = glm::make_mat4(&m[16 * j]);
+      }
+      r.emplace<Skeleton>(part, std::move(skeleton));
+    }
+  }
+}
+
+AnimationClip::Channel Loader::read_channel(const tinygltf::Animation& a, const tinygltf::AnimationChannel& c,
+                                            const std::string& label, size_t components) const {
+  if (c.sampler < 0 || size_t(c.sampler) >= a.samplers.size()) fail(label + " sampler out of range");
+  const tinygltf::AnimationSampler& sampler = a.samplers[size_t(c.sampler)];
+  AnimationClip::Channel out;
+  out.interpolation = sampler.interpolation == "STEP"          ? AnimationClip::Interpolation::Step
+                      : sampler.interpolation == "CUBICSPLINE" ? AnimationClip::Interpolation::CubicSpline
+                                                               : AnimationClip::Interpolation::Linear;
+  out.times = read_floats(sampler.input, label + " input", 1);
+  for (size_t i = 1; i < out.times.size(); ++i)
+    if (!(out.times[i] > out.times[i - 1])) fail(label + " input times are not increasing");
+  const size_t per_key = components * (out.interpolation == AnimationClip::Interpolation::CubicSpline ? 3 : 1);
+  const int element = c.target_path == "weights" ? 1 : int(components);
+  out.values = read_floats(sampler.output, label + " output", element);
+  if (out.times.empty() || out.values.size() != out.times.size() * per_key)
+    fail(label + " output has " + std::to_string(out.values.size()) + " values for " + std::to_string(out.times.size()) +
+         " keys of " + std::to_string(per_key));
+  out.components = uint32_t(components);
+  return out;
+}
+
+// Every glTF animation as a clip; the first plays (an AnimationPlayer on an entity of its own).
+void Loader::add_animations(Scene& scene) {
+  Registry& r = scene.registry;
+  for (size_t ai = 0; ai < model_.animations.size(); ++ai) {
+    const tinygltf::Animation& a = model_.animations[ai];
+    auto clip = std::make_shared<AnimationClip>();
+    clip->name = a.name.empty() ? "animation " + std::to_string(ai) : a.name;
+    for (size_t ci = 0; ci < a.channels.size(); ++ci) {
+      const tinygltf::AnimationChannel& c = a.channels[ci];
+      const std::string label = "animation " + std::to_string(ai) + " channel " + std::to_string(ci);
+      const int node = c.target_node;
+      if (node < 0 || size_t(node) >= node_entities_.size() || node_entities_[size_t(node)] == kNullEntity) continue;
+      using Path = AnimationClip::Path;
+      Path path;
+      size_t components = 3;
+      std::vector<Entity> targets{node_entities_[size_t(node)]};
+      if (c.target_path == "translation") path = Path::Translation;
+      else if (c.target_path == "scale") path = Path::Scale;
+      else if (c.target_path == "rotation") path = Path::Rotation, components = 4;
+      else if (c.target_path == "weights") {
+        path = Path::Weights;
+        targets.clear();
+        for (Entity part : node_meshes_[size_t(node)])
+          if (const auto* w = r.try_get<MorphWeights>(part)) targets.push_back(part), components = w->weights.size();
+        if (targets.empty() || components == 0) continue;
+      } else {
+        continue;  // "pointer" and other extension paths
+      }
+      AnimationClip::Channel channel = read_channel(a, c, label, components);
+      channel.path = path;
+      clip->duration = std::max(clip->duration, channel.times.back());
+      for (Entity t : targets) {
+        channel.target = t;
+        clip->channels.push_back(channel);
+      }
+    }
+    if (clip->channels.empty()) continue;
+    const Entity player = r.create();
+    r.emplace<Name>(player, Name{"animation: " + clip->name});
+    r.emplace<AnimationPlayer>(player, AnimationPlayer{std::move(clip), 1.0f, 0.0f, ai == 0});
+  }
 }
 
 Transform Loader::node_transform(const tinygltf::Node& node, int node_index) const {
@@ -551,6 +806,8 @@ void Loader::add_nodes(Scene& scene) {
   }
 
   std::vector<bool> visited(node_count, false);
+  node_entities_.assign(node_count, kNullEntity);
+  node_meshes_.assign(node_count, {});
   std::vector<std::pair<int, Entity>> stack;  // node index, parent entity
   for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.push_back({*it, kNullEntity});
   while (!stack.empty()) {
@@ -570,6 +827,7 @@ void Loader::add_nodes(Scene& scene) {
     Transform t = node_transform(node, node_index);
     t.parent = parent;
     r.emplace<Transform>(e, t);
+    node_entities_[size_t(node_index)] = e;
 
     if (node.mesh >= 0) {
       if (size_t(node.mesh) >= model_.meshes.size()) {
@@ -599,6 +857,7 @@ void Loader::add_nodes(Scene& scene) {
         }
         const Material material = material_for(mesh.primitives[size_t(p)].material,
                                                "mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(p));
+        node_meshes_[size_t(node_index)].push_back(target);
         r.emplace<Mesh>(target, Mesh{std::move(data)});
         r.emplace<Material>(target, material);
         r.emplace<ShadowCaster>(target);
@@ -743,6 +1002,8 @@ std::unique_ptr<Scene> Loader::load() {
   auto scene = std::make_unique<Scene>();
   scene->name = path_.stem().string();
   add_nodes(*scene);
+  add_skins_and_weights(scene->registry);
+  add_animations(*scene);
   update_world_transforms(scene->registry);
   add_views(*scene);
   // One summary line per kind rather than one per primitive: large files can have thousands.

@@ -10,6 +10,7 @@
 
 #include "engine/assets/scene_file.hpp"
 #include "engine/core/animation.hpp"
+#include "engine/core/skinning.hpp"
 #include "engine/core/transform_system.hpp"
 
 namespace engine {
@@ -50,16 +51,23 @@ void replicate_scene(Scene& scene, uint32_t copies) {
   const float gap = 0.1f * std::max(extent.x, extent.z);
   const glm::vec2 spacing(extent.x + gap, extent.z + gap);
   const uint32_t side = uint32_t(std::ceil(std::sqrt(double(copies))));
-  // Every entity of a mesh hierarchy: the meshes and their ancestors.
+  // Every entity of a mesh hierarchy: the meshes, their skeletons' joints and their ancestors.
   std::vector<Entity> sources;
   std::unordered_map<uint32_t, bool> wanted;
-  for (Entity e : scene.registry.view<Transform, Mesh>()) {
+  const auto want = [&](Entity e) {
     for (Entity a = e; a != kNullEntity && !wanted.count(a.index); a = scene.registry.get<Transform>(a).parent) {
       wanted[a.index] = true;
       sources.push_back(a);
       if (!scene.registry.has<Transform>(a)) break;
     }
+  };
+  for (Entity e : scene.registry.view<Transform, Mesh>()) {
+    want(e);
+    if (const auto* skeleton = scene.registry.try_get<Skeleton>(e))
+      for (Entity j : skeleton->joints)
+        if (scene.registry.has<Transform>(j)) want(j);
   }
+  const std::vector<Entity> players = scene.registry.view<AnimationPlayer>();
   for (uint32_t k = 1; k < copies; ++k) {
     const glm::vec3 offset(float(k % side) * spacing.x, 0.0f, float(k / side) * spacing.y);
     std::unordered_map<uint32_t, Entity> clone;
@@ -84,6 +92,27 @@ void replicate_scene(Scene& scene, uint32_t copies) {
         r.emplace<Animated>(c, std::move(a));
       }
       if (auto* x = r.try_get<Name>(e)) r.emplace<Name>(c, Name{x->value + " #" + std::to_string(k)});
+      if (auto* x = r.try_get<MorphWeights>(e)) r.emplace<MorphWeights>(c, *x);
+      if (auto* x = r.try_get<Skeleton>(e)) {
+        Skeleton skeleton = *x;
+        for (Entity& j : skeleton.joints)
+          if (auto it = clone.find(j.index); it != clone.end()) j = it->second;
+        r.emplace<Skeleton>(c, std::move(skeleton));
+      }
+    }
+    // Each copy plays its own copy of the clips that drive what it copied.
+    for (Entity p : players) {
+      const AnimationPlayer& player = scene.registry.get<AnimationPlayer>(p);
+      if (!player.clip) continue;
+      auto clip = std::make_shared<AnimationClip>(*player.clip);
+      bool drives_copy = false;
+      for (auto& ch : clip->channels)
+        if (auto it = clone.find(ch.target.index); it != clone.end()) ch.target = it->second, drives_copy = true;
+      if (!drives_copy) continue;
+      AnimationPlayer copy = player;
+      copy.clip = std::move(clip);
+      const Entity c = clone.count(p.index) ? clone.at(p.index) : scene.registry.create();
+      scene.registry.emplace<AnimationPlayer>(c, std::move(copy));
     }
   }
   scene.name += " x" + std::to_string(copies);
@@ -116,6 +145,26 @@ void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const
   const auto move = [&](const glm::vec3& p) { return glm::vec3(glm::dvec3(p) * scale + offset); };
   const float s = float(scale);
   Registry& r = scene.registry;
+  // A clip's keys on a root entity set what the root's transform holds: moved and scaled with it.
+  r.each<AnimationPlayer>([&](Entity, AnimationPlayer& player) {
+    if (!player.clip) return;
+    auto clip = std::make_shared<AnimationClip>(*player.clip);
+    for (auto& c : clip->channels) {
+      const auto* t = r.try_get<Transform>(c.target);
+      if (!t || t->parent != kNullEntity) continue;
+      const bool cubic = c.interpolation == AnimationClip::Interpolation::CubicSpline;
+      for (size_t i = 0; i + 3 <= c.values.size(); i += 3) {
+        glm::vec3 v(c.values[i], c.values[i + 1], c.values[i + 2]);
+        // A cubic spline's tangents (the first and third of each key's triples) scale without the offset.
+        const bool tangent = cubic && (i / 3) % 3 != 1;
+        if (c.path == AnimationClip::Path::Translation) v = tangent ? v * s : move(v);
+        else if (c.path == AnimationClip::Path::Scale) v *= s;
+        else break;
+        c.values[i] = v.x, c.values[i + 1] = v.y, c.values[i + 2] = v.z;
+      }
+    }
+    player.clip = std::move(clip);
+  });
   r.each<Transform>([&](Entity e, Transform& t) {
     if (t.parent != kNullEntity) return;
     t.translation = move(t.translation);
