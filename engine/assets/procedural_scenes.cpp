@@ -582,7 +582,9 @@ std::unique_ptr<Scene> build_hall() {
 
 namespace engine {
 
-std::vector<std::string> procedural_scene_names() { return {"contact", "atrium", "foliage", "canopy", "lamps", "hall"}; }
+std::vector<std::string> procedural_scene_names() {
+  return {"contact", "atrium", "foliage", "canopy", "lamps", "hall", "characters"};
+}
 
 std::unique_ptr<Scene> build_procedural_scene(const std::string& name) {
   if (name == "contact") return procedural::build_contact();
@@ -591,7 +593,9 @@ std::unique_ptr<Scene> build_procedural_scene(const std::string& name) {
   if (name == "canopy") return procedural::build_canopy();
   if (name == "lamps") return procedural::build_lamps();
   if (name == "hall") return procedural::build_hall();
-  throw SceneError("unknown procedural scene '" + name + "': expected one of contact, atrium, foliage, canopy, lamps, hall");
+  if (name == "characters") return procedural::build_character_crowd(100);
+  throw SceneError("unknown procedural scene '" + name +
+                   "': expected one of contact, atrium, foliage, canopy, lamps, hall, characters");
 }
 
 }  // namespace engine

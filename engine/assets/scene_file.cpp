@@ -248,10 +248,70 @@ void add_animation(const Reader& rd, Registry& r, Entity e, const json& a, const
   make_animated(r, e, anim);
 }
 
+// A glTF file's meshes placed as the object: one entity per mesh, flattened to world placements.
+void add_gltf_meshes(Scene& scene, const Reader& rd, const json& o, const std::string& f, const std::string& name,
+                     const Transform& t, const glm::vec4& color, const ShadowCaster& shadow,
+                     std::vector<Entity>& created) {
+  const std::filesystem::path gltf = rd.file().parent_path() / rd.string(o.at("gltf"), f + ".gltf");
+  std::unique_ptr<Scene> sub;
+  try {
+    sub = load_gltf_scene(gltf);
+  } catch (const SceneError& e) {
+    rd.fail(f + ".gltf", e.what());
+  }
+  update_world_transforms(sub->registry);
+  const glm::mat4 root = t.local_matrix();
+  sub->registry.each<Mesh, Transform>([&](Entity e, Mesh& m, Transform& st) {
+    if (!m.data) return;
+    glm::vec3 scale(1.0f), translation(0.0f), skew(0.0f);
+    glm::vec4 perspective(0.0f);
+    glm::quat rotation(1.0f, 0.0f, 0.0f, 0.0f);
+    Transform placed;
+    glm::decompose(root * st.world, scale, rotation, translation, skew, perspective);
+    placed.translation = translation;
+    placed.rotation = rotation;
+    placed.scale = scale;
+    const Entity n = scene.registry.create();
+    const Name* sub_name = sub->registry.try_get<Name>(e);
+    scene.registry.emplace<Name>(n, Name{name + "/" + (sub_name ? sub_name->value : m.data->name)});
+    scene.registry.emplace<Transform>(n, placed);
+    scene.registry.emplace<Mesh>(n, Mesh{m.data});
+    Material mat;
+    if (const Material* sm = sub->registry.try_get<Material>(e)) mat = *sm;
+    if (o.contains("color")) mat.base_color = color;
+    scene.registry.emplace<Material>(n, mat);
+    scene.registry.emplace<ShadowCaster>(n, shadow);
+    created.push_back(n);
+  });
+}
+
+// A walking figure (procedural_character.cpp) placed by the object's transform. Returns its root, which
+// an "animate" moves.
+Entity add_character(Scene& scene, const Reader& rd, const json& o, const std::string& f, const std::string& name,
+                     const Transform& t, const glm::vec4& color, const ShadowCaster& shadow,
+                     std::vector<Entity>& created) {
+  const json& c = o.at("character");
+  const std::string g = f + ".character";
+  rd.only_keys(c, {"tessellation"}, g);
+  const auto tessellation = uint32_t(rd.number_or(c, "tessellation", g, 32.0f, 6.0f, 128.0f));
+  const Entity root = add_walking_figure(scene, t.translation, 0.0f, tessellation, name);
+  Transform& placed = scene.registry.get<Transform>(root);
+  placed.rotation = t.rotation;
+  placed.scale = t.scale;
+  scene.registry.each<Mesh, Transform>([&](Entity e, Mesh&, Transform& mt) {
+    if (mt.parent == root) created.push_back(e);
+  });
+  for (Entity e : created) {
+    scene.registry.get<ShadowCaster>(e) = shadow;
+    if (o.contains("color")) scene.registry.get<Material>(e).base_color = color;
+  }
+  return root;
+}
+
 void add_object(Scene& scene, const Reader& rd, const json& o, size_t index, Detail detail) {
   const std::string f = "objects[" + std::to_string(index) + "]";
-  rd.only_keys(o, {"name", "shape", "shapes", "plants", "gltf", "translation", "rotation_deg", "scale", "color",
-                   "leaf_color", "shadow", "animate", "collide", "cutout"},
+  rd.only_keys(o, {"name", "shape", "shapes", "plants", "gltf", "character", "translation", "rotation_deg", "scale",
+                   "color", "leaf_color", "shadow", "animate", "collide", "cutout"},
                f);
   const std::string name = o.contains("name") ? rd.string(o.at("name"), f + ".name") : "object" + std::to_string(index);
   Transform t;
@@ -271,11 +331,13 @@ void add_object(Scene& scene, const Reader& rd, const json& o, size_t index, Det
     shadow.receives_shadow = rd.boolean_or(s, "receive", f + ".shadow", true);
     if (s.contains("csm")) shadow.csm = parse_csm(rd, s.at("csm"), f + ".shadow.csm");
   }
-  const int sources = int(o.contains("shape")) + int(o.contains("shapes")) + int(o.contains("plants")) + int(o.contains("gltf"));
-  if (sources != 1) rd.fail(f, "needs exactly one of shape, shapes, plants, gltf");
+  const int sources = int(o.contains("shape")) + int(o.contains("shapes")) + int(o.contains("plants")) +
+                      int(o.contains("gltf")) + int(o.contains("character"));
+  if (sources != 1) rd.fail(f, "needs exactly one of shape, shapes, plants, gltf, character");
   if (o.contains("cutout") && !o.contains("shape") && !o.contains("shapes")) rd.fail(f + ".cutout", "applies to shape or shapes only");
 
   std::vector<Entity> created;
+  Entity animated = kNullEntity;  // what an "animate" moves: the single mesh, or a character's root
   if (o.contains("shape") || o.contains("shapes")) {
     MeshData mesh;
     if (o.contains("shape")) {
@@ -314,44 +376,17 @@ void add_object(Scene& scene, const Reader& rd, const json& o, size_t index, Det
     if (o.contains("leaf_color")) leaf = glm::vec4(rd.vec3(o.at("leaf_color"), f + ".leaf_color"), 1.0f);
     created.push_back(add_entity(scene, name + "_stems", std::move(stems), {0.4f, 0.28f, 0.17f, 1.0f}, t, shadow));
     created.push_back(add_entity(scene, name + "_leaves", std::move(leaves), leaf, t, shadow));
+  } else if (o.contains("gltf")) {
+    add_gltf_meshes(scene, rd, o, f, name, t, color, shadow, created);
   } else {
-    const std::filesystem::path gltf = rd.file().parent_path() / rd.string(o.at("gltf"), f + ".gltf");
-    std::unique_ptr<Scene> sub;
-    try {
-      sub = load_gltf_scene(gltf);
-    } catch (const SceneError& e) {
-      rd.fail(f + ".gltf", e.what());
-    }
-    update_world_transforms(sub->registry);
-    const glm::mat4 root = t.local_matrix();
-    sub->registry.each<Mesh, Transform>([&](Entity e, Mesh& m, Transform& st) {
-      if (!m.data) return;
-      glm::vec3 scale(1.0f), translation(0.0f), skew(0.0f);
-      glm::vec4 perspective(0.0f);
-      glm::quat rotation(1.0f, 0.0f, 0.0f, 0.0f);
-      Transform placed;
-      glm::decompose(root * st.world, scale, rotation, translation, skew, perspective);
-      placed.translation = translation;
-      placed.rotation = rotation;
-      placed.scale = scale;
-      const Entity n = scene.registry.create();
-      const Name* sub_name = sub->registry.try_get<Name>(e);
-      scene.registry.emplace<Name>(n, Name{name + "/" + (sub_name ? sub_name->value : m.data->name)});
-      scene.registry.emplace<Transform>(n, placed);
-      scene.registry.emplace<Mesh>(n, Mesh{m.data});
-      Material mat;
-      if (const Material* sm = sub->registry.try_get<Material>(e)) mat = *sm;
-      if (o.contains("color")) mat.base_color = color;
-      scene.registry.emplace<Material>(n, mat);
-      scene.registry.emplace<ShadowCaster>(n, shadow);
-      created.push_back(n);
-    });
+    animated = add_character(scene, rd, o, f, name, t, color, shadow, created);
   }
   const bool solid = rd.boolean_or(o, "collide", f, !o.contains("plants"));
   for (Entity e : created) scene.registry.emplace<Collider>(e, Collider{solid});
+  if (!animated.valid() && created.size() == 1) animated = created[0];
   if (o.contains("animate")) {
-    if (created.size() != 1) rd.fail(f + ".animate", "only single-mesh objects (shape or shapes) can be animated");
-    add_animation(rd, scene.registry, created[0], o.at("animate"), f + ".animate");
+    if (!animated.valid()) rd.fail(f + ".animate", "only single-mesh objects (shape, shapes) and characters can be animated");
+    add_animation(rd, scene.registry, animated, o.at("animate"), f + ".animate");
   }
 }
 

@@ -83,7 +83,7 @@ glm::vec3 project(const Camera& c, const glm::vec3& p) {
 }
 
 TEST(ProceduralScenes, NamesAreTheFiveScenes) {
-  EXPECT_EQ(procedural_scene_names(), (std::vector<std::string>{"contact", "atrium", "foliage", "canopy", "lamps", "hall"}));
+  EXPECT_EQ(procedural_scene_names(), (std::vector<std::string>{"contact", "atrium", "foliage", "canopy", "lamps", "hall", "characters"}));
   EXPECT_THROW(build_procedural_scene("nope"), SceneError);
 }
 
@@ -161,7 +161,7 @@ TEST_P(EveryScene, IsDeterministic) {
   EXPECT_EQ(ba.max, bb.max);
 }
 
-INSTANTIATE_TEST_SUITE_P(Procedural, EveryScene, ::testing::Values("contact", "atrium", "foliage", "lamps", "hall"));
+INSTANTIATE_TEST_SUITE_P(Procedural, EveryScene, ::testing::Values("contact", "atrium", "foliage", "lamps", "hall", "characters"));
 
 TEST(ProceduralScenes, TriangleBudgetsAndSizesMatchTheirPurpose) {
   auto atrium = build_procedural_scene("atrium");

@@ -1,9 +1,16 @@
 #pragma once
 // Dimensions of the procedural scenes, shared with the tests that check analytic answers, and the
 // small mesh builders the scenes are made of.
+#include <memory>
+#include <string>
+
 #include <glm/glm.hpp>
 
 #include "engine/core/components.hpp"
+
+namespace engine {
+struct Scene;
+}
 
 namespace engine::procedural {
 // `contact`: a ground plane at y = 0 with objects standing on it; light from above, slightly slanted.
@@ -88,4 +95,19 @@ MeshData make_uv_sphere(const glm::vec3& center, float radius, int slices, int s
 MeshData make_double_sided_quad(const glm::vec3& center, const glm::vec3& u, const glm::vec3& v);
 // Appends `src` transformed by `transform` (normals by its inverse transpose) to `dst`.
 void append_mesh(MeshData& dst, const MeshData& src, const glm::mat4& transform = glm::mat4(1.0f));
+
+// A walking figure about 1.75 tall standing at `position` (feet on its y), facing +z: a root entity
+// (Transform, Name = name, an AnimationPlayer playing its looping "walk" clip from `phase` seconds),
+// twelve joint entities below it (hips, spine, chest, head, upper/lower legs and arms; Names
+// "name/joint") and the skinned mesh entity (child of the root, identity local transform; Mesh,
+// Material, ShadowCaster, Skeleton, Name = name). `tessellation` is the slices around each limb
+// (32: about 14,000 triangles). Returns the root: moving it moves the figure.
+Entity add_walking_figure(Scene& scene, const glm::vec3& position, float phase, uint32_t tessellation = 32,
+                          const std::string& name = "character");
+// The same around a mesh built before (figures may share one; each poses it with its own skeleton).
+Entity add_walking_figure(Scene& scene, const glm::vec3& position, float phase,
+                          const std::shared_ptr<const MeshData>& mesh, const std::string& name);
+// `count` walking figures on a square grid spaced 2 units over a ground plane, each at its own phase,
+// under the default sun; views: 0 overview, 1 close to the first figure's feet.
+std::unique_ptr<Scene> build_character_crowd(uint32_t count);
 }  // namespace engine::procedural

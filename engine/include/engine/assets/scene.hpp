@@ -74,7 +74,8 @@ void replicate_scene(Scene& scene, uint32_t copies);
 // reach past 1e7 units from the origin (where float spacing reaches a unit).
 void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const std::string& what = "transform");
 
-// The procedural scenes built in code: "contact", "atrium", "foliage", "canopy".
+// The procedural scenes built in code: "contact", "atrium", "foliage", "canopy", "lamps", "hall",
+// "characters" (100 skinned walking figures).
 std::vector<std::string> procedural_scene_names();
 std::unique_ptr<Scene> build_procedural_scene(const std::string& name);
 
