@@ -73,9 +73,12 @@ void Game::set_scene(std::unique_ptr<engine::Scene> scene) {
   engine::Scene& s = *scene_;
   // Rest pose for the collision world; moving objects do not collide.
   engine::update_animations(s.registry, 0.0f);
+  engine::update_clip_animations(s.registry, 0.0f);
   collision_ = CollisionWorld::from_scene(s, [&](engine::Entity e) {
     const auto* c = s.registry.try_get<engine::Collider>(e);
-    return s.registry.has<engine::Animated>(e) || (c && !c->solid);
+    // Skinned and morphing meshes move too (the character's mesh hangs below its walking root).
+    return s.registry.has<engine::Animated>(e) || s.registry.has<engine::Skeleton>(e) ||
+           s.registry.has<engine::MorphWeights>(e) || (c && !c->solid);
   });
   const engine::SceneView start = s.start ? *s.start : s.views.front();
   player_ = std::make_unique<Player>(&collision_, start.eye, start.target);
@@ -120,6 +123,7 @@ void Game::update(const InputFrame& input) {
   const float dt = input.dt;
   sim_time += dt;
   engine::update_animations(s.registry, sim_time);
+  engine::update_clip_animations(s.registry, sim_time);
   if (playing) {
     player_->update(input);
     engine::place_camera(s.registry, s.camera, player_->eye(), player_->eye() + player_->forward());

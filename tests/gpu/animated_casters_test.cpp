@@ -121,6 +121,7 @@ class AnimatedCastersTest : public GpuTest, public testing::WithParamInterface<A
       ++near;
       mismatched += (visibility[i] < 0.5f) != shadowed;
     }
+    std::printf("hybrid at %.2f s: %zu near points, %zu mismatched\n", seconds, near, mismatched);
     EXPECT_GT(near, size_t(kSize * kSize / 8)) << "hybrid at " << seconds << " s: too few near points";
     EXPECT_LE(double(mismatched), 0.0002 * double(near)) << "hybrid at " << seconds << " s: " << mismatched << " of " << near;
     module_->settings() = saved;
@@ -181,11 +182,12 @@ TEST_P(AnimatedCastersTest, EveryTechniqueMatchesTheReferenceAtTenTimes) {
     }
   }
   EXPECT_EQ(izb_terms.size(), size_t(kTimes));
-  // The shadow moves: every time differs from the first in some pixels.
+  // The shadow moves: every time differs from the one before it.
   for (size_t k = 1; k < izb_terms.size(); ++k) {
     size_t changed = 0;
-    for (size_t i = 0; i < izb_terms[k].size(); ++i) changed += izb_terms[k][i] != izb_terms[0][i];
-    EXPECT_GT(changed, 20u) << "time " << k << " casts the same shadow as time 0";
+    for (size_t i = 0; i < izb_terms[k].size(); ++i) changed += izb_terms[k][i] != izb_terms[k - 1][i];
+    EXPECT_GT(changed, 5u) << "time " << k << " casts the same shadow as time " << k - 1;
+    std::printf("%s: time %zu changes %zu pixels of the shadow\n", GetParam().name, k, changed);
   }
 }
 
