@@ -152,6 +152,22 @@ std::pair<VkDeviceSize, VkDeviceSize> GeometryStore::bind_region(const BufferInp
   return {base, in.offset - base + in.size};
 }
 
+// Binds a host positions region as the import pass's source (and, unread, as its uvs) and returns the
+// push of a pass reading `count` positions `stride` bytes apart from it in `mode` (no uvs).
+gpu_shared::MeshImportPush GeometryStore::bind_positions(VkCommandBuffer cmd, const BufferInput& in, uint32_t stride,
+                                                         uint32_t count, uint32_t mode) {
+  uint32_t position_word = 0;
+  const auto [base, range] = bind_region(in, position_word);
+  push_import_buffers(cmd, in.buffer, base, range, in.buffer, base, range);
+  gpu_shared::MeshImportPush push{};
+  push.mode = mode;
+  push.src_word = position_word;
+  push.stride_words = stride / 4;
+  push.count = count;
+  push.uv_word = gpu_shared::kNoUv;
+  return push;
+}
+
 // The positions' min and max, by the import shader's MESH_IMPORT_BOUNDS pass on the adopted queue,
 // waited for and read back (MeshDesc::bounds documents the cost and what the host must guarantee).
 Aabb GeometryStore::device_bounds(const MeshDesc& m, const std::string& what) {
@@ -164,16 +180,9 @@ Aabb GeometryStore::device_bounds(const MeshDesc& m, const std::string& what) {
                    VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                    VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
-    uint32_t position_word = 0;
-    const auto [base, range] = bind_region(m.positions, position_word);
     import_.bind(cmd);
-    push_import_buffers(cmd, m.positions.buffer, base, range, m.positions.buffer, base, range);
-    gpu_shared::MeshImportPush push{};
-    push.mode = gpu_shared::MESH_IMPORT_BOUNDS;
-    push.src_word = position_word;
-    push.stride_words = m.position_stride / 4;
-    push.count = m.vertex_count;
-    push.uv_word = gpu_shared::kNoUv;
+    const gpu_shared::MeshImportPush push =
+        bind_positions(cmd, m.positions, m.position_stride, m.vertex_count, gpu_shared::MESH_IMPORT_BOUNDS);
     import_.push_constants(cmd, push);
     vkCmdDispatch(cmd, groups(m.vertex_count, 64), 1, 1);
     memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
@@ -370,16 +379,9 @@ uint32_t GeometryStore::assign_entries(const Instance* instances, uint32_t count
 // One deformed instance's host positions into its slot (import_ bound): positions only, the slot's
 // normals and uvs stay those copied from its mesh.
 void GeometryStore::import_positions(VkCommandBuffer cmd, const DeformedPositions& in, const MeshRange& slot) {
-  uint32_t position_word = 0;
-  const auto [base, range] = bind_region(in.positions, position_word);
-  push_import_buffers(cmd, in.positions.buffer, base, range, in.positions.buffer, base, range);
-  gpu_shared::MeshImportPush push{};
-  push.mode = gpu_shared::MESH_IMPORT_POSITIONS;
-  push.src_word = position_word;
-  push.stride_words = in.stride / 4;
-  push.count = slot.vertex_count;
+  gpu_shared::MeshImportPush push =
+      bind_positions(cmd, in.positions, in.stride, slot.vertex_count, gpu_shared::MESH_IMPORT_POSITIONS);
   push.dst_first = uint32_t(slot.vertex_offset);
-  push.uv_word = gpu_shared::kNoUv;
   import_.push_constants(cmd, push);
   vkCmdDispatch(cmd, groups(slot.vertex_count, 64), 1, 1);
 }

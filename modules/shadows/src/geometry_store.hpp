@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include <shared/host.h>
+
 #include "gpu/pipeline.hpp"
 #include "frame.hpp"
 #include "shadows/context.hpp"
@@ -59,6 +61,8 @@ class GeometryStore {
   // The frame's table entries (entries_), new slots made; returns the first new slot's vertex (or vertex_count_).
   uint32_t assign_entries(const Instance* instances, uint32_t count, std::vector<std::pair<uint32_t, uint32_t>>& fresh);
   void import_positions(VkCommandBuffer cmd, const DeformedPositions& in, const MeshRange& slot);
+  gpu_shared::MeshImportPush bind_positions(VkCommandBuffer cmd, const BufferInput& in, uint32_t stride, uint32_t count,
+                                            uint32_t mode);
   void grow(engine::gpu::Buffer& buffer, VkDeviceSize bytes, VkDeviceSize used, VkBufferUsageFlags usage,
             const char* name, VkCommandBuffer cmd);
 
