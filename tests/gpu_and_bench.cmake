@@ -25,12 +25,13 @@ target_strict_warnings(gpu_tests)
 # The GPU smoke set (label gpu_smoke, in the plain run like the rest of label gpu): what the sanitizer
 # run (.ci/sanitize) protects beyond the unit and reference tests, the module's and engine's CPU code on
 # every path: context and device adoption, every refusal, pool growth and overflow, resize, each
-# technique and light type once, moving casters, overlays, alpha-tested materials.
+# technique and light type once, moving casters, skinned casters, overlays, alpha-tested materials.
 set(GPU_SMOKE_FILTER "GpuTest.*:AdoptedDeviceTest.*:RobustnessTest.*InOneLine:RobustnessTest.LiveAllocation*:\
 IzbTest.TinyNodePool*:IzbTest.NodePoolGrows*:IzbTest.Resize*:IzbTest.HybridNearPoints*:\
 CascadesTest.DebugOverlaysAndCullingChoice:RayTracedTest.DeviceWithoutRayTracing*:RayTracedTest.EveryLightOfAFrame*:\
 Levels/DynamicSceneTest.*/wall:Lights/LocalLightTest.ShadowMapsOfTheLight/*:Scenes/IzbSceneTest.OneSample*/contact_view0:\
-MaterialsTest.GbufferAlphaTests*:Features/MaskedFeatureTest.PathsThatNeedTheFeatureRefuseInOneLine/*")
+MaterialsTest.GbufferAlphaTests*:Features/MaskedFeatureTest.PathsThatNeedTheFeatureRefuseInOneLine/*:\
+Clips/AnimatedCastersTest.*/skinned_cylinder")
 # The rest of the per-scene sweeps of the equivalence tests (an optimisation changes no verdict: lit
 # culling, anchored nodes, compute against raster; every shape of the IZB's first step) and the 512²
 # lamps run under `long`; the plain run keeps one scene of each sweep and the 256² lamps.
@@ -350,7 +351,7 @@ target_strict_warnings(host_tests)
 # The host path's smoke set: every refusal (capabilities per light type, mesh bounds computed on the
 # device included), several lights in one record, frames in flight, a few of the input matrix's
 # pairings (CPU code the sanitizer run protects); the rest of it in label gpu.
-set(HOST_SMOKE_FILTER "HostBadInput.*:HostDevice.*:HostLightCapabilities.*:HostMeshBounds.*:Modes/HostLights.*/izb_1spp:Slots/HostFramesInFlight.*/2_in_flight:\
+set(HOST_SMOKE_FILTER "HostBadInput.*:HostDeformed.EveryRefusalNamesItsField:HostDevice.*:HostLightCapabilities.*:HostMeshBounds.*:Modes/HostLights.*/izb_1spp:Slots/HostFramesInFlight.*/2_in_flight:\
 Pairs/HostInputMatrix.*/0_*:Pairs/HostInputMatrix.*/5_*:Pairs/HostInputMatrix.*/10_*:Pairs/HostInputMatrix.*/15_*:\
 Pairs/HostInputMatrix.*/17_*:Modes/HostMatchesEmbree.*/izb_csm_view0_1spp")
 gtest_discover_tests(host_tests DISCOVERY_TIMEOUT 60 TEST_FILTER "${HOST_SMOKE_FILTER}"
