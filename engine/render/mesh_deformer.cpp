@@ -26,7 +26,10 @@ void MeshDeformer::update(const Registry& registry, const SceneGeometry& geometr
   staging_.clear();
   for (size_t i = 0; i < deformed.size(); ++i) {
     const DeformedMesh& d = deformed[i];
-    const Mesh& mesh = registry.get<Mesh>(d.entity);
+    const Mesh* mesh = registry.try_get<Mesh>(d.entity);
+    // An entity destroyed or stripped of its mesh since the scene was set keeps its last pose: its
+    // slot is drawn by nobody.
+    if (!mesh || !mesh->data) continue;
     std::vector<glm::mat4> joints;
     if (d.skin_word != UINT32_MAX) joints = joint_matrices(registry, d.entity);
     // A skeleton that lost joints since the scene was set keeps the pass inside its data: the
@@ -34,13 +37,14 @@ void MeshDeformer::update(const Registry& registry, const SceneGeometry& geometr
     joints.resize(d.joint_count, glm::mat4(1.0f));
     std::vector<float> weights;
     if (const auto* w = registry.try_get<MorphWeights>(d.entity)) weights = w->weights;
-    else if (mesh.data->deform) weights = mesh.data->deform->default_weights;
+    else if (mesh->data->deform) weights = mesh->data->deform->default_weights;
     weights.resize(d.target_count, 0.0f);
+    jobs_[i].posed = true;
     jobs_[i].joint_float = uint32_t(staging_.size());
     for (const glm::mat4& m : joints) staging_.insert(staging_.end(), &m[0][0], &m[0][0] + 16);
     jobs_[i].weight_float = uint32_t(staging_.size());
     staging_.insert(staging_.end(), weights.begin(), weights.end());
-    bounds_[i] = deformed_bounds(*mesh.data, weights, joints);
+    bounds_[i] = deformed_bounds(*mesh->data, weights, joints);
   }
   if (deformed.empty()) return;
   if (staging_.empty()) staging_.push_back(0.0f);  // a valid binding for entities with neither
@@ -70,6 +74,7 @@ void MeshDeformer::record(VkCommandBuffer cmd, gpu::GpuProfiler& profiler, const
       .push(ctx_, cmd, pipeline_);
   for (size_t i = 0; i < deformed.size(); ++i) {
     const DeformedMesh& d = deformed[i];
+    if (!jobs_[i].posed) continue;
     const GpuMeshRange& own = geometry.mesh(d.mesh);
     const GpuMeshRange& rest = geometry.mesh(d.rest_mesh);
     gpu_shared::SkinningPush push{};

@@ -23,6 +23,7 @@ class MeshDeformer {
 
  private:
   struct Job {
+    bool posed = false;  // false: the entity has no mesh any more; nothing is dispatched for it
     uint32_t joint_float = 0;
     uint32_t weight_float = 0;
   };
