@@ -486,12 +486,16 @@ void Loader::read_skin_weights(const tinygltf::Primitive& prim, const std::strin
         const float w = weight_sets[set][v * 4 + k];
         const float j = joint_sets[set][v * 4 + k];
         if (w < 0.0f) fail(label + " WEIGHTS_" + std::to_string(set) + " has a negative weight at vertex " + std::to_string(v));
+        // glTF joints are unsigned bytes or shorts: anything else (a float, a normalized value) is no index.
+        if (!(j >= 0.0f && j <= 65535.0f && j == std::floor(j)))
+          fail(label + " JOINTS_" + std::to_string(set) + " holds no joint index at vertex " + std::to_string(v));
         if (w > 0.0f) influences.push_back({w, uint32_t(j)});
       }
     std::stable_sort(influences.begin(), influences.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
     if (influences.size() > kMaxJointsPerVertex) ++clamped, influences.resize(kMaxJointsPerVertex);
     float sum = 0.0f;
     for (const auto& [w, j] : influences) sum += w;
+    if (!std::isfinite(sum)) fail(label + " has weights at vertex " + std::to_string(v) + " that do not sum to a finite value");
     if (!(sum > 0.0f)) continue;
     for (size_t k = 0; k < influences.size(); ++k) {
       joints[v][int(k)] = influences[k].second;

@@ -117,4 +117,15 @@ TEST(SkinnedGltf, ReplicatedCopiesPoseTheirOwnSkeletons) {
   EXPECT_GT(glm::distance(pa.back().position, scene->registry.get<Mesh>(skinned[0]).data->vertices.back().position), 0.05f);
 }
 
+// The committed copies (content/test_gltf, the fuzzer's seeds) load as the written files do.
+TEST(SkinnedGltf, CommittedSeedsLoadWithTheirSkinsMorphsAndClips) {
+  const auto dir = std::filesystem::path(ENGINE_SOURCE_DIR) / "content" / "test_gltf";
+  auto skinned = load_gltf_scene(dir / "skinned_cylinder.gltf");
+  EXPECT_EQ(skinned->registry.count<Skeleton>(), 1u);
+  EXPECT_EQ(skinned->registry.count<AnimationPlayer>(), 1u);
+  auto morph = load_gltf_scene(dir / "morph_flap.gltf");
+  EXPECT_EQ(morph->registry.count<MorphWeights>(), 1u);
+  EXPECT_EQ(morph->registry.count<AnimationPlayer>(), 1u);
+}
+
 }  // namespace
