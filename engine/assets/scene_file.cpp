@@ -288,12 +288,14 @@ void add_gltf_meshes(Scene& scene, const Reader& rd, const json& o, const std::s
 // A walking figure (procedural_character.cpp) placed by the object's transform. Returns its root, which
 // an "animate" moves.
 Entity add_character(Scene& scene, const Reader& rd, const json& o, const std::string& f, const std::string& name,
-                     const Transform& t, const glm::vec4& color, const ShadowCaster& shadow,
+                     const Transform& t, const glm::vec4& color, const ShadowCaster& shadow, Detail detail,
                      std::vector<Entity>& created) {
   const json& c = o.at("character");
   const std::string g = f + ".character";
   rd.only_keys(c, {"tessellation"}, g);
-  const auto tessellation = uint32_t(rd.number_or(c, "tessellation", g, 32.0f, 6.0f, 128.0f));
+  auto tessellation = uint32_t(rd.number_or(c, "tessellation", g, 32.0f, 6.0f, 128.0f));
+  // Low detail (a CPU device): a quarter of the slices, about a sixteenth of the triangles.
+  if (detail == Detail::Low) tessellation = std::max(6u, tessellation / 4);
   const Entity root = add_walking_figure(scene, t.translation, 0.0f, tessellation, name);
   Transform& placed = scene.registry.get<Transform>(root);
   placed.rotation = t.rotation;
@@ -379,7 +381,7 @@ void add_object(Scene& scene, const Reader& rd, const json& o, size_t index, Det
   } else if (o.contains("gltf")) {
     add_gltf_meshes(scene, rd, o, f, name, t, color, shadow, created);
   } else {
-    animated = add_character(scene, rd, o, f, name, t, color, shadow, created);
+    animated = add_character(scene, rd, o, f, name, t, color, shadow, detail, created);
   }
   const bool solid = rd.boolean_or(o, "collide", f, !o.contains("plants"));
   for (Entity e : created) scene.registry.emplace<Collider>(e, Collider{solid});

@@ -21,7 +21,7 @@ class SceneError : public std::runtime_error {
 // How finely generated content (the plants of scene files) is built. Full is the content as authored,
 // which tests, the reference and the benchmark use; Low is for devices that cannot afford it (the
 // walkthrough on a CPU device): the same plants with a quarter of their leaf cards, each twice the
-// size (the same leaf area), and thinner stem tessellation.
+// size (the same leaf area), and thinner stem tessellation; characters with a quarter of their slices.
 enum class Detail { Full, Low };
 
 struct SceneView {
