@@ -183,13 +183,14 @@ void transform_scene(Scene& scene, double scale, const glm::dvec3& offset, const
   // Intensities in candela light a point by intensity / distance²: scaled by scale² they light the
   // scaled scene as before.
   const float intensity_scale = float(scale * scale);
-  const auto scale_light = [&](Entity e, float& range, float& intensity) {
+  const auto scale_light = [&](Entity e, float& range, float& intensity, float& radius) {
     range *= s;
+    radius *= s;
     intensity *= intensity_scale;
     keep_unit_scale(e);
   };
-  r.each<SpotLight>([&](Entity e, SpotLight& l) { scale_light(e, l.range, l.intensity); });
-  r.each<PointLight>([&](Entity e, PointLight& l) { scale_light(e, l.range, l.intensity); });
+  r.each<SpotLight>([&](Entity e, SpotLight& l) { scale_light(e, l.range, l.intensity, l.radius); });
+  r.each<PointLight>([&](Entity e, PointLight& l) { scale_light(e, l.range, l.intensity, l.radius); });
   r.each<Camera>([&](Entity e, Camera& c) {
     c.near_plane *= s;
     c.far_plane *= s;

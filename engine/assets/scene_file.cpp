@@ -412,7 +412,7 @@ SceneView read_view(const Reader& rd, const json& v, const std::string& f, const
 // "intensity", "name"}, an entity placed (and, for a spot, aimed down its local -Z) by its Transform.
 void add_light(Scene& scene, const Reader& rd, const json& j, const std::string& field) {
   rd.only_keys(j, {"type", "name", "position", "direction", "range", "inner_cone_deg", "outer_cone_deg", "color",
-                   "intensity"},
+                   "intensity", "radius"},
                field);
   const std::string type = rd.string(rd.required(j, "type", field), field + ".type");
   if (type != "spot" && type != "point") rd.fail(field + ".type", "expected \"spot\" or \"point\"");
@@ -425,8 +425,9 @@ void add_light(Scene& scene, const Reader& rd, const json& j, const std::string&
   if (glm::any(glm::lessThan(color, glm::vec3(0.0f)))) rd.fail(field + ".color", "must not be negative");
   const float intensity = rd.number_or(j, "intensity", field, 10.0f, 0.0f, 1e6f);
   const float range = rd.number(rd.required(j, "range", field), field + ".range", 1e-3f, 1e5f);
+  const float radius = rd.number_or(j, "radius", field, 0.0f, 0.0f, 1e4f);
   if (type == "point") {
-    r.emplace<PointLight>(e, PointLight{color, intensity, range});
+    r.emplace<PointLight>(e, PointLight{color, intensity, range, true, radius});
   } else {
     glm::vec3 direction = rd.vec3(rd.required(j, "direction", field), field + ".direction");
     if (glm::length(direction) < 1e-6f) rd.fail(field + ".direction", "must not be zero");
@@ -436,7 +437,7 @@ void add_light(Scene& scene, const Reader& rd, const json& j, const std::string&
     const float inner = rd.number_or(j, "inner_cone_deg", field, 0.0f, 0.0f, 90.0f);
     const float outer = rd.number_or(j, "outer_cone_deg", field, 45.0f, 0.0f, 90.0f);
     if (!(inner < outer)) rd.fail(field + ".inner_cone_deg", "must be less than outer_cone_deg");
-    r.emplace<SpotLight>(e, SpotLight{color, intensity, range, glm::radians(inner), glm::radians(outer)});
+    r.emplace<SpotLight>(e, SpotLight{color, intensity, range, glm::radians(inner), glm::radians(outer), true, radius});
   }
   r.emplace<Transform>(e, t);
 }
@@ -461,12 +462,14 @@ std::unique_ptr<Scene> load_scene_file(const std::filesystem::path& path, Detail
   DirectionalLight light;
   if (doc.contains("sun")) {
     const json& s = doc.at("sun");
-    rd.only_keys(s, {"direction", "color", "intensity"}, "sun");
+    rd.only_keys(s, {"direction", "color", "intensity", "angular_diameter_deg"}, "sun");
     light.direction = rd.vec3(rd.required(s, "direction", "sun"), "sun.direction");
     if (glm::length(light.direction) < 1e-6f) rd.fail("sun.direction", "must not be zero");
     light.direction = glm::normalize(light.direction);
     if (s.contains("color")) light.color = rd.vec3(s.at("color"), "sun.color");
     light.intensity = rd.number_or(s, "intensity", "sun", light.intensity, 0.0f, 1000.0f);
+    light.angular_diameter_degrees =
+        rd.number_or(s, "angular_diameter_deg", "sun", light.angular_diameter_degrees, 0.0f, 10.0f);
   }
   Camera camera;
   if (doc.contains("camera")) {

@@ -294,7 +294,7 @@ void Renderer::gather_local_lights() {
   view_.local_lights.clear();
   Registry& r = scene_->registry;
   auto add = [&](Entity e, LocalLightKind kind, const glm::vec3& color, float intensity, float range,
-                 float inner_cone, float outer_cone) {
+                 float inner_cone, float outer_cone, float radius) {
     const auto* t = r.try_get<Transform>(e);
     if (!t || !(intensity > 0.0f) || !(range > 0.0f)) return;
     FrameLight l;
@@ -306,6 +306,7 @@ void Renderer::gather_local_lights() {
     l.range = range;
     l.inner_cone = inner_cone;
     l.outer_cone = outer_cone;
+    l.radius = radius;
     // A light whose sphere of reach lies outside the view lights no pixel: no pass runs for it.
     Aabb reach;
     reach.extend(l.position - glm::vec3(range));
@@ -314,10 +315,10 @@ void Renderer::gather_local_lights() {
     view_.local_lights.push_back(l);
   };
   r.each<SpotLight>([&](Entity e, SpotLight& s) {
-    if (s.enabled) add(e, LocalLightKind::Spot, s.color, s.intensity, s.range, s.inner_cone, s.outer_cone);
+    if (s.enabled) add(e, LocalLightKind::Spot, s.color, s.intensity, s.range, s.inner_cone, s.outer_cone, s.radius);
   });
   r.each<PointLight>([&](Entity e, PointLight& p) {
-    if (p.enabled) add(e, LocalLightKind::Point, p.color, p.intensity, p.range, 0.0f, 0.0f);
+    if (p.enabled) add(e, LocalLightKind::Point, p.color, p.intensity, p.range, 0.0f, 0.0f, p.radius);
   });
   // The nearest lights (by the distance to their sphere of reach) when there are more than the pass takes.
   std::stable_sort(view_.local_lights.begin(), view_.local_lights.end(), [&](const FrameLight& a, const FrameLight& b) {
@@ -363,6 +364,7 @@ void Renderer::update(float dt) {
     const auto& light = scene_->registry.get<DirectionalLight>(scene_->light);
     view_.light_direction = glm::normalize(light.direction);
     view_.light_radiance = light.color * light.intensity;
+    view_.light_angular_diameter_degrees = light.angular_diameter_degrees;
   }
   gather_local_lights();
 

@@ -71,6 +71,9 @@ struct Options {
   glm::dvec3 offset{0.0};            // --offset: then moved by this (world units)
   std::optional<double> time;        // --time: the scene's animations posed at this time (seconds)
   bool rigid = false;                // --rigid: skinned and morphing meshes drawn rigid in their rest pose
+  std::optional<double> light_size;  // --light-size: the sun's angular diameter, degrees
+  std::optional<double> light_radius;  // --light-radius: every spot and point light's radius, world units
+  uint32_t rt_rays = 0;              // --rt-rays: Settings::rt_light_samples
 };
 
 const char* kUsage =
@@ -82,7 +85,7 @@ const char* kUsage =
     "                    [--max-mismatch R] [--max-coverage-mae E]\n"
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
     "                    [--light sun|spot|point] [--scale S] [--offset X,Y,Z] [--large-world] [--sun]\n"
-    "                    [--time SECONDS] [--rigid]\n"
+    "                    [--time SECONDS] [--rigid] [--light-size DEGREES] [--light-radius R] [--rt-rays N]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
@@ -105,6 +108,11 @@ const char* kUsage =
     "  posed at that time, so an animated frame is reproducible; without it the scene stays as loaded.\n"
     "  --rigid: skinned and morphing meshes become rigid meshes in their rest pose (nothing is deformed):\n"
     "  the static frame an animated one is compared with.\n"
+    "  --light-size DEGREES: the sun's angular diameter (default: the scene's, 0.53 unless it says; 0 hard,\n"
+    "  at most 10); --light-radius R: every spot and point light's radius (world units, after --scale).\n"
+    "  --rt-rays N: rt traces N rays per pixel over the light (Settings::rt_light_samples, 0..64; 0: the\n"
+    "  light's centre alone, hard). With a light size, --reference also reports soft_mae and penumbra_mae\n"
+    "  against an area-light reference.\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
     "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
@@ -207,6 +215,9 @@ Options parse(int argc, char** argv) {
     else if (a == "--scale") o.scale = parse_number(a, args.value());
     else if (a == "--time") o.time = parse_number(a, args.value());
     else if (a == "--rigid") o.rigid = true;
+    else if (a == "--light-size") o.light_size = parse_number(a, args.value());
+    else if (a == "--light-radius") o.light_radius = parse_number(a, args.value());
+    else if (a == "--rt-rays") o.rt_rays = split_uints(a, args.value()).at(0);
     else if (a == "--offset") {
       const std::string v = args.value();
       const auto items = split(v);
@@ -417,6 +428,7 @@ struct Bench {
   json measure(const RunConfig& run, bool print) {
     module->settings() = run.settings;
     module->settings().units_per_metre = float(scene.units_per_metre);
+    module->settings().rt_light_samples = o.rt_rays;
     const uint32_t spp = run.settings.izb.samples_per_pixel;
     const VkExtent2D extent = renderer.extent();
     json entry;
@@ -680,6 +692,13 @@ std::unique_ptr<engine::Scene> load(const std::string& name, uint32_t instances,
   engine::replicate_scene(*scene, instances);
   apply_csm_choice(*scene, o.csm_choice);
   if (o.rigid) make_rigid(*scene);
+  if (o.light_size)
+    scene->registry.each<engine::DirectionalLight>(
+        [&](engine::Entity, engine::DirectionalLight& l) { l.angular_diameter_degrees = float(*o.light_size); });
+  if (o.light_radius) {
+    scene->registry.each<engine::SpotLight>([&](engine::Entity, engine::SpotLight& l) { l.radius = float(*o.light_radius); });
+    scene->registry.each<engine::PointLight>([&](engine::Entity, engine::PointLight& l) { l.radius = float(*o.light_radius); });
+  }
   if (o.time) {
     engine::update_animations(scene->registry, float(*o.time));
     engine::update_clip_animations(scene->registry, float(*o.time));

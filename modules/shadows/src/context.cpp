@@ -340,6 +340,13 @@ void ContextImpl::validate_light(const Light& light, const std::string& name) co
   const glm::vec3 dir = glm::make_vec3(light.direction);
   if (light.type != LightType::Point && !(glm::length(dir) > 0.5f && glm::length(dir) < 1.5f))
     throw Error("shadows: " + name + ".direction must be a unit vector");
+  if (!std::isfinite(light.angular_diameter_degrees) || light.angular_diameter_degrees < 0.0f ||
+      light.angular_diameter_degrees > 10.0f)
+    throw Error("shadows: " + name + ".angular_diameter_degrees " + std::to_string(light.angular_diameter_degrees) +
+                " is not in 0..10 (degrees; the sun is 0.53)");
+  if (!std::isfinite(light.radius) || light.radius < 0.0f)
+    throw Error("shadows: " + name + ".radius " + std::to_string(light.radius) +
+                " is not a finite radius >= 0 (world units)");
   if (light.type != LightType::Directional) {
     if (!std::isfinite(light.position[0]) || !std::isfinite(light.position[1]) || !std::isfinite(light.position[2]))
       throw Error("shadows: " + name + ".position must be finite");
@@ -442,6 +449,8 @@ void ContextImpl::validate(const FrameDesc& f) const {
   if (!finite(f.origin, 3)) throw Error("shadows: FrameDesc.origin has a value that is not finite");
   if (!(settings_.units_per_metre > 0.0f) || !std::isfinite(settings_.units_per_metre))
     throw Error("shadows: Settings.units_per_metre must be finite and > 0");
+  if (settings_.rt_light_samples > 64)
+    throw Error("shadows: Settings.rt_light_samples " + std::to_string(settings_.rt_light_samples) + " is not in 0..64");
   // A technique the device cannot run is refused here, before anything is recorded.
   if (settings_.technique == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline)
     throw Error(capabilities().of(Technique::RayTraced).reason);  // the line capabilities() gives
@@ -617,6 +626,9 @@ void ContextImpl::set_light(View& view, const Light& light) {
   view.light_range = light.range;
   view.light_cos_outer = light.type == LightType::Spot ? std::cos(light.outer_cone) : -1.0f;
   view.light_face = false;
+  view.light_tan_half_angle =
+      light.type == LightType::Directional ? std::tan(0.5f * light.angular_diameter_degrees * 0.017453292f) : 0.0f;
+  view.light_radius = light.type == LightType::Directional ? 0.0f : light.radius;
 }
 
 // Between two lights of one record: every access of the previous light's passes (their statistics

@@ -23,6 +23,10 @@ struct View {
   float light_range = 0.0f;        // spot and point
   float light_cos_outer = -1.0f;   // spot: cosine of the outer cone; point: -1 (every direction)
   bool light_face = false;         // one of a point light's six cones, shadowed as a spot light (IZB)
+  // The light's size (Light::angular_diameter_degrees, radius): the sun's tangent of its angular
+  // radius; a spot or point light's sphere radius in world units. 0: a point, hard shadows.
+  float light_tan_half_angle = 0.0f;
+  float light_radius = 0.0f;
   float near_plane = 0.05f;
   float far_plane = 200.0f;
   glm::vec2 tan_half_fov{1.0f};  // x, y: tangent of the half field of view (from the projection)

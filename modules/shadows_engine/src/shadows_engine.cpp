@@ -259,6 +259,7 @@ class EngineShadowModule final : public ShadowModule {
       if (sun_lit) {
         Light sun;
         std::memcpy(sun.direction, glm::value_ptr(frame.view.light_direction), sizeof(sun.direction));
+        sun.angular_diameter_degrees = frame.view.light_angular_diameter_degrees;
         lights_.push_back(sun);
         outputs_.push_back(image_input(frame.shadow_term));
       }
@@ -359,6 +360,7 @@ Light light_of(const engine::FrameLight& l) {
   out.range = l.range;
   out.inner_cone = l.inner_cone;
   out.outer_cone = l.outer_cone;
+  out.radius = l.radius;
   return out;
 }
 

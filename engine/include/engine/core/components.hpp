@@ -136,6 +136,9 @@ struct DirectionalLight {
   glm::vec3 direction{-0.4f, -1.0f, -0.3f};
   glm::vec3 color{1.0f, 0.97f, 0.9f};
   float intensity = 3.0f;
+  // The sun's angular diameter in degrees (0.53: the real sun; 0: a point, hard shadows; at most 10).
+  // Soft-shadow techniques widen their penumbrae with it (shadows::Light::angular_diameter_degrees).
+  float angular_diameter_degrees = 0.53f;
 };
 
 // A spot light at the entity's world position, shining down its local -Z axis (glTF's
@@ -148,6 +151,7 @@ struct SpotLight {
   float inner_cone = 0.0f;
   float outer_cone = 0.7853982f;
   bool enabled = true;  // off: the renderer neither lights nor shadows with it
+  float radius = 0.0f;  // the emitting sphere's radius in world units (0: a point, hard shadows)
 };
 
 // A point light at the entity's world position; units as SpotLight.
@@ -156,6 +160,7 @@ struct PointLight {
   float intensity = 10.0f;
   float range = 10.0f;
   bool enabled = true;  // off: the renderer neither lights nor shadows with it
+  float radius = 0.0f;  // the emitting sphere's radius in world units (0: a point, hard shadows)
 };
 
 // Whether this mesh enters the conservative shadow map z-prepass.

@@ -100,6 +100,7 @@ struct FrameLight {
   glm::vec3 radiance{0.0f};                 // colour * intensity (candela)
   float range = 0.0f;                       // world units
   float inner_cone = 0.0f, outer_cone = 0.0f;  // spot: half angles, radians
+  float radius = 0.0f;                      // the emitting sphere's, world units (SpotLight/PointLight::radius)
 };
 
 // Every world-space value of a frame (FrameView's matrices and positions, DrawItem::world and bounds,
@@ -116,6 +117,7 @@ struct FrameView {
   glm::vec3 camera_position{0.0f};
   glm::vec3 light_direction{0.0f, -1.0f, 0.0f};  // travel direction, unit
   glm::vec3 light_radiance{1.0f};
+  float light_angular_diameter_degrees = 0.53f;  // the sun's (DirectionalLight::angular_diameter_degrees)
   // Enabled spot and point lights whose range reaches the view, nearest first, at most
   // Renderer::kMaxLocalLights.
   std::vector<FrameLight> local_lights;

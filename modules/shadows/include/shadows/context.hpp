@@ -316,6 +316,14 @@ struct Light {
   float position[3] = {0.0f, 0.0f, 0.0f};    // spot and point (world)
   float range = 0.0f;                        // spot and point: > 0, world units
   float inner_cone = 0.0f, outer_cone = 0.0f;  // spot: half angles in radians, 0 <= inner < outer <= pi/2
+  // The light's size, which sets how fast penumbrae widen with the distance from occluder to receiver.
+  // Directional: the sun's angular diameter in degrees, finite, 0 (a point: hard shadows) to 10; the
+  // real sun is 0.53. Spot and point: the radius of the emitting sphere in world units, finite, >= 0.
+  // `sm`, `cascades` and `hybrid` filter by it (PCSS; the hybrid keeps the exact IZB term wherever the
+  // penumbra is narrower than a pixel), `rt` samples it with Settings::rt_light_samples rays; `izb`
+  // and `izb+csm` draw the exact hard shadow of the light's centre whatever its size.
+  float angular_diameter_degrees = 0.53f;
+  float radius = 0.0f;
 };
 
 enum class NormalSpace : uint32_t { World, View };

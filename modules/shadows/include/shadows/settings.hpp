@@ -145,6 +145,12 @@ struct Settings {
   // (world units, along the light) or farther above it takes the cascades' filtered term; nearer
   // occluders blend linearly toward the exact IZB term, which contact shadows keep.
   float hybrid_soft_distance = 2.0f;
+  // rt: shadow rays per pixel over the light (Light::angular_diameter_degrees, radius): 0 traces one
+  // ray toward the light's centre, the hard shadow whatever its size; 1..64 that many rays spread
+  // evenly over the sun's disc or the sphere's disc as the point sees it, turned per pixel, the term
+  // their lit fraction (no denoiser: few rays are noisy). Ignored at 32 spp (IzbSettings) and for a
+  // light of size 0.
+  uint32_t rt_light_samples = 0;
   // How many of the host's world units make a metre (1: metres, 100: centimetres, 0.01: hectometres).
   // The distances above stated in world units are taken in metres and scaled by it: cascades.max_distance
   // and kernel_radius, izb.max_distance, hybrid_izb_distance and hybrid_soft_distance. Nothing else in
