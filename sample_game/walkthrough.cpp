@@ -270,6 +270,12 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
       ImGui::Text("at %.1f %.1f %.1f", p.x, p.y, p.z);
     }
     if (ImGui::SliderFloat("time of day", &game.time_of_day, 0.0f, 24.0f, "%.1f h")) game.sun_from_time = true;
+    // The sun's size (shadows::Light::angular_diameter_degrees): penumbrae widen with it in sm, cascades
+    // and hybrid (and rt with rays over the disc); 0 gives hard shadows everywhere.
+    engine::Scene* shown = renderer.scene();
+    if (shown && shown->light.valid() && shown->registry.has<engine::DirectionalLight>(shown->light))
+      ImGui::SliderFloat("sun size", &shown->registry.get<engine::DirectionalLight>(shown->light).angular_diameter_degrees,
+                         0.0f, 10.0f, "%.2f deg");
     if (ImGui::Checkbox("animate sun", &game.animate_sun) && game.animate_sun) game.sun_from_time = true;
     ImGui::SameLine();
     ImGui::SetNextItemWidth(100);
@@ -301,6 +307,10 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
       ImGui::EndCombo();
     }
     if (!rt_ok) ImGui::TextDisabled("ray traced: %s", rt_why.c_str());
+    if (s.technique == shadows::Technique::RayTraced) {
+      int rays = int(s.rt_light_samples);
+      if (ImGui::SliderInt("rays over the sun (0: its centre)", &rays, 0, 64)) s.rt_light_samples = uint32_t(rays);
+    }
     bool spp32 = s.izb.samples_per_pixel == 32;
     if (ImGui::Checkbox("32 samples per pixel", &spp32)) s.izb.samples_per_pixel = spp32 ? 32 : 1;
     ImGui::Checkbox("CSM z-prepass", &s.izb.csm);
@@ -457,7 +467,7 @@ std::string save_settings(const std::string& path, shadows::ShadowModule& module
   j["debug"] = int(s.debug);
   j["izb_resolution"] = s.izb.resolution;
   j["hybrid_izb_distance"] = s.hybrid_izb_distance;
-  j["hybrid_soft_distance"] = s.hybrid_soft_distance;
+  j["rt_light_samples"] = s.rt_light_samples;
   j["time_of_day"] = game.time_of_day;
   j["animate_sun"] = game.animate_sun;
   j["day_speed"] = game.day_speed;
@@ -522,7 +532,11 @@ std::string load_settings(const std::string& path, shadows::ShadowModule& module
         if (r < 64 || r > 8192) return bad("must be 64..8192");
         s.izb.resolution = uint32_t(r);
       } else if (k == "hybrid_izb_distance") s.hybrid_izb_distance = v.get<float>();
-      else if (k == "hybrid_soft_distance") s.hybrid_soft_distance = v.get<float>();
+      else if (k == "rt_light_samples") {
+        const int n = v.get<int>();
+        if (n < 0 || n > 64) return bad("must be 0..64");
+        s.rt_light_samples = uint32_t(n);
+      } else if (k == "hybrid_soft_distance") return bad("no longer a setting: penumbrae follow the sun's size");
       else if (k == "time_of_day") tod = std::clamp(v.get<float>(), 0.0f, 24.0f);
       else if (k == "animate_sun") animate = v.get<bool>();
       else if (k == "day_speed") speed = std::clamp(v.get<float>(), 0.0f, 10.0f);

@@ -1,7 +1,7 @@
 find_package(nlohmann_json 3 CONFIG REQUIRED)
 
 # Frame capture + reference glue shared by the GPU tests and the benchmark.
-add_library(shadow_test_support STATIC support/frame_capture.cpp)
+add_library(shadow_test_support STATIC support/frame_capture.cpp support/penumbra_mask.cpp)
 target_include_directories(shadow_test_support PUBLIC support)
 target_link_libraries(shadow_test_support PUBLIC engine_gpu shadows_engine shadow_reference)
 target_strict_warnings(shadow_test_support)

@@ -151,8 +151,7 @@ void insert_listed_node() {
   uint texel = texel_index(grid_texel(g));
   nodes[index] = uvec2(atomicExchange(heads[texel], index), index);
   raise_farthest(texel, g.z);
-  // What the whole build leaves for a pixel with a node: no sample settled, no occluder found yet.
-  if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
+  // What the whole build leaves for a pixel with a node: no sample settled.
   visibility_mask[index] = 0u;
 }
 
@@ -376,17 +375,15 @@ void main() {
     bool mask_read = (!direct_term && !listed_resolve) || sorted_lists() ||
                      (count != 0u && (listed_resolve || izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));
     // (kBuildClassify: kBuildInsert writes them, for pixels with a node.)
-    if (candidate != 0u && mask_read && inserts) {  // only candidates' are read
-      if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
-      visibility_mask[index] = mask;
-    }
+    if (candidate != 0u && mask_read && inserts) visibility_mask[index] = mask;  // only candidates' are read
+    // The penumbra pass reads every pixel's: none found yet (only the trace and the fallback find one).
+    if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = floatBitsToUint(1.0e30);
   }
   if (izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
     // A pixel without a node is settled here (no occluder distance: only the trace finds one); the
     // others, the fallback's too, are the resolve's.
     bool written;
-    write_pixel_term(pixel, inside && count == 0u, state, mask, position, floatBitsToUint(1.0e30),
-                     izb_flag(IZB_FLAG_HYBRID), push.soft_distance, written);
+    write_pixel_term(pixel, inside && count == 0u, state, mask, position, izb_flag(IZB_FLAG_HYBRID), written);
     bool has_nodes = inside && count != 0u;
     uint slot = reserve_slots_raising(IZB_COUNTER_RESOLVE_LIST, has_nodes ? 1u : 0u, !izb_flag(IZB_FLAG_CPU_DEVICE),
                                       IZB_COUNTER_RESOLVE_LIST + 1u, params.extent.x * params.extent.y, 64u);

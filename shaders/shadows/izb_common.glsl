@@ -647,9 +647,13 @@ void write_shadowed_term(uint pixel) {
 // false when skipped (progressive removal of a fully shadowed pixel).
 bool trace_node(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area) {
   if (izb_flag(IZB_FLAG_DIRECT_TERM) && !izb_flag(IZB_FLAG_PROGRESSIVE)) {
-    // The term is all that is read afterwards, and darkening it again is harmless: no mask.
-    float unused_gap = 1.0e30;
-    if (occluded_samples(pixel, ca, a, b, c, inv_area, unused_gap) != 0u) write_shadowed_term(pixel);
+    // The term (and the hybrid's occluder distance) is all that is read afterwards, and darkening it
+    // again is harmless: no mask.
+    float gap = 1.0e30;
+    if (occluded_samples(pixel, ca, a, b, c, inv_area, gap) != 0u) {
+      write_shadowed_term(pixel);
+      note_occluder_gap(pixel, gap);
+    }
     return true;
   }
   // The point(s) load beside the mask, not after its test: one round trip to memory, not two.

@@ -6,8 +6,8 @@ layout(local_size_x = 64) in;
 layout(set = 0, binding = IZB_BINDING_SOFT_TERM, r32f) uniform image2D soft_term;
 layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) readonly buffer HybridList { uvec4 hybrid_list[]; };
 
-// Hybrid, last step: each pixel the resolve listed mixes its hard term (in the shadow term) toward
-// the cascades' (in the soft term), first by occluder distance, then by the fade at the IZB's range.
+// Hybrid, last step where the IZB's range is limited: each pixel the resolve listed mixes the IZB's
+// term (in the shadow term) toward the cascades' (in the soft term) by the fade at the IZB's range.
 // It then marks the pixel unfiltered (-1) again, so the soft term is -1 wherever the next frame's
 // cascades do not write, which their blur needs, without a frame-sized clear or store.
 void main() {
@@ -19,8 +19,7 @@ void main() {
     ivec2 pixel = ivec2(e.x & 0xffffu, e.x >> 16u);
     float hard = imageLoad(shadow_term, pixel).r;
     float soft = imageLoad(soft_term, pixel).r;
-    float visibility = mix(hard, soft, uintBitsToFloat(e.y));
-    imageStore(shadow_term, pixel, vec4(mix(visibility, soft, uintBitsToFloat(e.z))));
+    imageStore(shadow_term, pixel, vec4(mix(hard, soft, uintBitsToFloat(e.z))));
     imageStore(soft_term, pixel, vec4(-1.0));
   }
 }

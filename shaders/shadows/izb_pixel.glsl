@@ -173,18 +173,17 @@ bool listed_pixel(out uint index) {
   return listed;
 }
 
-// Hybrid: the pixels that take any of the cascades' term, with their two weights (izb_resolve.comp).
+// Hybrid: the pixels that take any of the cascades' term, with their weight (izb_resolve.comp).
 layout(set = 0, binding = IZB_BINDING_HYBRID_LIST) writeonly buffer HybridList { uvec4 hybrid_list[]; };
 
 // The shadow term of a classified pixel (`state`, IZB_PIXEL_*) from its visibility mask, written where
-// it applies; returns the visibility. With `hybrid` the term blends toward the cascades' by occluder
-// distance (`gap_bits`: the occluder distance buffer's value, in light depth) and over the last tenth
-// of the IZB's range, and beyond it is the cascades' alone: the pixels that take any of the cascades'
-// term are listed with their two weights, so that the cascades filter only those (a CPU device pays
-// every pixel of a full-screen pass) and izb_hybrid_blend.comp mixes them. Called by every lane of
-// the subgroup (the list takes one atomic per subgroup on a GPU); `has_pixel` false for a lane with none.
-float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 position, uint gap_bits, bool hybrid,
-                       float soft_distance, out bool written) {
+// it applies; returns the visibility. With `hybrid` the term blends toward the cascades' over the
+// last tenth of the IZB's range, and beyond it is the cascades' alone: the pixels that take any of the
+// cascades' term are listed with their weight, so that the cascades filter only those (a CPU device
+// pays every pixel of a full-screen pass) and izb_hybrid_blend.comp mixes them. Called by every lane
+// of the subgroup (the list takes one atomic per subgroup on a GPU); `has_pixel` false for a lane with none.
+float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 position, bool hybrid,
+                       out bool written) {
   written = false;
   bool covered = has_pixel && (state & IZB_PIXEL_COVERED) != 0u;
   bool candidate = (state & IZB_PIXEL_CANDIDATE) != 0u;
@@ -200,19 +199,12 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
     visibility = 0.0;
   }  // else: does not receive shadows, lit
   if (hybrid) {
-    // The farther the nearest occluder sits above the point (in world units along the light), the
-    // more the cascades' filtered term takes over; near the IZB's range limit they take over fully.
-    // Surfaces facing away are 0 in both terms, so they need no blend.
-    // IZB_FLAG_GAPS is set only with a positive soft distance.
-    float gap_world = izb_flag(IZB_FLAG_GAPS) ? uintBitsToFloat(gap_bits) * (params.depth_range.y - params.depth_range.x)
-                                              : 1.0e30;
-    bool occluded = candidate && mask != 0u && gap_world < 1.0e20;
-    float gap_weight = occluded ? clamp(gap_world / soft_distance, 0.0, 1.0) : 0.0;
-    // (Unlimited range: reach is huge and the fade 0.)
+    // Near the IZB's range limit the cascades take over. Surfaces facing away are 0 in both terms, so
+    // they need no blend. (Unlimited range: reach is huge and the fade 0.)
     float reach = izb_reach();
     float dist = distance(position, params.camera_position.xyz);
     float fade = beyond ? 1.0 : clamp((dist - 0.9 * reach) / (0.1 * reach), 0.0, 1.0);
-    bool listed = covered && facing && (gap_weight > 0.0 || fade > 0.0);
+    bool listed = covered && facing && fade > 0.0;
     // One atomic per subgroup; the dispatch over the list grows with it. A CPU device: an atomic per
     // lane, and the dispatch after the resolve (izb_list_dispatch.comp).
     uint slot = 0u;
@@ -228,8 +220,7 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
       slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(listed ? 1u : 0u);
     }
     if (listed)
-      hybrid_list[slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), floatBitsToUint(gap_weight),
-                                       floatBitsToUint(fade), 0u);
+      hybrid_list[slot] = uvec4(uint(pixel.x) | (uint(pixel.y) << 16u), 0u, floatBitsToUint(fade), 0u);
   }
   if (!covered) return visibility;
   if (beyond && !hybrid) return visibility;  // beyond the IZB: the term already there stays

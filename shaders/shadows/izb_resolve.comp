@@ -84,10 +84,8 @@ void resolve(ivec2 pixel, bool inside) {
   PixelPoint p = surface ? load_surface(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
   uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
   if ((state & IZB_PIXEL_CANDIDATE) != 0u && spot_light() && mask != full_mask()) mask |= straddler_samples(pixel, p);
-  uint gap_bits = kHybrid != 0u && izb_flag(IZB_FLAG_GAPS) && inside ? occluder_distance[index] : 0u;
   bool written;
-  float visibility = write_pixel_term(pixel, inside, state, mask, p.position, gap_bits, kHybrid != 0u,
-                                      push.soft_distance, written);
+  float visibility = write_pixel_term(pixel, inside, state, mask, p.position, kHybrid != 0u, written);
   if (!written) return;
 
   if (kDebug == kDebugVisibility && (state & IZB_PIXEL_CANDIDATE) != 0u) {

@@ -36,6 +36,11 @@ struct IzbParams {
   // view (world units); [2].w unused.
   vec4 corner_ray_origin[3];
   vec4 corner_ray_direction[3];
+  // The hybrid's penumbrae (izb_penumbra.comp): world -> clip of the camera; x: the sun's tangent of
+  // its angular radius (0: no penumbra pass), y: a pixel's width in world units per unit of distance
+  // from the camera (2 tan(fov_y / 2) / height).
+  mat4 view_projection;
+  vec4 penumbra;
 };
 
 // (For the raster trace, depth culling and the rasterizer choice are pipeline state.)
@@ -46,7 +51,7 @@ SHARED_CONST uint IZB_FLAG_NO_DEPTH_CULL = 32u;  // compute trace: test every to
 SHARED_CONST uint IZB_FLAG_CSM_BUFFER = 64u;     // the CSM is the compute pass's buffer, not the depth image
 SHARED_CONST uint IZB_FLAG_SORTED_LISTS = 128u;  // lists are contiguous node ranges (counting sort), not linked
 SHARED_CONST uint IZB_FLAG_ALPHA = 256u;         // some caster is alpha-tested (else the node test skips that code)
-SHARED_CONST uint IZB_FLAG_GAPS = 512u;          // keep each pixel's nearest occluder distance (hybrid blending)
+SHARED_CONST uint IZB_FLAG_GAPS = 512u;          // keep each pixel's nearest occluder distance found (hybrid penumbrae)
 SHARED_CONST uint IZB_FLAG_DIRECT_NODES = 1024u; // 1 spp, linked lists, pool >= pixels: a pixel's node is its own index
 SHARED_CONST uint IZB_FLAG_LIT = 2048u;          // the build culls points the lit map proves lit
 // 1 spp, the sun, no hybrid nor debug view: the build settles every pixel's term (it starts lit: the
@@ -138,6 +143,9 @@ SHARED_CONST uint IZB_COUNTER_RESOLVE_LIST = 24u;
 // izb_list_dispatch.comp's push.mode: which list's dispatch it sizes.
 SHARED_CONST uint IZB_LIST_RESOLVE = 0u;
 SHARED_CONST uint IZB_LIST_HYBRID = 1u;
+// Hybrid penumbrae: the tiles the filter step listed, then 3 uints: the apply step's indirect
+// dispatch over them (a workgroup a tile).
+SHARED_CONST uint IZB_COUNTER_PENUMBRA_TILES = 28u;
 SHARED_CONST uint IZB_COUNTER_PAIR_DISPATCH = 32u;      // 3 uints: over texel pairs
 // Hybrid: the pixels the resolve listed for the cascades, then 3 uints: indirect dispatch over them in
 // workgroups of kIzbHybridEntriesPerGroup entries.
@@ -225,7 +233,9 @@ SHARED_CONST uint IZB_BINDING_GEOMETRIC_NORMAL = 10u;
 SHARED_CONST uint IZB_BINDING_ALBEDO = 11u;
 // Hybrid: the resolve writes the hard term and lists the pixels that blend toward the cascades; the
 // cascades then filter only those (into the soft term), and a last pass blends them.
-SHARED_CONST uint IZB_BINDING_HYBRID_LIST = 12u;  // uvec4 {pixel x | y << 16, gap weight bits, fade bits, -}
+// From entry 0: the pixels in the fade band, uvec4 {pixel x | y << 16, -, fade bits, -}; from entry
+// width * height: the penumbra pass's tiles (izb_penumbra_*_at).
+SHARED_CONST uint IZB_BINDING_HYBRID_LIST = 12u;
 SHARED_CONST uint IZB_BINDING_SOFT_TERM = 13u;    // R32F: the cascades' term of listed pixels, -1 elsewhere
 SHARED_CONST uint IZB_BINDING_SHADOW_TERM = 14u;
 SHARED_CONST uint IZB_BINDING_OVERLAY = 15u;
@@ -261,6 +271,31 @@ SHARED_CONST uint IZB_BINDING_LIST_CURSOR = 30u;
 SHARED_CONST uint IZB_BINDING_RESOLVE_LIST = 31u;
 SHARED_CONST uint kIzbScanBlock = 1024u;  // texels per block of the prefix sum (256 threads x 4)
 SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per workgroup (64 threads x 4)
+
+// The hybrid's penumbra pass (izb_penumbra.comp) works in square tiles of kPenumbraTile pixels, a
+// workgroup each. A penumbra is filtered over at most kPenumbraMaxRadius pixels (wider ones are
+// filtered at that radius), with kPenumbraSearchTaps taps to find the blockers and kPenumbraFilterTaps
+// to filter.
+SHARED_CONST uint kPenumbraTile = 8u;
+SHARED_CONST uint kPenumbraMaxRadius = 24u;
+SHARED_CONST uint kPenumbraSearchTaps = 16u;
+SHARED_CONST uint kPenumbraFilterTaps = 24u;
+SHARED_INLINE uint penumbra_tiles_x(uint width) { return (width + kPenumbraTile - 1u) / kPenumbraTile; }
+SHARED_INLINE uint penumbra_tiles_y(uint height) { return (height + kPenumbraTile - 1u) / kPenumbraTile; }
+// In the hybrid list's buffer (uvec4 entries), after the fade band's width * height: per tile its
+// summary {min term, max term, widest penumbra radius in pixels (float bits), -}; then the listed
+// tiles {tile, -, -, -}; then per listed tile its kPenumbraTile² filtered terms (float bits, 4 an entry).
+SHARED_INLINE uint izb_penumbra_tiles_at(uint width, uint height) { return width * height; }
+SHARED_INLINE uint izb_penumbra_list_at(uint width, uint height) {
+  return width * height + penumbra_tiles_x(width) * penumbra_tiles_y(height);
+}
+SHARED_INLINE uint izb_penumbra_values_at(uint width, uint height) {
+  return width * height + 2u * penumbra_tiles_x(width) * penumbra_tiles_y(height);
+}
+SHARED_INLINE uint izb_hybrid_list_entries(uint width, uint height) {
+  return izb_penumbra_values_at(width, height) +
+         penumbra_tiles_x(width) * penumbra_tiles_y(height) * (kPenumbraTile * kPenumbraTile / 4u);
+}
 
 SHARED_CONST uint IZB_DRAW_IN_CSM = 1u;
 
@@ -310,7 +345,7 @@ struct IzbComputePush {
   uint mode;            // pass-specific selector
   uint debug;           // DebugView as uint
   uint triangle_count;  // caster triangles
-  float soft_distance;  // hybrid: occluder distance (world units) at which the shadow is fully soft
+  uint unused;
 };
 
 // push.mode of the compute trace/CSM passes: what the work is for.
@@ -361,7 +396,7 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::IzbFrame) == 80);
-static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 3 * 16 + 6 * 16);
+static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 3 * 16 + 6 * 16 + 64 + 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterTriangle) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterDraw) == 96);

@@ -11,6 +11,7 @@
 #include "engine/core/skinning.hpp"
 #include <shared/shadow_common.h>
 #include "frame_capture.hpp"
+#include "penumbra_mask.hpp"
 #include "gpu_fixture.hpp"
 #include "shadows_engine/shadows_engine.hpp"
 
@@ -94,8 +95,8 @@ class AnimatedCastersTest : public GpuTest, public testing::WithParamInterface<A
     }
     frames.finish();
   }
-  // The hybrid's near points (as IzbTest.HybridNearPointsMatchTheReference: within its IZB's range, lit
-  // or shadowed by an occluder nearer than its soft distance) match Embree within the IZB's bound.
+  // The hybrid's sharp points (as IzbTest.HybridKeepsTheExactTermWherePenumbraeAreUnderAPixel: those no
+  // penumbra of a pixel's width or more reaches) match Embree within the IZB's bound.
   void check_hybrid_near_points(InFlightFrames& frames, float seconds) {
     const shadows::Settings saved = module_->settings();
     shadows::Settings& hybrid = module_->settings();
@@ -105,21 +106,17 @@ class AnimatedCastersTest : public GpuTest, public testing::WithParamInterface<A
     render_at(frames, seconds);
     const auto visibility = module_->read_visibility();
     const auto points = support::capture_shading_points(*renderer_);
-    const glm::vec3 to_light = -renderer_->frame_view().light_direction;
-    const glm::vec3 eye = renderer_->frame_view().camera_position;
+    const engine::FrameView& view = renderer_->frame_view();
     reference::EmbreeTracer tracer(scene_->registry, support::frame_shift(*renderer_));
     const auto truth = support::reference_visibility(*renderer_, tracer, 1);
+    const auto sharp = support::sub_pixel_penumbra_mask(
+        points, truth, tracer, -view.light_direction, std::tan(0.5f * glm::radians(view.light_angular_diameter_degrees)),
+        2.0f * std::tan(0.5f * view.vertical_fov) / float(points.height));
     size_t near = 0, mismatched = 0;
     for (size_t i = 0; i < visibility.size(); ++i) {
-      if (!points.covered(i) || !points.faces(i, to_light)) continue;
-      const glm::vec3 p(points.position[i]);
-      if (glm::distance(p, eye) > 0.9f * hybrid.hybrid_izb_distance) continue;
-      const glm::vec3 origin =
-          gpu_shared::shadow_ray_origin(p, glm::vec3(points.normal[i]), gpu_shared::shadow_ray_offset(p, eye));
-      const bool shadowed = truth[i] < 0.5f;
-      if (shadowed && !tracer.occluded_within(origin, to_light, 0.4f * hybrid.hybrid_soft_distance)) continue;
+      if (!sharp[i]) continue;
       ++near;
-      mismatched += (visibility[i] < 0.5f) != shadowed;
+      mismatched += (visibility[i] < 0.5f) != (truth[i] < 0.5f);
     }
     std::printf("hybrid at %.2f s: %zu near points, %zu mismatched\n", seconds, near, mismatched);
     EXPECT_GT(near, size_t(kSize * kSize / 8)) << "hybrid at " << seconds << " s: too few near points";

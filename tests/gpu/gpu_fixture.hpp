@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <optional>
 #include <memory>
 #include <string>
 
@@ -51,15 +52,19 @@ class GpuTest : public ::testing::Test {
     ctx_.reset();
   }
 
-  // Loads `scene_name` at `view` into a renderer of the given size.
+  // Loads `scene_name` at `view` into a renderer of the given size (the sun sized by sun_degrees_ where set).
   engine::Renderer& make_renderer(const std::string& scene_name, size_t view, uint32_t width, uint32_t height) {
     scene_ = engine::load_scene(scene_name);
     scene_->apply_view(view);
+    if (sun_degrees_)
+      scene_->registry.each<engine::DirectionalLight>(
+          [&](engine::Entity, engine::DirectionalLight& l) { l.angular_diameter_degrees = *sun_degrees_; });
     renderer_ = std::make_unique<engine::Renderer>(*ctx_, VkExtent2D{width, height});
     renderer_->set_scene(*scene_);
     return *renderer_;
   }
 
+  std::optional<float> sun_degrees_;  // the sun's angular diameter for the scenes make_renderer loads
   std::unique_ptr<engine::gpu::Context> ctx_;
   std::unique_ptr<engine::Scene> scene_;
   std::unique_ptr<engine::Renderer> renderer_;

@@ -11,6 +11,7 @@
 
 #include "frame_capture.hpp"
 #include "gpu_fixture.hpp"
+#include "penumbra_mask.hpp"
 #include "csm_pass.hpp"
 #include "shadows_engine/shadows_engine.hpp"
 
@@ -965,8 +966,10 @@ TEST_F(IzbTest, SponzaCsmIsConservative) {
 
 namespace {
 
-// Hybrid: hard at contact, soft where the occluder is far above the receiver.
+// Hybrid: hard at contact, soft where the occluder is far above the receiver (a 4-degree sun, so
+// that the penumbrae of the pole's top and the plate span pixels at 256x256).
 TEST_F(IzbTest, HybridIsHardAtContactAndSoftAway) {
+  sun_degrees_ = 4.0f;
   shadows::Settings hybrid;
   hybrid.technique = shadows::Technique::Hybrid;
   hybrid.izb.resolution = 512;
@@ -990,50 +993,55 @@ TEST_F(IzbTest, HybridIsHardAtContactAndSoftAway) {
   EXPECT_GT(soft_pixels, 20u);  // the far ends of the pole's and plate's shadows soften
 }
 
-// The hybrid keeps the exact IZB term near contact: a shadowed point whose nearest occluder lies within
-// 0.4 of the soft distance takes under half of the cascades' term, so it stays shadowed whatever they say,
-// and a lit point inside the IZB's range takes none. Those points match Embree within the IZB's bound
-// (Embree tells which points have an occluder that near).
-TEST_F(IzbTest, HybridNearPointsMatchTheReference) {
+// The hybrid keeps the IZB's exact term wherever the sun's penumbrae are narrower than a pixel: with
+// the real sun (0.53 degrees) at 256x256, on the pixels no wider penumbra reaches (Embree's nearest
+// occluders tell which), the term equals the IZB's bit for bit and matches Embree within the IZB's bound.
+TEST_F(IzbTest, HybridKeepsTheExactTermWherePenumbraeAreUnderAPixel) {
   shadows::Settings hybrid;
   hybrid.technique = shadows::Technique::Hybrid;
   hybrid.izb.resolution = 512;
+  hybrid.izb.lit_culling = shadows::LitCulling::Off;
+  const auto hard = render("contact", 0, izb(1), true, 1, 256);
   const auto h = render("contact", 0, hybrid, true, 1, 256);
   const auto points = support::capture_shading_points(*renderer_);
-  const glm::vec3 to_light = -renderer_->frame_view().light_direction;
-  const glm::vec3 eye = renderer_->frame_view().camera_position;
+  const engine::FrameView& view = renderer_->frame_view();
+  const glm::vec3 to_light = -view.light_direction;
   reference::EmbreeTracer tracer(scene_->registry);
-  size_t near_shadowed = 0, lit = 0, mismatched = 0;
-  for (size_t i = 0; i < h.visibility.size(); ++i) {
-    if (!points.covered(i) || !points.faces(i, to_light)) continue;
-    const glm::vec3 p(points.position[i]);
-    if (glm::distance(p, eye) > 0.9f * hybrid.hybrid_izb_distance) continue;  // the IZB's range, before its fade
-    const glm::vec3 origin = gpu_shared::shadow_ray_origin(p, glm::vec3(points.normal[i]), gpu_shared::shadow_ray_offset(p, eye));
-    const bool shadowed = h.reference[i] < 0.5f;
-    // 0.4 rather than 0.5: a margin for the trace's own measure of the distance.
-    if (shadowed && !tracer.occluded_within(origin, to_light, 0.4f * hybrid.hybrid_soft_distance)) continue;
-    ++(shadowed ? near_shadowed : lit);
-    mismatched += (h.visibility[i] < 0.5f) != shadowed;
+  const float tan_half = std::tan(0.5f * glm::radians(view.light_angular_diameter_degrees));
+  const auto sharp = support::sub_pixel_penumbra_mask(points, h.reference, tracer, to_light, tan_half,
+                                                      2.0f * std::tan(0.5f * view.vertical_fov) / 256.0f);
+  size_t sharp_pixels = 0, differing = 0, soft = 0;
+  std::vector<uint8_t> include(sharp.size(), 0);
+  for (size_t i = 0; i < sharp.size(); ++i) {
+    if (h.visibility[i] != hard.visibility[i] && !sharp[i]) ++soft;
+    if (!sharp[i]) continue;
+    include[i] = 1;
+    ++sharp_pixels;
+    differing += h.visibility[i] != hard.visibility[i] ? 1 : 0;
   }
-  std::printf("hybrid near points: %zu shadowed, %zu lit, %zu mismatched\n", near_shadowed, lit, mismatched);
-  EXPECT_GT(near_shadowed, 150u);  // 340 seen
-  EXPECT_GT(lit, 10000u);
-  EXPECT_LE(double(mismatched), 0.0002 * double(near_shadowed + lit));
+  const auto cmp = reference::compare_visibility(h.visibility, h.reference, include);
+  std::printf("hybrid: %zu pixels under sub-pixel penumbrae, %zu differ from the IZB; %zu softened elsewhere\n",
+              sharp_pixels, differing, soft);
+  EXPECT_GT(sharp_pixels, 40000u);
+  EXPECT_EQ(differing, 0u);
+  EXPECT_LE(cmp.mismatch_rate, 0.0002);
 }
 
-// The hybrid's IZB lists the pixels that take some of the cascades' term, and only those are filtered.
-// Listing none (no blending by occluder distance, the range beyond the view) leaves the IZB's term
-// bit for bit; listing every facing pixel (a range shorter than the near plane) gives the cascades'.
+// The hybrid's cascades filter only the pixels of its fade band and beyond (a limited range): a range
+// beyond the view and a sun of size 0 leave the IZB's term bit for bit; a range shorter than the near
+// plane gives the cascades' term.
 TEST_F(IzbTest, HybridFiltersOnlyThePixelsItBlends) {
+  sun_degrees_ = 0.0f;
   const auto plain_izb = render("contact", 0, izb(1), false);
   shadows::Settings none;
   none.technique = shadows::Technique::Hybrid;
   none.izb.resolution = kSize;
-  none.hybrid_soft_distance = 0.0f;
   none.hybrid_izb_distance = 1.0e6f;
   const auto hard_only = render("contact", 0, none, false);
   EXPECT_EQ(hard_only.visibility, plain_izb.visibility);
   EXPECT_EQ(hard_only.stats.expensive_path_pixels, 0u);  // the cascades filtered nothing
+  none.hybrid_izb_distance = 0.0f;  // unlimited: no cascades at all
+  EXPECT_EQ(render("contact", 0, none, false).visibility, plain_izb.visibility);
 
   shadows::Settings cascades_only;
   cascades_only.technique = shadows::Technique::Cascades;

@@ -19,6 +19,7 @@
 
 #include "../gpu/gpu_fixture.hpp"
 #include "frame_capture.hpp"
+#include "penumbra_mask.hpp"
 #include "reference/comparator.hpp"
 #include "reference/embree_tracer.hpp"
 #include "shared/shadow_common.h"
@@ -153,23 +154,15 @@ class WorldScaleTest : public GpuTest, public ::testing::WithParamInterface<std:
         r.cmp = reference::compare_visibility(vis, expected);
         r.away_from_edges = reference::compare_visibility(vis, expected, reference::edge_distance_mask(expected, kSize, kSize, 2.0f));
       } else {
-        // The hybrid's near points (izb_test's HybridNearPointsMatchTheReference): inside the IZB's
-        // range before its fade, lit, or shadowed by an occluder within 0.4 of the soft distance.
+        // The hybrid's sharp points (izb_test's HybridKeepsTheExactTermWherePenumbraeAreUnderAPixel):
+        // those no penumbra of a pixel's width or more reaches, where its term is the IZB's.
         const auto points = support::capture_shading_points(*renderer_);
-        const shadows::Settings world = shadows::in_world_units(module->settings());
-        const glm::vec3 to_light = -renderer_->frame_view().light_direction;
-        std::vector<uint8_t> include(vis.size(), 0);
-        for (size_t i = 0; i < vis.size(); ++i) {
-          if (!points.covered(i) || !points.faces(i, to_light)) continue;
-          const glm::vec3 p(points.position[i]);
-          if (glm::distance(p, points.eye) > 0.9f * world.hybrid_izb_distance) continue;
-          const glm::vec3 origin = gpu_shared::shadow_ray_origin(p, glm::vec3(points.normal[i]),
-                                                                 gpu_shared::shadow_ray_offset(p, points.eye));
-          if (expected[i] < 0.5f && !tracer->occluded_within(origin, to_light, 0.4f * world.hybrid_soft_distance))
-            continue;
-          include[i] = 1;
-          ++r.near_points;
-        }
+        const engine::FrameView& view = renderer_->frame_view();
+        const auto include = support::sub_pixel_penumbra_mask(
+            points, expected, *tracer, -view.light_direction,
+            std::tan(0.5f * glm::radians(view.light_angular_diameter_degrees)),
+            2.0f * std::tan(0.5f * view.vertical_fov) / float(points.height));
+        for (uint8_t in : include) r.near_points += in;
         r.cmp = reference::compare_visibility(vis, expected, include);
       }
       std::printf("%-28s %-14s pixels %6llu mismatch %.6f false shadowed %4llu (%4llu off edges) false lit %4llu MAE %.6f%s\n",

@@ -855,11 +855,15 @@ void ContextImpl::record_technique(Frame& frame) {
       izb().record(frame, settings.izb, settings.debug, false, collect_stats_);
       break;
     case Technique::Hybrid: {
-      // IZB first: its resolve lists the pixels that take some of the cascades' term, and the
+      // The IZB's exact term, then the penumbrae the light's size casts around its edges. With a
+      // limited range its resolve also lists the pixels that take some of the cascades' term, and the
       // cascades filter only those.
       IzbSettings near = settings.izb;
       near.max_distance = settings.hybrid_izb_distance;
-      izb().record(frame, near, settings.debug, true, collect_stats_, settings.hybrid_soft_distance);
+      izb().record(frame, near, settings.debug, true, collect_stats_);
+      pass_barrier(*gpu_, frame.cmd);
+      izb().record_hybrid_penumbra(frame);
+      if (near.max_distance <= 0.0f) break;
       pass_barrier(*gpu_, frame.cmd);
       const PixelList listed = izb().hybrid_list();
       cascades().record(frame, settings.cascades, izb().soft_term(), settings.debug, &listed);
@@ -975,7 +979,11 @@ std::vector<std::string> ContextImpl::pass_names() const {
     }
     case Technique::Izb: return izb;
     case Technique::Hybrid: {
-      izb.insert(izb.begin(), cascades.begin(), cascades.end());
+      izb.push_back("hybrid_penumbra");
+      if (settings_.hybrid_izb_distance > 0.0f) {
+        izb.insert(izb.begin(), cascades.begin(), cascades.end());
+        izb.push_back("hybrid_blend");
+      }
       return izb;
     }
     case Technique::RayTraced: return {"rt_build", "rt_trace"};

@@ -79,6 +79,9 @@ void write_izb_params(IzbState& s, const Frame& frame, const IzbSettings& settin
     p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
     p.light_cone = glm::vec4(frame.view.light_cos_outer, light.tan_half_angle, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
   }
+  p.view_projection = frame.view.view_projection;
+  p.penumbra = glm::vec4(plan.penumbra ? frame.view.light_tan_half_angle : 0.0f,
+                         2.0f * frame.view.tan_half_fov.y / float(std::max(frame.view.extent.height, 1u)), 0.0f, 0.0f);
   const glm::mat4& inverse_vp = frame.view.inverse_view_projection;
   if (plan.constant_ray_w) set_ray_scales(p, inverse_vp);
   if (plan.bounded_fit) set_corner_rays(p, inverse_vp, frame.view.extent);

@@ -22,8 +22,8 @@ void IzbResources::ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid)
   const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
   vkCmdClearColorImage(cmd, soft_term.handle(), VK_IMAGE_LAYOUT_GENERAL, &unfiltered, 1, &range);
   pass_barrier(ctx, cmd);
-  hybrid_list = Buffer(ctx, VkDeviceSize(want.width) * want.height * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
-                       "izb hybrid pixel list");
+  hybrid_list = Buffer(ctx, VkDeviceSize(gpu_shared::izb_hybrid_list_entries(want.width, want.height)) * 16,
+                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb hybrid pixel list");
 }
 
 PixelList izb_hybrid_list(const IzbResources& res) {
@@ -37,6 +37,19 @@ void record_hybrid_blend(IzbState& s, Frame& frame) {
   blend.bind(cmd);
   s.push_all(cmd, frame, blend);
   vkCmdDispatchIndirect(cmd, s.res.counters.handle(), (gpu_shared::IZB_COUNTER_HYBRID + 1) * 4);
+}
+
+void record_hybrid_penumbra(IzbState& s, Frame& frame) {
+  VkCommandBuffer cmd = frame.cmd;
+  ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "hybrid_penumbra");
+  const gpu_shared::IzbComputePush push{};
+  const uint32_t tiles_x = gpu_shared::penumbra_tiles_x(frame.view.extent.width);
+  const uint32_t tiles_y = gpu_shared::penumbra_tiles_y(frame.view.extent.height);
+  s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, tiles_x, tiles_y);  // kStepTiles
+  pass_barrier(s.ctx, cmd);
+  s.dispatch(cmd, frame, s.pipelines.penumbra(1), push, tiles_x, tiles_y);  // kStepFilter
+  pass_barrier(s.ctx, cmd);
+  s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(2), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);
 }
 
 }  // namespace shadows::detail

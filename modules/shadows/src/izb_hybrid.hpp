@@ -11,5 +11,8 @@ namespace shadows::detail {
 // (izb_hybrid_blend.comp), then restores the soft term to "not filtered".
 PixelList izb_hybrid_list(const IzbResources& res);
 void record_hybrid_blend(IzbState& s, Frame& frame);
+// Hybrid with a sun of some size, after the IZB's term and occluder heights: the penumbrae
+// (izb_penumbra.comp) into the shadow term.
+void record_hybrid_penumbra(IzbState& s, Frame& frame);
 
 }  // namespace shadows::detail

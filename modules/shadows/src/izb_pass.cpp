@@ -25,8 +25,7 @@ bool IzbPass::hardware_raster_available() const { return state_->pipelines.hardw
 
 bool IzbPass::csm_test_supported(CsmTest test, std::string* why) const { return state_->csm->supported(test, why); }
 
-void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
-                     bool collect_stats, float soft_distance) {
+void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug, bool hybrid, bool collect_stats) {
   IzbState& s = *state_;
   if (settings.resolution == 0 || settings.resolution > 16384)
     throw std::invalid_argument("IZB resolution must be in 1..16384");
@@ -41,11 +40,12 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (plan.compute_csm) upload_csm_draw_flags(s, frame);
   const IzbLightView light = izb_light_view(frame);
   plan.debug = izb_debug_code(debug);
-  choose_izb_flags(s, frame, settings, hybrid, collect_stats, soft_distance, plan);
+  choose_izb_flags(s, frame, settings, hybrid, collect_stats, plan);
+  s.last.penumbra = plan.penumbra;
   s.res.ensure_resolve_list(frame.view.extent, plan.listed_resolve);
   s.p = &s.pipelines.set(s.res.samples, plan.flags);  // specialized for every flag of the plan
   write_izb_params(s, frame, settings, plan, light);
-  const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, plan.debug, s.casters.triangle_count, soft_distance};
+  const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, plan.debug, s.casters.triangle_count, 0u};
 
   record_izb_reset(s, frame, plan);
   record_light_frustum(s, frame, settings, plan, push);
@@ -67,6 +67,10 @@ engine::gpu::Image& IzbPass::soft_term() { return state_->res.soft_term; }
 PixelList IzbPass::hybrid_list() const { return izb_hybrid_list(state_->res); }
 
 void IzbPass::record_hybrid_blend(Frame& frame) { detail::record_hybrid_blend(*state_, frame); }
+
+void IzbPass::record_hybrid_penumbra(Frame& frame) {
+  if (state_->last.penumbra) detail::record_hybrid_penumbra(*state_, frame);
+}
 
 CsmSnapshot IzbPass::read_csm() { return detail::read_csm(*state_); }
 

@@ -20,14 +20,17 @@ class IzbPass {
   explicit IzbPass(engine::gpu::Context& ctx);
   ~IzbPass();
   // collect_stats adds the statistics passes (fragment count before culling, list lengths).
-  // hybrid: writes the hard term and lists the pixels that take some of the cascades' term (beyond the
-  // IZB's range, in its last tenth, and, with soft_distance > 0, by occluder distance); the cascades
-  // then filter those pixels into soft_term(), and record_hybrid_blend() mixes them into the term.
+  // hybrid: writes the hard term and, with a sun of some size, each shadowed pixel's occluder height
+  // for record_hybrid_penumbra(); with a limited range it lists the pixels that take some of the
+  // cascades' term (beyond the IZB's range and in its last tenth), which the cascades then filter
+  // into soft_term(), and record_hybrid_blend() mixes them into the term.
   void record(Frame& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
-              bool collect_stats, float soft_distance = 0.0f);
+              bool collect_stats);
   engine::gpu::Image& soft_term();
   PixelList hybrid_list() const;
   void record_hybrid_blend(Frame& frame);
+  // After a hybrid record with a sun of some size: its penumbrae into the term (else nothing).
+  void record_hybrid_penumbra(Frame& frame);
   // The frame recorded in frame-in-flight slot `slot` has completed.
   // One Stats per IZB record of the slot's frame (one per light, six for a point light), in order; the
   // CSM's statistics go into the last.

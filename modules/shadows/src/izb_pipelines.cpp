@@ -176,4 +176,11 @@ const Pipeline& IzbPipelineCache::hybrid_blend() {
   return hybrid_blend_;
 }
 
+const Pipeline& IzbPipelineCache::penumbra(uint32_t step) {
+  Pipeline& pipeline = penumbra_.at(step);
+  if (!pipeline.valid())
+    pipeline = factory_.compute({"izb_penumbra.comp", izb_bindings(), sizeof(gpu_shared::IzbComputePush), {{14, step}}});
+  return pipeline;
+}
+
 }  // namespace shadows::detail

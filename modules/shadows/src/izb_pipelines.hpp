@@ -47,6 +47,8 @@ class IzbPipelineCache {
   const IzbPipelines::TileWork& tile_work(IzbPipelines& set, uint32_t mode);
   const engine::gpu::Pipeline& build_casters();
   const engine::gpu::Pipeline& hybrid_blend();
+  // The hybrid's penumbra pass, per step (izb_penumbra.comp's kStep*).
+  const engine::gpu::Pipeline& penumbra(uint32_t step);
 
   // The trace's fragment shader reads gl_PrimitiveID, which SPIR-V puts under the Geometry capability:
   // the hardware conservative trace needs geometry shaders as much as the software one does.
@@ -65,6 +67,7 @@ class IzbPipelineCache {
   std::map<uint64_t, IzbTracePipelines> opaque_traces_;
   engine::gpu::Pipeline build_casters_;
   engine::gpu::Pipeline hybrid_blend_;
+  std::array<engine::gpu::Pipeline, 3> penumbra_;
 };
 
 }  // namespace shadows::detail

@@ -126,18 +126,19 @@ void choose_lit_culling(IzbState& s, const Frame& frame, const IzbSettings& sett
 
 // What the lists, culling and trace do (IZB_FLAG_*).
 uint32_t work_flags(const IzbState& s, const Frame& frame, const IzbSettings& settings, bool hybrid,
-                    bool collect_stats, float soft_distance, IzbPlan& plan) {
+                    bool collect_stats, IzbPlan& plan) {
   uint32_t flags = collect_stats ? gpu_shared::IZB_FLAG_STATS : 0u;
   if (!settings.depth_cull) flags |= gpu_shared::IZB_FLAG_NO_DEPTH_CULL;
   if (plan.compute_csm) flags |= gpu_shared::IZB_FLAG_CSM_BUFFER;
   plan.sorted = settings.lists == ListLayout::Sorted;
   if (plan.sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
   if (plan.run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
-  // At 32 spp also unasked, unless the hybrid blends by occluder distance (which needs every occluder
-  // of a shadowed pixel): its 32 samples are often all shadowed long before its last node is tested
-  // (Sponza v1 4K: the trace 0.49 -> 0.44 ms on an H100).
-  const bool gaps = hybrid && soft_distance > 0.0f;
-  if (settings.progressive_removal || (s.res.samples == 32 && !gaps)) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
+  // At 32 spp also unasked: a pixel's 32 samples are often all shadowed long before its last node is
+  // tested (Sponza v1 4K: the trace 0.49 -> 0.44 ms on an H100). The hybrid's penumbrae then take the
+  // nearest occluder among those tested before: any occluder's height serves their estimate.
+  plan.penumbra = hybrid && !plan.spot && frame.view.light_tan_half_angle > 0.0f;
+  const bool gaps = plan.penumbra;
+  if (settings.progressive_removal || s.res.samples == 32) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
   if (plan.lit) flags |= gpu_shared::IZB_FLAG_LIT;
   if (std::any_of(frame.draws.begin(), frame.draws.end(),
                   [](const DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))
@@ -161,9 +162,10 @@ uint32_t work_flags(const IzbState& s, const Frame& frame, const IzbSettings& se
 // Where the term is written and how the camera rays are made (IZB_FLAG_*).
 uint32_t output_flags(const IzbState& s, const Frame& frame, const IzbSettings& settings, bool hybrid, IzbPlan& plan) {
   uint32_t flags = 0;
-  // The resolve is needed only to count samples (32 spp), blend (hybrid), draw a debug view, or for a
-  // local light's straddling casters and cone faces.
-  plan.direct_term = s.res.samples == 1 && !hybrid && plan.debug == 0 && !plan.spot;
+  // The resolve is needed only to count samples (32 spp), list the hybrid's fade band toward the
+  // cascades (a limited range), draw a debug view, or for a local light's straddling casters and cone
+  // faces.
+  plan.direct_term = s.res.samples == 1 && !(hybrid && settings.max_distance > 0.0f) && plan.debug == 0 && !plan.spot;
   if (plan.direct_term) flags |= gpu_shared::IZB_FLAG_DIRECT_TERM;
   // Otherwise, for the sun with no debug view, the build settles every pixel without a node and the
   // resolve reads only the others.
@@ -206,8 +208,8 @@ void choose_izb_backends(IzbState& s, const Frame& frame, const IzbSettings& set
 }
 
 void choose_izb_flags(const IzbState& s, const Frame& frame, const IzbSettings& settings, bool hybrid,
-                      bool collect_stats, float soft_distance, IzbPlan& plan) {
-  plan.flags = work_flags(s, frame, settings, hybrid, collect_stats, soft_distance, plan) |
+                      bool collect_stats, IzbPlan& plan) {
+  plan.flags = work_flags(s, frame, settings, hybrid, collect_stats, plan) |
                output_flags(s, frame, settings, hybrid, plan);
 }
 

@@ -27,6 +27,7 @@ struct IzbPlan {
   bool listed_resolve = false;  // the resolve reads only the pixels with nodes
   bool constant_ray_w = false;
   bool bounded_fit = false;
+  bool penumbra = false;  // the hybrid with a sun of some size: occluder heights and the penumbra pass
 };
 
 // The resolve's and the trace's debug view (izb_common.glsl).
@@ -40,6 +41,6 @@ void choose_izb_backends(IzbState& s, const Frame& frame, const IzbSettings& set
 
 // The shader flags for the choices made (IZB_FLAG_*, see izb_common.glsl).
 void choose_izb_flags(const IzbState& s, const Frame& frame, const IzbSettings& settings, bool hybrid,
-                      bool collect_stats, float soft_distance, IzbPlan& plan);
+                      bool collect_stats, IzbPlan& plan);
 
 }  // namespace shadows::detail

@@ -46,6 +46,7 @@ struct IzbLastRecord {
   bool lit = false;
   bool hardware = false;
   bool csm = false;
+  bool penumbra = false;  // IzbPlan::penumbra
 };
 
 // Everything the IZB's steps share, and the ways they record a pass: every pass binds the same

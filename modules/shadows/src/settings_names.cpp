@@ -133,7 +133,6 @@ Settings in_world_units(const Settings& settings) {
   s.cascades.kernel_radius *= u;
   s.izb.max_distance *= u;
   s.hybrid_izb_distance *= u;
-  s.hybrid_soft_distance *= u;
   return s;
 }
 

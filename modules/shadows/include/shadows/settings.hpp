@@ -16,7 +16,7 @@ enum class Technique {
   ShadowMap,  // one plain shadow map fitted to the scene, one tap: the aliasing baseline ("sm")
   Cascades,   // cascaded filtered shadow maps ("cascades")
   Izb,        // frustum-traced irregular z-buffer hard shadows ("izb"; with IzbSettings::csm: "izb+csm")
-  Hybrid,     // IZB near the camera blended into cascades far away ("hybrid")
+  Hybrid,     // the IZB's exact hard shadow softened into penumbrae sized by the light ("hybrid"; see Settings)
   RayTraced,  // one hardware shadow ray per shading point or μQuad sample ("rt"; needs ray tracing)
 };
 
@@ -138,13 +138,20 @@ struct Settings {
   CascadeSettings cascades;
   IzbSettings izb;
   DebugView debug = DebugView::None;
-  // Hybrid: the IZB covers points up to this distance from the camera (fading over its last tenth
-  // into the cascades, which cover the rest up to cascades.max_distance).
-  float hybrid_izb_distance = 20.0f;
-  // Hybrid: hard at contact, soft away from it. A shadowed point whose nearest occluder lies this far
-  // (world units, along the light) or farther above it takes the cascades' filtered term; nearer
-  // occluders blend linearly toward the exact IZB term, which contact shadows keep.
-  float hybrid_soft_distance = 2.0f;
+  // Hybrid: hard at contact, soft away from it, as the light's size makes them (the sun's
+  // Light::angular_diameter_degrees). The IZB's exact term, then around its shadow edges a penumbra as
+  // wide as the sun's disc seen past the occluder: each pixel near an edge averages the occluder
+  // heights the IZB found for the shadowed pixels whose penumbra reaches it, and filters the exact
+  // term over a disc of that radius across the light, on its own surface, in world units (so the
+  // width depends neither on the world's units nor on the distance from the camera). Where the
+  // penumbra is narrower than a pixel the term is the IZB's, exact; a sun of size 0 gives the IZB's
+  // term everywhere. Penumbrae wider than gpu_shared::kPenumbraMaxRadius (24) pixels are filtered at
+  // that width. A spot or point light takes the IZB's hard term.
+  // hybrid_izb_distance: 0, the IZB covers every visible point; > 0, only points up to that distance
+  // from the camera, fading over its last tenth into the cascades (which cover the rest up to
+  // cascades.max_distance, filtered by the light's size too), for views whose far points are many and
+  // far (a large outdoor world).
+  float hybrid_izb_distance = 0.0f;
   // rt: shadow rays per pixel over the light (Light::angular_diameter_degrees, radius): 0 traces one
   // ray toward the light's centre, the hard shadow whatever its size; 1..64 that many rays spread
   // evenly over the sun's disc or the sphere's disc as the point sees it, turned per pixel, the term
@@ -153,7 +160,7 @@ struct Settings {
   uint32_t rt_light_samples = 0;
   // How many of the host's world units make a metre (1: metres, 100: centimetres, 0.01: hectometres).
   // The distances above stated in world units are taken in metres and scaled by it: cascades.max_distance
-  // and kernel_radius, izb.max_distance, hybrid_izb_distance and hybrid_soft_distance. Nothing else in
+  // and kernel_radius, izb.max_distance and hybrid_izb_distance. Nothing else in
   // the module depends on the world's units or on how far the scene is from the world's origin (see
   // FrameDesc::origin). Finite and > 0.
   float units_per_metre = 1.0f;
