@@ -1,7 +1,8 @@
 // Where shadow rays toward a light with a size go: over the sun's disc (a cone of directions around
 // the direction toward the sun) or over a spot or point light's sphere, taken as the disc it shows the
 // shading point (centred at the light, perpendicular to the point-to-light direction). Shared by the
-// techniques that sample a light and by the tests that check them.
+// techniques that sample a light and by the tests that check them. The hash is exact on both sides;
+// the float functions may round differently on a GPU (their users compare lit fractions, not bits).
 #ifndef AREA_LIGHT_H
 #define AREA_LIGHT_H
 #include "shared_prelude.h"
