@@ -7,11 +7,20 @@ SHARED_BEGIN
 
 struct RayTracedPush {
   mat4 inverse_view_projection;  // NDC -> world, for the μQuad corners (32 samples per pixel)
-  vec4 light_direction;          // xyz: the direction light travels (unit; a point light: unused)
+  // xyz: the direction light travels (unit; a spot light: the way it shines; a point light: unused);
+  // w: the light's size (area_light.h): the sun's tangent of its angular radius, a spot or point
+  // light's radius in world units; read only with rays over the light (extent.w).
+  vec4 light_direction;
   vec4 light_position;           // xyz: a spot or point light's position; w: its range (0: the sun)
   vec4 light_cone;               // x: cosine of a spot light's outer cone (a point light: -1); yzw: the camera's position
-  uvec4 extent;                  // xy: render size; z: samples per pixel (1 or 32); w: 1 = count rays
+  // xy: render size; z: samples per pixel (1 or 32); w: bit 0 set = count rays, bits 1 and up: the
+  // rays over the light a pixel traces at 1 sample per pixel (0: one ray toward its centre).
+  uvec4 extent;
 };
+
+// RayTracedPush::extent.w: the statistics flag and the count of rays over the light above it.
+SHARED_CONST uint RT_EXTENT_COUNT_RAYS = 1u;
+SHARED_CONST uint RT_EXTENT_LIGHT_RAYS_SHIFT = 1u;
 
 SHARED_CONST uint RT_BINDING_SCENE = 0u;
 SHARED_CONST uint RT_BINDING_WORLD_POSITION = 1u;

@@ -180,3 +180,35 @@ TEST(Comparator, DiffImageColours) {
 }
 
 }  // namespace
+
+namespace {
+
+// Soft metrics counted by hand: background in both is skipped, background in one is a coverage
+// disagreement, and the penumbra bounds are exclusive.
+TEST(Comparator, SoftMetricsCountedByHand) {
+  const std::vector<float> technique{-1.0f, 0.5f, 1.0f, 0.2f, -1.0f, 0.0f, 0.0f, 1.0f, 0.7f};
+  const std::vector<float> reference{-1.0f, 0.4f, 1.0f, 0.0f, 0.3f, 0.5f, 0.02f, 0.98f, -1.0f};
+  const reference::SoftComparison c = reference::compare_soft(technique, reference);
+  EXPECT_EQ(c.pixels, 6u);
+  EXPECT_EQ(c.penumbra_pixels, 2u);  // 0.4 and 0.5
+  EXPECT_EQ(c.coverage_disagreements, 2u);
+  EXPECT_NEAR(c.soft_mae, (0.1 + 0.0 + 0.2 + 0.5 + 0.02 + 0.02) / 6.0, 1e-6);
+  EXPECT_NEAR(c.penumbra_mae, (0.1 + 0.5) / 2.0, 1e-6);
+
+  // Wider penumbra bounds take in 0.02 and 0.98.
+  const reference::SoftComparison wide = reference::compare_soft(technique, reference, 0.01f, 0.99f);
+  EXPECT_EQ(wide.penumbra_pixels, 4u);
+  EXPECT_NEAR(wide.penumbra_mae, (0.1 + 0.5 + 0.02 + 0.02) / 4.0, 1e-6);
+
+  const reference::SoftComparison same = reference::compare_soft(reference, reference);
+  EXPECT_EQ(same.pixels, 7u);
+  EXPECT_EQ(same.soft_mae, 0.0);
+  EXPECT_EQ(same.penumbra_mae, 0.0);
+
+  const reference::SoftComparison none = reference::compare_soft({-1.0f}, {-1.0f});
+  EXPECT_EQ(none.pixels, 0u);
+  EXPECT_EQ(none.soft_mae, 0.0);
+  EXPECT_THROW(reference::compare_soft({0.0f}, {0.0f, 1.0f}), std::invalid_argument);
+}
+
+}  // namespace

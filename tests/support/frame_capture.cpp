@@ -47,6 +47,31 @@ std::vector<float> reference_visibility(engine::Renderer& renderer, const refere
   return samples_per_pixel == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
 }
 
+std::vector<float> area_reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
+                                             uint32_t rays) {
+  check_tracer(renderer, tracer);
+  const engine::FrameView& view = renderer.frame_view();
+  return tracer.area_visibility(capture_shading_points(renderer), view.light_direction,
+                                view.light_angular_diameter_degrees, rays);
+}
+
+std::vector<float> area_reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
+                                             uint32_t rays, const reference::LocalLight& scene_light, float radius) {
+  check_tracer(renderer, tracer);
+  reference::LocalLight light = scene_light;  // scene space -> the frame's coordinates
+  light.position = glm::vec3(glm::dvec3(light.position) + frame_shift(renderer));
+  return tracer.area_visibility(capture_shading_points(renderer), light, radius, rays);
+}
+
+std::vector<float> area_reference_visibility(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
+                                             uint32_t rays, const FrameLightCheck& light) {
+  check_tracer(renderer, tracer);
+  const auto points = capture_shading_points(renderer);
+  if (light.kind == "sun")
+    return tracer.area_visibility(points, renderer.frame_view().light_direction, light.size, rays);
+  return tracer.area_visibility(points, light.local, light.size, rays);
+}
+
 std::vector<FrameLightCheck> check_every_light(engine::Renderer& renderer, const reference::EmbreeTracer& tracer,
                                                uint32_t samples_per_pixel) {
   check_tracer(renderer, tracer);
@@ -59,7 +84,7 @@ std::vector<FrameLightCheck> check_every_light(engine::Renderer& renderer, const
   };
   std::vector<FrameLightCheck> out;
   if (glm::length(view.light_radiance) > 0.0f || view.local_lights.empty()) {
-    FrameLightCheck c{"sun", masked(renderer.read_shadow_term()), {}};
+    FrameLightCheck c{"sun", masked(renderer.read_shadow_term()), {}, view.light_angular_diameter_degrees, {}};
     c.reference = samples_per_pixel == 32 ? tracer.visibility_32spp(points, view.light_direction)
                                           : tracer.visibility_1spp(points, view.light_direction);
     out.push_back(std::move(c));
@@ -72,7 +97,7 @@ std::vector<FrameLightCheck> check_every_light(engine::Renderer& renderer, const
     light.spot = l.kind == engine::LocalLightKind::Spot;
     light.spot_direction = l.direction;
     light.cos_outer = light.spot ? std::cos(l.outer_cone) : -1.0f;
-    FrameLightCheck c{light.spot ? "spot" : "point", masked(renderer.read_local_shadow_term(i)), {}};
+    FrameLightCheck c{light.spot ? "spot" : "point", masked(renderer.read_local_shadow_term(i)), {}, l.radius, light};
     c.reference = samples_per_pixel == 32 ? tracer.visibility_32spp(points, light) : tracer.visibility_1spp(points, light);
     out.push_back(std::move(c));
   }
@@ -106,6 +131,7 @@ SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type
     registry.each<engine::SpotLight, engine::Transform>([&](engine::Entity, engine::SpotLight& s, engine::Transform& t) {
       if (found) return;
       place(t, s.range);
+      out.module.radius = s.radius;
       out.module.inner_cone = s.inner_cone;
       out.module.outer_cone = s.outer_cone;
       out.reference.spot = true;
@@ -113,7 +139,9 @@ SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type
     });
   } else if (type == shadows::LightType::Point) {
     registry.each<engine::PointLight, engine::Transform>([&](engine::Entity, engine::PointLight& p, engine::Transform& t) {
-      if (!found) place(t, p.range);
+      if (found) return;
+      place(t, p.range);
+      out.module.radius = p.radius;
     });
   }
   if (!found) throw std::runtime_error(std::string("the scene has no ") +

@@ -873,7 +873,7 @@ void ContextImpl::record_technique(Frame& frame) {
     }
     case Technique::RayTraced:
       if (!ray_traced_) ray_traced_ = std::make_unique<RayTracedPass>(*gpu_);
-      ray_traced_->record(frame, settings.izb.samples_per_pixel, collect_stats_);
+      ray_traced_->record(frame, settings.izb.samples_per_pixel, settings.rt_light_samples, collect_stats_);
       break;
   }
 }

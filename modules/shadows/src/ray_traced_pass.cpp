@@ -128,6 +128,28 @@ VkAccelerationStructureBuildRangeInfoKHR bottom_range(const MeshRange& mesh) {
 constexpr VkBuildAccelerationStructureFlagsKHR kDeformedFlags =
     VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR | VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_UPDATE_BIT_KHR;
 
+// The trace's push constants. Rays over the light only at 1 sample per pixel and for a light with a
+// size; otherwise extent.w's ray count is 0 and the shader takes the hard path it always took.
+gpu_shared::RayTracedPush trace_push(const View& view, uint32_t samples_per_pixel, uint32_t light_samples,
+                                     bool collect_stats) {
+  gpu_shared::RayTracedPush push{};
+  push.inverse_view_projection = view.inverse_view_projection;
+  push.light_direction = glm::vec4(glm::normalize(view.light_direction), 0.0f);
+  push.light_cone = glm::vec4(0.0f, view.camera_position);  // yzw: the shadow-ray offset's eye
+  if (view.local_light) {
+    push.light_position = glm::vec4(view.light_position, view.light_range);
+    push.light_cone.x = view.light_cos_outer;
+  }
+  const bool single = samples_per_pixel != 32;
+  const float size = view.local_light ? view.light_radius : view.light_tan_half_angle;
+  const uint32_t light_rays = single && size > 0.0f ? std::min(light_samples, 64u) : 0u;
+  if (light_rays > 0) push.light_direction.w = size;
+  push.extent = glm::uvec4(view.extent.width, view.extent.height, single ? 1u : 32u,
+                           (collect_stats ? gpu_shared::RT_EXTENT_COUNT_RAYS : 0u) |
+                               (light_rays << gpu_shared::RT_EXTENT_LIGHT_RAYS_SHIFT));
+  return push;
+}
+
 }  // namespace
 
 struct RayTracedPass::Impl {
@@ -371,7 +393,7 @@ void RayTracedPass::scene_changed() {
   impl_->built_for = nullptr;
 }
 
-void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collect_stats) {
+void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, uint32_t light_samples, bool collect_stats) {
   Impl& m = *impl_;
   VkCommandBuffer cmd = frame.cmd;
   // Rebuilt when the vertex buffer moved or the mesh table grew (a mesh registered, a deformed slot
@@ -393,16 +415,7 @@ void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, bool collec
   }
   {
     ScopedGpuRegion region(m.ctx, frame.profiler, cmd, "rt_trace");
-    gpu_shared::RayTracedPush push{};
-    push.inverse_view_projection = frame.view.inverse_view_projection;
-    push.light_direction = glm::vec4(glm::normalize(frame.view.light_direction), 0.0f);
-    push.light_cone = glm::vec4(0.0f, frame.view.camera_position);  // yzw: the shadow-ray offset's eye
-    if (frame.view.local_light) {
-      push.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
-      push.light_cone.x = frame.view.light_cos_outer;
-    }
-    push.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, samples_per_pixel == 32 ? 32u : 1u,
-                             collect_stats ? 1u : 0u);
+    const gpu_shared::RayTracedPush push = trace_push(frame.view, samples_per_pixel, light_samples, collect_stats);
     m.pipeline.bind(cmd);
     DescriptorWriter()
         .acceleration_structure(gpu_shared::RT_BINDING_SCENE, m.top.handle)

@@ -54,6 +54,32 @@ Comparison compare(const std::vector<float>& technique, const std::vector<float>
   return c;
 }
 
+}  // namespace
+
+SoftComparison compare_soft(const std::vector<float>& technique, const std::vector<float>& reference,
+                            float penumbra_low, float penumbra_high) {
+  check_sizes(technique.size(), reference.size(), "compare_soft");
+  SoftComparison c;
+  double sum = 0.0, penumbra_sum = 0.0;
+  for (size_t i = 0; i < reference.size(); ++i) {
+    const bool covered = reference[i] >= 0.0f;
+    if (covered != (technique[i] >= 0.0f)) ++c.coverage_disagreements;
+    if (!covered || technique[i] < 0.0f) continue;
+    const double err = std::abs(double(technique[i]) - double(reference[i]));
+    ++c.pixels;
+    sum += err;
+    if (reference[i] > penumbra_low && reference[i] < penumbra_high) {
+      ++c.penumbra_pixels;
+      penumbra_sum += err;
+    }
+  }
+  if (c.pixels > 0) c.soft_mae = sum / double(c.pixels);
+  if (c.penumbra_pixels > 0) c.penumbra_mae = penumbra_sum / double(c.penumbra_pixels);
+  return c;
+}
+
+namespace {
+
 // Squared distance transform of one line (lower envelope of parabolas rooted at each sample):
 // out[q] = min_p (q - p)^2 + f[p]. `v` and `z` are scratch of size n and n + 1.
 constexpr double kFar = 1.0e20;

@@ -146,19 +146,7 @@ struct EmbreeTracer::Impl {
     for (int i = 0; i < kPacket; ++i) {
       const bool on = i < count;
       valid[i] = on ? -1 : 0;
-      const glm::vec3 o = on ? origins[i] : glm::vec3(0.0f);
-      rays.org_x[i] = o.x;
-      rays.org_y[i] = o.y;
-      rays.org_z[i] = o.z;
-      rays.tnear[i] = 0.0f;
-      rays.dir_x[i] = dir.x;
-      rays.dir_y[i] = dir.y;
-      rays.dir_z[i] = dir.z;
-      rays.time[i] = 0.0f;
-      rays.tfar[i] = kInf;
-      rays.mask[i] = 0xFFFFFFFFu;
-      rays.id[i] = static_cast<unsigned>(i);
-      rays.flags[i] = 0;
+      set_ray(rays, i, on ? origins[i] : glm::vec3(0.0f), dir, kInf);
     }
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -167,6 +155,49 @@ struct EmbreeTracer::Impl {
     rtcOccluded16(valid, scene.get(), &ctx, &rays);
     // Embree sets tfar to -inf for every occluded ray.
     for (int i = 0; i < count; ++i) hit[i] = rays.tfar[i] < 0.0f ? 1 : 0;
+  }
+
+  static void set_ray(RTCRay16& rays, int i, glm::vec3 origin, glm::vec3 dir, float t_far) {
+    rays.org_x[i] = origin.x;
+    rays.org_y[i] = origin.y;
+    rays.org_z[i] = origin.z;
+    rays.tnear[i] = 0.0f;
+    rays.dir_x[i] = dir.x;
+    rays.dir_y[i] = dir.y;
+    rays.dir_z[i] = dir.z;
+    rays.time[i] = 0.0f;
+    rays.tfar[i] = t_far;
+    rays.mask[i] = 0xFFFFFFFFu;
+    rays.id[i] = static_cast<unsigned>(i);
+    rays.flags[i] = 0;
+  }
+
+  // Of `count` rays from `origin`, ray i along the unit dirs[i] up to t_far[i], how many no triangle
+  // occludes; a ray with t_far[i] <= 0 is lit without a trace (it ends before it starts).
+  uint32_t lit_rays(glm::vec3 origin, const glm::vec3* dirs, const float* t_far, uint32_t count) const {
+    uint32_t lit = 0;
+    for (uint32_t first = 0; first < count; first += kPacket) {
+      const int n = int(std::min<uint32_t>(kPacket, count - first));
+      if (!packets) {
+        for (int i = 0; i < n; ++i)
+          lit += t_far[first + i] <= 0.0f || !occluded1(origin, dirs[first + i], t_far[first + i]) ? 1u : 0u;
+        continue;
+      }
+      alignas(64) int valid[kPacket];
+      alignas(64) RTCRay16 rays;
+      for (int i = 0; i < kPacket; ++i) {
+        const bool on = i < n && t_far[first + i] > 0.0f;
+        valid[i] = on ? -1 : 0;
+        set_ray(rays, i, origin, on ? dirs[first + i] : glm::vec3(0.0f, 1.0f, 0.0f), on ? t_far[first + i] : kInf);
+      }
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      // One pixel's rays share their origin and spread over a small cone.
+      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      rtcOccluded16(valid, scene.get(), &ctx, &rays);
+      for (int i = 0; i < n; ++i) lit += valid[i] == 0 || rays.tfar[i] >= 0.0f ? 1u : 0u;
+    }
+    return lit;
   }
 
   bool occluded1(glm::vec3 origin, glm::vec3 dir, float t_far = kInf) const {
@@ -415,6 +446,13 @@ std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points,
 }
 
 namespace {
+// Whether a local light reaches the point (range, cone) and its geometric normal faces the light.
+bool local_light_shines_on(const LocalLight& light, glm::vec3 p, glm::vec3 n) {
+  return gpu_shared::local_light_reaches(light.position, light.range, light.spot_direction, light.cos_outer, light.spot,
+                                         p) &&
+         gpu_shared::faces_local_light(n, p, light.position);
+}
+
 // The pixels' shared rule for a local light: -1 background, 0 unreached or turned away, else the lit
 // fraction of `samples` rays (the μQuad's, or the shading point's alone).
 template <typename Occluded>
@@ -428,9 +466,7 @@ std::vector<float> local_visibility(const ShadingPoints& points, const LocalLigh
       if (!points.covered(i)) continue;
       const glm::vec3 p(points.position[i]);
       const glm::vec3 n(points.normal[i]);
-      if (!gpu_shared::local_light_reaches(light.position, light.range, light.spot_direction, light.cos_outer,
-                                           light.spot, p) ||
-          !gpu_shared::faces_local_light(n, p, light.position)) {
+      if (!local_light_shines_on(light, p, n)) {
         out[i] = 0.0f;
         continue;
       }
@@ -465,6 +501,143 @@ std::vector<float> EmbreeTracer::visibility_32spp(const ShadingPoints& points, c
   check_points(points);
   return local_visibility(points, light, gpu_shared::kSamplesPerPixel,
                           [&](glm::vec3 o, glm::vec3 d, float t) { return occluded_within(o, d, t); });
+}
+
+namespace {
+// A fixed, well-mixed hash of a pixel, a sample and a dimension: the jitter of the area rays.
+double jitter(uint32_t x, uint32_t y, uint32_t sample, uint32_t dimension) {
+  const auto mix = [](uint32_t h) {
+    h = (h ^ (h >> 16)) * 0x21f0aaadu;
+    h = (h ^ (h >> 15)) * 0x735a2d97u;
+    return h ^ (h >> 15);
+  };
+  uint32_t h = mix(x * 0x9e3779b9u + 0x632be5abu);
+  h = mix(h ^ (y * 0x85ebca6bu + 0x2c1b3c6du));
+  h = mix(h ^ (sample * 2u + dimension));
+  return double(h) * (1.0 / 4294967296.0);
+}
+
+// The concentric map of the unit square onto the unit disc: squares around the centre go to rings,
+// and areas are kept, so points uniform on the square are uniform on the disc.
+glm::dvec2 concentric_disc(double u, double v) {
+  constexpr double kQuarterPi = 0.78539816339744830962;
+  const double a = 2.0 * u - 1.0, b = 2.0 * v - 1.0;
+  if (a == 0.0 && b == 0.0) return glm::dvec2(0.0);
+  double r, phi;
+  if (std::abs(a) > std::abs(b)) {
+    r = a;
+    phi = kQuarterPi * (b / a);
+  } else {
+    r = b;
+    phi = 2.0 * kQuarterPi - kQuarterPi * (a / b);
+  }
+  return r * glm::dvec2(std::cos(phi), std::sin(phi));
+}
+
+// Sample `sample` of `count` of pixel (x, y) on the unit disc: the unit square cut into `count` cells
+// of equal area (floor(sqrt(count)) rows; the first count % rows rows one cell longer, and each row as
+// tall as its share of the cells), a point jittered in the sample's cell, through concentric_disc.
+glm::dvec2 stratified_disc(uint32_t x, uint32_t y, uint32_t sample, uint32_t count) {
+  const uint32_t rows = std::max(1u, uint32_t(std::sqrt(double(count))));
+  const uint32_t base = count / rows, long_cells = (count % rows) * (base + 1);
+  const uint32_t in_row = sample < long_cells ? base + 1 : base;
+  const uint32_t row_start = sample < long_cells ? sample / in_row * in_row
+                                                 : long_cells + (sample - long_cells) / in_row * in_row;
+  const double u = (double(sample - row_start) + jitter(x, y, sample, 0)) / double(in_row);
+  const double v = (double(row_start) + jitter(x, y, sample, 1) * double(in_row)) / double(count);
+  return concentric_disc(u, v);
+}
+
+// Two unit vectors perpendicular to the unit `axis` and to each other (built apart from area_light.h's
+// basis, so the reference does not lean on the code it checks).
+struct DiscFrame {
+  glm::dvec3 u, v;
+};
+DiscFrame disc_frame(const glm::dvec3& axis) {
+  const glm::dvec3 helper = std::abs(axis.x) < 0.6 ? glm::dvec3(1.0, 0.0, 0.0) : glm::dvec3(0.0, 1.0, 0.0);
+  const glm::dvec3 u = glm::normalize(glm::cross(axis, helper));
+  return {u, glm::cross(axis, u)};
+}
+
+void check_rays(uint32_t rays) {
+  if (rays == 0) throw std::invalid_argument("area_visibility: rays must be at least 1");
+}
+}  // namespace
+
+std::vector<float> EmbreeTracer::area_visibility(const ShadingPoints& points, glm::vec3 light_direction,
+                                                 float angular_diameter_degrees, uint32_t rays) const {
+  check_points(points);
+  check_rays(rays);
+  if (!std::isfinite(angular_diameter_degrees) || angular_diameter_degrees < 0.0f || angular_diameter_degrees >= 180.0f)
+    throw std::invalid_argument("area_visibility: the angular diameter " + std::to_string(angular_diameter_degrees) +
+                                " is not in [0, 180) degrees");
+  if (angular_diameter_degrees == 0.0f) return visibility_1spp(points, light_direction);
+  const glm::vec3 to_light = to_light_dir(light_direction);
+  const glm::dvec3 axis = glm::normalize(glm::dvec3(to_light));
+  const DiscFrame frame = disc_frame(axis);
+  // 1 - cos(angular radius), as 2 sin^2(half of it): no cancellation for a small sun.
+  const double quarter = glm::radians(double(angular_diameter_degrees)) * 0.25;
+  const double cone = 2.0 * std::sin(quarter) * std::sin(quarter);
+  std::vector<float> out(points.pixel_count(), -1.0f);
+  for_each_row(points.height, [&](uint32_t y) {
+    std::vector<glm::vec3> dirs(rays);
+    const std::vector<float> t_far(rays, kInf);
+    for (uint32_t x = 0; x < points.width; ++x) {
+      const size_t i = points.index(x, y);
+      if (!points.covered(i)) continue;
+      const glm::vec3 p(points.position[i]);
+      const glm::vec3 n(points.normal[i]);
+      if (!points.faces(i, to_light)) {
+        out[i] = 0.0f;
+        continue;
+      }
+      const glm::vec3 origin = gpu_shared::shadow_ray_origin(p, n, gpu_shared::shadow_ray_offset(p, points.eye));
+      for (uint32_t s = 0; s < rays; ++s) {
+        // A disc sample of squared radius q lies at 1 - cos = q * cone from the axis: uniform in solid angle.
+        const glm::dvec2 d = stratified_disc(x, y, s, rays);
+        const double h = glm::dot(d, d) * cone;
+        const glm::dvec3 dir = axis * (1.0 - h) + std::sqrt(cone * (2.0 - h)) * (d.x * frame.u + d.y * frame.v);
+        dirs[s] = glm::vec3(glm::normalize(dir));
+      }
+      out[i] = float(impl_->lit_rays(origin, dirs.data(), t_far.data(), rays)) / float(rays);
+    }
+  });
+  return out;
+}
+
+std::vector<float> EmbreeTracer::area_visibility(const ShadingPoints& points, const LocalLight& light, float radius,
+                                                 uint32_t rays) const {
+  check_points(points);
+  check_rays(rays);
+  if (!std::isfinite(radius) || radius < 0.0f)
+    throw std::invalid_argument("area_visibility: the radius " + std::to_string(radius) + " is not finite and >= 0");
+  if (radius == 0.0f) return visibility_1spp(points, light);
+  const glm::dvec3 center(light.position);
+  std::vector<float> out(points.pixel_count(), -1.0f);
+  for_each_row(points.height, [&](uint32_t y) {
+    std::vector<glm::vec3> dirs(rays);
+    std::vector<float> t_far(rays);
+    for (uint32_t x = 0; x < points.width; ++x) {
+      const size_t i = points.index(x, y);
+      if (!points.covered(i)) continue;
+      const glm::vec3 p(points.position[i]);
+      const glm::vec3 n(points.normal[i]);
+      if (!local_light_shines_on(light, p, n)) {
+        out[i] = 0.0f;
+        continue;
+      }
+      const glm::vec3 origin = gpu_shared::shadow_ray_origin(p, n, gpu_shared::shadow_ray_offset(p, points.eye));
+      const DiscFrame frame = disc_frame(glm::normalize(center - glm::dvec3(origin)));
+      for (uint32_t s = 0; s < rays; ++s) {
+        const glm::dvec2 d = stratified_disc(x, y, s, rays);
+        const glm::vec3 target(center + double(radius) * (d.x * frame.u + d.y * frame.v));
+        t_far[s] = gpu_shared::local_shadow_ray_length(origin, target, light.range);
+        dirs[s] = t_far[s] > 0.0f ? glm::normalize(target - origin) : glm::vec3(0.0f, 1.0f, 0.0f);
+      }
+      out[i] = float(impl_->lit_rays(origin, dirs.data(), t_far.data(), rays)) / float(rays);
+    }
+  });
+  return out;
 }
 
 namespace {

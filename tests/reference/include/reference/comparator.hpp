@@ -30,6 +30,20 @@ Comparison compare_visibility(const std::vector<float>& technique,
                               const std::vector<float>& reference,
                               const std::vector<uint8_t>& include, float threshold = 0.5f);
 
+// A technique's fractional term against an area-light reference (EmbreeTracer::area_visibility).
+struct SoftComparison {
+  uint64_t pixels = 0;           // compared: covered in both (value >= 0)
+  uint64_t penumbra_pixels = 0;  // of which the reference is strictly between penumbra_low and penumbra_high
+  uint64_t coverage_disagreements = 0;  // covered in one input only: not compared
+  double soft_mae = 0.0;      // mean |technique - reference| over the compared pixels (0 when none)
+  double penumbra_mae = 0.0;  // the same over the penumbra pixels (0 when none)
+};
+
+// Inputs: one value per pixel, -1 background, else in [0, 1] (the technique's term, the reference's
+// lit fraction). Throws std::invalid_argument when the sizes differ.
+SoftComparison compare_soft(const std::vector<float>& technique, const std::vector<float>& reference,
+                            float penumbra_low = 0.02f, float penumbra_high = 0.98f);
+
 // Diff image (RGB PNG): agreeing lit light grey (200), agreeing shadowed dark grey (64), false
 // shadow red, false lit blue, background black, covered in only one input magenta. Throws
 // std::runtime_error when the file cannot be written, std::invalid_argument on size mismatch.

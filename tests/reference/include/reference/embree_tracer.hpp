@@ -101,6 +101,28 @@ class EmbreeTracer {
   std::vector<float> visibility_1spp(const ShadingPoints& points, const LocalLight& light) const;
   std::vector<float> visibility_32spp(const ShadingPoints& points, const LocalLight& light) const;
 
+  // Soft shadows: the fraction of a light with a size that a pixel's shading point sees, from `rays`
+  // (>= 1; 256 or more for figures worth quoting) rays per pixel. The pixels' rules are visibility_1spp's
+  // (-1 background; 0 for a point that does not face the light or, for a local light, that it does not
+  // reach, both decided toward the light's centre), and every ray starts at the same
+  // shadow_ray_origin(p, n, shadow_ray_offset(p, eye)); the value is lit rays / rays. The rays are
+  // stratified over the light: the unit square cut into `rays` cells of equal area (a sqrt(rays) x
+  // sqrt(rays) grid when rays is a square), one point jittered in each cell by a hash of the pixel and
+  // the sample (so a result is reproducible), mapped onto the unit disc by the concentric map (which
+  // keeps areas). A light of size 0 gives exactly visibility_1spp's answer.
+  // The sun: `angular_diameter_degrees` (0 to < 180) is its disc's angular diameter; a disc sample of
+  // squared radius u goes to the direction at 1 - cos(angle) = u (1 - cos(half the diameter)) from the
+  // direction toward the sun, so the rays are uniform in the cone's solid angle. Throws
+  // std::invalid_argument on a bad direction, size or ray count, or mismatched buffers.
+  std::vector<float> area_visibility(const ShadingPoints& points, glm::vec3 light_direction,
+                                     float angular_diameter_degrees, uint32_t rays) const;
+  // A spot or point light taken as the disc of `radius` (world units, >= 0) centred at its position
+  // and perpendicular to the direction from the ray origin toward it: a ray toward each disc sample,
+  // occluded by a hit within local_shadow_ray_length(origin, sample, range) (it ends short of the
+  // sample by the bulb, as the ray toward the centre does; a length <= 0 is lit).
+  std::vector<float> area_visibility(const ShadingPoints& points, const LocalLight& light, float radius,
+                                     uint32_t rays) const;
+
   // The same truth computed without the module's shader code (of shared/*.h only the documented
   // sample positions, kSamplePattern, are read): for each pixel a
   // primary ray from the eye through the pixel's centre finds the triangle it shows, and its hit,
