@@ -118,6 +118,18 @@ PcssBlockers pcss_blockers(PcssMap m, PcssReceiver r, float radius, vec2 rotatio
   return b;
 }
 
+// The nearest light depth among kPcssSearchTaps taps over a disc of `radius` map units that shadow the
+// receiver, or 2 where none does (farther than any depth).
+float pcss_nearest_occluder(PcssMap m, PcssReceiver r, float radius, vec2 rotation) {
+  float nearest = 2.0;
+  for (uint k = 0u; k < kPcssSearchTaps; ++k) {
+    float depth;
+    bool shadows = !pcss_tap(m, r, pcss_disc(k, kPcssSearchTaps, rotation) * radius / m.texel, depth);
+    nearest = shadows ? min(nearest, depth) : nearest;
+  }
+  return nearest;
+}
+
 // Lit fraction of kPcssFilterTaps taps over a disc of `radius` map units (the spiral turned the other
 // way round from the search's, so the two sets of taps do not coincide).
 float pcss_filter(PcssMap m, PcssReceiver r, float radius, vec2 rotation) {
@@ -130,13 +142,18 @@ float pcss_filter(PcssMap m, PcssReceiver r, float radius, vec2 rotation) {
   return float(lit) / float(kPcssFilterTaps);
 }
 
-// The whole PCSS term: the search over pcss_search_radius(max_texels), then the filter over the
-// penumbra's radius (clamped likewise; sm and cascades pass kPcssMaxTexels, shared/shadows.h). Returns -1 where no tap blocks or the penumbra's radius is
+// The whole PCSS term: a first search over pcss_search_radius(max_texels) for the nearest occluder,
+// the blocker search over that occluder's reach (where the map's near plane lies far nearer the light
+// than any caster, as a spot light's does, the first radius would spread the taps too thin for the
+// reach test to keep any), then the filter over the penumbra's radius (clamped likewise; sm and
+// cascades pass kPcssMaxTexels, shared/shadows.h). Returns -1 where no tap blocks or the penumbra's radius is
 // below `min_texels` texels of the coarser axis: there the caller keeps its own narrower filter or
 // one tap, so a small light changes nothing where its penumbra is narrower than that.
 float pcss_visibility(PcssMap m, PcssReceiver r, vec2 rotation, float max_texels, float min_texels) {
   float search = pcss_search_radius(m, r.z, max_texels);
-  PcssBlockers b = pcss_blockers(m, r, search, rotation);
+  float nearest = pcss_nearest_occluder(m, r, search, rotation);
+  if (nearest > 1.0) return -1.0;
+  PcssBlockers b = pcss_blockers(m, r, min(search, pcss_reach(m, r.z, nearest)), rotation);
   if (b.count == 0u) return -1.0;
   float radius = min(pcss_reach(m, r.z, b.depth), max_texels * min(m.texel.x, m.texel.y));
   if (radius < min_texels * max(m.texel.x, m.texel.y)) return -1.0;
