@@ -230,6 +230,41 @@ TEST_F(PcssTest, TinyLightGivesTheHardTermBitForBit) {
   }
 }
 
+// A spot light's sphere (Light::radius) in the perspective map of `sm` (and of `cascades`, which
+// shadows a spot light with the same map, filtered): a light 12 above the ground, just beside the high
+// plank's edge (6 above the ground, halfway down), casts a penumbra on the ground as wide as a disc
+// of the radius times (distance from the edge to the ground) / (from the light to the edge) = 1, and a
+// radius too small for half a texel changes nothing.
+TEST_F(PcssTest, SpotLightRadiusWidensItsPenumbra) {
+  constexpr float kRadius = 0.15f;
+  // The shadow boundary under the plank's lower right corner (0.2, 6.0) seen from (0.4, 12).
+  constexpr Edge kEdge{0.0f, 6.0f};
+  for (shadows::Technique technique : {shadows::Technique::ShadowMap, shadows::Technique::Cascades}) {
+    shadows::Settings settings;
+    settings.technique = technique;
+    setup(planks_level(), 0, settings, 0.0f);
+    shadows::Light spot{.type = shadows::LightType::Spot, .direction = {0.0f, -1.0f, 0.0f},
+                        .position = {0.4f, 12.0f, 3.5f}, .range = 30.0f, .inner_cone = 0.6f, .outer_cone = 0.8f};
+    std::vector<float> terms[3];
+    Capture soft;
+    for (int k = 0; k < 3; ++k) {
+      spot.radius = k == 0 ? 0.0f : k == 1 ? 1.0e-6f : kRadius;
+      module_->set_light(spot);
+      soft = render();
+      terms[k] = soft.term;
+    }
+    EXPECT_EQ(std::memcmp(terms[0].data(), terms[1].data(), terms[0].size() * sizeof(float)), 0);
+    const double width = penumbra_width(soft, kEdge, 3.0f, 6.0f);
+    const double expected = 2.0 * 0.687 * kRadius * kEdge.height / (12.0 - kEdge.height);
+    std::printf("[pcss] %s, spot light of radius %.2f: penumbra 10-90 %% width %.4f (geometry %.4f)\n",
+                technique == shadows::Technique::ShadowMap ? "sm" : "cascades", kRadius, width, expected);
+    EXPECT_GT(width, 0.6 * expected);
+    EXPECT_LT(width, 1.6 * expected);
+    renderer_.reset();
+    module_.reset();
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Techniques, PcssSplitTest,
                          testing::Values(TechniqueCase{"cascades", shadows::Technique::Cascades, 1, false}),
                          [](const testing::TestParamInfo<TechniqueCase>& info) { return std::string(info.param.name); });

@@ -108,12 +108,15 @@ SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type
       place(t, s.range);
       out.module.inner_cone = s.inner_cone;
       out.module.outer_cone = s.outer_cone;
+      out.module.radius = s.radius;
       out.reference.spot = true;
       out.reference.cos_outer = std::cos(s.outer_cone);
     });
   } else if (type == shadows::LightType::Point) {
     registry.each<engine::PointLight, engine::Transform>([&](engine::Entity, engine::PointLight& p, engine::Transform& t) {
-      if (!found) place(t, p.range);
+      if (found) return;
+      place(t, p.range);
+      out.module.radius = p.radius;
     });
   }
   if (!found) throw std::runtime_error(std::string("the scene has no ") +
