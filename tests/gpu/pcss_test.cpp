@@ -230,6 +230,45 @@ TEST_F(PcssTest, TinyLightGivesTheHardTermBitForBit) {
   }
 }
 
+// With PCSS the masks are tested over the blocker search's footprint, which holds every PCSS tap:
+// as without a light size (CascadesTest.MaskingMatchesUnmaskedAndSavesWork), the depth extent
+// reproduces the edge-masked term exactly, edge masking differs from no masking on few pixels and
+// never between lit and shadowed, and both still skip work.
+TEST_F(PcssTest, MaskingStaysExactWithWidePenumbrae) {
+  for (const std::string& scene : {planks_level(), std::string("contact")}) {
+    SCOPED_TRACE(scene);
+    shadows::Settings settings;
+    settings.technique = shadows::Technique::Cascades;
+    settings.cascades.map_size = 512;
+    setup(scene, 0, settings, scene == "contact" ? 8.0f : 2.0f, 192);
+    const shadows::Masking modes[3] = {shadows::Masking::Off, shadows::Masking::Edge, shadows::Masking::DepthExtent};
+    std::vector<float> term[3];
+    double fraction[3] = {};
+    for (int m = 0; m < 3; ++m) {
+      module_->settings().cascades.masking = modes[m];
+      term[m] = render().term;
+      fraction[m] = module_->stats().expensive_path_fraction;
+    }
+    size_t edge_diff = 0, extent_diff = 0, flips = 0;
+    for (size_t i = 0; i < term[0].size(); ++i) {
+      edge_diff += std::abs(term[0][i] - term[1][i]) > 1e-6f;
+      extent_diff += term[1][i] != term[2][i];
+      flips += (term[0][i] >= 0.5f) != (term[1][i] >= 0.5f);
+    }
+    std::printf("[pcss] %s masking: expensive off %.4f edge %.4f depth-extent %.4f; edge!=off %zu, extent!=edge %zu, "
+                "flips %zu of %zu\n",
+                scene_->name.c_str(), fraction[0], fraction[1], fraction[2], edge_diff, extent_diff, flips,
+                term[0].size());
+    EXPECT_EQ(extent_diff, 0u);
+    EXPECT_LT(double(edge_diff), 0.01 * double(term[0].size()));
+    EXPECT_EQ(flips, 0u);
+    EXPECT_LT(fraction[1], fraction[0]);
+    EXPECT_LT(fraction[2], fraction[0]);
+    renderer_.reset();
+    module_.reset();
+  }
+}
+
 // A spot light's sphere (Light::radius) in the perspective map of `sm` (and of `cascades`, which
 // shadows a spot light with the same map, filtered): a light 12 above the ground, just beside the high
 // plank's edge (6 above the ground, halfway down), casts a penumbra on the ground as wide as a disc
