@@ -9,7 +9,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // One shader, three pipelines (kStage):
 // - CASCADE_STAGE_CLASSIFY, over the frame: per pixel the cascade, the mask test and the one-tap
 //   result; writes every pixel that needs nothing more, and lists the others.
-// - CASCADE_STAGE_KERNEL, over the kernel list: the 12-tap kernel in one cascade.
+// - CASCADE_STAGE_KERNEL, over the kernel list: the 12-tap kernel (or PCSS, kPcss) in one cascade.
 // - CASCADE_STAGE_BAND, over the band list: pixels in a blend band, two cascades, each with its own
 //   mask test, one tap or the kernel.
 // Every stage writes exactly what one pass evaluating each pixel in full would. The split is for CPU
@@ -19,6 +19,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const uint kStage = CASCADE_STAGE_CLASSIFY;
 layout(constant_id = 1) const uint kMasking = CASCADE_MASKING_EDGE;  // CascadeParams::mode.x
 layout(constant_id = 2) const uint kDebug = CASCADE_DEBUG_NONE;      // CascadeParams::mode.z
+// The sun has a size (CascadeParams::pcss.x > 0): the kernel is PCSS's (pcss.glsl) wherever its
+// penumbra is wider than the fixed kernel, which stays the narrowest filter.
+layout(constant_id = 3) const bool kPcss = false;
 
 layout(set = 0, binding = CASCADE_FILTER_BINDING_PARAMS) uniform Params { CascadeParams params; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
@@ -39,12 +42,28 @@ layout(set = 0, binding = CASCADE_FILTER_BINDING_WORK_LIST) buffer WorkList { ui
 layout(set = 0, binding = CASCADE_FILTER_BINDING_INPUT_LIST) readonly buffer InputList { uvec4 input_list[]; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_INPUT_COUNTERS) readonly buffer InputCounters { uint input_counters[]; };
 
+float pcss_map_depth(int layer, ivec2 texel) { return texelFetch(depth_map, ivec3(texel, layer), 0).r; }
+#include "pcss.glsl"
+
+PcssMap pcss_map(int c) {
+  PcssMap m;
+  m.layer = c;
+  m.size = int(params.extent.z);
+  m.texel = vec2(params.texel_world[c]);
+  m.light_size = params.pcss.x;
+  m.perspective = false;
+  m.depth_range = params.depth_range[c];
+  m.near_far = vec2(0.0);
+  return m;
+}
+
 // A receiver's position in cascade c's map.
 struct Probe {
   vec2 t;          // map texel coordinates
   float z;         // light depth
   vec2 gradient;   // the receiver's tangent plane, light depth per texel
   float r;         // kernel radius in texels
+  float reach;     // radius in texels that any tap may lie at: r, or with PCSS its search radius if wider
   float bias;
   bool expensive;  // the mask test wants the 12-tap kernel
 };
@@ -101,8 +120,11 @@ Probe probe(int c, vec3 p, vec3 n) {
   bool grazing = any(greaterThan(abs(slope), vec2(max_slope)));
   pr.r = params.kernel_texels[c];
   pr.bias = params.depth_bias[c];
-  float spread = (abs(pr.gradient.x) + abs(pr.gradient.y)) * (pr.r + 1.0);
-  pr.expensive = needs_kernel(c, pr.t, pr.r, pr.z - spread, pr.z + spread) || grazing;
+  // PCSS's taps lie within its search radius (its filter's radius, the reach of the average blocker,
+  // is never wider): the mask test over that footprint keeps skipping exact.
+  pr.reach = kPcss ? max(pr.r, pcss_search_radius(pcss_map(c), pr.z, params.pcss.y) / params.texel_world[c]) : pr.r;
+  float spread = (abs(pr.gradient.x) + abs(pr.gradient.y)) * (pr.reach + 1.0);
+  pr.expensive = needs_kernel(c, pr.t, pr.reach, pr.z - spread, pr.z + spread) || grazing;
   return pr;
 }
 
@@ -125,6 +147,26 @@ uint kernel(int c, Probe pr, ivec2 pixel) {
     lit += tap(c, pr, o);
   }
   return lit;
+}
+
+// The filtered term in cascade c, and whether its taps disagreed (the blur takes those): PCSS where
+// it finds blockers and a penumbra wider than the kernel, else the rotated 12-tap kernel.
+float filtered(int c, Probe pr, ivec2 pixel, out bool mixed) {
+  if (kPcss) {
+    PcssReceiver r;
+    r.t = pr.t;
+    r.z = pr.z;
+    r.gradient = pr.gradient;
+    r.bias = pr.bias;
+    float soft = pcss_visibility(pcss_map(c), r, pcss_rotation(pixel), params.pcss.y, max(pr.r, 0.5));
+    if (soft >= 0.0) {
+      mixed = soft > 0.0 && soft < 1.0;
+      return soft;
+    }
+  }
+  uint lit = kernel(c, pr, pixel);
+  mixed = lit != 0u && lit != kPoissonTaps;
+  return float(lit) / float(kPoissonTaps);
 }
 
 // The pixel's cascade and blend weight toward the next one (or toward lit after the last).
@@ -198,8 +240,8 @@ uvec2 classify_pixel(ivec2 pixel) {
   bool evaluated = facing && receives && ch.in_range;
   Probe pr = probe(ch.cascade, p.xyz, n);
   // (The kernel stage's arithmetic, so the same term.)
-  uint lit = kKernelInClassify ? kernel(ch.cascade, pr, pixel) : 0u;
-  float visibility = kKernelInClassify ? float(lit) / float(kPoissonTaps) : float(tap(ch.cascade, pr, vec2(0.0)));
+  bool mixed = false;
+  float visibility = kKernelInClassify ? filtered(ch.cascade, pr, pixel, mixed) : float(tap(ch.cascade, pr, vec2(0.0)));
   // The last cascade fades to lit over its band.
   if (ch.band) visibility = mix(visibility, 1.0, ch.w);
   visibility = evaluated ? visibility : (facing ? 1.0 : 0.0);
@@ -209,7 +251,7 @@ uvec2 classify_pixel(ivec2 pixel) {
   if (covered && !deferred) imageStore(shadow_term, pixel, vec4(visibility));
   if (kDebug != CASCADE_DEBUG_NONE && covered && !deferred) write_overlay(pixel, evaluated ? ch.cascade : -1, filtered_here);
   bool kernel_only = deferred && !band;
-  bool blur = filtered_here && lit != 0u && lit != kPoissonTaps && params.mode.y != 0u;
+  bool blur = filtered_here && mixed && params.mode.y != 0u;
   return uvec2((facing ? 1u : 0u) | (band ? 1u << 16u : 0u),
                (kernel_only || blur ? 1u : 0u) | (filtered_here ? 1u << 16u : 0u));
 }
@@ -276,11 +318,9 @@ void finish() {
   if (!band_stage) {
     // Listed because the mask test wants the kernel.
     Probe pr = probe(ch.cascade, p, n);
-    uint lit = kernel(ch.cascade, pr, pixel);
-    visibility = float(lit) / float(kPoissonTaps);
+    visibility = filtered(ch.cascade, pr, pixel, mixed);
     if (ch.band) visibility = mix(visibility, 1.0, ch.w);
     expensive = true;
-    mixed = lit != 0u && lit != kPoissonTaps;
   } else {
     float v[2];
     expensive = false;
@@ -288,11 +328,12 @@ void finish() {
     for (int k = 0; k < 2; ++k) {
       int c = ch.cascade + k;
       Probe pr = probe(c, p, n);
-      uint lit = kernel(c, pr, pixel);
+      bool disagree;
+      float soft = filtered(c, pr, pixel, disagree);
       uint one = tap(c, pr, vec2(0.0));
-      v[k] = pr.expensive ? float(lit) / float(kPoissonTaps) : float(one);
+      v[k] = pr.expensive ? soft : float(one);
       expensive = expensive || pr.expensive;
-      mixed = mixed || (pr.expensive && lit != 0u && lit != kPoissonTaps);
+      mixed = mixed || (pr.expensive && disagree);
     }
     visibility = mix(v[0], v[1], ch.w);
     count(CASCADE_COUNTER_EXPENSIVE, valid && expensive);

@@ -5,6 +5,10 @@
 #include "local_light.h"
 layout(local_size_x = 8, local_size_y = 8) in;
 
+// A light with a size (ShadowMapResolveParams::pcss): the PCSS pipeline. A specialization constant
+// rather than a branch, since llvmpipe pays for both sides of one.
+layout(constant_id = 0) const bool kPcss = false;
+
 layout(set = 0, binding = SM_RESOLVE_BINDING_PARAMS) uniform Params { ShadowMapResolveParams params; };
 layout(set = 0, binding = SM_RESOLVE_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
 layout(set = 0, binding = SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly uniform image2D geometric_normal;
@@ -12,7 +16,32 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_MAP) uniform sampler2D shado
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
 layout(set = 0, binding = SM_RESOLVE_BINDING_RECEIVERS, rgba8) readonly uniform image2D receivers;
 
-// One tap, no filtering: the baseline whose aliasing the other techniques remove. A spot light's map
+float pcss_map_depth(int layer, ivec2 texel) { return texelFetch(shadow_map, texel, 0).r; }
+#include "pcss.glsl"
+
+// Where the light has a size: the PCSS term from the shading point p (normal n) at map position uv,
+// or `hard` (the one tap, or the fixed filter) where no tap blocks or the penumbra is narrower than
+// half a texel (or than the fixed filter): so a small light leaves the hard result bit for bit.
+float soft_visibility(ivec2 pixel, vec3 p, vec3 n, vec2 uv, float z, float hard) {
+  PcssMap m;
+  m.layer = 0;
+  m.size = int(params.extent.z);
+  m.texel = params.pcss_texel.xy;
+  m.light_size = params.pcss.x;
+  m.perspective = params.pcss_texel.w > 0.0;
+  m.depth_range = params.pcss.y;
+  m.near_far = params.pcss.zw;
+  PcssReceiver r;
+  r.t = uv * vec2(params.extent.zw);
+  r.z = z;
+  r.gradient = pcss_plane_gradient(params.light_plane_matrix, p, n, m.size, pcss_max_slope(m, z));
+  r.bias = params.bias.x;
+  float soft = pcss_visibility(m, r, pcss_rotation(pixel), params.pcss_texel.z, max(params.bias.y, 0.5));
+  return soft >= 0.0 ? soft : hard;
+}
+
+// One tap, no filtering: the baseline whose aliasing the other techniques remove (a light with a size
+// widens it to the PCSS penumbra where that is at least half a texel, soft_visibility). A spot light's map
 // is a perspective one from the light (a point light's, one per cube-face cone); points it does not
 // reach or that turn away from it are 0; a point that does not receive shadows (its receiver flag) and
 // faces the light is 1, as in every technique.
@@ -36,7 +65,8 @@ void main() {
   if (facing && imageLoad(receivers, pixel).a <= 0.5) {
     visibility = 1.0;
   } else if (facing) {
-    vec4 light = params.light_view_projection * vec4(shadow_ray_origin(p.xyz, n, shadow_ray_offset(p.xyz, params.camera_position.xyz)), 1.0);
+    vec3 origin = shadow_ray_origin(p.xyz, n, shadow_ray_offset(p.xyz, params.camera_position.xyz));
+    vec4 light = params.light_view_projection * vec4(origin, 1.0);
     light.xyz /= light.w;  // 1 for the sun's orthographic map
     vec2 uv = light.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) {
@@ -57,6 +87,7 @@ void main() {
         }
         visibility = lit / 16.0;
       }
+      if (kPcss) visibility = soft_visibility(pixel, origin, n, uv, light.z, visibility);
     }
   }
   imageStore(shadow_term, pixel, vec4(visibility));

@@ -86,6 +86,8 @@ struct CascadeParams {
   vec4 light_direction;         // xyz: travel direction, unit
   uvec4 extent;                 // xy frame size, z map size, w cascade count
   uvec4 mode;                   // x masking, y blur on, z debug view, w the input list's count word (CASCADE_STAGE_CLASSIFY_LIST)
+  vec4 depth_range;             // world units from light depth 0 to 1 (PCSS)
+  vec4 pcss;                    // x the sun's tan of its angular radius (0: no PCSS), y the widest PCSS radius in texels
 };
 
 struct CascadeMaskPush {
@@ -140,7 +142,7 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::CascadeDepthPush) == 128);
-static_assert(sizeof(gpu_shared::CascadeParams) == 8 * 64 + 18 * 16);
+static_assert(sizeof(gpu_shared::CascadeParams) == 8 * 64 + 20 * 16);
 static_assert(sizeof(gpu_shared::CascadeMaskPush) == 16);
 static_assert(sizeof(gpu_shared::CascadeBlurPush) == 32);
 #endif

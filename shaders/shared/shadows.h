@@ -10,6 +10,11 @@ struct ShadowMapPush {
   mat4 model;
   mat4 light_view_projection;
 };
+// The widest PCSS blocker search and filter radius (pcss.glsl) of sm and cascades, in map texels along
+// the finer axis: wider, 16 search taps would be too sparse to find thin occluders. Penumbrae wider
+// than this are clamped to it.
+SHARED_CONST float kPcssMaxTexels = 32.0f;
+
 struct ShadowMapResolveParams {
   mat4 light_view_projection;
   vec4 light_direction;  // xyz travel direction
@@ -18,6 +23,14 @@ struct ShadowMapResolveParams {
   vec4 bias;             // x: constant depth bias; y: PCF radius in map texels (0: one tap)
   uvec4 extent;          // xy render size, zw map size
   vec4 camera_position;  // xyz (the shadow-ray offset, shadow_common.h)
+  // PCSS (a light with a size; pcss.glsl's PcssMap): the transpose of light_view_projection's inverse
+  // (receiver planes into the map); x the light's size (sun: tan of its angular radius; else its
+  // radius), y an orthographic map's depth range (world units), zw a perspective map's near and far
+  // planes; xy a texel's size in map units, z the widest search and filter radius in texels, w 1 for
+  // a perspective map.
+  mat4 light_plane_matrix;
+  vec4 pcss;
+  vec4 pcss_texel;
 };
 SHARED_CONST uint SM_RESOLVE_BINDING_PARAMS = 0u;
 SHARED_CONST uint SM_RESOLVE_BINDING_WORLD_POSITION = 1u;
@@ -40,6 +53,6 @@ SHARED_END
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::ShadowMapPush) == 128);
 static_assert(sizeof(gpu_shared::AlphaDepthPush) == 80);
-static_assert(sizeof(gpu_shared::ShadowMapResolveParams) == 64 + 96);
+static_assert(sizeof(gpu_shared::ShadowMapResolveParams) == 2 * 64 + 128);
 #endif
 #endif

@@ -134,6 +134,7 @@ SceneLight scene_local_light(engine::Registry& registry, shadows::LightType type
       out.module.radius = s.radius;
       out.module.inner_cone = s.inner_cone;
       out.module.outer_cone = s.outer_cone;
+      out.module.radius = s.radius;
       out.reference.spot = true;
       out.reference.cos_outer = std::cos(s.outer_cone);
     });

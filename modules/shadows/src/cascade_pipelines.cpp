@@ -49,8 +49,8 @@ CascadePipelines::CascadePipelines(Context& ctx) : ctx_(ctx) {
                                    {{0, apply}}});
 }
 
-const Pipeline& CascadePipelines::filter(uint32_t stage, uint32_t masking, uint32_t debug) {
-  Pipeline& pipeline = filters_[stage][masking][debug];
+const Pipeline& CascadePipelines::filter(uint32_t stage, uint32_t masking, uint32_t debug, uint32_t pcss) {
+  Pipeline& pipeline = filters_[stage][masking][debug][pcss];
   if (pipeline.valid()) return pipeline;
   PipelineFactory factory(ctx_);
   pipeline = factory.compute(
@@ -70,7 +70,7 @@ const Pipeline& CascadePipelines::filter(uint32_t stage, uint32_t masking, uint3
         {gs::CASCADE_FILTER_BINDING_INPUT_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
         {gs::CASCADE_FILTER_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
        0,
-       {{0, stage}, {1, masking}, {2, debug}}});
+       {{0, stage}, {1, masking}, {2, debug}, {3, pcss}}});
   return pipeline;
 }
 

@@ -8,12 +8,12 @@ namespace shadows::detail {
 // The cascades' depth maps' format.
 inline constexpr VkFormat kCascadeMapFormat = VK_FORMAT_D32_SFLOAT;
 
-// The cascades' pipelines: the depth pass, the masks, the filter's stages (per masking and debug
-// view, made on first use), the dispatch sizes and the blur.
+// The cascades' pipelines: the depth pass, the masks, the filter's stages (per masking, debug view and
+// PCSS, made on first use), the dispatch sizes and the blur.
 class CascadePipelines {
  public:
   explicit CascadePipelines(engine::gpu::Context& ctx);
-  const engine::gpu::Pipeline& filter(uint32_t stage, uint32_t masking, uint32_t debug);
+  const engine::gpu::Pipeline& filter(uint32_t stage, uint32_t masking, uint32_t debug, uint32_t pcss);
 
   engine::gpu::Pipeline depth[2];  // [cull_front_faces]
   engine::gpu::Pipeline alpha_depth;  // alpha-tested casters, either culling setting
@@ -23,7 +23,7 @@ class CascadePipelines {
 
  private:
   engine::gpu::Context& ctx_;
-  engine::gpu::Pipeline filters_[4][3][3];  // [stage][masking][debug]
+  engine::gpu::Pipeline filters_[4][3][3][2];  // [stage][masking][debug][pcss]
 };
 
 }  // namespace shadows::detail

@@ -1,7 +1,10 @@
 // Cascaded filtered shadow maps. Per frame: fit the cascades (cascade_fit.cpp) -> cascade_depth (one
 // D32 layer per cascade) -> cascade_masks (edge flag and depth extent per texel of each cascade's
 // mask level over its receivers' rectangle, then combined over each texel's 2x2 neighbourhoods) ->
-// cascade_filter (rotated 12-tap Poisson PCF or one tap, per pixel: a classify stage over the frame
+// cascade_filter (rotated 12-tap Poisson PCF or one tap, per pixel; for a sun with a size, PCSS in the
+// pixel's cascade (pcss.glsl) wherever its penumbra is wider than the 12-tap kernel, the penumbra's
+// radius taken in world units and converted with the cascade's own texel size, so it runs on
+// unbroken across splits and blend bands; a classify stage over the frame
 // takes the one tap where the mask allows and lists the pixels that need the kernel or lie in a
 // blend band; two stages over those lists, with indirect dispatches, finish them; with masking off
 // the classify stage takes the kernel itself and lists only the band) -> cascade_blur
@@ -25,7 +28,10 @@
 // receiver's tangent plane, extended over the kernel, crosses an edge-free stretch of the map (a
 // concave crease, e.g. a wall meeting the roof slab above it): there the full kernel lets a few taps
 // through and the single tap does not. Such pixels differ by fewer than half the taps, so they never
-// change between lit and shadowed at a 0.5 threshold.
+// change between lit and shadowed at a 0.5 threshold. With PCSS the footprint tested is the blocker
+// search's (where wider than the kernel): every PCSS tap lies within it, since the filter's radius,
+// the reach of the average blocker, never exceeds the search's, so the same argument holds; the mask
+// level is chosen for the widest search a cascade can need (its depth range times the sun's tangent).
 #include "barriers.hpp"
 #include "cascades_pass.hpp"
 
@@ -42,6 +48,7 @@
 #include "light_space.hpp"
 #include "shared/cascades.h"
 #include "shared/izb.h"
+#include "shared/shadows.h"
 
 namespace shadows::detail {
 
@@ -199,6 +206,8 @@ struct CascadesPass::Impl {
                                 std::array<glm::ivec4, kMaxCascadeCount>* rects) const {
     gs::CascadeParams p{};
     const float size = float(map_size);
+    const float tan_half_angle = frame.view.light_tan_half_angle;
+    p.pcss = glm::vec4(tan_half_angle, gs::kPcssMaxTexels, 0.0f, 0.0f);
     const uint32_t top_level = mip_count(map_size) - 1;
     uint32_t mask_texels = 0;
     for (uint32_t c = 0; c < kMaxCascadeCount; ++c) {
@@ -210,8 +219,11 @@ struct CascadesPass::Impl {
       p.split_far[c] = fit.splits[k + 1];
       p.blend_start[c] = fit.blend_start[k];
       p.texel_world[c] = texel;
-      const float kernel = std::max(s.kernel_radius, 0.0f) / texel;
-      p.kernel_texels[c] = kernel;
+      p.kernel_texels[c] = std::max(s.kernel_radius, 0.0f) / texel;
+      p.depth_range[c] = range;
+      // The widest footprint a pixel's taps may cover: with PCSS its search radius for a receiver at
+      // the map's far depth (pcss.glsl, pcss_search_radius), when that is wider than the kernel.
+      const float kernel = std::max(p.kernel_texels[c], std::min(tan_half_angle * range / texel, gs::kPcssMaxTexels));
       p.depth_bias[c] = s.constant_bias * texel / range;
       p.normal_offset[c] = s.normal_offset * texel;
       p.edge_threshold[c] = kEdgeSlopeTexels * texel / range;
@@ -350,9 +362,9 @@ void CascadesPass::Impl::record_masks(Frame& frame, const CascadeSettings& s,
 void CascadesPass::Impl::record_filter(Frame& frame, const gs::CascadeParams& p, Image& out, const PixelList* only) {
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_filter");
-  const uint32_t masking = p.mode.x, debug_view = p.mode.z;
+  const uint32_t masking = p.mode.x, debug_view = p.mode.z, pcss = p.pcss.x > 0.0f ? 1u : 0u;
   auto bind_filter = [&](uint32_t stage) {
-    const Pipeline& pipeline = pipelines.filter(stage, masking, debug_view);
+    const Pipeline& pipeline = pipelines.filter(stage, masking, debug_view, pcss);
     pipeline.bind(cmd);
     DescriptorWriter()
         .uniform_buffer(gs::CASCADE_FILTER_BINDING_PARAMS, params.handle())

@@ -2,6 +2,7 @@
 #include "shadow_map_pass.hpp"
 
 #include "light_space.hpp"
+#include "shared/local_light.h"
 #include "shared/shadows.h"
 
 namespace shadows::detail {
@@ -10,7 +11,20 @@ using namespace engine::gpu;
 
 namespace {
 constexpr VkFormat kMapFormat = VK_FORMAT_D32_SFLOAT;
+
+// The PCSS fields of the resolve's parameters (pcss.glsl's PcssMap). `light_vp` is a projection
+// times a rigid light view, so the norms of its rows' xyz are the projection's scales: a texel's size
+// in map units from the first two, an orthographic map's depth range from the third.
+void set_pcss_params(gpu_shared::ShadowMapResolveParams& p, const View& view, const glm::mat4& light_vp, uint32_t size) {
+  const auto row_norm = [&](int i) { return glm::length(glm::vec3(light_vp[0][i], light_vp[1][i], light_vp[2][i])); };
+  const bool perspective = view.local_light;
+  p.light_plane_matrix = glm::transpose(glm::inverse(light_vp));
+  p.pcss = glm::vec4(perspective ? view.light_radius : view.light_tan_half_angle, 1.0f / row_norm(2), 0.0f, 0.0f);
+  if (perspective) p.pcss = glm::vec4(p.pcss.x, 0.0f, gpu_shared::local_light_bulb(view.light_range), view.light_range);
+  p.pcss_texel = glm::vec4(2.0f / (row_norm(0) * float(size)), 2.0f / (row_norm(1) * float(size)),
+                           gpu_shared::kPcssMaxTexels, perspective ? 1.0f : 0.0f);
 }
+}  // namespace
 
 ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
   params_ = Buffer(ctx, sizeof(gpu_shared::ShadowMapResolveParams),
@@ -26,14 +40,17 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
   d.depth_compare = VK_COMPARE_OP_LESS_OR_EQUAL;
   d.cull_mode = VK_CULL_MODE_NONE;
   d.depth_bias = true;
-  resolve_pipeline_ = factory.compute({"shadow_map_resolve.comp",
-                                       {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-                                        {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                        {gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                        {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                                        {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                        {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
-                                       0});
+  for (uint32_t pcss = 0; pcss < 2; ++pcss)
+    resolve_pipelines_[pcss] =
+        factory.compute({"shadow_map_resolve.comp",
+                         {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+                          {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                          {gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                          {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                          {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                          {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+                         0,
+                         {{0, pcss}}});
   depth_pipeline_ = factory.graphics(d);
   alpha_depth_pipeline_ = alpha_depth_pipeline(ctx, d);
 }
@@ -79,8 +96,11 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     p.bias = glm::vec4(settings.constant_bias, filter_texels, 0.0f, 0.0f);
     p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
     p.camera_position = glm::vec4(frame.view.camera_position, 1.0f);
+    set_pcss_params(p, frame.view, light_vp, settings.size);
     record_update(ctx_, cmd, params_, &p, sizeof(p));
-    resolve_pipeline_.bind(cmd);
+    const bool sized = (frame.view.local_light ? frame.view.light_radius : frame.view.light_tan_half_angle) > 0.0f;
+    const Pipeline& resolve_pipeline = resolve_pipelines_[sized ? 1 : 0];
+    resolve_pipeline.bind(cmd);
     DescriptorWriter()
         .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
@@ -88,7 +108,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
         .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, frame.shadow_term.view())
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, frame.gbuffer.albedo)
-        .push(ctx_, cmd, resolve_pipeline_);
+        .push(ctx_, cmd, resolve_pipeline);
     vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
   }
 }

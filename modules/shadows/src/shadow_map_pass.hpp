@@ -5,12 +5,15 @@
 
 namespace shadows::detail {
 
-// The "sm" baseline: one depth map fitted to the casters' bounds, resolved with one tap.
+// The "sm" baseline: one depth map fitted to the casters' bounds, resolved with one tap; a light with a
+// size (View::light_tan_half_angle, light_radius) is resolved with PCSS (pcss.glsl) wherever its
+// penumbra is at least half a texel wide (and wider than `filter_texels`), with one tap elsewhere.
 class ShadowMapPass {
  public:
   explicit ShadowMapPass(engine::gpu::Context& ctx);
   // `filter_texels` > 0: percentage-closer filtering over a disk of that radius in map texels (a spot
-  // light's counterpart of the cascades' filtered term); 0: one tap.
+  // light's counterpart of the cascades' filtered term; with a light size, the narrowest PCSS filter);
+  // 0: one tap.
   void record(Frame& frame, const ShadowMapSettings& settings, float filter_texels = 0.0f);
 
  private:
@@ -21,7 +24,7 @@ class ShadowMapPass {
   engine::gpu::Sampler sampler_;
   engine::gpu::Pipeline depth_pipeline_;
   engine::gpu::Pipeline alpha_depth_pipeline_;  // alpha-tested casters
-  engine::gpu::Pipeline resolve_pipeline_;
+  engine::gpu::Pipeline resolve_pipelines_[2];  // [the light has a size: PCSS]
 };
 
 }  // namespace shadows::detail

@@ -30,7 +30,9 @@ enum class CsmTest {
 
 // Auto: Edge where the cascades filter the whole frame; Off in the hybrid, where they filter only the
 // pixels the IZB leaves them, and building masks over the whole view costs more than the taps they
-// would skip (measured on lavapipe and the H200).
+// would skip (measured on lavapipe and the H200). With a sun of some size the masks are tested over
+// the PCSS blocker search's footprint (which holds every PCSS tap), so a pixel with a wide penumbra
+// is never skipped wrongly; wide searches just skip less.
 enum class Masking { Off, Edge, DepthExtent, Auto };
 
 enum class DebugView { None, VisibilityMask, ListLength, Cascades, CsmCoverage, ExpensivePath };
@@ -55,6 +57,9 @@ enum class LitCulling { Off, On, Auto };
 // own (64, up to 256). The answer is the same in every shape.
 enum class StepOneShape { Auto, Wide, Narrow };
 
+// sm: one tap, or for a light with a size (Light::angular_diameter_degrees, radius) PCSS wherever its
+// penumbra is at least half a texel wide (blocker search and filter within kPcssMaxTexels, 32 texels,
+// shared/shadows.h).
 struct ShadowMapSettings {
   uint32_t size = 1024;
   float constant_bias = 1.0e-4f;  // in light depth units ([0,1] over the fitted depth range)
@@ -71,8 +76,11 @@ struct CascadeSettings {
   float slope_bias = 1.5f;            // rasterizer slope-scaled bias
   float normal_offset = 1.0f;         // in texels, along the geometric normal
   bool cull_front_faces = false;      // render back faces into the maps (closed meshes only)
-  float kernel_radius = 0.08f;        // PCF disk radius in world units (same across cascades)
-  Masking masking = Masking::Auto;    // where the 12-tap filter may be skipped
+  // PCF disk radius in world units (same across cascades). For a sun with a size
+  // (Light::angular_diameter_degrees) the narrowest filter: pixels whose PCSS penumbra is wider take
+  // PCSS's radius instead (continuous across cascades), the rest keep this kernel.
+  float kernel_radius = 0.08f;
+  Masking masking = Masking::Auto;    // where the filter (12 taps, or PCSS's) may be skipped
   bool blur = true;                   // 5x5 blur on pixels whose taps disagreed
 };
 
