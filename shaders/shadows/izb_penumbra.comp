@@ -14,16 +14,18 @@ layout(local_size_x = 8, local_size_y = 8) in;  // kPenumbraTile²: a workgroup 
 // plane, both with taps laid across the light and mapped onto the pixel's tangent plane and into the
 // image. Where the penumbra is narrower than a pixel the IZB's term stays as it is, exact.
 //
-// Three steps, specialized apart (a CPU device runs every branch):
-//  kStepTiles:  per tile, the range of the hard term and the widest penumbra its shadowed pixels cast
-//               (in pixels);
-//  kStepFilter: per tile, whether any tile within kPenumbraMaxRadius casts a penumbra that reaches it
-//               over a term that varies; if so, the tile is listed and its pixels' filtered terms
-//               stored beside the list (the term itself is read by the neighbours' taps);
-//  kStepApply:  over the listed tiles (an indirect dispatch), the filtered terms into the term.
+// Four steps, specialized apart (a CPU device runs every branch):
+//  kStepTiles:  a workgroup a tile: the range of the hard term and the widest penumbra its shadowed
+//               pixels cast (in pixels);
+//  kStepDilate: a thread a tile: whether any tile within kPenumbraMaxRadius casts a penumbra that
+//               reaches it over a term that varies; if so it is listed, with that reach;
+//  kStepFilter: a workgroup a listed tile (an indirect dispatch): its pixels' filtered terms, stored
+//               beside the list (the term itself is read by the neighbours' taps);
+//  kStepApply:  the same workgroups: the filtered terms into the term.
 const uint kStepTiles = 0u;
-const uint kStepFilter = 1u;
-const uint kStepApply = 2u;
+const uint kStepDilate = 1u;
+const uint kStepFilter = 2u;
+const uint kStepApply = 3u;
 layout(constant_id = 14) const uint kStep = kStepTiles;
 
 layout(set = 0, binding = IZB_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D positions;
@@ -56,6 +58,9 @@ struct Receiver {
   float height;   // occluder_height
 };
 
+bool inside(ivec2 pixel) { return all(greaterThanEqual(pixel, ivec2(0))) && all(lessThan(pixel, extent())); }
+
+// The pixel whose penumbra is being found: its surface in full.
 Receiver load_receiver(ivec2 pixel) {
   Receiver r;
   r.valid = false;
@@ -63,7 +68,7 @@ Receiver load_receiver(ivec2 pixel) {
   r.height = -1.0;
   r.position = vec3(0.0);
   r.normal = vec3(0.0, 1.0, 0.0);
-  if (any(lessThan(pixel, ivec2(0))) || any(greaterThanEqual(pixel, extent()))) return r;
+  if (!inside(pixel)) return r;
   vec4 p = imageLoad(positions, pixel);
   vec4 n = imageLoad(normals, pixel);
   r.position = p.xyz;
@@ -76,9 +81,29 @@ Receiver load_receiver(ivec2 pixel) {
   return r;
 }
 
+// A tap's pixel: its point and term (and with `heights`, its occluder's height), no more. A tap on the
+// receiver's own plane (same_surface) shares its facing; one on a surface that receives no shadow
+// reads as lit, which its term is.
+Receiver load_tap(ivec2 pixel, bool heights) {
+  Receiver t;
+  t.normal = vec3(0.0);
+  t.term = 1.0;
+  t.height = -1.0;
+  vec4 p = inside(pixel) ? imageLoad(positions, pixel) : vec4(0.0);
+  t.position = p.xyz;
+  t.valid = p.w > 0.5 && distance(p.xyz, params.camera_position.xyz) <= range_limit();
+  if (!t.valid) return t;
+  t.term = imageLoad(shadow_term, pixel).r;
+  if (heights && t.term < 1.0) t.height = occluder_height(uint(pixel.y) * params.extent.x + uint(pixel.x));
+  return t;
+}
+
 // ---- kStepTiles ----------------------------------------------------------------------------------
 shared uint tile_min_term, tile_max_term, tile_radius;
 
+// The range of the term over the tile's pixels (every pixel's: a wider range only lists more tiles),
+// and the widest penumbra radius, in pixels, of its pixels with an occluder height. Reduced per
+// subgroup, then across them.
 void summarize_tile() {
   if (gl_LocalInvocationIndex == 0u) {
     tile_min_term = floatBitsToUint(1.0);
@@ -86,11 +111,20 @@ void summarize_tile() {
     tile_radius = 0u;
   }
   barrier();
-  Receiver r = load_receiver(ivec2(gl_GlobalInvocationID.xy));
-  if (r.valid) {
-    atomicMin(tile_min_term, floatBitsToUint(r.term));  // terms in [0, 1]: their bits order as they do
-    atomicMax(tile_max_term, floatBitsToUint(r.term));
-    if (r.height > 0.0) atomicMax(tile_radius, floatBitsToUint(r.height * tan_half_angle() / footprint(r.position)));
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  float term = inside(pixel) ? imageLoad(shadow_term, pixel).r : 1.0;
+  float radius = 0.0;
+  if (term < 1.0) {
+    float height = occluder_height(uint(pixel.y) * params.extent.x + uint(pixel.x));
+    if (height > 0.0) radius = height * tan_half_angle() / footprint(imageLoad(positions, pixel).xyz);
+  }
+  // Terms in [0, 1] and radii >= 0: their bits order as they do.
+  uint low = subgroupMin(floatBitsToUint(term)), high = subgroupMax(floatBitsToUint(term));
+  uint widest = subgroupMax(floatBitsToUint(radius));
+  if (subgroupElect()) {
+    atomicMin(tile_min_term, low);
+    atomicMax(tile_max_term, high);
+    atomicMax(tile_radius, widest);
   }
   barrier();
   if (gl_LocalInvocationIndex == 0u) {
@@ -100,52 +134,56 @@ void summarize_tile() {
   }
 }
 
-// ---- kStepFilter ---------------------------------------------------------------------------------
-shared uint window_radius, window_min_term, window_max_term, listed_slot;
-
-// Pixels between tile `t`'s nearest pixel and this tile's (0 for the tile itself and its neighbours).
+// ---- kStepDilate ---------------------------------------------------------------------------------
+// Pixels between the nearest pixels of two tiles `offset` apart (0 for a tile and its neighbours).
 float tile_gap(ivec2 offset) { return length(vec2(max(abs(offset) - 1, ivec2(0)) * int(kPenumbraTile))); }
 
-// Whether this tile needs filtering: some tile in reach casts a penumbra over it, and the term varies
-// within that reach. Sets window_radius (pixels) and listed_slot.
-bool tile_in_penumbra() {
-  uint i = gl_LocalInvocationIndex;
-  if (i == 0u) {
-    window_radius = 0u;
-    window_min_term = floatBitsToUint(1.0);
-    window_max_term = 0u;
-  }
-  barrier();
-  const int side = 2 * kWindow + 1;
-  ivec2 offset = ivec2(int(i) % side, int(i) / side) - kWindow;
-  ivec2 tile = ivec2(gl_WorkGroupID.xy) + offset;
-  bool in_window = int(i) < side * side && all(greaterThanEqual(tile, ivec2(0))) &&
-                   all(lessThan(tile, ivec2(tiles_x(), penumbra_tiles_y(params.extent.y))));
-  uvec4 summary = in_window ? entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y) + uint(tile.y) * tiles_x() + uint(tile.x)]
-                            : uvec4(floatBitsToUint(1.0), 0u, 0u, 0u);
-  float radius = min(uintBitsToFloat(summary.z), float(kPenumbraMaxRadius));
-  if (in_window && radius >= 0.5 && radius >= tile_gap(offset)) atomicMax(window_radius, floatBitsToUint(radius));
-  barrier();
-  float reach = uintBitsToFloat(window_radius);
-  if (in_window && reach > 0.0 && tile_gap(offset) <= reach) {
-    atomicMin(window_min_term, summary.x);
-    atomicMax(window_max_term, summary.y);
-  }
-  barrier();
-  bool needed = reach > 0.0 && window_min_term < window_max_term;
-  if (needed && i == 0u) {
-    listed_slot = atomicAdd(counters[IZB_COUNTER_PENUMBRA_TILES], 1u);
-    // The apply step's dispatch: rows of kIzbDispatchRow workgroups (a dimension's portable limit is 65535).
-    atomicMax(counters[IZB_COUNTER_PENUMBRA_TILES + 1u], min(listed_slot + 1u, kIzbDispatchRow));
-    atomicMax(counters[IZB_COUNTER_PENUMBRA_TILES + 2u], listed_slot / kIzbDispatchRow + 1u);
-    counters[IZB_COUNTER_PENUMBRA_TILES + 3u] = 1u;
-    entries[izb_penumbra_list_at(params.extent.x, params.extent.y) + listed_slot] =
-        uvec4(gl_WorkGroupID.y * tiles_x() + gl_WorkGroupID.x, 0u, 0u, 0u);
-  }
-  barrier();
-  return needed;
+uvec4 tile_summary(ivec2 tile) {
+  return entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y) + uint(tile.y) * tiles_x() + uint(tile.x)];
 }
 
+// A thread a tile: listed (with the widest penumbra that reaches it, in pixels) where some tile in
+// reach casts a penumbra over it and the term varies within that reach.
+void dilate_tile() {
+  ivec2 tile = ivec2(gl_GlobalInvocationID.xy);
+  ivec2 tiles = ivec2(tiles_x(), penumbra_tiles_y(params.extent.y));
+  bool needed = false;
+  float reach = 0.0;
+  if (all(lessThan(tile, tiles))) {
+    ivec2 lo = max(tile - kWindow, ivec2(0)), hi = min(tile + kWindow, tiles - 1);
+    for (int y = lo.y; y <= hi.y; ++y)
+      for (int x = lo.x; x <= hi.x; ++x) {
+        float radius = min(uintBitsToFloat(tile_summary(ivec2(x, y)).z), float(kPenumbraMaxRadius));
+        if (radius >= 0.5 && radius >= tile_gap(ivec2(x, y) - tile)) reach = max(reach, radius);
+      }
+    uint low = floatBitsToUint(1.0), high = 0u;
+    if (reach > 0.0)
+      for (int y = lo.y; y <= hi.y; ++y)
+        for (int x = lo.x; x <= hi.x; ++x) {
+          if (tile_gap(ivec2(x, y) - tile) > reach) continue;
+          uvec4 summary = tile_summary(ivec2(x, y));
+          low = min(low, summary.x);
+          high = max(high, summary.y);
+        }
+    needed = low < high;
+  }
+  // One atomic per subgroup; the filter and apply steps' dispatch in rows of kIzbDispatchRow.
+  uint count = subgroupAdd(needed ? 1u : 0u);
+  uint base = 0u;
+  if (subgroupElect() && count != 0u) {
+    base = atomicAdd(counters[IZB_COUNTER_PENUMBRA_TILES], count);
+    uint last = base + count - 1u;
+    atomicMax(counters[IZB_COUNTER_PENUMBRA_TILES + 1u], min(last + 1u, kIzbDispatchRow));
+    atomicMax(counters[IZB_COUNTER_PENUMBRA_TILES + 2u], last / kIzbDispatchRow + 1u);
+    counters[IZB_COUNTER_PENUMBRA_TILES + 3u] = 1u;
+  }
+  uint slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(needed ? 1u : 0u);
+  if (needed)
+    entries[izb_penumbra_list_at(params.extent.x, params.extent.y) + slot] =
+        uvec4(uint(tile.y) * tiles_x() + uint(tile.x), floatBitsToUint(reach), 0u, 0u);
+}
+
+// ---- kStepFilter ---------------------------------------------------------------------------------
 // A per-pixel turn of the tap pattern, fixed over time (a still frame stays still).
 float pixel_turn(ivec2 pixel) {
   return 6.2831853 * fract(52.9829189 * fract(0.06711056 * float(pixel.x) + 0.00583715 * float(pixel.y)));
@@ -158,23 +196,23 @@ vec2 disc_tap(uint k, uint n, float turn) {
   return radius * vec2(cos(angle), sin(angle));
 }
 
-struct Frame2 {
-  vec3 across_u, across_v;  // unit, perpendicular to the light and to each other
-  vec3 light;               // the direction light travels
+struct Across {
+  vec3 u, v;   // unit, perpendicular to the light and to each other
+  vec3 light;  // the direction light travels
 };
 
-Frame2 light_frame() {
-  Frame2 f;
+Across across_light() {
+  Across f;
   f.light = normalize(params.light_direction.xyz);
   vec3 helper = abs(f.light.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
-  f.across_u = normalize(cross(helper, f.light));
-  f.across_v = cross(f.light, f.across_u);
+  f.u = normalize(cross(helper, f.light));
+  f.v = cross(f.light, f.u);
   return f;
 }
 
 // The pixel showing the point of `r`'s tangent plane that lies `offset` across the light from it.
-ivec2 tap_pixel(Receiver r, Frame2 f, vec2 offset) {
-  vec3 across = offset.x * f.across_u + offset.y * f.across_v;
+ivec2 tap_pixel(Receiver r, Across f, vec2 offset) {
+  vec3 across = offset.x * f.u + offset.y * f.v;
   float facing = dot(f.light, r.normal);
   facing = facing < 0.0 ? min(facing, -0.1) : max(facing, 0.1);  // grazing light: bounded stretch
   vec3 point = r.position + across - (dot(across, r.normal) / facing) * f.light;
@@ -189,23 +227,24 @@ bool same_surface(Receiver r, Receiver t, float pixel_width) {
   return t.valid && abs(dot(d, r.normal)) <= 2.0 * pixel_width + 0.1 * length(d);
 }
 
-float across_distance(Frame2 f, vec3 d) { return length(d - dot(d, f.light) * f.light); }
+float across_distance(Across f, vec3 d) { return length(d - dot(d, f.light) * f.light); }
 
-// The filtered term of `r` (at `pixel`), or kNoValue where the IZB's term stays.
-uint filtered_term(ivec2 pixel, Receiver r) {
+// The filtered term of `r` (at `pixel`; `reach`: the widest penumbra in reach, in pixels), or
+// kNoValue where the IZB's term stays.
+uint filtered_term(ivec2 pixel, Receiver r, float reach) {
   if (!r.valid) return kNoValue;
-  Frame2 f = light_frame();
+  Across f = across_light();
   float pixel_width = footprint(r.position);
   float turn = pixel_turn(pixel);
   // (1) Blockers: shadowed pixels around whose penumbra reaches this one, their heights averaged.
-  float search = uintBitsToFloat(window_radius) * pixel_width;
+  float search = reach * pixel_width;
   float heights = 0.0, blockers = 0.0;
   if (r.height > 0.0) {
     heights += r.height;
     blockers += 1.0;
   }
   for (uint k = 0u; k < kPenumbraSearchTaps; ++k) {
-    Receiver t = load_receiver(tap_pixel(r, f, search * disc_tap(k, kPenumbraSearchTaps, turn)));
+    Receiver t = load_tap(tap_pixel(r, f, search * disc_tap(k, kPenumbraSearchTaps, turn)), true);
     if (!same_surface(r, t, pixel_width) || t.height <= 0.0) continue;
     // (Half a pixel of slack: the tap stands for its pixel's whole square.)
     if (across_distance(f, t.position - r.position) > t.height * tan_half_angle() + 0.5 * pixel_width) continue;
@@ -221,7 +260,7 @@ uint filtered_term(ivec2 pixel, Receiver r) {
   // two weighs its neighbours by how much of them it covers.
   float sum = 0.0, weight = 0.0;
   for (uint k = 0u; k < kPenumbraFilterTaps; ++k) {
-    Receiver t = load_receiver(tap_pixel(r, f, radius * disc_tap(k, kPenumbraFilterTaps, turn + 1.0)));
+    Receiver t = load_tap(tap_pixel(r, f, radius * disc_tap(k, kPenumbraFilterTaps, turn + 1.0)), false);
     if (!same_surface(r, t, pixel_width)) continue;
     sum += t.term;
     weight += 1.0;
@@ -230,27 +269,46 @@ uint filtered_term(ivec2 pixel, Receiver r) {
   return floatBitsToUint(sum / weight);
 }
 
+// The listed tile of this workgroup (the filter's and the apply's indirect dispatch), or false.
+bool listed_tile(out uint slot, out uvec4 entry) {
+  slot = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
+  if (slot >= counters[IZB_COUNTER_PENUMBRA_TILES]) return false;
+  entry = entries[izb_penumbra_list_at(params.extent.x, params.extent.y) + slot];
+  return true;
+}
+
+ivec2 tile_pixel(uint tile) {
+  return ivec2(tile % tiles_x(), tile / tiles_x()) * int(kPenumbraTile) + ivec2(gl_LocalInvocationID.xy);
+}
+
+// Where a listed tile's filtered terms are kept: 4 an entry.
+uint value_entry(uint slot) {
+  return izb_penumbra_values_at(params.extent.x, params.extent.y) + slot * (kPenumbraTile * kPenumbraTile / 4u) +
+         gl_LocalInvocationIndex / 4u;
+}
+
 void filter_tile() {
-  if (!tile_in_penumbra()) return;
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-  uint value = filtered_term(pixel, load_receiver(pixel));
-  uint at = izb_penumbra_values_at(params.extent.x, params.extent.y) + listed_slot * (kPenumbraTile * kPenumbraTile / 4u);
-  entries[at + gl_LocalInvocationIndex / 4u][gl_LocalInvocationIndex % 4u] = value;
+  uint slot;
+  uvec4 entry;
+  if (!listed_tile(slot, entry)) return;
+  ivec2 pixel = tile_pixel(entry.x);
+  entries[value_entry(slot)][gl_LocalInvocationIndex % 4u] =
+      filtered_term(pixel, load_receiver(pixel), uintBitsToFloat(entry.y));
 }
 
 // ---- kStepApply ----------------------------------------------------------------------------------
 void apply_tile() {
-  uint slot = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
-  if (slot >= counters[IZB_COUNTER_PENUMBRA_TILES]) return;
-  uint tile = entries[izb_penumbra_list_at(params.extent.x, params.extent.y) + slot].x;
-  ivec2 pixel = ivec2(tile % tiles_x(), tile / tiles_x()) * int(kPenumbraTile) + ivec2(gl_LocalInvocationID.xy);
-  uint at = izb_penumbra_values_at(params.extent.x, params.extent.y) + slot * (kPenumbraTile * kPenumbraTile / 4u);
-  uint value = entries[at + gl_LocalInvocationIndex / 4u][gl_LocalInvocationIndex % 4u];
-  if (value != kNoValue && all(lessThan(pixel, extent()))) imageStore(shadow_term, pixel, vec4(uintBitsToFloat(value)));
+  uint slot;
+  uvec4 entry;
+  if (!listed_tile(slot, entry)) return;
+  ivec2 pixel = tile_pixel(entry.x);
+  uint value = entries[value_entry(slot)][gl_LocalInvocationIndex % 4u];
+  if (value != kNoValue && inside(pixel)) imageStore(shadow_term, pixel, vec4(uintBitsToFloat(value)));
 }
 
 void main() {
   if (kStep == kStepTiles) summarize_tile();
+  else if (kStep == kStepDilate) dilate_tile();
   else if (kStep == kStepFilter) filter_tile();
   else apply_tile();
 }

@@ -278,13 +278,13 @@ SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per 
 // to filter.
 SHARED_CONST uint kPenumbraTile = 8u;
 SHARED_CONST uint kPenumbraMaxRadius = 24u;
-SHARED_CONST uint kPenumbraSearchTaps = 16u;
-SHARED_CONST uint kPenumbraFilterTaps = 24u;
+SHARED_CONST uint kPenumbraSearchTaps = 12u;
+SHARED_CONST uint kPenumbraFilterTaps = 16u;
 SHARED_INLINE uint penumbra_tiles_x(uint width) { return (width + kPenumbraTile - 1u) / kPenumbraTile; }
 SHARED_INLINE uint penumbra_tiles_y(uint height) { return (height + kPenumbraTile - 1u) / kPenumbraTile; }
 // In the hybrid list's buffer (uvec4 entries), after the fade band's width * height: per tile its
 // summary {min term, max term, widest penumbra radius in pixels (float bits), -}; then the listed
-// tiles {tile, -, -, -}; then per listed tile its kPenumbraTile² filtered terms (float bits, 4 an entry).
+// tiles {tile, widest penumbra in reach in pixels (float bits), -, -}; then per listed tile its kPenumbraTile² filtered terms (float bits, 4 an entry).
 SHARED_INLINE uint izb_penumbra_tiles_at(uint width, uint height) { return width * height; }
 SHARED_INLINE uint izb_penumbra_list_at(uint width, uint height) {
   return width * height + penumbra_tiles_x(width) * penumbra_tiles_y(height);

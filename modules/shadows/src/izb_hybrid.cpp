@@ -45,11 +45,13 @@ void record_hybrid_penumbra(IzbState& s, Frame& frame) {
   const gpu_shared::IzbComputePush push{};
   const uint32_t tiles_x = gpu_shared::penumbra_tiles_x(frame.view.extent.width);
   const uint32_t tiles_y = gpu_shared::penumbra_tiles_y(frame.view.extent.height);
-  s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, tiles_x, tiles_y);  // kStepTiles
+  s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, tiles_x, tiles_y);  // kStepTiles: a workgroup a tile
   pass_barrier(s.ctx, cmd);
-  s.dispatch(cmd, frame, s.pipelines.penumbra(1), push, tiles_x, tiles_y);  // kStepFilter
+  s.dispatch(cmd, frame, s.pipelines.penumbra(1), push, (tiles_x + 7) / 8, (tiles_y + 7) / 8);  // kStepDilate: a thread a tile
   pass_barrier(s.ctx, cmd);
-  s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(2), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);
+  s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(2), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);  // kStepFilter
+  pass_barrier(s.ctx, cmd);
+  s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(3), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);  // kStepApply
 }
 
 }  // namespace shadows::detail

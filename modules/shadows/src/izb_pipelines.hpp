@@ -67,7 +67,7 @@ class IzbPipelineCache {
   std::map<uint64_t, IzbTracePipelines> opaque_traces_;
   engine::gpu::Pipeline build_casters_;
   engine::gpu::Pipeline hybrid_blend_;
-  std::array<engine::gpu::Pipeline, 3> penumbra_;
+  std::array<engine::gpu::Pipeline, 4> penumbra_;
 };
 
 }  // namespace shadows::detail
