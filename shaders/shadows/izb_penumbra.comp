@@ -229,6 +229,57 @@ bool same_surface(Receiver r, Receiver t, float pixel_width) {
 
 float across_distance(Across f, vec3 d) { return length(d - dot(d, f.light) * f.light); }
 
+// The share of the unit disc below the line at `t` (-1..1) along any axis.
+float disc_below(float t) {
+  t = clamp(t, -1.0, 1.0);
+  return 0.5 + (t * sqrt(1.0 - t * t) + asin(t)) / 3.14159265;
+}
+
+// A penumbra a few pixels across, at 1 spp: its disc covers few pixels (on a surface seen at a grazing
+// angle, a fraction of a pixel one way), so averaging whole pixels places the edge to a pixel. The
+// pixels around (5x5, on this surface) place a straight edge better: their points across the light
+// are exact, and a line separating the lit ones from the shadowed ones, perpendicular to the
+// difference of their means, sits between the nearest of each. The lit share of the disc of `radius`
+// on this pixel's side of that line is the term. False (the disc's average stands) where the pixels
+// are all lit or all shadowed, or no such line separates them (a corner, a thin caster).
+bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float radius, out float value) {
+  value = 1.0;
+  vec2 across[25];
+  bool lit[25];
+  int n = 0;
+  vec2 lit_sum = vec2(0.0), dark_sum = vec2(0.0);
+  float lit_count = 0.0, dark_count = 0.0;
+  for (int dy = -2; dy <= 2; ++dy)
+    for (int dx = -2; dx <= 2; ++dx) {
+      Receiver t = load_tap(pixel + ivec2(dx, dy), false);
+      if (!same_surface(r, t, pixel_width)) continue;
+      vec3 d = t.position - r.position;
+      across[n] = vec2(dot(d, f.u), dot(d, f.v));
+      lit[n] = t.term >= 0.5;
+      if (lit[n]) {
+        lit_sum += across[n];
+        lit_count += 1.0;
+      } else {
+        dark_sum += across[n];
+        dark_count += 1.0;
+      }
+      ++n;
+    }
+  if (lit_count == 0.0 || dark_count == 0.0) return false;
+  vec2 normal = lit_sum / lit_count - dark_sum / dark_count;
+  if (dot(normal, normal) <= 0.0) return false;
+  normal = normalize(normal);
+  float darkest = -3.0e38, lightest = 3.0e38;  // the nearest shadowed and lit points along the normal
+  for (int k = 0; k < n; ++k) {
+    float s = dot(across[k], normal);
+    if (lit[k]) lightest = min(lightest, s);
+    else darkest = max(darkest, s);
+  }
+  if (darkest >= lightest) return false;
+  value = 1.0 - disc_below(0.5 * (darkest + lightest) / radius);
+  return true;
+}
+
 // The filtered term of `r` (at `pixel`; `reach`: the widest penumbra in reach, in pixels), or
 // kNoValue where the IZB's term stays.
 uint filtered_term(ivec2 pixel, Receiver r, float reach) {
@@ -266,6 +317,8 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
     weight += 1.0;
   }
   if (weight == 0.0) return kNoValue;
+  float fitted;
+  if (params.extent.w == 1u && fitted_edge(pixel, r, f, pixel_width, radius, fitted)) return floatBitsToUint(fitted);
   return floatBitsToUint(sum / weight);
 }
 
