@@ -294,7 +294,8 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
     heights += r.height;
     blockers += 1.0;
   }
-  for (uint k = 0u; k < kPenumbraSearchTaps; ++k) {
+  // A shadowed pixel's own occluder is its blocker; a lit one searches.
+  for (uint k = 0u; k < (r.height > 0.0 ? 0u : kPenumbraSearchTaps); ++k) {
     Receiver t = load_tap(tap_pixel(r, f, search * disc_tap(k, kPenumbraSearchTaps, turn)), true);
     if (!same_surface(r, t, pixel_width) || t.height <= 0.0) continue;
     // (Half a pixel of slack: the tap stands for its pixel's whole square.)
@@ -317,9 +318,11 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
     weight += 1.0;
   }
   if (weight == 0.0) return kNoValue;
-  float fitted;
-  if (params.extent.w == 1u && fitted_edge(pixel, r, f, pixel_width, radius, fitted)) return floatBitsToUint(fitted);
-  return floatBitsToUint(sum / weight);
+  // (Where every tap agrees the edge lies beyond the disc: nothing to fit.)
+  float average = sum / weight, fitted;
+  if (params.extent.w == 1u && average > 0.0 && average < 1.0 && fitted_edge(pixel, r, f, pixel_width, radius, fitted))
+    return floatBitsToUint(fitted);
+  return floatBitsToUint(average);
 }
 
 // The listed tile of this workgroup (the filter's and the apply's indirect dispatch), or false.
