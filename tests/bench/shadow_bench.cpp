@@ -793,10 +793,16 @@ int run_single(const Options& o) {
   print_header();
   for (const auto& run : runs) results.push_back(bench.measure(run, true));
   if (bench.tracer && !o.screenshot_dir.empty() && !bench.reference_vis.empty()) {
-    // The lighting path fed by the reference instead of a technique: what the image should be.
+    // The lighting path fed by the reference instead of a technique: what the image should be (the
+    // area light's where the light has a size, "_area_reference.png", beside the hard one).
     renderer.set_external_shadow_term(bench.reference_vis);
     renderer.render_frame(0.0f);
     renderer.write_png(o.screenshot_dir + "/" + scene->name + "_v" + std::to_string(o.view) + "_reference.png");
+    if (!bench.area_vis.empty() && !bench.area_vis[0].empty()) {
+      renderer.set_external_shadow_term(bench.area_vis[0]);
+      renderer.render_frame(0.0f);
+      renderer.write_png(o.screenshot_dir + "/" + scene->name + "_v" + std::to_string(o.view) + "_area_reference.png");
+    }
     renderer.set_external_shadow_term({});
   }
   if (!o.json_path.empty()) write_json(o.json_path, results);

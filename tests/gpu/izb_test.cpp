@@ -1063,11 +1063,13 @@ TEST_F(IzbTest, HybridFiltersOnlyThePixelsItBlends) {
 
 namespace {
 
-// Every overlay the panel offers draws something over the lit image, without validation messages.
+// Every overlay the panel offers draws something over the lit image, without validation messages
+// (the hybrid with a limited range, so that its cascades run and their overlays have pixels).
 TEST_F(IzbTest, DebugOverlaysDrawOverTheImage) {
   auto& r = make_renderer("atrium", 0, 96, 96);
   shadows::Settings s;
   s.technique = shadows::Technique::Hybrid;
+  s.hybrid_izb_distance = 20.0f;
   s.izb.resolution = 256;
   s.izb.csm = true;
   module_ = shadows::install(r, s);

@@ -862,7 +862,7 @@ void ContextImpl::record_technique(Frame& frame) {
       near.max_distance = settings.hybrid_izb_distance;
       izb().record(frame, near, settings.debug, true, collect_stats_);
       pass_barrier(*gpu_, frame.cmd);
-      izb().record_hybrid_penumbra(frame);
+      izb().record_hybrid_penumbra(frame, settings.izb.step_timings);
       if (near.max_distance <= 0.0f) break;
       pass_barrier(*gpu_, frame.cmd);
       const PixelList listed = izb().hybrid_list();

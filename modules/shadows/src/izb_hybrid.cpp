@@ -39,19 +39,25 @@ void record_hybrid_blend(IzbState& s, Frame& frame) {
   vkCmdDispatchIndirect(cmd, s.res.counters.handle(), (gpu_shared::IZB_COUNTER_HYBRID + 1) * 4);
 }
 
-void record_hybrid_penumbra(IzbState& s, Frame& frame) {
+void record_hybrid_penumbra(IzbState& s, Frame& frame, bool step_timings) {
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "hybrid_penumbra");
   const gpu_shared::IzbComputePush push{};
   const uint32_t tiles_x = gpu_shared::penumbra_tiles_x(frame.view.extent.width);
   const uint32_t tiles_y = gpu_shared::penumbra_tiles_y(frame.view.extent.height);
-  s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, tiles_x, tiles_y);  // kStepTiles: a workgroup a tile
-  pass_barrier(s.ctx, cmd);
-  s.dispatch(cmd, frame, s.pipelines.penumbra(1), push, (tiles_x + 7) / 8, (tiles_y + 7) / 8);  // kStepDilate: a thread a tile
-  pass_barrier(s.ctx, cmd);
-  s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(2), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);  // kStepFilter
-  pass_barrier(s.ctx, cmd);
-  s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(3), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);  // kStepApply
+  const auto step = [&](const char* name, auto&& record) {
+    OptionalGpuRegion timed(step_timings, s.ctx, frame.profiler, cmd, name);
+    record();
+    pass_barrier(s.ctx, cmd);
+  };
+  step("penumbra_tiles", [&] { s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, tiles_x, tiles_y); });  // a workgroup a tile
+  step("penumbra_dilate",  // a thread a tile
+       [&] { s.dispatch(cmd, frame, s.pipelines.penumbra(1), push, (tiles_x + 7) / 8, (tiles_y + 7) / 8); });
+  step("penumbra_filter", [&] {
+    s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(2), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);
+  });
+  OptionalGpuRegion timed(step_timings, s.ctx, frame.profiler, cmd, "penumbra_apply");
+  s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(3), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);
 }
 
 }  // namespace shadows::detail

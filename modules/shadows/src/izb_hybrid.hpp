@@ -13,6 +13,6 @@ PixelList izb_hybrid_list(const IzbResources& res);
 void record_hybrid_blend(IzbState& s, Frame& frame);
 // Hybrid with a sun of some size, after the IZB's term and occluder heights: the penumbrae
 // (izb_penumbra.comp) into the shadow term.
-void record_hybrid_penumbra(IzbState& s, Frame& frame);
+void record_hybrid_penumbra(IzbState& s, Frame& frame, bool step_timings);
 
 }  // namespace shadows::detail

@@ -68,8 +68,8 @@ PixelList IzbPass::hybrid_list() const { return izb_hybrid_list(state_->res); }
 
 void IzbPass::record_hybrid_blend(Frame& frame) { detail::record_hybrid_blend(*state_, frame); }
 
-void IzbPass::record_hybrid_penumbra(Frame& frame) {
-  if (state_->last.penumbra) detail::record_hybrid_penumbra(*state_, frame);
+void IzbPass::record_hybrid_penumbra(Frame& frame, bool step_timings) {
+  if (state_->last.penumbra) detail::record_hybrid_penumbra(*state_, frame, step_timings);
 }
 
 CsmSnapshot IzbPass::read_csm() { return detail::read_csm(*state_); }

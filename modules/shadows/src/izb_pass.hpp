@@ -29,8 +29,9 @@ class IzbPass {
   engine::gpu::Image& soft_term();
   PixelList hybrid_list() const;
   void record_hybrid_blend(Frame& frame);
-  // After a hybrid record with a sun of some size: its penumbrae into the term (else nothing).
-  void record_hybrid_penumbra(Frame& frame);
+  // After a hybrid record with a sun of some size: its penumbrae into the term (else nothing); with
+  // `step_timings` (IzbSettings::step_timings) each step in a region of its own.
+  void record_hybrid_penumbra(Frame& frame, bool step_timings);
   // The frame recorded in frame-in-flight slot `slot` has completed.
   // One Stats per IZB record of the slot's frame (one per light, six for a point light), in order; the
   // CSM's statistics go into the last.
