@@ -199,8 +199,11 @@ void WorldScaleTest::check_placements(std::string scene, const std::vector<Place
       const Technique& t = kinds[k];
       const reference::Comparison& c = got[k].cmp;
       SCOPED_TRACE(t.name);
-      // The same shading points, give or take the float rounding of a moved camera.
-      EXPECT_NEAR(double(c.pixels), double(origin[k].cmp.pixels), 0.01 * double(origin[k].cmp.pixels));
+      // The same shading points, give or take the float rounding of a moved camera (the hybrid compares
+      // the pixels its sharp mask keeps, whose count follows the occluders' measured heights: below).
+      if (!t.hybrid_near) {
+        EXPECT_NEAR(double(c.pixels), double(origin[k].cmp.pixels), 0.01 * double(origin[k].cmp.pixels));
+      }
       const double acne_allowance = 1.0e-4 * double(kSize) * double(kSize);  // 0.01 % of the picture
       const std::string name = t.name;
       // Acne: false shadow. The filtered techniques resample a map whose texels fall elsewhere on the

@@ -33,7 +33,8 @@ std::vector<uint8_t> sub_pixel_penumbra_mask(const reference::ShadingPoints& poi
                                                            gpu_shared::shadow_ray_offset(p, points.eye));
     const float limit = 4.0f * (1.0f + glm::length(p - points.eye) + glm::length(p));
     const float height = nearest_occluder(tracer, origin, to_light, limit);
-    if (height > 0.0f) radius[i] = height * tan_half_angle;
+    // A shadowed point whose occluder the bisection cannot place may cast any penumbra: as wide as any.
+    radius[i] = height > 0.0f ? height * tan_half_angle : 3.0e38f;
   }
   const auto across = [&](const glm::vec3& d) { return glm::length(d - glm::dot(d, to_light) * to_light); };
   std::vector<uint8_t> mask(n, 0);

@@ -14,7 +14,8 @@ namespace support {
 // For each covered pixel facing the light: 1 where every penumbra that can reach it is narrower than
 // `fraction` of its width, else 0. A shadowed pixel (`hard_reference` < 0.5, the 1 spp reference of the
 // same points) casts a penumbra of radius h tan(a) across the light, h its nearest occluder's height
-// above it along the light (Embree, from the shadow ray's origin), a the sun's angular radius
+// above it along the light (Embree, from the shadow ray's origin; unbounded where the bisection
+// finds none within its limit), a the sun's angular radius
 // (`tan_half_angle`); it reaches the pixels within that radius, widened by `reach_margin` times and
 // a pixel, of its pixel within `window` pixels. A pixel's width at a point is its distance from the eye
 // times `pixel_angle` (2 tan(vertical fov / 2) / height).
