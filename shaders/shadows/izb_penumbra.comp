@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;  // kPenumbraTile²: a workgroup a tile
+layout(local_size_x = 8, local_size_y = 8) in;  // kPenumbraTile²: the filter and apply steps take a workgroup a tile
 
 // The hybrid's penumbrae, after the IZB wrote its exact hard term (1 spp: 0 or 1; 32 spp: the lit
 // fraction) and, per pixel it found shadowed, the light depth from the point up to an occluder it
@@ -15,7 +15,7 @@ layout(local_size_x = 8, local_size_y = 8) in;  // kPenumbraTile²: a workgroup 
 // image. Where the penumbra is narrower than a pixel the IZB's term stays as it is, exact.
 //
 // Four steps, specialized apart (a CPU device runs every branch):
-//  kStepTiles:  a workgroup a tile: the range of the hard term and the widest penumbra its shadowed
+//  kStepTiles:  a thread a row of a tile: the range of the hard term and the widest penumbra its shadowed
 //               pixels cast (in pixels);
 //  kStepDilate: a thread a tile: whether any tile within kPenumbraMaxRadius casts a penumbra that
 //               reaches it over a term that varies; if so it is listed, with that reach;
@@ -99,47 +99,57 @@ Receiver load_tap(ivec2 pixel, bool heights) {
 }
 
 // ---- kStepTiles ----------------------------------------------------------------------------------
-shared uint tile_min_term, tile_max_term, tile_radius;
+// A workgroup summarizes kSummaryTiles tiles side by side, a thread a row of kPenumbraTile pixels: the
+// row's loads go out together (a thread a pixel waits on one load chain at a time, and a workgroup a
+// tile pays two barriers per 64 pixels).
+const uint kSummaryTiles = 64u / kPenumbraTile;
+shared uvec3 row_summary[64];
 
 // The range of the term over the tile's pixels (every pixel's: a wider range only lists more tiles),
-// and the widest penumbra radius, in pixels, of its pixels with an occluder height. Reduced per
-// subgroup, then across them.
-void summarize_tile() {
-  if (gl_LocalInvocationIndex == 0u) {
-    tile_min_term = floatBitsToUint(1.0);
-    tile_max_term = 0u;
-    tile_radius = 0u;
-  }
-  barrier();
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-  float term = inside(pixel) ? imageLoad(shadow_term, pixel).r : 1.0;
-  float radius = 0.0;
-  if (term < 1.0) {
-    float height = occluder_height(uint(pixel.y) * params.extent.x + uint(pixel.x));
-    if (height > 0.0) radius = height * tan_half_angle() / footprint(imageLoad(positions, pixel).xyz);
+// and the widest penumbra radius, in pixels, of its pixels with an occluder height.
+void summarize_tiles() {
+  uint lane = gl_LocalInvocationIndex;
+  uint tile_x = gl_WorkGroupID.x * kSummaryTiles + lane / kPenumbraTile;
+  ivec2 first = ivec2(tile_x * kPenumbraTile, gl_WorkGroupID.y * kPenumbraTile + lane % kPenumbraTile);
+  float terms[kPenumbraTile];
+  for (uint i = 0u; i < kPenumbraTile; ++i) {
+    ivec2 pixel = first + ivec2(i, 0);
+    terms[i] = inside(pixel) ? imageLoad(shadow_term, pixel).r : 1.0;
   }
   // Terms in [0, 1] and radii >= 0: their bits order as they do.
-  uint low = subgroupMin(floatBitsToUint(term)), high = subgroupMax(floatBitsToUint(term));
-  uint widest = subgroupMax(floatBitsToUint(radius));
-  if (subgroupElect()) {
-    atomicMin(tile_min_term, low);
-    atomicMax(tile_max_term, high);
-    atomicMax(tile_radius, widest);
+  uint low = floatBitsToUint(1.0), high = 0u, widest = 0u;
+  for (uint i = 0u; i < kPenumbraTile; ++i) {
+    low = min(low, floatBitsToUint(terms[i]));
+    high = max(high, floatBitsToUint(terms[i]));
+    if (terms[i] >= 1.0) continue;
+    ivec2 pixel = first + ivec2(i, 0);
+    float height = occluder_height(uint(pixel.y) * params.extent.x + uint(pixel.x));
+    if (height > 0.0)
+      widest = max(widest, floatBitsToUint(height * tan_half_angle() / footprint(imageLoad(positions, pixel).xyz)));
   }
+  row_summary[lane] = uvec3(low, high, widest);
   barrier();
-  if (gl_LocalInvocationIndex == 0u) {
-    uint tile = gl_WorkGroupID.y * tiles_x() + gl_WorkGroupID.x;
-    entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y) + tile] =
-        uvec4(tile_min_term, tile_max_term, tile_radius, 0u);
+  if (lane % kPenumbraTile != 0u || tile_x >= tiles_x()) return;
+  uvec3 tile = row_summary[lane];
+  for (uint r = 1u; r < kPenumbraTile; ++r) {
+    uvec3 row = row_summary[lane + r];
+    tile = uvec3(min(tile.x, row.x), max(tile.y, row.y), max(tile.z, row.z));
   }
+  entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y) + gl_WorkGroupID.y * tiles_x() + tile_x] =
+      uvec4(tile, 0u);
 }
 
 // ---- kStepDilate ---------------------------------------------------------------------------------
 // Pixels between the nearest pixels of two tiles `offset` apart (0 for a tile and its neighbours).
 float tile_gap(ivec2 offset) { return length(vec2(max(abs(offset) - 1, ivec2(0)) * int(kPenumbraTile))); }
 
-uvec4 tile_summary(ivec2 tile) {
-  return entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y) + uint(tile.y) * tiles_x() + uint(tile.x)];
+// The workgroup's 8x8 tiles and kWindow tiles around them, read once (each thread reads its window of
+// (2 kWindow + 1)² tiles twice).
+const int kDilateBlock = 8 + 2 * kWindow;
+shared uvec3 block_summary[kDilateBlock * kDilateBlock];
+
+uvec3 block_tile(ivec2 tile, ivec2 block_origin) {
+  return block_summary[(tile.y - block_origin.y) * kDilateBlock + (tile.x - block_origin.x)];
 }
 
 // A thread a tile: listed (with the widest penumbra that reaches it, in pixels) where some tile in
@@ -147,13 +157,20 @@ uvec4 tile_summary(ivec2 tile) {
 void dilate_tile() {
   ivec2 tile = ivec2(gl_GlobalInvocationID.xy);
   ivec2 tiles = ivec2(tiles_x(), penumbra_tiles_y(params.extent.y));
+  ivec2 block_origin = ivec2(gl_WorkGroupID.xy) * 8 - kWindow;
+  for (uint k = gl_LocalInvocationIndex; k < uint(kDilateBlock * kDilateBlock); k += 64u) {
+    ivec2 at = block_origin + ivec2(int(k) % kDilateBlock, int(k) / kDilateBlock);
+    uint index = uint(clamp(at.y, 0, tiles.y - 1)) * tiles_x() + uint(clamp(at.x, 0, tiles.x - 1));
+    block_summary[k] = entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y) + index].xyz;
+  }
+  barrier();
   bool needed = false;
   float reach = 0.0;
   if (all(lessThan(tile, tiles))) {
     ivec2 lo = max(tile - kWindow, ivec2(0)), hi = min(tile + kWindow, tiles - 1);
     for (int y = lo.y; y <= hi.y; ++y)
       for (int x = lo.x; x <= hi.x; ++x) {
-        float radius = min(uintBitsToFloat(tile_summary(ivec2(x, y)).z), float(kPenumbraMaxRadius));
+        float radius = min(uintBitsToFloat(block_tile(ivec2(x, y), block_origin).z), float(kPenumbraMaxRadius));
         if (radius >= 0.5 && radius >= tile_gap(ivec2(x, y) - tile)) reach = max(reach, radius);
       }
     uint low = floatBitsToUint(1.0), high = 0u;
@@ -161,7 +178,7 @@ void dilate_tile() {
       for (int y = lo.y; y <= hi.y; ++y)
         for (int x = lo.x; x <= hi.x; ++x) {
           if (tile_gap(ivec2(x, y) - tile) > reach) continue;
-          uvec4 summary = tile_summary(ivec2(x, y));
+          uvec3 summary = block_tile(ivec2(x, y), block_origin);
           low = min(low, summary.x);
           high = max(high, summary.y);
         }
@@ -363,7 +380,7 @@ void apply_tile() {
 }
 
 void main() {
-  if (kStep == kStepTiles) summarize_tile();
+  if (kStep == kStepTiles) summarize_tiles();
   else if (kStep == kStepDilate) dilate_tile();
   else if (kStep == kStepFilter) filter_tile();
   else apply_tile();

@@ -50,8 +50,12 @@ void record_hybrid_penumbra(IzbState& s, Frame& frame, bool step_timings) {
     record();
     pass_barrier(s.ctx, cmd);
   };
-  step("penumbra_tiles", [&] { s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, tiles_x, tiles_y); });  // a workgroup a tile
-  step("penumbra_dilate",  // a thread a tile
+  // A workgroup a row of 64 / kPenumbraTile tiles (a thread a row of pixels).
+  constexpr uint32_t kSummaryTiles = 64 / gpu_shared::kPenumbraTile;
+  step("penumbra_tiles", [&] {
+    s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, (tiles_x + kSummaryTiles - 1) / kSummaryTiles, tiles_y);
+  });
+  step("penumbra_dilate",  // a thread a tile, 8x8 a workgroup
        [&] { s.dispatch(cmd, frame, s.pipelines.penumbra(1), push, (tiles_x + 7) / 8, (tiles_y + 7) / 8); });
   step("penumbra_filter", [&] {
     s.dispatch_indirect(cmd, frame, s.pipelines.penumbra(2), push, gpu_shared::IZB_COUNTER_PENUMBRA_TILES + 1);
