@@ -60,9 +60,13 @@ void GpuProfiler::begin(VkCommandBuffer cmd, const std::string& name) {
   // region past the pool is left untimed, never written outside its segment.
   const auto open = std::count_if(f.regions.begin(), f.regions.end(), [](const Open& r) { return r.end_query == UINT32_MAX; });
   if (f.used + 2 + uint32_t(open) > capacity_) return;
+  if (std::find(order_.begin(), order_.end(), name) == order_.end()) {
+    order_.push_back(name);
+    const auto innermost = std::find_if(f.regions.rbegin(), f.regions.rend(), [](const Open& r) { return r.end_query == UINT32_MAX; });
+    parent_[name] = innermost == f.regions.rend() ? std::string() : innermost->name;
+  }
   f.regions.push_back({name, f.first_query + f.used++});
   vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, f.regions.back().begin_query);
-  if (std::find(order_.begin(), order_.end(), name) == order_.end()) order_.push_back(name);
 }
 
 void GpuProfiler::end(VkCommandBuffer cmd, const std::string& name) {
@@ -107,6 +111,15 @@ void GpuProfiler::collect() {
     h.push_back(ms);
     if (h.size() > history_frames_) h.pop_front();
   }
+}
+
+std::vector<std::string> GpuProfiler::children(const std::string& parent) const {
+  std::vector<std::string> names;
+  for (const auto& name : order_) {
+    const auto it = parent_.find(name);
+    if (it != parent_.end() && it->second == parent) names.push_back(name);
+  }
+  return names;
 }
 
 double GpuProfiler::average_ms(const std::string& name, size_t last_n) const {

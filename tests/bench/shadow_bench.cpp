@@ -435,6 +435,8 @@ struct Bench {
   // The area-light references of the current view and size (area_key), one per light that has a size.
   std::string area_key;
   std::vector<std::vector<float>> area_vis;
+  double off_frame_ms = -1.0;  // the frame's GPU time in this invocation's `off` run, if any
+  std::string off_frame_key;   // its scene, view and size
 
   // Light `l`'s area reference (its size > 0), computed once per view, size and light.
   const std::vector<float>& area_reference(size_t l, const support::FrameLightCheck& c) {
@@ -561,9 +563,30 @@ struct Bench {
       }
       gpu_ms["total"] = median(totals);
     }
+    // named: per frame, the sum of the regions directly inside the module's region; what it leaves
+    // unnamed is the region's time no region accounts for (work outside them, waits between them).
+    {
+      std::vector<double> named(size_t(o.frames), 0.0);
+      for (const auto& child : renderer.profiler().children("shadows")) {
+        const auto h = renderer.profiler().history(child);
+        for (size_t f = 0; f < h.size() && f < named.size(); ++f) named[f] += h[f];
+      }
+      gpu_ms["named"] = median(named);
+    }
     entry["gpu_ms"] = gpu_ms;
     entry["passes"] = module->pass_names();
     const double frame_ms = renderer.profiler().median_ms("frame");
+    // What the frame pays: its GPU time over that of an `off` run earlier in this invocation (same
+    // scene, view and size).
+    const std::string off_key = scene.name + "/" + std::to_string(view) + "/" + std::to_string(renderer.extent().width) +
+                                "x" + std::to_string(renderer.extent().height);
+    if (off_key != off_frame_key) off_frame_ms = -1.0;
+    if (run.settings.technique == shadows::Technique::Off) {
+      off_frame_ms = frame_ms;
+      off_frame_key = off_key;
+    }
+    entry["frame_ms"] = frame_ms;
+    if (off_frame_ms >= 0.0) entry["frame_over_off_ms"] = frame_ms - off_frame_ms;
     module->set_collect_stats(true);
     renderer.render_frame(0.0f);
     const shadows::Stats& st = module->stats();
@@ -704,8 +727,13 @@ struct Bench {
                   ran(st.csm_choice, run.csm_backend).c_str(), spp, gpu_ms["total"].get<double>(), frame_ms,
                   mismatch, (unsigned long long)false_shadowed, mae, double(st.memory_total_bytes) / (1 << 20));
       std::fputs(soft_line.c_str(), stdout);
+      const double region = gpu_ms["shadows"], named = gpu_ms["named"];
+      std::printf("    cost: region %.3f ms, named %.3f ms (%.1f%% of the region unnamed)", region, named,
+                  region > 0.0 ? 100.0 * (region - named) / region : 0.0);
+      if (off_frame_ms >= 0.0) std::printf(", frame - frame(off) %.3f ms", frame_ms - off_frame_ms);
+      std::printf("\n");
       for (const auto& [name, value] : gpu_ms.items())
-        if (name != "total") std::printf("    %-26s %10.3f ms\n", name.c_str(), value.get<double>());
+        if (name != "total" && name != "named") std::printf("    %-26s %10.3f ms\n", name.c_str(), value.get<double>());
     }
     return entry;
   }

@@ -104,6 +104,8 @@ class ContextImpl final : public Context {
   mutable std::optional<Capabilities> capabilities_;  // capabilities(), made once
   engine::gpu::Pipeline output_pipelines_[3][16];  // by format, HOST_OUTPUT_* bits
   const engine::gpu::Pipeline& output_pipeline(int format, uint32_t what);
+  void record_output_pass(VkCommandBuffer cmd, const engine::gpu::Pipeline& p, VkImageView out, VkImageView overlay_out,
+                          const ShadingInputs& inputs, const View& view);
   engine::gpu::Image dummy_input_;              // bound where an optional input is absent
   bool targets_fresh_ = false;                  // just created: UNDEFINED until the first barrier
 

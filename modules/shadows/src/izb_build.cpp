@@ -31,6 +31,7 @@ void record_counting_sort(IzbState& s, Frame& frame, const gpu_shared::IzbComput
 
 void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan) {
   VkCommandBuffer cmd = frame.cmd;
+  ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_reset");
   vkCmdFillBuffer(cmd, s.res.counters.handle(), 0, VK_WHOLE_SIZE, 0);
   if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, VK_WHOLE_SIZE, 0);
   else vkCmdFillBuffer(cmd, s.res.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);

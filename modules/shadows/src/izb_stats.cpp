@@ -100,6 +100,7 @@ void record_izb_stats(IzbState& s, Frame& frame, const IzbPlan& plan, const IzbR
 }
 
 void record_counters_readback(IzbState& s, const Frame& frame) {
+  ScopedGpuRegion region(s.ctx, frame.profiler, frame.cmd, "izb_readback");
   s.res.counters_readback.record_copy(frame, s.res.counters, s.res.counters.size(),
                                       pass_shader_stages(s.ctx) | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
                                       VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,

@@ -54,6 +54,9 @@ class GpuProfiler {
   double average_ms(const std::string& name, size_t last_n = 0) const;
   double median_ms(const std::string& name) const;
   std::vector<std::string> region_names() const { return order_; }
+  // The regions first recorded directly inside `parent` (no other region open between), in first-seen
+  // order: what a region's time is made of, as far as regions name it.
+  std::vector<std::string> children(const std::string& parent) const;
   // Per-frame times of one region since the last clear_history(), at most the last history_frames
   // (empty if never recorded).
   std::vector<double> history(const std::string& name) const;
@@ -81,6 +84,7 @@ class GpuProfiler {
   };
   std::deque<Frame> frames_;  // oldest first; back() is the frame being recorded
   std::vector<std::string> order_;
+  std::map<std::string, std::string> parent_;  // the innermost region open when a name was first recorded
   std::map<std::string, std::deque<double>> history_;
   std::vector<std::pair<std::string, double>> last_frame_;
   std::vector<std::vector<std::pair<std::string, double>>> last_by_segment_;
