@@ -190,9 +190,12 @@ void dilate_tile() {
   if (subgroupElect() && count != 0u) {
     base = atomicAdd(counters[IZB_COUNTER_PENUMBRA_TILES], count);
     uint last = base + count - 1u;
-    atomicMax(counters[IZB_COUNTER_PENUMBRA_TILES + 1u], min(last + 1u, kIzbDispatchRow));
-    atomicMax(counters[IZB_COUNTER_PENUMBRA_TILES + 2u], last / kIzbDispatchRow + 1u);
-    counters[IZB_COUNTER_PENUMBRA_TILES + 3u] = 1u;
+    // The dispatch widens only within its first row and grows a row only where a subgroup's slots
+    // enter one: the others skip the atomics on those three words.
+    if (base < kIzbDispatchRow) atomicMax(counters[IZB_COUNTER_PENUMBRA_TILES + 1u], min(last + 1u, kIzbDispatchRow));
+    if (base == 0u || last / kIzbDispatchRow != (base - 1u) / kIzbDispatchRow)
+      atomicMax(counters[IZB_COUNTER_PENUMBRA_TILES + 2u], last / kIzbDispatchRow + 1u);
+    if (base == 0u) counters[IZB_COUNTER_PENUMBRA_TILES + 3u] = 1u;
   }
   uint slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(needed ? 1u : 0u);
   if (needed)
@@ -260,10 +263,9 @@ float disc_below(float t) {
 // on this pixel's side of that line is the term. False (the disc's average stands) where the pixels
 // are all lit or all shadowed, or no such line separates them (a corner, a thin caster).
 bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float radius, out float value) {
+  // Two passes over the 5x5 pixels (the means, then the nearest of each side): holding the 25 points
+  // in arrays costs the filter occupancy; the second pass's loads hit the cache.
   value = 1.0;
-  vec2 across[25];
-  bool lit[25];
-  int n = 0;
   vec2 lit_sum = vec2(0.0), dark_sum = vec2(0.0);
   float lit_count = 0.0, dark_count = 0.0;
   for (int dy = -2; dy <= 2; ++dy)
@@ -271,27 +273,29 @@ bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float rad
       Receiver t = load_tap(pixel + ivec2(dx, dy), false);
       if (!same_surface(r, t, pixel_width)) continue;
       vec3 d = t.position - r.position;
-      across[n] = vec2(dot(d, f.u), dot(d, f.v));
-      lit[n] = t.term >= 0.5;
-      if (lit[n]) {
-        lit_sum += across[n];
+      vec2 across = vec2(dot(d, f.u), dot(d, f.v));
+      if (t.term >= 0.5) {
+        lit_sum += across;
         lit_count += 1.0;
       } else {
-        dark_sum += across[n];
+        dark_sum += across;
         dark_count += 1.0;
       }
-      ++n;
     }
   if (lit_count == 0.0 || dark_count == 0.0) return false;
   vec2 normal = lit_sum / lit_count - dark_sum / dark_count;
   if (dot(normal, normal) <= 0.0) return false;
   normal = normalize(normal);
   float darkest = -3.0e38, lightest = 3.0e38;  // the nearest shadowed and lit points along the normal
-  for (int k = 0; k < n; ++k) {
-    float s = dot(across[k], normal);
-    if (lit[k]) lightest = min(lightest, s);
-    else darkest = max(darkest, s);
-  }
+  for (int dy = -2; dy <= 2; ++dy)
+    for (int dx = -2; dx <= 2; ++dx) {
+      Receiver t = load_tap(pixel + ivec2(dx, dy), false);
+      if (!same_surface(r, t, pixel_width)) continue;
+      vec3 d = t.position - r.position;
+      float along = dot(vec2(dot(d, f.u), dot(d, f.v)), normal);
+      if (t.term >= 0.5) lightest = min(lightest, along);
+      else darkest = max(darkest, along);
+    }
   if (darkest >= lightest) return false;
   value = 1.0 - disc_below(0.5 * (darkest + lightest) / radius);
   return true;
