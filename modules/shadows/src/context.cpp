@@ -656,9 +656,21 @@ void ContextImpl::set_light(View& view, const Light& light) {
 // copies, the output pass's reads of the term) finishes before the next light's rewrite the same
 // resources; the term starts lit again and each light's debug view marks a clean overlay
 // (FrameDesc::overlay_light's is the one handed over).
-void ContextImpl::restart_term(VkCommandBuffer cmd) {
+void ContextImpl::restart_term(VkCommandBuffer cmd, bool lit_start) {
   pass_barrier(*gpu_, cmd);
-  clear_term_and_overlay(cmd);
+  if (lit_start) clear_term_and_overlay(cmd);
+}
+
+// Whether the technique's passes write every pixel of the term for `light`, which then need not start
+// lit (with a debug view the overlay starts empty by the same pass, so it always runs).
+bool ContextImpl::writes_every_pixel(const Light& light) {
+  if (settings_.debug != DebugView::None) return false;
+  const bool local = light.type != LightType::Directional;
+  if (settings_.technique == Technique::Izb)
+    return izb().writes_every_pixel(settings_.izb, settings_.izb.max_distance, settings_.debug, false, local);
+  if (settings_.technique == Technique::Hybrid)
+    return izb().writes_every_pixel(settings_.izb, settings_.hybrid_izb_distance, settings_.debug, true, local);
+  return false;
 }
 
 namespace {
@@ -755,7 +767,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   const bool off = settings_.technique == Technique::Off;
   {
     engine::gpu::ScopedGpuRegion targets_region(*gpu_, profiler, cmd, "prepare_targets");
-    prepare_targets(cmd, !off && f.native.present());
+    prepare_targets(cmd, !off && f.native.present() && (f.light_count == 0 || !writes_every_pixel(f.lights[0])));
   }
   // The input pass stores whether each point faces the sun (host_inputs.comp): for the sun of this
   // record, not the light the previous record left in view_ (a spot's axis, or none on the first
@@ -788,7 +800,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     if (f.light_count > 1) light_region.emplace(*gpu_, profiler, cmd, "light " + std::to_string(i));
     if (i > 0) {
       engine::gpu::ScopedGpuRegion restart_region(*gpu_, profiler, cmd, "restart_term");
-      restart_term(cmd);
+      restart_term(cmd, !writes_every_pixel(f.lights[i]));
     }
     set_light(view, f.lights[i]);
     if (host_inputs && f.lights[i].type == LightType::Directional && sun_direction(i) != *inputs_sun) {

@@ -65,7 +65,9 @@ class ContextImpl final : public Context {
   void record_point_light_faces(Frame& frame, RecordFace&& record_face);
   void record_local_light(Frame& frame, const Settings& settings);  // settings in world units
   void set_light(View& view, const Light& light);
-  void restart_term(VkCommandBuffer cmd);
+  // Between two lights: the previous light's accesses done; with `lit_start` the term lit again.
+  void restart_term(VkCommandBuffer cmd, bool lit_start);
+  bool writes_every_pixel(const Light& light);
   void clear_term_and_overlay(VkCommandBuffer cmd);
   void validate_light(const Light& light, const std::string& name) const;
   void check_paths(const Light& light, const std::string& name) const;

@@ -8,6 +8,10 @@ namespace shadows::detail {
 
 using namespace engine::gpu;
 
+bool izb_direct_term(uint32_t samples, bool hybrid, float max_distance, uint32_t debug_code, bool spot) {
+  return samples == 1 && !(hybrid && max_distance > 0.0f) && debug_code == 0 && !spot;
+}
+
 uint32_t izb_debug_code(DebugView debug) {
   switch (debug) {
     case DebugView::VisibilityMask: return 1;
@@ -165,7 +169,7 @@ uint32_t output_flags(const IzbState& s, const Frame& frame, const IzbSettings& 
   // The resolve is needed only to count samples (32 spp), list the hybrid's fade band toward the
   // cascades (a limited range), draw a debug view, or for a local light's straddling casters and cone
   // faces.
-  plan.direct_term = s.res.samples == 1 && !(hybrid && settings.max_distance > 0.0f) && plan.debug == 0 && !plan.spot;
+  plan.direct_term = izb_direct_term(s.res.samples, hybrid, settings.max_distance, plan.debug, plan.spot);
   if (plan.direct_term) flags |= gpu_shared::IZB_FLAG_DIRECT_TERM;
   // Otherwise, for the sun with no debug view, the build settles every pixel without a node and the
   // resolve reads only the others.
