@@ -344,6 +344,10 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   auto module = shadows::install(*renderer, mode);
   if (std::string why; !module->supported(mode.technique, &why)) throw std::runtime_error("--mode " + o.mode + ": " + why);
   module->set_collect_stats(o.stats);  // else the panel's checkbox turns the statistics passes on
+  // Where the frame rate is held on a CPU device, the IZB's trace (paid per caster triangle and point)
+  // covers the hybrid's first 20 m and the cascades the rest: the courtyard's distant plants doubled the
+  // trace there (README, "Frame rate"). A settings file may set another range.
+  if (cpu && !o.fixed_size) module->settings().hybrid_izb_distance = 20.0f;
 
   // A CPU device starts at half size: at full size its first frames take most of a second each.
   walkthrough::DynamicResolution dynres(o.target_fps > 0.0f ? o.target_fps : (cpu ? 10.0f : 30.0f),
