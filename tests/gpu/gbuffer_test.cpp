@@ -139,6 +139,31 @@ TEST_F(GpuTest, ProfilerLeavesRegionsPastItsPoolUntimed) {
   EXPECT_EQ(profiler.history("inner").size(), 0u);
 }
 
+// A region's children are the regions first recorded directly inside it (what names its time); a
+// region at the top has none above it.
+TEST_F(GpuTest, ProfilerNamesTheRegionsInsideEachRegion) {
+  engine::gpu::GpuProfiler profiler(*ctx_, 8, 8);
+  ASSERT_TRUE(profiler.enabled());
+  ctx_->immediate_submit([&](VkCommandBuffer cmd) {
+    profiler.begin_frame(cmd);
+    profiler.begin(cmd, "module");
+    profiler.begin(cmd, "first");
+    profiler.begin(cmd, "step");
+    profiler.end(cmd, "step");
+    profiler.end(cmd, "first");
+    profiler.begin(cmd, "second");
+    profiler.end(cmd, "second");
+    profiler.end(cmd, "module");
+    profiler.begin(cmd, "after");
+    profiler.end(cmd, "after");
+  });
+  profiler.collect();
+  EXPECT_EQ(profiler.children("module"), (std::vector<std::string>{"first", "second"}));
+  EXPECT_EQ(profiler.children("first"), (std::vector<std::string>{"step"}));
+  EXPECT_TRUE(profiler.children("second").empty());
+  EXPECT_EQ(profiler.children(""), (std::vector<std::string>{"module", "after"}));
+}
+
 TEST_F(GpuTest, ProfilerHistoryKeepsOnlyTheLastFrames) {
   engine::gpu::GpuProfiler profiler(*ctx_, 4, 3);
   ASSERT_TRUE(profiler.enabled());
