@@ -54,9 +54,9 @@ SHARED_CONST uint IZB_FLAG_ALPHA = 256u;         // some caster is alpha-tested 
 SHARED_CONST uint IZB_FLAG_GAPS = 512u;          // keep each pixel's nearest occluder distance found (hybrid penumbrae)
 SHARED_CONST uint IZB_FLAG_DIRECT_NODES = 1024u; // 1 spp, linked lists, pool >= pixels: a pixel's node is its own index
 SHARED_CONST uint IZB_FLAG_LIT = 2048u;          // the build culls points the lit map proves lit
-// 1 spp, the sun, no hybrid nor debug view: the build settles every pixel's term (it starts lit: the
-// build stores the shadowed ones' zeros) and the trace darkens each pixel it finds shadowed, so no
-// resolve pass reads every pixel again.
+// 1 spp, the sun, no hybrid range nor debug view: the build settles every pixel's term (on a GPU it
+// stores every pixel's 1 or 0; on a CPU device the term starts lit and it stores the shadowed ones'
+// zeros) and the trace darkens each pixel it finds shadowed, so no resolve pass reads every pixel again.
 SHARED_CONST uint IZB_FLAG_DIRECT_TERM = 4096u;
 // With IZB_FLAG_DIRECT_NODES on a GPU: each run of a workgroup row's pixels sharing a texel enters
 // its list with one exchange (a CPU device pays more for the workgroup barriers than it saves).
