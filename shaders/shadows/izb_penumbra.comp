@@ -99,17 +99,16 @@ Receiver load_tap(ivec2 pixel, bool heights) {
 }
 
 // ---- kStepTiles ----------------------------------------------------------------------------------
-// A workgroup summarizes kSummaryTiles tiles side by side, a thread a row of kPenumbraTile pixels: the
-// row's loads go out together (a thread a pixel waits on one load chain at a time, and a workgroup a
-// tile pays two barriers per 64 pixels).
-const uint kSummaryTiles = 64u / kPenumbraTile;
+// A workgroup summarizes kPenumbraSummaryTiles tiles side by side, a thread a row of kPenumbraTile
+// pixels: the row's loads go out together (a thread a pixel waits on one load chain at a time, and a
+// workgroup a tile pays two barriers per 64 pixels).
 shared uvec3 row_summary[64];
 
 // The range of the term over the tile's pixels (every pixel's: a wider range only lists more tiles),
 // and the widest penumbra radius, in pixels, of its pixels with an occluder height.
 void summarize_tiles() {
   uint lane = gl_LocalInvocationIndex;
-  uint tile_x = gl_WorkGroupID.x * kSummaryTiles + lane / kPenumbraTile;
+  uint tile_x = gl_WorkGroupID.x * kPenumbraSummaryTiles + lane / kPenumbraTile;
   ivec2 first = ivec2(tile_x * kPenumbraTile, gl_WorkGroupID.y * kPenumbraTile + lane % kPenumbraTile);
   float terms[kPenumbraTile];
   for (uint i = 0u; i < kPenumbraTile; ++i) {

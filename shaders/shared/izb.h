@@ -277,6 +277,9 @@ SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per 
 // filtered at that radius), with kPenumbraSearchTaps taps to find the blockers and kPenumbraFilterTaps
 // to filter.
 SHARED_CONST uint kPenumbraTile = 8u;
+// The tile summaries' step: a workgroup of 64 threads, a thread a row of a tile, so this many tiles
+// side by side a workgroup.
+SHARED_CONST uint kPenumbraSummaryTiles = 64u / kPenumbraTile;
 SHARED_CONST uint kPenumbraMaxRadius = 24u;
 SHARED_CONST uint kPenumbraSearchTaps = 12u;
 SHARED_CONST uint kPenumbraFilterTaps = 16u;

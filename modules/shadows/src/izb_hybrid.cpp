@@ -50,10 +50,9 @@ void record_hybrid_penumbra(IzbState& s, Frame& frame, bool step_timings) {
     record();
     pass_barrier(s.ctx, cmd);
   };
-  // A workgroup a row of 64 / kPenumbraTile tiles (a thread a row of pixels).
-  constexpr uint32_t kSummaryTiles = 64 / gpu_shared::kPenumbraTile;
+  constexpr uint32_t summary_tiles = gpu_shared::kPenumbraSummaryTiles;  // a workgroup's, side by side
   step("penumbra_tiles", [&] {
-    s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, (tiles_x + kSummaryTiles - 1) / kSummaryTiles, tiles_y);
+    s.dispatch(cmd, frame, s.pipelines.penumbra(0), push, (tiles_x + summary_tiles - 1) / summary_tiles, tiles_y);
   });
   step("penumbra_dilate",  // a thread a tile, 8x8 a workgroup
        [&] { s.dispatch(cmd, frame, s.pipelines.penumbra(1), push, (tiles_x + 7) / 8, (tiles_y + 7) / 8); });

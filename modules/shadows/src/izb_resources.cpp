@@ -30,7 +30,7 @@ void IzbResources::make_frame_data(VkDeviceSize fit_groups) {
 }
 
 void IzbResources::ensure_buffers(const Frame& frame, const IzbSettings& s) {
-  const uint32_t spp = s.samples_per_pixel == 32 ? 32 : 1;
+  const uint32_t spp = izb_sample_count(s);
   if (resolution != s.resolution) ensure_grid(frame.cmd, s.resolution);
   const VkExtent2D e = frame.view.extent;
   if (e.width != extent.width || e.height != extent.height || spp != samples) ensure_view(e, spp);

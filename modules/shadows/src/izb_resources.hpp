@@ -15,6 +15,9 @@ struct IzbWorkList {
 
 // The IZB's buffers and images: per grid (lists, farthest depths, lit map), per view (pixels' nodes
 // and light-space data), the node pool and the work lists. Every pass binds all of them (izb_bindings()).
+// The samples a pixel the IZB takes for `s`: 32 where asked, else 1.
+inline uint32_t izb_sample_count(const IzbSettings& s) { return s.samples_per_pixel == 32 ? 32u : 1u; }
+
 struct IzbResources {
   explicit IzbResources(engine::gpu::Context& c);
 
