@@ -637,7 +637,7 @@ void ContextImpl::record_output_pass(VkCommandBuffer cmd, const engine::gpu::Pip
   push.light_position = glm::vec4(view.light_position, view.light_range);
   push.light_direction = glm::vec4(view.light_direction, view.light_cos_outer);
   p.push_constants(cmd, push);
-  vkCmdDispatch(cmd, groups(extent_.width, 32), groups(extent_.height, 32), 1);  // 16x16 threads of 2x2 pixels
+  vkCmdDispatch(cmd, groups(extent_.width, gs::HOST_OUTPUT_BLOCK), groups(extent_.height, gs::HOST_OUTPUT_BLOCK), 1);
 }
 
 void ContextImpl::set_light(View& view, const Light& light) {

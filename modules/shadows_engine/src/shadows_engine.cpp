@@ -182,8 +182,11 @@ class EngineShadowModule final : public ShadowModule {
     f.light_outputs = outputs_.data() + 1;
     f.instances = instances_.data();
     f.instance_count = uint32_t(instances_.size());
-    f.overlay = image_input(frame.overlay);
+    // The overlay only while a debug view draws into it: without one the renderer's overlay keeps its
+    // zeros and the output pass stores the term alone.
+    if (context_->settings().debug != DebugView::None) f.overlay = image_input(frame.overlay);
     context_->record(frame.cmd, f);
+    frame.written |= written_ | (f.overlay.present() ? engine::FrameContext::kWroteOverlay : 0u);
     recorded_.push_back(f.frame_index);
   }
 
@@ -246,6 +249,7 @@ class EngineShadowModule final : public ShadowModule {
     // sunlight shadows the local lights alone. set_light() replaces them all with one light.
     lights_.clear();
     outputs_.clear();
+    written_ = 0;
     const bool sun_lit = glm::length(frame.view.light_radiance) > 0.0f || frame.view.local_lights.empty();
     if (light_) {
       // set_light() takes scene-space positions (as Transform places lights): rebased to the frame's
@@ -255,6 +259,7 @@ class EngineShadowModule final : public ShadowModule {
       for (int k = 0; k < 3; ++k) light.position[k] = float(double(light.position[k]) + shift[k]);
       lights_.push_back(light);
       outputs_.push_back(image_input(frame.shadow_term));
+      written_ = engine::FrameContext::kWroteSunTerm;
     } else {
       if (sun_lit) {
         Light sun;
@@ -262,10 +267,12 @@ class EngineShadowModule final : public ShadowModule {
         sun.angular_diameter_degrees = frame.view.light_angular_diameter_degrees;
         lights_.push_back(sun);
         outputs_.push_back(image_input(frame.shadow_term));
+        written_ = engine::FrameContext::kWroteSunTerm;
       }
       for (size_t i = 0; i < frame.view.local_lights.size(); ++i) {
         lights_.push_back(light_of(frame.view.local_lights[i]));
         outputs_.push_back(image_input(frame.local_shadow_terms[i]));
+        written_ |= engine::FrameContext::kWroteLocalTerm << i;
       }
     }
     return sun_lit;
@@ -347,6 +354,7 @@ class EngineShadowModule final : public ShadowModule {
   bool host_inputs_ = false;          // set_host_inputs()
   std::vector<Light> lights_;         // this frame's, in FrameDesc order
   std::vector<ImageInput> outputs_;   // their shadow terms
+  uint32_t written_ = 0;               // engine::FrameContext::written bits of outputs_
   std::deque<uint64_t> recorded_;  // frames recorded and not yet reported complete, oldest first
 };
 

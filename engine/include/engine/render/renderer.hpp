@@ -144,13 +144,19 @@ struct FrameContext {
   gpu::GpuProfiler& profiler;
   const FrameView& view;
   GBuffer& gbuffer;
-  gpu::Image& shadow_term;     // R32F storage image, cleared to 1 (lit) before features run: the sun's
+  gpu::Image& shadow_term;     // R32F storage image, the sun's: 1 (lit) in every pixel no feature writes
   gpu::Image* local_shadow_terms;  // view.local_lights.size() images as shadow_term, one per local light
-  gpu::Image& overlay;         // RGBA8 storage image, cleared to 0; lighting blends rgb by a
+  gpu::Image& overlay;         // RGBA8 storage image, 0 where no feature writes; lighting blends rgb by a
   const gpu::Buffer& frame_uniforms;
   SceneGeometry& geometry;
   const std::vector<DrawItem>& draws;
   Registry& registry;
+  // What the features wrote every pixel of this frame (kWroteSunTerm | kWroteOverlay | kWroteLocalTerm
+  // << i), set by a feature's record(). Lighting then reads those as written; the renderer sets the
+  // others to their rest values (terms 1, overlay 0) after the features, where they do not hold them
+  // already, so that a full-screen clear runs only where no feature writes.
+  uint32_t written = 0;
+  static constexpr uint32_t kWroteSunTerm = 1u, kWroteOverlay = 2u, kWroteLocalTerm = 4u;
 };
 
 // A plug-in stage that runs after the G-buffer and before lighting (the shadow module is one).
@@ -259,6 +265,10 @@ class Renderer {
   gpu::Image shadow_term_;
   std::vector<gpu::Image> local_shadow_terms_;  // kMaxLocalLights
   gpu::Image overlay_;
+  // Which of the sun's term, the overlay and the local terms hold their rest values (FrameContext::written's
+  // bits): left by the renderer's own clear and written by nothing since.
+  uint32_t at_rest_ = 0;
+  void rest_unwritten(VkCommandBuffer cmd, uint32_t written);
   gpu::Image output_;
   uint32_t frames_in_flight_ = 1;
   std::vector<gpu::Buffer> frame_uniforms_;  // one per frame-in-flight slot: written by the host each frame
