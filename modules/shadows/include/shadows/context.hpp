@@ -431,7 +431,9 @@ struct FrameDesc {
   // With light_count > 1: light_count - 1 more images, as `output`, for lights[1..].
   const ImageInput* light_outputs = nullptr;
   // Optional debug overlay (Settings::debug) of lights[overlay_light]: R8G8B8A8_UNORM, STORAGE usage,
-  // GENERAL; rgb colour, a blend weight. Pixels the overlay does not mark are written 0.
+  // GENERAL; rgb colour, a blend weight. Pixels the overlay does not mark are written 0, and without a
+  // debug view every pixel is: a host that keeps its overlay cleared itself hands it over only while
+  // Settings::debug draws one, which spares a store a pixel (the engine's client does).
   ImageInput overlay;
   uint32_t overlay_light = 0;  // < light_count
 };
