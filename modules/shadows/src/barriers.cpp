@@ -1,10 +1,18 @@
 #include "barriers.hpp"
 
 #include <algorithm>
+#include <cstdlib>
+#include <string_view>
 
 #include "gpu/resources.hpp"
 
 namespace shadows::detail {
+
+bool takes_cpu_paths(const engine::gpu::Context& ctx) {
+  const char* gpu_paths = std::getenv("SHADOWS_GPU_PATHS");
+  const bool forced = gpu_paths && std::string_view(gpu_paths) == "1";
+  return ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && !forced;
+}
 
 VkPipelineStageFlags2 pass_shader_stages(const engine::gpu::Context& ctx) {
   VkPipelineStageFlags2 stages = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |

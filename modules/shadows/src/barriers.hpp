@@ -9,6 +9,12 @@ namespace shadows::detail {
 // Shader stages the module's passes use on this device.
 VkPipelineStageFlags2 pass_shader_stages(const engine::gpu::Context& ctx);
 
+// Whether the module takes its CPU-device paths (a CPU device pays a store or an atomic for every lane
+// of a SIMD row, and a transfer clear is a memset there): on a CPU device, unless the environment
+// variable SHADOWS_GPU_PATHS is 1, which makes it take the paths a GPU takes (for tests: both must give
+// the same pixels). Read by each object that decides a path once, when it is created.
+bool takes_cpu_paths(const engine::gpu::Context& ctx);
+
 // Every earlier pass's writes (shader storage, depth and colour attachments, copies and fills) before
 // every later pass's reads and writes (shaders, indirect arguments, vertex and index fetch, depth
 // tests, copies and fills).

@@ -219,6 +219,7 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
   // Every pipeline of the module is created after this, from the SPIR-V inside the library.
   engine::gpu::register_embedded_shaders(embedded_shaders());
   gpu_ = adopt_host_device(desc);
+  cpu_paths_ = takes_cpu_paths(*gpu_);
   frames_in_flight_ = desc.frames_in_flight;
   // Resources the passes replace (pools growing, a resize) may still be read by frames in flight.
   gpu_->defer_releases(true);
@@ -493,7 +494,7 @@ void ContextImpl::prepare_targets(VkCommandBuffer cmd, bool clear) {
 // The term to lit and, when a debug view draws, the overlay to empty; visible to every pass.
 void ContextImpl::clear_term_and_overlay(VkCommandBuffer cmd) {
   const bool overlay = settings_.debug != DebugView::None;
-  if (gpu_->properties().deviceType != VK_PHYSICAL_DEVICE_TYPE_CPU) {
+  if (!cpu_paths_) {
     // A GPU may clear a storage image through its graphics units (on an H200, 0.6 ms for a 4K R32F
     // term, against 0.01 for compute stores): the output shader writes the term all lit instead, and
     // with a debug view the overlay empty.

@@ -82,6 +82,7 @@ class ContextImpl final : public Context {
   CascadesPass& cascades();
 
   std::unique_ptr<engine::gpu::Context> gpu_;
+  bool cpu_paths_ = false;  // takes_cpu_paths
   uint32_t frames_in_flight_ = 2;
   Settings settings_;
   Stats stats_;

@@ -47,7 +47,7 @@ bool IzbPipelineCache::hardware_trace_available() const {
   return ctx_.features().conservative_rasterization && ctx_.features().geometry_shader;
 }
 bool IzbPipelineCache::raster_trace_available() const { return ctx_.features().geometry_shader; }
-bool IzbPipelineCache::cpu_device() const { return ctx_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; }
+bool IzbPipelineCache::cpu_device() const { return cpu_paths_; }
 
 IzbPipelines& IzbPipelineCache::set(uint32_t samples_per_pixel, uint32_t flags) {
   auto& slot = sets_[(uint64_t(samples_per_pixel) << 32) | flags];

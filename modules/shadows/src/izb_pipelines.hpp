@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include "barriers.hpp"
 #include "gpu/pipeline.hpp"
 
 namespace shadows::detail {
@@ -36,7 +37,7 @@ struct IzbPipelines {
 // Makes the IZB's pipelines on first use and keeps them, per sample count and flags.
 class IzbPipelineCache {
  public:
-  explicit IzbPipelineCache(engine::gpu::Context& ctx) : ctx_(ctx), factory_(ctx) {}
+  explicit IzbPipelineCache(engine::gpu::Context& ctx) : ctx_(ctx), cpu_paths_(takes_cpu_paths(ctx)), factory_(ctx) {}
   // The pipelines for `samples_per_pixel` and `flags`.
   IzbPipelines& set(uint32_t samples_per_pixel, uint32_t flags);
   // Opaque casters' raster trace where some are alpha-tested (without the alpha-test code).
@@ -61,6 +62,7 @@ class IzbPipelineCache {
   IzbTracePipelines trace_pipelines(uint32_t samples_per_pixel, uint32_t flags);
 
   engine::gpu::Context& ctx_;
+  bool cpu_paths_;  // takes_cpu_paths
   engine::gpu::PipelineFactory factory_;
   std::map<uint64_t, std::unique_ptr<IzbPipelines>> sets_;
   std::map<uint64_t, engine::gpu::Pipeline> resolve_pipelines_;
