@@ -182,8 +182,7 @@ class EngineShadowModule final : public ShadowModule {
     f.light_outputs = outputs_.data() + 1;
     f.instances = instances_.data();
     f.instance_count = uint32_t(instances_.size());
-    // The overlay only while a debug view draws into it: without one the renderer's overlay keeps its
-    // zeros and the output pass stores the term alone.
+    // The overlay only while a debug view draws into it (else the renderer's keeps its zeros).
     if (context_->settings().debug != DebugView::None) f.overlay = image_input(frame.overlay);
     context_->record(frame.cmd, f);
     frame.written |= written_ | (f.overlay.present() ? engine::FrameContext::kWroteOverlay : 0u);
@@ -249,8 +248,8 @@ class EngineShadowModule final : public ShadowModule {
     // sunlight shadows the local lights alone. set_light() replaces them all with one light.
     lights_.clear();
     outputs_.clear();
-    written_ = 0;
     const bool sun_lit = glm::length(frame.view.light_radiance) > 0.0f || frame.view.local_lights.empty();
+    written_ = light_ || sun_lit ? engine::FrameContext::kWroteSunTerm : 0u;
     if (light_) {
       // set_light() takes scene-space positions (as Transform places lights): rebased to the frame's
       // origin like the rest, Scene::origin included.
@@ -259,7 +258,6 @@ class EngineShadowModule final : public ShadowModule {
       for (int k = 0; k < 3; ++k) light.position[k] = float(double(light.position[k]) + shift[k]);
       lights_.push_back(light);
       outputs_.push_back(image_input(frame.shadow_term));
-      written_ = engine::FrameContext::kWroteSunTerm;
     } else {
       if (sun_lit) {
         Light sun;
@@ -267,7 +265,6 @@ class EngineShadowModule final : public ShadowModule {
         sun.angular_diameter_degrees = frame.view.light_angular_diameter_degrees;
         lights_.push_back(sun);
         outputs_.push_back(image_input(frame.shadow_term));
-        written_ = engine::FrameContext::kWroteSunTerm;
       }
       for (size_t i = 0; i < frame.view.local_lights.size(); ++i) {
         lights_.push_back(light_of(frame.view.local_lights[i]));
