@@ -482,12 +482,15 @@ void Renderer::record_frame(VkCommandBuffer cmd) {
           .push(ctx_, cmd, shading_points_pipeline_);
       vkCmdDispatch(cmd, groups(extent_.width, 8), groups(extent_.height, 8), 1);
     }
+    // The shading points' writes before the features' and lighting's reads.
+    full_barrier(cmd);
     uint32_t written = 0;
     if (use_external_shadow_) {
       VkBufferImageCopy copy{};
       copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
       copy.imageExtent = {extent_.width, extent_.height, 1};
       vkCmdCopyBufferToImage(cmd, external_shadow_.handle(), shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
+      full_barrier(cmd);  // the copy before lighting's reads
       written = FrameContext::kWroteSunTerm;
     } else {
       FrameContext frame{ctx_,     cmd,           profiler_,      view_,      gbuffer_, shadow_term_,
