@@ -28,6 +28,12 @@ class GpuPathsTest : public GpuTest, public ::testing::WithParamInterface<PathsC
     auto module = shadows::install(r, settings);
     unsetenv("SHADOWS_GPU_PATHS");  // read when the module was created
     for (int f = 0; f < frames; ++f) r.render_frame(0.0f);
+    // The path taken: a CPU device culls the IZB's casters in a step of its own (with step timings on).
+    if (settings.technique == shadows::Technique::Izb || settings.technique == shadows::Technique::Hybrid) {
+      bool cpu_cull = false;
+      for (const auto& pass : module->context().pass_times()) cpu_cull = cpu_cull || pass.name == "light_frustum_cull";
+      EXPECT_EQ(cpu_cull, !gpu_paths) << "the IZB took the other device's paths";
+    }
     std::vector<std::vector<float>> out = {r.read_shadow_term()};
     for (uint32_t i = 0; i < r.frame_view().local_lights.size(); ++i) out.push_back(r.read_local_shadow_term(i));
     r.finish_frames();
@@ -43,6 +49,7 @@ TEST_P(GpuPathsTest, EveryTechniqueGivesTheCpuPathsTerms) {
     GTEST_SKIP() << "a GPU takes these paths already";
   shadows::Settings base;
   base.izb.resolution = 256;
+  base.izb.step_timings = true;  // names the CPU paths' own step (terms())
   base.shadow_map.size = 512;
   base.cascades.map_size = 512;
   // (`izb` alone takes no path `izb+csm` does not.)

@@ -12,7 +12,7 @@ VkPipelineStageFlags2 pass_shader_stages(const engine::gpu::Context& ctx);
 // Whether the module takes its CPU-device paths (a CPU device pays a store or an atomic for every lane
 // of a SIMD row, and a transfer clear is a memset there): on a CPU device, unless the environment
 // variable SHADOWS_GPU_PATHS is 1, which makes it take the paths a GPU takes (for tests: both must give
-// the same pixels). Read by each object that decides a path once, when it is created.
+// the same pixels). Read once, when a module is created (its passes, made later, take that answer).
 bool takes_cpu_paths(const engine::gpu::Context& ctx);
 
 // Every earlier pass's writes (shader storage, depth and colour attachments, copies and fills) before

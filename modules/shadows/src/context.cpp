@@ -1059,7 +1059,7 @@ void ContextImpl::add_memory(Stats& s, Technique technique, bool csm) const {
 }
 
 IzbPass& ContextImpl::izb() {
-  if (!izb_) izb_ = std::make_unique<IzbPass>(*gpu_);
+  if (!izb_) izb_ = std::make_unique<IzbPass>(*gpu_, cpu_paths_);
   return *izb_;
 }
 CascadesPass& ContextImpl::cascades() {

@@ -18,7 +18,7 @@ namespace shadows::detail {
 
 using namespace engine::gpu;
 
-IzbPass::IzbPass(Context& ctx) : state_(std::make_unique<IzbState>(ctx)) {}
+IzbPass::IzbPass(Context& ctx, bool cpu_paths) : state_(std::make_unique<IzbState>(ctx, cpu_paths)) {}
 IzbPass::~IzbPass() = default;
 
 bool IzbPass::hardware_raster_available() const { return state_->pipelines.hardware_trace_available(); }

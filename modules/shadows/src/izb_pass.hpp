@@ -17,7 +17,8 @@ struct IzbState;
 // records them in order over the state they share (izb_state).
 class IzbPass {
  public:
-  explicit IzbPass(engine::gpu::Context& ctx);
+  // `cpu_paths`: the module's takes_cpu_paths (barriers.hpp), decided when the module was created.
+  IzbPass(engine::gpu::Context& ctx, bool cpu_paths);
   ~IzbPass();
   // collect_stats adds the statistics passes (fragment count before culling, list lengths).
   // hybrid: writes the hard term and, with a sun of some size, each shadowed pixel's occluder height

@@ -5,7 +5,6 @@
 #include <memory>
 #include <vector>
 
-#include "barriers.hpp"
 #include "gpu/pipeline.hpp"
 
 namespace shadows::detail {
@@ -37,7 +36,8 @@ struct IzbPipelines {
 // Makes the IZB's pipelines on first use and keeps them, per sample count and flags.
 class IzbPipelineCache {
  public:
-  explicit IzbPipelineCache(engine::gpu::Context& ctx) : ctx_(ctx), cpu_paths_(takes_cpu_paths(ctx)), factory_(ctx) {}
+  // `cpu_paths`: the module's takes_cpu_paths, decided once when it was created.
+  IzbPipelineCache(engine::gpu::Context& ctx, bool cpu_paths) : ctx_(ctx), cpu_paths_(cpu_paths), factory_(ctx) {}
   // The pipelines for `samples_per_pixel` and `flags`.
   IzbPipelines& set(uint32_t samples_per_pixel, uint32_t flags);
   // Opaque casters' raster trace where some are alpha-tested (without the alpha-test code).

@@ -21,8 +21,8 @@ Context& with_izb_features(Context& c) {
 }
 }  // namespace
 
-IzbState::IzbState(Context& c)
-    : ctx(with_izb_features(c)), pipelines(c), res(c), casters(c), csm(std::make_unique<CsmPass>(c)) {}
+IzbState::IzbState(Context& c, bool cpu_paths)
+    : ctx(with_izb_features(c)), pipelines(c, cpu_paths), res(c), casters(c), csm(std::make_unique<CsmPass>(c)) {}
 
 void IzbState::push_all(VkCommandBuffer cmd, const Frame& frame, const Pipeline& pipeline) {
   DescriptorWriter()

@@ -52,7 +52,7 @@ struct IzbLastRecord {
 // Everything the IZB's steps share, and the ways they record a pass: every pass binds the same
 // descriptors (push_all) and takes an IzbComputePush.
 struct IzbState {
-  explicit IzbState(engine::gpu::Context& c);
+  IzbState(engine::gpu::Context& c, bool cpu_paths);
 
   void push_all(VkCommandBuffer cmd, const Frame& frame, const engine::gpu::Pipeline& pipeline);
   void bind_compute(VkCommandBuffer cmd, const Frame& frame, const engine::gpu::Pipeline& pipeline,
