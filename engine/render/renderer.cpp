@@ -490,7 +490,9 @@ void Renderer::record_frame(VkCommandBuffer cmd) {
       copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
       copy.imageExtent = {extent_.width, extent_.height, 1};
       vkCmdCopyBufferToImage(cmd, external_shadow_.handle(), shadow_term_.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &copy);
-      full_barrier(cmd);  // the copy before lighting's reads
+      // The copy before lighting's storage reads.
+      memory_barrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
       written = FrameContext::kWroteSunTerm;
     } else {
       FrameContext frame{ctx_,     cmd,           profiler_,      view_,      gbuffer_, shadow_term_,

@@ -53,13 +53,13 @@ SHARED_CONST uint HOST_OUTPUT_ALL_LIT = 4u;        // the host's output as 1 (no
 SHARED_CONST uint HOST_OUTPUT_OCCLUSION = 8u;      // OutputTerm::Occlusion: 1 where the light does not reach or face
 SHARED_CONST uint HOST_OUTPUT_BINDING_WORLD_POSITION = 4u;    // the shading points the passes read
 SHARED_CONST uint HOST_OUTPUT_BINDING_GEOMETRIC_NORMAL = 5u;
-// The light the term is for (HostOutputPush::extent.z).
 // The output pass's workgroup: HOST_OUTPUT_GROUP_X x HOST_OUTPUT_GROUP_Y threads over a square block of
 // HOST_OUTPUT_BLOCK pixels a side, each thread storing one pixel of every row of threads' span in turn
 // (so that a warp's stores fall on whole rows of pixels).
 SHARED_CONST uint HOST_OUTPUT_GROUP_X = 32u;
 SHARED_CONST uint HOST_OUTPUT_GROUP_Y = 8u;
 SHARED_CONST uint HOST_OUTPUT_BLOCK = 32u;
+// The light the term is for (HostOutputPush::extent.z).
 SHARED_CONST uint HOST_OUTPUT_LIGHT_DIRECTIONAL = 0u;
 SHARED_CONST uint HOST_OUTPUT_LIGHT_SPOT = 1u;
 SHARED_CONST uint HOST_OUTPUT_LIGHT_POINT = 2u;
