@@ -104,16 +104,20 @@ bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
 
 Probe probe(int c, vec3 p, vec3 n) {
   Probe pr;
-  vec3 q = shadow_ray_origin(p, n, shadow_ray_offset(p, params.camera_position.xyz)) + n * params.normal_offset[c];
-  vec4 light = params.light_view_projection[c] * vec4(q, 1.0);
+  // `precise` from the point to every tap's comparison: a GPU's compiler fuses multiply-adds as the
+  // code around them lets it, so without it the variants of this shader (with and without PCSS, say)
+  // round a tap at a shadow's edge apart and a light of no size changes the hard term.
+  precise vec3 q = shadow_ray_origin(p, n, shadow_ray_offset(p, params.camera_position.xyz)) + n * params.normal_offset[c];
+  precise vec4 light = params.light_view_projection[c] * vec4(q, 1.0);
   float size = float(params.extent.z);
-  pr.t = (light.xy * 0.5 + 0.5) * size;
+  precise vec2 t = (light.xy * 0.5 + 0.5) * size;
+  pr.t = t;
   pr.z = light.z;
   // The receiver's tangent plane in map space: each tap compares the plane's depth at its texel's
   // centre, so a planar receiver agrees with its own stored depth at every tap.
-  vec3 nc = mat3(params.light_normal_matrix[c]) * n;
+  precise vec3 nc = mat3(params.light_normal_matrix[c]) * n;
   float max_slope = 8.0 * params.edge_threshold[c];
-  vec2 slope = abs(nc.z) > 1.0e-8 ? -nc.xy / nc.z * (2.0 / size) : vec2(1.0e8);
+  precise vec2 slope = abs(nc.z) > 1.0e-8 ? -nc.xy / nc.z * (2.0 / size) : vec2(1.0e8);
   pr.gradient = clamp(slope, vec2(-max_slope), vec2(max_slope));
   // Near-grazing receivers get a clamped plane that no longer tracks the map, so their taps can
   // disagree on a smooth map: they always take the kernel, which keeps masking exact.
@@ -131,10 +135,12 @@ Probe probe(int c, vec3 p, vec3 n) {
 // 1 where the tap at map texel coordinates t + o is lit.
 uint tap(int c, Probe pr, vec2 o) {
   int last = int(params.extent.z) - 1;
-  ivec2 texel = ivec2(floor(pr.t + o));
-  float zt = pr.z + dot(pr.gradient, vec2(texel) + 0.5 - pr.t);
+  precise vec2 at = pr.t + o;
+  ivec2 texel = ivec2(floor(at));
+  precise float zt = pr.z + dot(pr.gradient, vec2(texel) + 0.5 - pr.t);
   float d = texelFetch(depth_map, ivec3(clamp(texel, ivec2(0), ivec2(last)), c), 0).r;
-  return zt <= d + pr.bias ? 1u : 0u;
+  precise float limit = d + pr.bias;
+  return zt <= limit ? 1u : 0u;
 }
 
 // Lit taps of the rotated 12-tap Poisson disk.
@@ -142,8 +148,8 @@ uint kernel(int c, Probe pr, ivec2 pixel) {
   vec2 rot = texelFetch(rotation, pixel % int(kRotationTileSize), 0).xy;
   uint lit = 0u;
   for (uint i = 0u; i < kPoissonTaps; ++i) {
-    vec2 o = kPoissonDisk[i];
-    o = vec2(o.x * rot.x - o.y * rot.y, o.x * rot.y + o.y * rot.x) * pr.r;
+    vec2 disk = kPoissonDisk[i];
+    precise vec2 o = vec2(disk.x * rot.x - disk.y * rot.y, disk.x * rot.y + disk.y * rot.x) * pr.r;
     lit += tap(c, pr, o);
   }
   return lit;

@@ -1,5 +1,6 @@
 // The frustum-traced IZB and the CSM z-prepass against the Embree reference, on lavapipe (CTest) or the
 // device ENGINE_DEVICE names; the hardware paths run where the device has them and skip naming what it lacks.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -1101,6 +1102,22 @@ TEST_F(IzbTest, DebugOverlaysDrawOverTheImage) {
   module_->settings().debug = shadows::DebugView::None;
   r.render_frame(0.0f);
   EXPECT_EQ(r.read_output_rgba8(), plain) << "the last overlay left behind";
+}
+
+// Shadows off with no debug view: the engine records none of the module's passes, and the renderer
+// rests the term the IZB wrote at lit (it clears what nothing wrote): every pixel 1, the frame
+// without a `shadows` region, and the image that of a scene without shadows.
+TEST_F(IzbTest, OffRecordsNothingAndLeavesEveryPixelLit) {
+  auto& r = make_renderer("contact", 0, 96, 96);
+  module_ = shadows::install(r, izb(1));
+  r.render_frame(0.0f);
+  const auto shadowed = r.read_shadow_term();
+  ASSERT_LT(*std::min_element(shadowed.begin(), shadowed.end()), 1.0f) << "the view has no shadow to clear";
+  module_->settings().technique = shadows::Technique::Off;
+  for (int i = 0; i < 3; ++i) r.render_frame(0.0f);
+  const auto term = r.read_shadow_term();
+  EXPECT_EQ(std::count(term.begin(), term.end(), 1.0f), std::ptrdiff_t(term.size())) << "a pixel not lit";
+  for (const auto& [name, ms] : r.profiler().last_frame()) EXPECT_NE(name, "shadows") << "the module recorded";
 }
 
 }  // namespace

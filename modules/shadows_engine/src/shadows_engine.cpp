@@ -169,6 +169,10 @@ class EngineShadowModule final : public ShadowModule {
   }
 
   void record(engine::FrameContext& frame) override {
+    // Shadows off with no debug view: nothing to record. The renderer keeps the terms it was not told
+    // were written at rest, lit (FrameContext::written), so the frame pays nothing for the module.
+    const Settings& settings = context_->settings();
+    if (settings.technique == Technique::Off && settings.debug == DebugView::None) return;
     if (geometry_ != &frame.geometry) on_scene(frame.ctx, *renderer_.scene(), frame.geometry);
     gather_instances(frame);
     FrameDesc f = frame_inputs(frame, renderer_.smooth_terminator(), host_inputs_);
