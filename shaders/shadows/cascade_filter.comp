@@ -184,6 +184,20 @@ struct Choice {
   float w;
 };
 
+// The blend (mix) of a pixel in a band, like its depth and weight, is `precise`: one fused multiply-add
+// more or less in one variant of this shader (with PCSS, or reading the host's inputs) moves the blend
+// by a rounding step.
+float blend(float a, float b, float w) {
+  precise float v = a + (b - a) * w;
+  return v;
+}
+
+// The pixel's view depth, as choose() takes it.
+float view_depth(vec3 p) {
+  precise float depth = dot(p - params.camera_position.xyz, params.camera_forward.xyz);
+  return depth;
+}
+
 Choice choose(float depth) {
   Choice ch;
   int count = int(params.extent.w);
@@ -194,7 +208,8 @@ Choice choose(float depth) {
   float start = params.blend_start[ch.cascade];
   ch.band = depth > start;
   ch.two = ch.band && ch.cascade + 1 < count;
-  ch.w = clamp((depth - start) / max(params.split_far[ch.cascade] - start, 1.0e-6), 0.0, 1.0);
+  precise float w = (depth - start) / max(params.split_far[ch.cascade] - start, 1.0e-6);
+  ch.w = clamp(w, 0.0, 1.0);
   return ch;
 }
 
@@ -240,7 +255,7 @@ uvec2 classify_pixel(ivec2 pixel) {
   bool covered = inside && p.w != 0.0;
   // Surfaces facing away from the light are shadowed by themselves: no lookups.
   bool facing = covered && faces_light(normal);
-  Choice ch = choose(dot(p.xyz - params.camera_position.xyz, params.camera_forward.xyz));
+  Choice ch = choose(view_depth(p.xyz));
   // A point that does not receive shadows (its receiver flag) and faces the light is lit, unfiltered.
   bool receives = covered && imageLoad(receivers, pixel).a > 0.5;
   bool evaluated = facing && receives && ch.in_range;
@@ -249,7 +264,7 @@ uvec2 classify_pixel(ivec2 pixel) {
   bool mixed = false;
   float visibility = kKernelInClassify ? filtered(ch.cascade, pr, pixel, mixed) : float(tap(ch.cascade, pr, vec2(0.0)));
   // The last cascade fades to lit over its band.
-  if (ch.band) visibility = mix(visibility, 1.0, ch.w);
+  if (ch.band) visibility = blend(visibility, 1.0, ch.w);
   visibility = evaluated ? visibility : (facing ? 1.0 : 0.0);
   bool band = evaluated && ch.two;
   bool filtered_here = kKernelInClassify && evaluated && !band;
@@ -318,14 +333,14 @@ void finish() {
   ivec2 pixel = ivec2(packed_pixel & 0xffffu, packed_pixel >> 16u);
   vec3 p = imageLoad(world_position, pixel).xyz;
   vec3 n = imageLoad(geometric_normal, pixel).xyz;
-  Choice ch = choose(dot(p - params.camera_position.xyz, params.camera_forward.xyz));
+  Choice ch = choose(view_depth(p));
   float visibility;
   bool expensive, mixed;
   if (!band_stage) {
     // Listed because the mask test wants the kernel.
     Probe pr = probe(ch.cascade, p, n);
     visibility = filtered(ch.cascade, pr, pixel, mixed);
-    if (ch.band) visibility = mix(visibility, 1.0, ch.w);
+    if (ch.band) visibility = blend(visibility, 1.0, ch.w);
     expensive = true;
   } else {
     float v[2];
@@ -341,7 +356,7 @@ void finish() {
       expensive = expensive || pr.expensive;
       mixed = mixed || (pr.expensive && disagree);
     }
-    visibility = mix(v[0], v[1], ch.w);
+    visibility = blend(v[0], v[1], ch.w);
     count(CASCADE_COUNTER_EXPENSIVE, valid && expensive);
   }
   if (valid) {
