@@ -18,9 +18,13 @@ void main() {
     imageStore(world_position, ivec2(pixel), vec4(0.0));
     return;
   }
-  vec2 ndc = (vec2(pixel) + 0.5) / vec2(frame.extent.xy) * 2.0 - 1.0;
-  vec4 world = frame.inverse_view_projection * vec4(ndc, depth, 1.0);
+  // `precise`, as in the shadow module's input pass (host_inputs.comp), which makes the same points from
+  // a host's depth: a multiply-add fused in one shader and not in the other would move a point by a
+  // rounding step, and a filter's tap at a shadow's edge with it.
+  precise vec2 ndc = (vec2(pixel) + 0.5) / vec2(frame.extent.xy) * 2.0 - 1.0;
+  precise vec4 world = frame.inverse_view_projection * vec4(ndc, depth, 1.0);
   vec3 offset = (frame.extent.w & FRAME_FLAG_SMOOTH_TERMINATOR) != 0u ? imageLoad(terminator_offset, ivec2(pixel)).xyz
                                                                       : vec3(0.0);
-  imageStore(world_position, ivec2(pixel), vec4(world.xyz / world.w + offset, 1.0));
+  precise vec3 position = world.xyz / world.w + offset;
+  imageStore(world_position, ivec2(pixel), vec4(position, 1.0));
 }

@@ -49,10 +49,12 @@ void main() {
     imageStore(albedo_out, pixel, vec4(0.0));
     return;
   }
-  vec2 ndc = (vec2(pixel) + 0.5) / vec2(params.extent.xy) * 2.0 - 1.0;
-  vec4 world = params.inverse_view_projection * vec4(ndc, depth, 1.0);
+  // `precise`: the same arithmetic as the engine's shading points (shading_points.comp), unfused in
+  // both, so a host handing over the engine's own depth gets its points bit for bit.
+  precise vec2 ndc = (vec2(pixel) + 0.5) / vec2(params.extent.xy) * 2.0 - 1.0;
+  precise vec4 world = params.inverse_view_projection * vec4(ndc, depth, 1.0);
   vec3 offset = (flags & HOST_HAS_OFFSET) != 0u ? texelFetch(offset_image, pixel, 0).xyz : vec3(0.0);
-  vec3 position = world.xyz / world.w + offset;
+  precise vec3 position = world.xyz / world.w + offset;
   // A UNORM depth is rounded to half a step, so the point may lie that far along the view ray behind
   // the surface, where its own surface would shadow it (a 16-bit standard-Z buffer: about 5 mm 8
   // units out). It is pushed off the surface by the distance that rounding spans, below. (A float
