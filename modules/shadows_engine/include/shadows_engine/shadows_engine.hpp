@@ -68,7 +68,10 @@ class ShadowModule : public engine::RenderFeature {
   virtual void set_host_inputs(bool enabled) = 0;
 };
 
-// Creates the module on the renderer's device, adds it to the renderer, and returns it.
+// Creates the module on the renderer's device, adds it to the renderer, and returns it. Each frame it
+// records the module's passes into the renderer's terms, except with Technique::Off and no debug
+// view: then it records nothing (no `shadows` profiler region, stats() as the last recorded frame
+// left them) and the renderer keeps the terms lit.
 std::shared_ptr<ShadowModule> install(engine::Renderer& renderer, const Settings& settings = {});
 
 // The module's description of one of the renderer's local lights (FrameView::local_lights).
