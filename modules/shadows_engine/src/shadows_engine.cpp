@@ -104,33 +104,38 @@ FrameDesc frame_inputs(engine::FrameContext& frame, bool smooth_terminator, bool
   return f;
 }
 
+// The module on the renderer's device, queue and enabled extensions and features.
+std::unique_ptr<detail::ContextImpl> make_context(engine::Renderer& renderer, const Settings& settings) {
+  engine::gpu::Context& ctx = renderer.context();
+  ContextDesc desc;
+  desc.instance = ctx.instance();
+  desc.physical_device = ctx.physical_device();
+  desc.device = ctx.device();
+  desc.queue_family = ctx.queue_family();
+  desc.queue = ctx.queue();
+  desc.get_instance_proc_addr = vkGetInstanceProcAddr;
+  desc.get_device_proc_addr = vkGetDeviceProcAddr;
+  // Name arrays as vkCreateInstance/vkCreateDevice took them; the module copies them.
+  std::vector<const char*> instance_extensions, device_extensions;
+  for (const std::string& e : ctx.enabled_instance_extensions()) instance_extensions.push_back(e.c_str());
+  for (const std::string& e : ctx.enabled_device_extensions()) device_extensions.push_back(e.c_str());
+  desc.enabled_instance_extension_names = instance_extensions.data();
+  desc.enabled_instance_extension_count = uint32_t(instance_extensions.size());
+  desc.enabled_device_extension_names = device_extensions.data();
+  desc.enabled_device_extension_count = uint32_t(device_extensions.size());
+  desc.enabled_features = ctx.enabled_features();
+  desc.masked_features = ctx.masked_features();
+  // As many as the renderer: it waits for frame N - F before recording frame N and reports each
+  // completed frame through after_frame().
+  desc.frames_in_flight = renderer.frames_in_flight();
+  desc.settings = settings;
+  return std::make_unique<detail::ContextImpl>(desc);
+}
+
 class EngineShadowModule final : public ShadowModule {
  public:
-  EngineShadowModule(engine::Renderer& renderer, const Settings& settings) : renderer_(renderer) {
-    engine::gpu::Context& ctx = renderer.context();
-    ContextDesc desc;
-    desc.instance = ctx.instance();
-    desc.physical_device = ctx.physical_device();
-    desc.device = ctx.device();
-    desc.queue_family = ctx.queue_family();
-    desc.queue = ctx.queue();
-    desc.get_instance_proc_addr = vkGetInstanceProcAddr;
-    desc.get_device_proc_addr = vkGetDeviceProcAddr;
-    // Name arrays as vkCreateInstance/vkCreateDevice took them; create() copies them.
-    std::vector<const char*> instance_extensions, device_extensions;
-    for (const std::string& e : ctx.enabled_instance_extensions()) instance_extensions.push_back(e.c_str());
-    for (const std::string& e : ctx.enabled_device_extensions()) device_extensions.push_back(e.c_str());
-    desc.enabled_instance_extension_names = instance_extensions.data();
-    desc.enabled_instance_extension_count = uint32_t(instance_extensions.size());
-    desc.enabled_device_extension_names = device_extensions.data();
-    desc.enabled_device_extension_count = uint32_t(device_extensions.size());
-    desc.enabled_features = ctx.enabled_features();
-    desc.masked_features = ctx.masked_features();
-    // As many as the renderer: it waits for frame N - F before recording frame N and reports each
-    // completed frame through after_frame().
-    desc.frames_in_flight = renderer.frames_in_flight();
-    desc.settings = settings;
-    context_ = std::make_unique<detail::ContextImpl>(desc);
+  EngineShadowModule(engine::Renderer& renderer, const Settings& settings)
+      : renderer_(renderer), context_(make_context(renderer, settings)) {
     context_->use_profiler(&renderer.profiler());
     // ENGINE_HOST_INPUTS=1 starts every module on the host path, so a whole test suite (or a
     // program) runs through the module's input pass without changing its code.
