@@ -105,8 +105,8 @@ bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
 Probe probe(int c, vec3 p, vec3 n) {
   Probe pr;
   // `precise` from the point to every tap's comparison: a GPU's compiler fuses multiply-adds as the
-  // code around them lets it, so without it the variants of this shader (with and without PCSS, say)
-  // round a tap at a shadow's edge apart and a light of no size changes the hard term.
+  // code around them lets it, and the variants of this shader (with and without PCSS, say) must round
+  // a tap at a shadow's edge alike (on the H200 it was the band's blend, below, that differed).
   precise vec3 q = shadow_ray_origin(p, n, shadow_ray_offset(p, params.camera_position.xyz)) + n * params.normal_offset[c];
   precise vec4 light = params.light_view_projection[c] * vec4(q, 1.0);
   float size = float(params.extent.z);

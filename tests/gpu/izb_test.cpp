@@ -1105,8 +1105,8 @@ TEST_F(IzbTest, DebugOverlaysDrawOverTheImage) {
 }
 
 // Shadows off with no debug view: the engine records none of the module's passes, and the renderer
-// rests the term the IZB wrote at lit (it clears what nothing wrote): every pixel 1, the frame
-// without a `shadows` region, and the image that of a scene without shadows.
+// rests the term the IZB wrote at lit (it clears what nothing wrote): every pixel 1 and the frame
+// without a `shadows` region.
 TEST_F(IzbTest, OffRecordsNothingAndLeavesEveryPixelLit) {
   auto& r = make_renderer("contact", 0, 96, 96);
   module_ = shadows::install(r, izb(1));

@@ -192,7 +192,7 @@ class EngineShadowModule final : public ShadowModule {
     f.instances = instances_.data();
     f.instance_count = uint32_t(instances_.size());
     // The overlay only while a debug view draws into it (else the renderer's keeps its zeros).
-    if (context_->settings().debug != DebugView::None) f.overlay = image_input(frame.overlay);
+    if (settings.debug != DebugView::None) f.overlay = image_input(frame.overlay);
     context_->record(frame.cmd, f);
     frame.written |= written_ | (f.overlay.present() ? engine::FrameContext::kWroteOverlay : 0u);
     recorded_.push_back(f.frame_index);
