@@ -274,8 +274,8 @@ struct CascadesPass::Impl {
   // Mask and neighbourhood buffers for every cascade's rectangle.
   void ensure_masks(const gs::CascadeParams& p, const std::array<glm::ivec4, kMaxCascadeCount>& rects);
   void record_masks(Frame& frame, const CascadeSettings& s, const std::array<glm::ivec4, kMaxCascadeCount>& rects);
-  void record_filter(Frame& frame, const gs::CascadeParams& p, Image& out, const PixelList* only);
-  void record_blur(Frame& frame, Image& out);
+  void record_filter(Frame& frame, const gs::CascadeParams& p, VkImageView out, const PixelList* only);
+  void record_blur(Frame& frame, VkImageView out);
 
   // Each cascade is drawn only over the texels its receivers can read (the mask rectangle, which
   // already holds the kernel, the offsets and a border, in map texels): the rest of a layer is never
@@ -359,7 +359,7 @@ void CascadesPass::Impl::record_masks(Frame& frame, const CascadeSettings& s,
 
 // The filter's stages: classify (over the frame, or over `only`'s list), then the kernel and band
 // lists it made, with indirect dispatches.
-void CascadesPass::Impl::record_filter(Frame& frame, const gs::CascadeParams& p, Image& out, const PixelList* only) {
+void CascadesPass::Impl::record_filter(Frame& frame, const gs::CascadeParams& p, VkImageView out, const PixelList* only) {
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_filter");
   const uint32_t masking = p.mode.x, debug_view = p.mode.z, pcss = p.pcss.x > 0.0f ? 1u : 0u;
@@ -374,7 +374,7 @@ void CascadesPass::Impl::record_filter(Frame& frame, const gs::CascadeParams& p,
         .storage_buffer(gs::CASCADE_FILTER_BINDING_NEIGHBOURHOODS, neighbourhoods.handle())
         .sampled_image(gs::CASCADE_FILTER_BINDING_ROTATION, rotation.view(), nearest.handle(),
                        VK_IMAGE_LAYOUT_GENERAL)
-        .storage_image(gs::CASCADE_FILTER_BINDING_SHADOW_TERM, out.view())
+        .storage_image(gs::CASCADE_FILTER_BINDING_SHADOW_TERM, out)
         .storage_image(gs::CASCADE_FILTER_BINDING_OVERLAY, frame.overlay.view())
         .storage_buffer(gs::CASCADE_FILTER_BINDING_COUNTERS, counters.handle())
         .storage_buffer(gs::CASCADE_FILTER_BINDING_BLUR_LIST, blur_list.handle())
@@ -401,7 +401,7 @@ void CascadesPass::Impl::record_filter(Frame& frame, const gs::CascadeParams& p,
 }
 
 // 5x5 on the pixels whose taps disagreed, into a side buffer, then written back.
-void CascadesPass::Impl::record_blur(Frame& frame, Image& out) {
+void CascadesPass::Impl::record_blur(Frame& frame, VkImageView out) {
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_blur");
   record_dispatch_args(cmd);
@@ -417,7 +417,7 @@ void CascadesPass::Impl::record_blur(Frame& frame, Image& out) {
     DescriptorWriter()
         .storage_image(gs::CASCADE_BLUR_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
         .storage_image(gs::CASCADE_BLUR_BINDING_GEOMETRIC_NORMAL, frame.gbuffer.geometric_normal)
-        .storage_image(gs::CASCADE_BLUR_BINDING_SHADOW_TERM, out.view())
+        .storage_image(gs::CASCADE_BLUR_BINDING_SHADOW_TERM, out)
         .storage_buffer(gs::CASCADE_BLUR_BINDING_COUNTERS, counters.handle())
         .storage_buffer(gs::CASCADE_BLUR_BINDING_BLUR_LIST, blur_list.handle())
         .storage_buffer(gs::CASCADE_BLUR_BINDING_BLURRED, blurred.handle())
@@ -431,7 +431,7 @@ CascadesPass::CascadesPass(Context& ctx) : impl_(std::make_unique<Impl>(ctx)) {}
 
 CascadesPass::~CascadesPass() = default;
 
-void CascadesPass::record(Frame& frame, const CascadeSettings& settings, Image& out, DebugView debug,
+void CascadesPass::record(Frame& frame, const CascadeSettings& settings, VkImageView out, DebugView debug,
                           const PixelList* only) {
   static_assert(gs::kIzbHybridEntriesPerGroup == 4 * gs::CASCADE_LIST_GROUP, "a list workgroup takes 4 entries a thread");
   Impl& m = *impl_;

@@ -19,12 +19,12 @@ class CascadesPass {
  public:
   explicit CascadesPass(engine::gpu::Context& ctx);
   ~CascadesPass();
-  // Writes the filtered visibility (1 lit .. 0 shadowed) of every covered pixel into `out` (R32F
-  // storage image of the frame's size, GENERAL layout). Background pixels are left untouched.
+  // Writes the filtered visibility (1 lit .. 0 shadowed) of every covered pixel into `out` (a view of
+  // an R32F storage image of the frame's size, GENERAL layout). Background pixels are left untouched.
   // With debug == Cascades or ExpensivePath, also draws that overlay into frame.overlay.
   // With `only`, filters just the listed pixels; the rest of `out` must hold a negative term (the caller
   // keeps it so), and the blur takes no neighbours from there.
-  void record(Frame& frame, const CascadeSettings& settings, engine::gpu::Image& out, DebugView debug,
+  void record(Frame& frame, const CascadeSettings& settings, VkImageView out, DebugView debug,
               const PixelList* only = nullptr);
   // After the frame's fence: fills the cascade fields of `stats`.
   void after_frame(Stats& stats, uint32_t slot);

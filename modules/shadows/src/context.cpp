@@ -474,7 +474,7 @@ void ContextImpl::ensure_targets(VkExtent2D extent) {
 
 // The previous frame's reads of the module's per-pixel images finish before this frame rewrites them;
 // fresh images move from UNDEFINED to GENERAL.
-void ContextImpl::prepare_targets(VkCommandBuffer cmd, bool clear) {
+void ContextImpl::prepare_targets(VkCommandBuffer cmd, bool clear, const TermImage& term) {
   for (Image* img : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_}) {
     if (targets_fresh_)
       img->transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
@@ -488,19 +488,21 @@ void ContextImpl::prepare_targets(VkCommandBuffer cmd, bool clear) {
   targets_fresh_ = false;
   // Without the input pass (native inputs), the term starts lit and the overlay, when a debug view
   // draws, empty.
-  if (clear) clear_term_and_overlay(cmd);
+  if (clear) clear_term_and_overlay(cmd, term);
 }
 
 // The term to lit and, when a debug view draws, the overlay to empty; visible to every pass.
-void ContextImpl::clear_term_and_overlay(VkCommandBuffer cmd) {
+void ContextImpl::clear_term_and_overlay(VkCommandBuffer cmd, const TermImage& term) {
   const bool overlay = settings_.debug != DebugView::None;
-  if (!cpu_paths_) {
+  // A host's output is written by compute shaders only (context.hpp's synchronization contract).
+  const bool own = term.handle() == shadow_term_.handle();
+  if (!cpu_paths_ || !own) {
     // A GPU may clear a storage image through its graphics units (on an H200, 0.6 ms for a 4K R32F
     // term, against 0.01 for compute stores): the output shader writes the term all lit instead, and
     // with a debug view the overlay empty.
     namespace gs = gpu_shared;
     const uint32_t what = gs::HOST_OUTPUT_ALL_LIT | (overlay ? gs::HOST_OUTPUT_ZERO_OVERLAY : 0u);
-    record_output_pass(cmd, output_pipeline(2, what), shadow_term_.view(), overlay_.view(),
+    record_output_pass(cmd, output_pipeline(2, what), term.view(), overlay_.view(),
                        {inputs_.world_position.view(), inputs_.geometric_normal.view(), inputs_.albedo.view()}, view_);
   } else {
     // A CPU device clears with a memset.
@@ -599,17 +601,36 @@ const engine::gpu::Pipeline& ContextImpl::output_pipeline(int format, uint32_t w
   return pipeline;
 }
 
-void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool with_overlay,
-                                const ShadingInputs& inputs, const View& view) {
-  // Every pass's writes of the term and overlay, visible to the copy into the host's images.
-  memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+uint32_t ContextImpl::output_bits(const FrameDesc& f, bool with_overlay) const {
   namespace gs = gpu_shared;
   uint32_t what = settings_.technique == Technique::Off ? gs::HOST_OUTPUT_ALL_LIT : 0u;
   if (f.output_term == OutputTerm::Occlusion) what |= gs::HOST_OUTPUT_OCCLUSION;
   // The overlay is FrameDesc::overlay_light's (the other lights leave the host's overlay alone).
   if (f.overlay.present() && with_overlay)
     what |= settings_.debug != DebugView::None ? gs::HOST_OUTPUT_COPY_OVERLAY : gs::HOST_OUTPUT_ZERO_OVERLAY;
+  return what;
+}
+
+// In place where the output pass would only copy: native inputs (the input pass, which starts the
+// module's term lit, does not run), an R32F output, nothing to convert or draw in the overlay, and a
+// technique that writes the term with compute shaders only (rt writes it from its ray generation
+// shader; the host's barrier after record() names COMPUTE_SHADER). The frame is spared a pass over
+// every pixel.
+TermImage ContextImpl::term_target(const FrameDesc& f, uint32_t i) const {
+  const ImageInput& output = i == 0 ? f.output : f.light_outputs[i - 1];
+  const bool in_place = f.native.present() && output.format == VK_FORMAT_R32_SFLOAT &&
+                        settings_.technique != Technique::RayTraced && output_bits(f, i == f.overlay_light) == 0u;
+  return in_place ? TermImage{output.image, output.view} : TermImage{shadow_term_.handle(), shadow_term_.view()};
+}
+
+void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool with_overlay,
+                                const ShadingInputs& inputs, const View& view, bool written_in_place) {
+  // Every pass's writes of the term and overlay, visible to the copy into the host's images (with the
+  // term written in place, its writes were compute shaders', which the host's own barrier orders).
+  memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                 VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+  if (written_in_place) return;
+  const uint32_t what = output_bits(f, with_overlay);
   const int which = output.format == VK_FORMAT_R8_UNORM ? 0 : output.format == VK_FORMAT_R16_SFLOAT ? 1 : 2;
   record_output_pass(cmd, output_pipeline(which, what), output.view, f.overlay.present() ? f.overlay.view : overlay_.view(),
                      inputs, view);
@@ -657,9 +678,9 @@ void ContextImpl::set_light(View& view, const Light& light) {
 // copies, the output pass's reads of the term) finishes before the next light's rewrite the same
 // resources; the term starts lit again and each light's debug view marks a clean overlay
 // (FrameDesc::overlay_light's is the one handed over).
-void ContextImpl::restart_term(VkCommandBuffer cmd, bool lit_start) {
+void ContextImpl::restart_term(VkCommandBuffer cmd, bool lit_start, const TermImage& term) {
   pass_barrier(*gpu_, cmd);
-  if (lit_start) clear_term_and_overlay(cmd);
+  if (lit_start) clear_term_and_overlay(cmd, term);
 }
 
 // Whether the technique's passes write every pixel of the term for `light`, which then need not start
@@ -768,7 +789,8 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   const bool off = settings_.technique == Technique::Off;
   {
     engine::gpu::ScopedGpuRegion targets_region(*gpu_, profiler, cmd, "prepare_targets");
-    prepare_targets(cmd, !off && f.native.present() && (f.light_count == 0 || !writes_every_pixel(f.lights[0])));
+    prepare_targets(cmd, !off && f.native.present() && (f.light_count == 0 || !writes_every_pixel(f.lights[0])),
+                    term_target(f, 0));
   }
   // The input pass stores whether each point faces the sun (host_inputs.comp): for the sun of this
   // record, not the light the previous record left in view_ (a spot's axis, or none on the first
@@ -801,7 +823,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     if (f.light_count > 1) light_region.emplace(*gpu_, profiler, cmd, "light " + std::to_string(i));
     if (i > 0) {
       engine::gpu::ScopedGpuRegion restart_region(*gpu_, profiler, cmd, "restart_term");
-      restart_term(cmd, !writes_every_pixel(f.lights[i]));
+      restart_term(cmd, !writes_every_pixel(f.lights[i]), term_target(f, i));
     }
     set_light(view, f.lights[i]);
     if (host_inputs && f.lights[i].type == LightType::Directional && sun_direction(i) != *inputs_sun) {
@@ -810,11 +832,17 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
       record_inputs(cmd, f, view);
       inputs_sun = sun_direction(i);
     }
-    Frame frame{*gpu_, cmd, profiler, view, inputs, shadow_term_, overlay_, geometry_.geometry(), draws_,
+    const TermImage term = term_target(f, i);
+    Frame frame{*gpu_, cmd, profiler, view, inputs, term, overlay_, geometry_.geometry(), draws_,
                 slot_index, frames_in_flight_};
     record_technique(frame);
-    engine::gpu::ScopedGpuRegion output_region(*gpu_, profiler, cmd, "host_output");
-    record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light, inputs, view);
+    {
+      // Written in place, the output needs no pass of its own (and no region).
+      const bool in_place = term.handle() != shadow_term_.handle();
+      std::optional<engine::gpu::ScopedGpuRegion> output_region;
+      if (!in_place) output_region.emplace(*gpu_, profiler, cmd, "host_output");
+      record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light, inputs, view, in_place);
+    }
     records.izb_count = (izb_ ? izb_->records_so_far(slot_index, f.frame_index) : 0u) - records.izb_first;
     records.rt_count = (ray_traced_ ? ray_traced_->records_so_far(slot_index, f.frame_index) : 0u) - records.rt_first;
     slot.lights.push_back(std::move(records));
@@ -889,7 +917,7 @@ void ContextImpl::record_technique(Frame& frame) {
       shadow_map_->record(frame, settings.shadow_map);
       break;
     case Technique::Cascades:
-      cascades().record(frame, settings.cascades, frame.shadow_term, settings.debug);
+      cascades().record(frame, settings.cascades, frame.shadow_term.view(), settings.debug);
       break;
     case Technique::Izb:
       izb().record(frame, settings.izb, settings.debug, false, collect_stats_);
@@ -906,7 +934,7 @@ void ContextImpl::record_technique(Frame& frame) {
       if (near.max_distance <= 0.0f) break;
       pass_barrier(*gpu_, frame.cmd);
       const PixelList listed = izb().hybrid_list();
-      cascades().record(frame, settings.cascades, izb().soft_term(), settings.debug, &listed);
+      cascades().record(frame, settings.cascades, izb().soft_term().view(), settings.debug, &listed);
       pass_barrier(*gpu_, frame.cmd);
       izb().record_hybrid_blend(frame);
       break;

@@ -59,23 +59,28 @@ class ContextImpl final : public Context {
   void validate(const FrameDesc& frame) const;
   void record_geometry(VkCommandBuffer cmd, const FrameDesc& frame, engine::gpu::GpuProfiler& profiler);
   void ensure_targets(VkExtent2D extent);
-  // `clear`: the term to 1 and (with a debug view) the overlay to 0, where no input pass does.
-  void prepare_targets(VkCommandBuffer cmd, bool clear);
+  // `clear`: `term` to 1 and (with a debug view) the overlay to 0, where no input pass does.
+  void prepare_targets(VkCommandBuffer cmd, bool clear, const TermImage& term);
   template <typename RecordFace>
   void record_point_light_faces(Frame& frame, RecordFace&& record_face);
   void record_local_light(Frame& frame, const Settings& settings);  // settings in world units
   void set_light(View& view, const Light& light);
-  // Between two lights: the previous light's accesses done; with `lit_start` the term lit again.
-  void restart_term(VkCommandBuffer cmd, bool lit_start);
+  // Between two lights: the previous light's accesses done; with `lit_start` `term` lit again.
+  void restart_term(VkCommandBuffer cmd, bool lit_start, const TermImage& term);
   bool writes_every_pixel(const Light& light);
-  void clear_term_and_overlay(VkCommandBuffer cmd);
+  void clear_term_and_overlay(VkCommandBuffer cmd, const TermImage& term);
+  // The HOST_OUTPUT_* bits of the output pass for an output (`with_overlay`: the overlay's light).
+  uint32_t output_bits(const FrameDesc& frame, bool with_overlay) const;
+  // Where light `i`'s passes write its term: the host's output itself where the output pass would
+  // only copy the module's term into it, else the module's term.
+  TermImage term_target(const FrameDesc& frame, uint32_t i) const;
   void validate_light(const Light& light, const std::string& name) const;
   void check_paths(const Light& light, const std::string& name) const;
   Capabilities find_capabilities() const;
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
   void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool with_overlay,
-                     const ShadingInputs& inputs, const View& view);
+                     const ShadingInputs& inputs, const View& view, bool written_in_place);
   void complete_slot(Slot& slot);
   void add_memory(Stats& s, Technique technique, bool csm) const;
   IzbPass& izb();

@@ -110,13 +110,22 @@ struct LitMapSnapshot {
   glm::mat4 light_view_projection{1.0f};
 };
 
+// The image a light's passes write its term into: the module's own, or the host's output where the
+// output pass would only copy it (ContextImpl::term_target).
+struct TermImage {
+  VkImage image = VK_NULL_HANDLE;
+  VkImageView image_view = VK_NULL_HANDLE;
+  VkImage handle() const { return image; }
+  VkImageView view() const { return image_view; }
+};
+
 struct Frame {
   engine::gpu::Context& ctx;
   VkCommandBuffer cmd;
   engine::gpu::GpuProfiler& profiler;
   const View& view;
   const ShadingInputs& gbuffer;
-  engine::gpu::Image& shadow_term;  // R32F storage, GENERAL, 1 (lit) where no technique writes
+  TermImage shadow_term;            // R32F storage, GENERAL, 1 (lit) where no technique writes
   engine::gpu::Image& overlay;      // RGBA8 storage, GENERAL; cleared to 0 only when a debug view is on
   Geometry& geometry;
   const std::vector<DrawItem>& draws;
