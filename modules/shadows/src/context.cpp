@@ -475,16 +475,18 @@ void ContextImpl::ensure_targets(VkExtent2D extent) {
 // The previous frame's reads of the module's per-pixel images finish before this frame rewrites them;
 // fresh images move from UNDEFINED to GENERAL.
 void ContextImpl::prepare_targets(VkCommandBuffer cmd, bool clear, const TermImage& term) {
+  // The lit start's compute pass binds every target (and reads none of them when it writes a host's
+  // term), a clear writes them, the passes write and read them.
+  constexpr VkAccessFlags2 kTargetFirstUses =
+      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT;
   for (Image* img : {&inputs_.world_position, &inputs_.geometric_normal, &inputs_.albedo, &shadow_term_, &overlay_}) {
     if (targets_fresh_)
       img->transition(cmd, VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_NONE, 0,
-                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
-                      VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT, kTargetFirstUses);
   }
   if (!targets_fresh_)
     memory_barrier(cmd, pass_shader_stages(*gpu_) | VK_PIPELINE_STAGE_2_COPY_BIT, kStorageReadWrite | VK_ACCESS_2_TRANSFER_READ_BIT,
-                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT,
-                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
+                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT, kTargetFirstUses);
   targets_fresh_ = false;
   // Without the input pass (native inputs), the term starts lit and the overlay, when a debug view
   // draws, empty.
@@ -625,11 +627,12 @@ TermImage ContextImpl::term_target(const FrameDesc& f, uint32_t i) const {
 
 void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool with_overlay,
                                 const ShadingInputs& inputs, const View& view, bool written_in_place) {
-  // Every pass's writes of the term and overlay, visible to the copy into the host's images (with the
-  // term written in place, its writes were compute shaders', which the host's own barrier orders).
+  // Written in place, the term's writes were compute shaders': the host's own barrier after record()
+  // orders them (context.hpp's synchronization contract).
+  if (written_in_place) return;
+  // Every pass's writes of the term and overlay, visible to the copy into the host's images.
   memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-  if (written_in_place) return;
   const uint32_t what = output_bits(f, with_overlay);
   const int which = output.format == VK_FORMAT_R8_UNORM ? 0 : output.format == VK_FORMAT_R16_SFLOAT ? 1 : 2;
   record_output_pass(cmd, output_pipeline(which, what), output.view, f.overlay.present() ? f.overlay.view : overlay_.view(),
