@@ -29,18 +29,14 @@ void record_counting_sort(IzbState& s, Frame& frame, const gpu_shared::IzbComput
 
 }  // namespace
 
-void record_izb_reset(IzbState& s, const Frame& frame) {
+void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan) {
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_reset");
   vkCmdFillBuffer(cmd, s.res.counters.handle(), 0, VK_WHOLE_SIZE, 0);
-  pass_barrier(frame.ctx, cmd);
-}
-
-void record_grid_reset(IzbState& s, const Frame& frame, const IzbPlan& plan) {
-  VkCommandBuffer cmd = frame.cmd;
   if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, VK_WHOLE_SIZE, 0);
   else vkCmdFillBuffer(cmd, s.res.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
   vkCmdFillBuffer(cmd, s.res.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
+  pass_barrier(frame.ctx, cmd);
 }
 
 void record_izb_build(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,

@@ -8,7 +8,6 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "gpu/profiler.hpp"
-#include "izb_build.hpp"
 #include "izb_corner_rays.hpp"
 #include "light_space.hpp"
 #include "shared/local_light.h"
@@ -93,8 +92,6 @@ void record_light_frustum(IzbState& s, Frame& frame, const IzbSettings& settings
                           const gpu_shared::IzbComputePush& push) {
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "light_frustum");
-  // Nothing in the light frustum reads the grid's lists: their reset runs beside it.
-  record_grid_reset(s, frame, plan);
   {
     // The last of its workgroups also fits the grid and (with many casters) lists the caster draws
     // whose bounds reach it; on a CPU device a dispatch of its own does (IZB_FLAG_CPU_DEVICE).

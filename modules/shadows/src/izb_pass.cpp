@@ -47,7 +47,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   write_izb_params(s, frame, settings, plan, light);
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, plan.debug, s.casters.triangle_count, 0u};
 
-  record_izb_reset(s, frame);
+  record_izb_reset(s, frame, plan);
   record_light_frustum(s, frame, settings, plan, push);
   pass_barrier(frame.ctx, frame.cmd);
   if (plan.lit) record_lit_map(s, frame, settings, push);
