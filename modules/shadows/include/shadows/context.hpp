@@ -426,6 +426,9 @@ struct FrameDesc {
   uint32_t instance_count = 0;
   // Visibility (1 lit .. 0 shadowed), per pixel of depth: R8_UNORM, R16_SFLOAT or R32_SFLOAT with
   // STORAGE usage, GENERAL layout, extent equal to depth's. Every pixel is written, as `output_term` says.
+  // With `native` inputs, an R32_SFLOAT output, OutputTerm::Combined, no overlay handed over for this
+  // light and a technique other than RayTraced, the module's passes write the term into it in place
+  // (no copy pass; the same values), reading back what they wrote: its earlier contents are not read.
   ImageInput output;
   OutputTerm output_term = OutputTerm::Occlusion;  // for output and every light_outputs image
   // With light_count > 1: light_count - 1 more images, as `output`, for lights[1..].
