@@ -626,10 +626,7 @@ TermImage ContextImpl::term_target(const FrameDesc& f, uint32_t i) const {
 }
 
 void ContextImpl::record_output(VkCommandBuffer cmd, const FrameDesc& f, const ImageInput& output, bool with_overlay,
-                                const ShadingInputs& inputs, const View& view, bool written_in_place) {
-  // Written in place, the term's writes were compute shaders': the host's own barrier after record()
-  // orders them (context.hpp's synchronization contract).
-  if (written_in_place) return;
+                                const ShadingInputs& inputs, const View& view) {
   // Every pass's writes of the term and overlay, visible to the copy into the host's images.
   memory_barrier(cmd, pass_shader_stages(*gpu_), VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                  VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
@@ -769,6 +766,13 @@ void ContextImpl::record_geometry(VkCommandBuffer cmd, const FrameDesc& f, engin
   collect_draws(f, geometry_, entries, draws_);
 }
 
+// The shading points the passes read: the host's native inputs in place, else the input pass's.
+ShadingInputs ContextImpl::shading_inputs(const FrameDesc& f) const {
+  if (f.native.present())
+    return ShadingInputs{f.native.world_position.view, f.native.geometric_normal.view, f.native.receives.view};
+  return ShadingInputs{inputs_.world_position.view(), inputs_.geometric_normal.view(), inputs_.albedo.view()};
+}
+
 void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
   if (cmd == VK_NULL_HANDLE) throw Error("shadows: record: cmd is VK_NULL_HANDLE");
   validate(f);
@@ -808,11 +812,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     if (inputs_sun) view.light_direction = *inputs_sun;
     record_inputs(cmd, f, view);
   }
-  const ShadingInputs inputs = f.native.present()
-                                   ? ShadingInputs{f.native.world_position.view, f.native.geometric_normal.view,
-                                                   f.native.receives.view}
-                                   : ShadingInputs{inputs_.world_position.view(), inputs_.geometric_normal.view(),
-                                                   inputs_.albedo.view()};
+  const ShadingInputs inputs = shading_inputs(f);
   const uint32_t slot_index = uint32_t(f.frame_index % frames_in_flight_);
   slot.lights.clear();
   for (uint32_t i = 0; i < f.light_count; ++i) {
@@ -820,8 +820,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     records.kind = f.lights[i].type == LightType::Spot ? "spot" : f.lights[i].type == LightType::Point ? "point" : "directional";
     records.izb_first = izb_ ? izb_->records_so_far(slot_index, f.frame_index) : 0u;
     records.rt_first = ray_traced_ ? ray_traced_->records_so_far(slot_index, f.frame_index) : 0u;
-    // Each light in turn through the same passes and the same term, which the output pass then copies
-    // into that light's image; a region per light when there are several.
+    // Each light in turn through the same passes, into its own term; a region per light when there are several.
     std::optional<engine::gpu::ScopedGpuRegion> light_region;
     if (f.light_count > 1) light_region.emplace(*gpu_, profiler, cmd, "light " + std::to_string(i));
     if (i > 0) {
@@ -839,12 +838,11 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     Frame frame{*gpu_, cmd, profiler, view, inputs, term, overlay_, geometry_.geometry(), draws_,
                 slot_index, frames_in_flight_};
     record_technique(frame);
-    {
-      // Written in place, the output needs no pass of its own (and no region).
-      const bool in_place = term.handle() != shadow_term_.handle();
-      std::optional<engine::gpu::ScopedGpuRegion> output_region;
-      if (!in_place) output_region.emplace(*gpu_, profiler, cmd, "host_output");
-      record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light, inputs, view, in_place);
+    // Written in place (the term's writes were compute shaders', which the host's barrier after
+    // record() orders), the output needs no pass.
+    if (term.handle() == shadow_term_.handle()) {
+      engine::gpu::ScopedGpuRegion output_region(*gpu_, profiler, cmd, "host_output");
+      record_output(cmd, f, i == 0 ? f.output : f.light_outputs[i - 1], i == f.overlay_light, inputs, view);
     }
     records.izb_count = (izb_ ? izb_->records_so_far(slot_index, f.frame_index) : 0u) - records.izb_first;
     records.rt_count = (ray_traced_ ? ray_traced_->records_so_far(slot_index, f.frame_index) : 0u) - records.rt_first;

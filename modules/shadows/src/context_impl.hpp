@@ -74,13 +74,14 @@ class ContextImpl final : public Context {
   // Where light `i`'s passes write its term: the host's output itself where the output pass would
   // only copy the module's term into it, else the module's term.
   TermImage term_target(const FrameDesc& frame, uint32_t i) const;
+  ShadingInputs shading_inputs(const FrameDesc& frame) const;
   void validate_light(const Light& light, const std::string& name) const;
   void check_paths(const Light& light, const std::string& name) const;
   Capabilities find_capabilities() const;
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
   void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool with_overlay,
-                     const ShadingInputs& inputs, const View& view, bool written_in_place);
+                     const ShadingInputs& inputs, const View& view);
   void complete_slot(Slot& slot);
   void add_memory(Stats& s, Technique technique, bool csm) const;
   IzbPass& izb();
