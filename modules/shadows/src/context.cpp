@@ -823,9 +823,10 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     // Each light in turn through the same passes, into its own term; a region per light when there are several.
     std::optional<engine::gpu::ScopedGpuRegion> light_region;
     if (f.light_count > 1) light_region.emplace(*gpu_, profiler, cmd, "light " + std::to_string(i));
+    const TermImage term = term_target(f, i);
     if (i > 0) {
       engine::gpu::ScopedGpuRegion restart_region(*gpu_, profiler, cmd, "restart_term");
-      restart_term(cmd, !writes_every_pixel(f.lights[i]), term_target(f, i));
+      restart_term(cmd, !writes_every_pixel(f.lights[i]), term);
     }
     set_light(view, f.lights[i]);
     if (host_inputs && f.lights[i].type == LightType::Directional && sun_direction(i) != *inputs_sun) {
@@ -834,7 +835,6 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
       record_inputs(cmd, f, view);
       inputs_sun = sun_direction(i);
     }
-    const TermImage term = term_target(f, i);
     Frame frame{*gpu_, cmd, profiler, view, inputs, term, overlay_, geometry_.geometry(), draws_,
                 slot_index, frames_in_flight_};
     record_technique(frame);
