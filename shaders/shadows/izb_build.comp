@@ -182,6 +182,7 @@ void main() {
     covered = p.covered ? 1u : 0u;
     if (p.covered) {
       state = IZB_PIXEL_COVERED | (p.facing ? IZB_PIXEL_FACING : 0u);
+      if (outside_light_face(p.position)) state |= IZB_PIXEL_OTHER_FACE;
       if (distance(p.position, params.camera_position.xyz) > izb_reach()) state |= IZB_PIXEL_BEYOND;
     }
     if (p.candidate) {
@@ -365,14 +366,18 @@ void main() {
     // the fallback (a pixel past the pool) and the progressive removal (a pixel with a node).
     bool direct_term = izb_flag(IZB_FLAG_DIRECT_TERM);
     bool listed_resolve = izb_flag(IZB_FLAG_LISTED_RESOLVE);
-    if ((!direct_term && (!listed_resolve || count != 0u)) || sorted_lists()) pixel_state[index] = state;
+    // (A local light's direct term: its straddlers' resolve reads the candidates', when there are any.)
+    if ((!direct_term && (!listed_resolve || count != 0u)) || sorted_lists() || (direct_term && spot_light()))
+      pixel_state[index] = state;
     // What izb_resolve.comp would write before the trace: candidates lit unless the CSM settled them,
     // surfaces facing away shadowed, the others lit; beyond the range the term already there stays.
     bool facing = (state & IZB_PIXEL_FACING) != 0u;
     // On a CPU device only its zeros (the sun's term starts lit: write_pixel_term); on a GPU every
     // pixel's 1 or 0, so the term needs no fill before (the trace then darkens the shadowed).
+    // A point-light face leaves the other faces' points alone (write_pixel_term).
     bool shadowed = covered != 0u && (candidate != 0u ? mask != 0u : !facing);
-    if (direct_term && (shadowed || !izb_flag(IZB_FLAG_CPU_DEVICE))) imageStore(shadow_term, pixel, vec4(shadowed ? 0.0 : 1.0));
+    if (direct_term && (shadowed || !izb_flag(IZB_FLAG_CPU_DEVICE)) && (state & IZB_PIXEL_OTHER_FACE) == 0u)
+      imageStore(shadow_term, pixel, vec4(shadowed ? 0.0 : 1.0));
     bool mask_read = (!direct_term && !listed_resolve) || sorted_lists() ||
                      (count != 0u && (listed_resolve || izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));
     // (kBuildClassify: kBuildInsert writes them, for pixels with a node.)

@@ -28,7 +28,9 @@ ivec2 fit_pixel(uint k) {
 void main() {
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
   float reach = izb_reach();
-  if (izb_samples() == 1u) {
+  if (spot_light()) {
+    // A spot light's grid is its cone's (izb_setup.glsl): no bounds, one workgroup.
+  } else if (izb_samples() == 1u) {
     // Every covered point in range bounds the candidates among them (a superset: the window only
     // needs to hold every node), and a ray origin lies within the normal offset of its point. So
     // one image load instead of the candidate test's three; all issued before any is used.

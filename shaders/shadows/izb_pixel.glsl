@@ -29,6 +29,14 @@ PixelPoint load_surface(ivec2 pixel) {
   return p;
 }
 
+// One face of a point light (six overlapping cones that cover every direction, params.light_cone.z):
+// whether `position` lies outside this face's cone, so that another face's pass writes its term.
+bool outside_light_face(vec3 position) {
+  vec3 from_light = position - params.light_position.xyz;
+  return spot_light() && params.light_cone.z > 0.0 &&
+         dot(from_light, params.light_direction.xyz) < params.light_cone.x * length(from_light);
+}
+
 // The shadow-ray offset of a shading point at `position` (shadow_common.h).
 float izb_ray_offset(vec3 position) { return shadow_ray_offset(position, params.camera_position.xyz); }
 
@@ -224,11 +232,9 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
   }
   if (!covered) return visibility;
   if (beyond && !hybrid) return visibility;  // beyond the IZB: the term already there stays
-  // One face of a point light (six overlapping cones that cover every direction): only the points in
-  // its cone are this pass's; the others keep what the other faces write.
-  if (spot_light() && params.light_cone.z > 0.0 && dot(position - params.light_position.xyz, params.light_direction.xyz) <
-                                       params.light_cone.x * length(position - params.light_position.xyz))
-    return visibility;
+  // One face of a point light: only the points in its cone are this pass's (the build marked the
+  // others); they keep what the other faces write.
+  if ((state & IZB_PIXEL_OTHER_FACE) != 0u) return visibility;
   written = true;
   // The sun's term starts lit (ContextImpl::clear_term_and_overlay, host_inputs.comp) and only the IZB
   // writes it before the trace and resolve: storing a lit pixel's 1 would rewrite what is there (a

@@ -77,13 +77,15 @@ layout(constant_id = 13) const uint kHybrid = 0u;
 void resolve(ivec2 pixel, bool inside) {
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
   // The build classified every pixel (IZB_PIXEL_*). The surface itself is read only where the blend's
-  // distance or a local light's rays need it.
+  // distance or a local light's rays need it: the rays only where casters straddle its near plane.
   uint state = inside ? pixel_state[index] : 0u;
   bool covered = (state & IZB_PIXEL_COVERED) != 0u;
-  bool surface = covered && (kHybrid != 0u || spot_light());
+  bool candidate = (state & IZB_PIXEL_CANDIDATE) != 0u;
+  uint mask = candidate ? visibility_mask[index] : 0u;
+  bool rays = candidate && spot_light() && mask != full_mask() && counters[IZB_COUNTER_STRADDLERS] != 0u;
+  bool surface = covered && (kHybrid != 0u || rays);
   PixelPoint p = surface ? load_surface(pixel) : PixelPoint(false, false, vec3(0.0), vec3(0.0), false);
-  uint mask = (state & IZB_PIXEL_CANDIDATE) != 0u ? visibility_mask[index] : 0u;
-  if ((state & IZB_PIXEL_CANDIDATE) != 0u && spot_light() && mask != full_mask()) mask |= straddler_samples(pixel, p);
+  if (rays) mask |= straddler_samples(pixel, p);
   bool written;
   float visibility = write_pixel_term(pixel, inside, state, mask, p.position, kHybrid != 0u, written);
   if (!written) return;
@@ -107,7 +109,22 @@ void resolve(ivec2 pixel, bool inside) {
   }
 }
 
+// IZB_FLAG_DIRECT_TERM, a local light with casters across its near plane (izb_triangles.glsl): the
+// build and the trace wrote the term; a candidate the straddlers' rays shadow is darkened too.
+void resolve_straddlers(ivec2 pixel) {
+  if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
+  uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
+  uint state = pixel_state[index];
+  if ((state & IZB_PIXEL_CANDIDATE) == 0u || (state & IZB_PIXEL_CSM_CULLED) != 0u) return;
+  if (imageLoad(shadow_term, pixel).x == 0.0) return;  // the trace shadowed it already
+  if (straddler_samples(pixel, load_surface(pixel)) != 0u) write_shadowed_term(index);
+}
+
 void main() {
+  if (izb_flag(IZB_FLAG_DIRECT_TERM)) {
+    resolve_straddlers(ivec2(gl_GlobalInvocationID.xy));
+    return;
+  }
   if (!izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     resolve(pixel, all(lessThan(uvec2(pixel), params.extent.xy)));

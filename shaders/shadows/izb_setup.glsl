@@ -166,9 +166,10 @@ void cull_draws(mat4 light_view_projection) {
 // sits on the grid's edge), and whose depth range spans the casters (from the CPU, which knows their
 // bounds); then lists the caster draws whose bounds reach the grid. The fit's last workgroup runs it.
 void set_up_frustum() {
-  // One per fit workgroup.
-  uint partials = ((params.extent.x + kIzbFitBlockWidth - 1u) / kIzbFitBlockWidth) *
-                  ((params.extent.y + kIzbFitBlockHeight - 1u) / kIzbFitBlockHeight);
+  // One per fit workgroup (a spot light's fit runs one).
+  uint partials = spot_light() ? 1u
+                               : ((params.extent.x + kIzbFitBlockWidth - 1u) / kIzbFitBlockWidth) *
+                                     ((params.extent.y + kIzbFitBlockHeight - 1u) / kIzbFitBlockHeight);
   vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
   for (uint i = gl_LocalInvocationIndex; i < partials; i += kSetupThreads) {
     vec4 p = bounds_partials[kIzbPartialsAt + i];

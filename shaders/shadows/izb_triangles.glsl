@@ -78,6 +78,13 @@ bool set_up_triangle(uint t, out vec3 grid[3]) {
       if (unreached) return false;
       uint k = atomicAdd(counters[IZB_COUNTER_STRADDLERS], 1u);
       grid_triangles[3u * push.triangle_count + k] = vec4(uintBitsToFloat(t), 0.0, 0.0, 0.0);
+      // With the term written by the build and the trace, the resolve runs for these alone: its
+      // indirect dispatch over the pixels (zero, so none, unless a straddler is found).
+      if (izb_flag(IZB_FLAG_DIRECT_TERM) && k == 0u) {
+        counters[IZB_COUNTER_RESOLVE_LIST + 1u] = (params.extent.x + 7u) / 8u;
+        counters[IZB_COUNTER_RESOLVE_LIST + 2u] = (params.extent.y + 7u) / 8u;
+        counters[IZB_COUNTER_RESOLVE_LIST + 3u] = 1u;
+      }
       return false;
     }
   }

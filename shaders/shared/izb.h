@@ -215,6 +215,7 @@ SHARED_CONST uint IZB_PIXEL_LIT_CULLED = 8u;
 SHARED_CONST uint IZB_PIXEL_COVERED = 16u;
 SHARED_CONST uint IZB_PIXEL_FACING = 32u;   // faces the light (a spot light: and lies in its reach)
 SHARED_CONST uint IZB_PIXEL_BEYOND = 64u;   // farther from the camera than the IZB's range
+SHARED_CONST uint IZB_PIXEL_OTHER_FACE = 128u;  // a point-light face's pass: outside its cone (another face's point)
 
 // Bindings (one layout shared by all IZB passes, so every pass sees the same buffers).
 SHARED_CONST uint IZB_BINDING_PARAMS = 0u;

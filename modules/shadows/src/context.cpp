@@ -687,11 +687,12 @@ void ContextImpl::restart_term(VkCommandBuffer cmd, bool lit_start, const TermIm
 // lit (with a debug view the overlay starts empty by the same pass, so it always runs).
 bool ContextImpl::writes_every_pixel(const Light& light) {
   if (settings_.debug != DebugView::None) return false;
+  // Both take a local light with the IZB alone (record_local_light).
   const bool local = light.type != LightType::Directional;
-  if (settings_.technique == Technique::Izb)
-    return izb().writes_every_pixel(settings_.izb, settings_.izb.max_distance, settings_.debug, false, local);
+  if (settings_.technique == Technique::Izb || (settings_.technique == Technique::Hybrid && local))
+    return izb().writes_every_pixel(settings_.izb, settings_.izb.max_distance, settings_.debug, false);
   if (settings_.technique == Technique::Hybrid)
-    return izb().writes_every_pixel(settings_.izb, settings_.hybrid_izb_distance, settings_.debug, true, local);
+    return izb().writes_every_pixel(settings_.izb, settings_.hybrid_izb_distance, settings_.debug, true);
   return false;
 }
 

@@ -95,8 +95,11 @@ void record_light_frustum(IzbState& s, Frame& frame, const IzbSettings& settings
   {
     // The last of its workgroups also fits the grid and (with many casters) lists the caster draws
     // whose bounds reach it; on a CPU device a dispatch of its own does (IZB_FLAG_CPU_DEVICE).
+    // A spot light's grid spans its whole cone whatever the points' bounds (izb_setup.glsl): one
+    // workgroup that reads no pixel sets it up.
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "light_frustum_fit");
-    s.dispatch(cmd, frame, s.p->fit, push, fit_columns(frame.view.extent.width), fit_rows(frame.view.extent.height));
+    if (plan.spot) s.dispatch(cmd, frame, s.p->fit, push, 1, 1);
+    else s.dispatch(cmd, frame, s.p->fit, push, fit_columns(frame.view.extent.width), fit_rows(frame.view.extent.height));
   }
   if (plan.cpu) {
     pass_barrier(frame.ctx, cmd);

@@ -62,10 +62,9 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   record_counters_readback(s, frame);
 }
 
-bool IzbPass::writes_every_pixel(const IzbSettings& settings, float max_distance, DebugView debug, bool hybrid,
-                                 bool local_light) const {
+bool IzbPass::writes_every_pixel(const IzbSettings& settings, float max_distance, DebugView debug, bool hybrid) const {
   return !state_->pipelines.cpu_device() &&
-         izb_direct_term(izb_sample_count(settings), hybrid, max_distance, izb_debug_code(debug), local_light);
+         izb_direct_term(izb_sample_count(settings), hybrid, max_distance, izb_debug_code(debug), false);
 }
 
 engine::gpu::Image& IzbPass::soft_term() { return state_->res.soft_term; }

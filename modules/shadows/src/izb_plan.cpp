@@ -8,8 +8,8 @@ namespace shadows::detail {
 
 using namespace engine::gpu;
 
-bool izb_direct_term(uint32_t samples, bool hybrid, float max_distance, uint32_t debug_code, bool spot) {
-  return samples == 1 && !(hybrid && max_distance > 0.0f) && debug_code == 0 && !spot;
+bool izb_direct_term(uint32_t samples, bool hybrid, float max_distance, uint32_t debug_code, bool cpu_local_light) {
+  return samples == 1 && !(hybrid && max_distance > 0.0f) && debug_code == 0 && !cpu_local_light;
 }
 
 uint32_t izb_debug_code(DebugView debug) {
@@ -167,9 +167,10 @@ uint32_t work_flags(const IzbState& s, const Frame& frame, const IzbSettings& se
 uint32_t output_flags(const IzbState& s, const Frame& frame, const IzbSettings& settings, bool hybrid, IzbPlan& plan) {
   uint32_t flags = 0;
   // The resolve is needed only to count samples (32 spp), list the hybrid's fade band toward the
-  // cascades (a limited range), draw a debug view, or for a local light's straddling casters and cone
-  // faces.
-  plan.direct_term = izb_direct_term(s.res.samples, hybrid, settings.max_distance, plan.debug, plan.spot);
+  // cascades (a limited range) or draw a debug view. A local light's casters that straddle its near
+  // plane take a resolve of their own, dispatched only when there are any (izb_triangles.glsl).
+  plan.direct_term = izb_direct_term(s.res.samples, hybrid, settings.max_distance, plan.debug,
+                                     plan.spot && s.pipelines.cpu_device());
   if (plan.direct_term) flags |= gpu_shared::IZB_FLAG_DIRECT_TERM;
   // Otherwise, for the sun with no debug view, the build settles every pixel without a node and the
   // resolve reads only the others.

@@ -32,9 +32,9 @@ struct IzbPlan {
 
 // The resolve's and the trace's debug view (izb_common.glsl).
 uint32_t izb_debug_code(DebugView debug);
-// 1 spp, the sun, no resolve needed (no hybrid range, no IZB debug view): the build and the trace write
-// the term (IZB_FLAG_DIRECT_TERM).
-bool izb_direct_term(uint32_t samples, bool hybrid, float max_distance, uint32_t debug_code, bool spot);
+// 1 spp, no resolve needed (no hybrid range, no IZB debug view): the build and the trace write the term
+// (IZB_FLAG_DIRECT_TERM). Not for a local light on a CPU device, whose build stores only zeros.
+bool izb_direct_term(uint32_t samples, bool hybrid, float max_distance, uint32_t debug_code, bool cpu_local_light);
 
 // Chooses the trace's and the CSM's backends, step 1's shape, the conservative rasterization and
 // the lit map, taking each probe's pick in the order the probes expect (each is timed only once the
