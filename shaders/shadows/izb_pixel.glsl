@@ -49,7 +49,25 @@ float izb_reach() {
   return max_distance > 0.0 ? max_distance : 3.0e38;
 }
 
+// A local light reaches a part of the view (its cone, its range): on a GPU the normal and the receiver
+// flag are read only for the points it reaches (a point light's face: a sixth of them), the others
+// being settled by their position alone, as load_surface settles them.
+PixelPoint load_local_light_pixel(ivec2 pixel) {
+  vec4 pos = imageLoad(world_position_image, pixel);
+  PixelPoint p = PixelPoint(pos.w > 0.5, false, pos.xyz, vec3(0.0), false);
+  if (!p.covered || !local_light_reaches(params.light_position.xyz, params.light_position.w, params.light_direction.xyz,
+                                         params.light_cone.x, true, p.position))
+    return p;
+  float receiver = imageLoad(albedo_image, pixel).a;
+  p.normal = imageLoad(geometric_normal_image, pixel).xyz;
+  p.facing = faces_local_light(p.normal, p.position, params.light_position.xyz);
+  bool in_range = distance(p.position, params.camera_position.xyz) <= izb_reach();
+  p.candidate = receiver > 0.5 && p.facing && in_range;
+  return p;
+}
+
 PixelPoint load_pixel(ivec2 pixel) {
+  if (spot_light() && !izb_flag(IZB_FLAG_CPU_DEVICE)) return load_local_light_pixel(pixel);
   // Loaded with the surface's, not after the coverage test: one round trip to memory instead of two.
   float receiver = imageLoad(albedo_image, pixel).a;
   PixelPoint p = load_surface(pixel);
