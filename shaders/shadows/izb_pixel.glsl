@@ -11,6 +11,12 @@ struct PixelPoint {
   bool facing;     // faces_light (shadow_common.h)
 };
 
+// Whether a spot light (or a point-light face's cone) reaches `position`: in its range and cone.
+bool local_light_reaches_point(vec3 position) {
+  return local_light_reaches(params.light_position.xyz, params.light_position.w, params.light_direction.xyz,
+                             params.light_cone.x, true, position);
+}
+
 // The surface only (`candidate` false): for passes that read the candidates from the build's state.
 PixelPoint load_surface(ivec2 pixel) {
   PixelPoint p;
@@ -20,9 +26,7 @@ PixelPoint load_surface(ivec2 pixel) {
   vec4 normal = imageLoad(geometric_normal_image, pixel);
   p.normal = normal.xyz;
   // A spot light: lit only where it reaches and the geometric normal faces it (local_light.h).
-  p.facing = spot_light() ? p.covered &&
-                                local_light_reaches(params.light_position.xyz, params.light_position.w,
-                                                    params.light_direction.xyz, params.light_cone.x, true, p.position) &&
+  p.facing = spot_light() ? p.covered && local_light_reaches_point(p.position) &&
                                 faces_local_light(p.normal, p.position, params.light_position.xyz)
                           : faces_light(normal);
   p.candidate = false;
@@ -49,20 +53,23 @@ float izb_reach() {
   return max_distance > 0.0 ? max_distance : 3.0e38;
 }
 
+// A covered point with its facing decided is a candidate where it receives shadows (its receiver flag)
+// and lies within the IZB's range.
+bool is_candidate(PixelPoint p, float receiver) {
+  return receiver > 0.5 && p.facing && distance(p.position, params.camera_position.xyz) <= izb_reach();
+}
+
 // A local light reaches a part of the view (its cone, its range): on a GPU the normal and the receiver
 // flag are read only for the points it reaches (a point light's face: a sixth of them), the others
 // being settled by their position alone, as load_surface settles them.
 PixelPoint load_local_light_pixel(ivec2 pixel) {
   vec4 pos = imageLoad(world_position_image, pixel);
   PixelPoint p = PixelPoint(pos.w > 0.5, false, pos.xyz, vec3(0.0), false);
-  if (!p.covered || !local_light_reaches(params.light_position.xyz, params.light_position.w, params.light_direction.xyz,
-                                         params.light_cone.x, true, p.position))
-    return p;
+  if (!p.covered || !local_light_reaches_point(p.position)) return p;
   float receiver = imageLoad(albedo_image, pixel).a;
   p.normal = imageLoad(geometric_normal_image, pixel).xyz;
   p.facing = faces_local_light(p.normal, p.position, params.light_position.xyz);
-  bool in_range = distance(p.position, params.camera_position.xyz) <= izb_reach();
-  p.candidate = receiver > 0.5 && p.facing && in_range;
+  p.candidate = is_candidate(p, receiver);
   return p;
 }
 
@@ -72,9 +79,7 @@ PixelPoint load_pixel(ivec2 pixel) {
   float receiver = imageLoad(albedo_image, pixel).a;
   PixelPoint p = load_surface(pixel);
   if (!p.covered) return p;
-  bool receives = receiver > 0.5;
-  bool in_range = distance(p.position, params.camera_position.xyz) <= izb_reach();
-  p.candidate = receives && p.facing && in_range;
+  p.candidate = is_candidate(p, receiver);
   return p;
 }
 
