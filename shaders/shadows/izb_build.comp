@@ -5,6 +5,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
+#include "shadows/izb_straddlers.glsl"
 layout(set = 0, binding = IZB_BINDING_CSM_DEPTH) uniform sampler2D csm_depth;
 
 // IZB_FLAG_ROW_RUNS: the workgroup's texels (none: 0xffffffff), node depths and the list heads its
@@ -234,6 +235,9 @@ void main() {
         state |= IZB_PIXEL_CSM_CULLED;
         culled = 1u;
       }
+      // A local light's direct term: a caster across its near plane (which the grid leaves out)
+      // shadows the point here, so it needs no node and no resolve follows. (Not the CSM's count.)
+      if (izb_flag(IZB_FLAG_DIRECT_TERM) && spot_light() && mask == 0u && straddler_samples(pixel, p) != 0u) mask = 1u;
       // Lit culling (izb_common.glsl): every sample no farther than its texel's nearest caster is lit,
       // so the pixel needs no node; its mask stays 0 and its occluder distance unset, as the trace
       // would leave them. Only pixels the CSM settled nothing of: a partly shadowed pixel keeps its
@@ -366,8 +370,7 @@ void main() {
     // the fallback (a pixel past the pool) and the progressive removal (a pixel with a node).
     bool direct_term = izb_flag(IZB_FLAG_DIRECT_TERM);
     bool listed_resolve = izb_flag(IZB_FLAG_LISTED_RESOLVE);
-    // (A local light's direct term: its straddlers' resolve reads the candidates', when there are any.)
-    if ((!direct_term && (!listed_resolve || count != 0u)) || sorted_lists() || (direct_term && spot_light()))
+    if ((!direct_term && (!listed_resolve || count != 0u)) || sorted_lists())
       pixel_state[index] = state;
     // What izb_resolve.comp would write before the trace: candidates lit unless the CSM settled them,
     // surfaces facing away shadowed, the others lit; beyond the range the term already there stays.

@@ -62,6 +62,21 @@ vec3 to_grid(vec3 world) {
   return vec3((clip.xy * 0.5 + 0.5) * res, clip.z);
 }
 
+// A straddler's grid bounds (izb_triangles.glsl's straddler_grid_bounds) packed for the resolve:
+// whole texels, widened by kStraddlerBoundsMargin texels for the rounding of the projections (near
+// the light a vertex's projection rounds most), clamped just outside the grid and offset to stay
+// positive, so a packed bound is never 0 (0: unbounded). `widen` < 0 for the low corner.
+const float kStraddlerBoundsMargin = 2.0;
+const float kStraddlerBoundsOffset = 8.0;
+uint pack_straddler_bound(vec2 g, float widen) {
+  float res = float(izb_resolution());
+  vec2 q = clamp(widen < 0.0 ? floor(g + widen) : ceil(g + widen), vec2(-4.0), vec2(res + 4.0)) + kStraddlerBoundsOffset;
+  return uint(q.x) | (uint(q.y) << 16u);
+}
+vec2 unpack_straddler_bound(uint packed) {
+  return vec2(float(packed & 0xffffu), float(packed >> 16u)) - kStraddlerBoundsOffset;
+}
+
 ivec2 grid_texel(vec3 g) {
   int res = int(izb_resolution());
   return clamp(ivec2(floor(g.xy)), ivec2(0), ivec2(res - 1));

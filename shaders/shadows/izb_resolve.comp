@@ -5,6 +5,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
+#include "shadows/izb_straddlers.glsl"
 layout(set = 0, binding = IZB_BINDING_OVERLAY, rgba8) uniform image2D overlay;
 
 const uint kDebugVisibility = 1u;
@@ -14,56 +15,6 @@ const uint kDebugCsm = 4u;
 vec3 heat(float t) {
   t = clamp(t, 0.0, 1.0);
   return clamp(vec3(1.5 - abs(4.0 * t - 3.0), 1.5 - abs(4.0 * t - 2.0), 1.5 - abs(4.0 * t - 1.0)), 0.0, 1.0);
-}
-
-// A ray (t in [0, t_max] along the unit `dir`) against a world triangle, either face (Moller-Trumbore);
-// `uv` the hit's barycentrics of vertices 1 and 2.
-bool ray_hits_triangle(vec3 o, vec3 dir, float t_max, vec3 v0, vec3 v1, vec3 v2, out vec2 uv) {
-  vec3 e1 = v1 - v0, e2 = v2 - v0;
-  vec3 pv = cross(dir, e2);
-  float det = dot(e1, pv);
-  uv = vec2(0.0);
-  if (abs(det) < 1.0e-30) return false;
-  float inv = 1.0 / det;
-  vec3 tv = o - v0;
-  float u = dot(tv, pv) * inv;
-  if (u < 0.0 || u > 1.0) return false;
-  vec3 qv = cross(tv, e1);
-  float v = dot(dir, qv) * inv;
-  if (v < 0.0 || u + v > 1.0) return false;
-  float t = dot(e2, qv) * inv;
-  uv = vec2(u, v);
-  return t >= 0.0 && t <= t_max;
-}
-
-// A spot light's caster triangles that reach behind its near plane (izb_triangles.comp lists them):
-// the samples of candidate `p` they shadow, by rays toward the light in world space, as rt and the
-// reference trace them.
-uint straddler_samples(ivec2 pixel, PixelPoint p) {
-  uint count = counters[IZB_COUNTER_STRADDLERS];
-  if (count == 0u) return 0u;
-  vec3 c[4];
-  if (izb_samples() == 32u) micro_quad_corners(pixel, p, c);
-  uint bits = 0u;
-  for (uint s = 0u; s < izb_samples(); ++s) {
-    vec3 o = izb_samples() == 32u ? micro_quad_blend(c[0], c[1], c[2], c[3], kSamplePattern[s])
-                                  : shadow_ray_origin(p.position, p.normal, izb_ray_offset(p.position));
-    float t_max = local_shadow_ray_length(o, params.light_position.xyz, params.light_position.w);
-    if (t_max <= 0.0) continue;
-    vec3 dir = normalize(params.light_position.xyz - o);
-    for (uint k = 0u; k < count; ++k) {
-      uint t = floatBitsToUint(grid_triangles[3u * push.triangle_count + k].x);
-      vec2 uv;
-      if (!ray_hits_triangle(o, dir, t_max, casters[t].p0.xyz, casters[t].p1.xyz, casters[t].p2.xyz, uv)) continue;
-      CasterAlpha ca = load_caster_alpha(t);
-      if (izb_flag(IZB_FLAG_ALPHA) && ca.threshold != 0u &&
-          !material_alpha_kept(ca.texture, ca.threshold, (1.0 - uv.x - uv.y) * ca.uv0 + uv.x * ca.uv1 + uv.y * ca.uv2))
-        continue;
-      bits |= 1u << s;
-      break;
-    }
-  }
-  return bits;
 }
 
 // Specialized per debug view and hybrid (a CPU driver would otherwise run every branch).
@@ -109,22 +60,7 @@ void resolve(ivec2 pixel, bool inside) {
   }
 }
 
-// IZB_FLAG_DIRECT_TERM, a local light with casters across its near plane (izb_triangles.glsl): the
-// build and the trace wrote the term; a candidate the straddlers' rays shadow is darkened too.
-void resolve_straddlers(ivec2 pixel) {
-  if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
-  uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);
-  uint state = pixel_state[index];
-  if ((state & IZB_PIXEL_CANDIDATE) == 0u || (state & IZB_PIXEL_CSM_CULLED) != 0u) return;
-  if (imageLoad(shadow_term, pixel).x == 0.0) return;  // the trace shadowed it already
-  if (straddler_samples(pixel, load_surface(pixel)) != 0u) write_shadowed_term(index);
-}
-
 void main() {
-  if (izb_flag(IZB_FLAG_DIRECT_TERM)) {
-    resolve_straddlers(ivec2(gl_GlobalInvocationID.xy));
-    return;
-  }
   if (!izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     resolve(pixel, all(lessThan(uvec2(pixel), params.extent.xy)));

@@ -6,40 +6,46 @@
 // (izb_records.comp). Include after izb_prelude.glsl and the push constants.
 // A spot light: a triangle reaching behind its near plane (where the projection folds over) or within
 // twice the light's radius of it is left out of the grid (degenerate, far outside it: every pass skips
-// it) and listed after the grid triangles, from 3 * triangle_count on; the resolve ray-tests it in
-// world space. w: 1 / light-view depth per vertex, for perspective-correct texture coordinates.
+// it) and listed after the grid triangles, from 3 * triangle_count on, with its grid bounds
+// (pack_straddler_bound); the resolve ray-tests it in world space. w: 1 / light-view depth per
+// vertex, for perspective-correct texture coordinates.
 
-// Whether a triangle reaching behind a local light's near plane lies wholly outside the pyramid from
-// the light through the fitted grid. Every candidate's shadow ray runs inside that pyramid (a point
-// and the light share their projection), so such a triangle meets none. The triangle is clipped to
-// light-view depth >= apex_depth first: a candidate's ray (inside the cone, at most the cone's half
-// angle off the axis) is that near the apex only within apex_depth / cos(cone) < the light's bulb (local_light_bulb) of
-// the light, the part of every ray that does not count (local_light.h). A cone of a half space keeps
-// every straddler. One texel of margin on each side.
-bool outside_light_pyramid(vec3 v[3], float depth[3]) {
+// The grid bounds [lo, hi] of the part of a triangle reaching behind a local light's near plane that
+// a candidate's shadow ray can meet; false when a cone of a half space bounds nothing. Every
+// candidate's shadow ray runs inside the pyramid from the light through the fitted grid, and a point
+// and the light share their projection, so a ray meets the triangle only where its grid position
+// lies in these bounds. The triangle is clipped to light-view depth >= apex_depth first: a
+// candidate's ray (inside the cone, at most the cone's half angle off the axis) is that near the apex
+// only within apex_depth / cos(cone) < the light's bulb (local_light_bulb) of the light, the part of
+// every ray that does not count (local_light.h). lo > hi: no part of it is that far out.
+bool straddler_grid_bounds(vec3 v[3], float depth[3], out vec2 lo, out vec2 hi) {
+  lo = vec2(1.0e30);
+  hi = vec2(-1.0e30);
   float cos_cone = params.light_cone.x;
   if (cos_cone <= 1.0e-3) return false;
   float apex_depth = 0.99 * local_light_bulb(params.light_position.w) * cos_cone;
-  vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
-  bool any = false;
   for (int i = 0; i < 3; ++i) {
     int j = (i + 1) % 3;
     if (depth[i] >= apex_depth) {
       vec2 g = to_grid(v[i]).xy;
       lo = min(lo, g);
       hi = max(hi, g);
-      any = true;
     }
     if ((depth[i] >= apex_depth) != (depth[j] >= apex_depth)) {
       vec3 crossing = mix(v[i], v[j], (apex_depth - depth[i]) / (depth[j] - depth[i]));
       vec2 g = to_grid(crossing).xy;
       lo = min(lo, g);
       hi = max(hi, g);
-      any = true;
     }
   }
+  return true;
+}
+
+// Whether bounds from straddler_grid_bounds lie wholly outside the grid (one texel of margin on each
+// side): the triangle meets no candidate's ray.
+bool outside_grid(vec2 lo, vec2 hi) {
   float res = float(izb_resolution());
-  return !any || hi.x < -1.0 || hi.y < -1.0 || lo.x > res + 1.0 || lo.y > res + 1.0;
+  return hi.x < -1.0 || hi.y < -1.0 || lo.x > res + 1.0 || lo.y > res + 1.0;
 }
 
 // Whether a triangle's grid bounds reach the grid (widened by kIzbCullMargin texels).
@@ -72,19 +78,20 @@ bool set_up_triangle(uint t, out vec3 grid[3]) {
     vec3 lo = min(min(v[0], v[1]), v[2]), hi = max(max(v[0], v[1]), v[2]);
     vec3 nearest = clamp(params.light_position.xyz, lo, hi);
     bool unreached = behind || distance(nearest, params.light_position.xyz) > params.light_position.w;
-    if (apart && !unreached) unreached = outside_light_pyramid(v, depth);
+    vec2 grid_lo = vec2(0.0), grid_hi = vec2(0.0);
+    bool bounded = false;
+    if (apart && !unreached) {
+      bounded = straddler_grid_bounds(v, depth, grid_lo, grid_hi);
+      unreached = bounded && outside_grid(grid_lo, grid_hi);
+    }
     if (apart || unreached) {
       for (uint i = 0u; i < 3u; ++i) grid_triangles[3u * t + i] = vec4(-1.0e9, -1.0e9, 2.0, 1.0);
       if (unreached) return false;
       uint k = atomicAdd(counters[IZB_COUNTER_STRADDLERS], 1u);
-      grid_triangles[3u * push.triangle_count + k] = vec4(uintBitsToFloat(t), 0.0, 0.0, 0.0);
-      // With the term written by the build and the trace, the resolve runs for these alone: its
-      // indirect dispatch over the pixels (zero, so none, unless a straddler is found).
-      if (izb_flag(IZB_FLAG_DIRECT_TERM) && k == 0u) {
-        counters[IZB_COUNTER_RESOLVE_LIST + 1u] = (params.extent.x + 7u) / 8u;
-        counters[IZB_COUNTER_RESOLVE_LIST + 2u] = (params.extent.y + 7u) / 8u;
-        counters[IZB_COUNTER_RESOLVE_LIST + 3u] = 1u;
-      }
+      // (Unbounded: zero bounds words, which the resolve reads as "test every ray".)
+      grid_triangles[3u * push.triangle_count + k] =
+          vec4(uintBitsToFloat(t), uintBitsToFloat(bounded ? pack_straddler_bound(grid_lo, -kStraddlerBoundsMargin) : 0u),
+               uintBitsToFloat(bounded ? pack_straddler_bound(grid_hi, kStraddlerBoundsMargin) : 0u), 0.0);
       return false;
     }
   }

@@ -167,8 +167,8 @@ uint32_t work_flags(const IzbState& s, const Frame& frame, const IzbSettings& se
 uint32_t output_flags(const IzbState& s, const Frame& frame, const IzbSettings& settings, bool hybrid, IzbPlan& plan) {
   uint32_t flags = 0;
   // The resolve is needed only to count samples (32 spp), list the hybrid's fade band toward the
-  // cascades (a limited range) or draw a debug view. A local light's casters that straddle its near
-  // plane take a resolve of their own, dispatched only when there are any (izb_triangles.glsl).
+  // cascades (a limited range) or draw a debug view. With a direct term the build ray-tests a local
+  // light's casters that straddle its near plane (izb_straddlers.glsl) before it gives a point a node.
   plan.direct_term = izb_direct_term(s.res.samples, hybrid, settings.max_distance, plan.debug,
                                      plan.spot && s.pipelines.cpu_device());
   if (plan.direct_term) flags |= gpu_shared::IZB_FLAG_DIRECT_TERM;

@@ -18,13 +18,12 @@ void record_overflow_fallback(IzbState& s, Frame& frame, const IzbPlan& plan, co
 
 void record_izb_resolve(IzbState& s, Frame& frame, const IzbPlan& plan, bool hybrid,
                         const gpu_shared::IzbComputePush& push) {
-  // The sun's direct term needs none; a local light's only for casters across its near plane, which
-  // izb_triangles.glsl sizes the dispatch for (none without them).
-  if (plan.direct_term && !plan.spot) return;
+  // A direct term needs none: the build also tests a local light's casters across its near plane.
+  if (plan.direct_term) return;
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_resolve");
   const Pipeline& resolve = s.pipelines.resolve(s.res.samples, plan.flags, plan.debug, hybrid);
-  if (plan.listed_resolve || plan.direct_term)
+  if (plan.listed_resolve)
     s.dispatch_indirect(cmd, frame, resolve, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
   else s.dispatch_pixels(cmd, frame, resolve, push);
   pass_barrier(frame.ctx, cmd);
