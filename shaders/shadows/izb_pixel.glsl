@@ -41,6 +41,15 @@ bool outside_light_face(vec3 position) {
          dot(from_light, params.light_direction.xyz) < params.light_cone.x * length(from_light);
 }
 
+// A point light's face from its axis (params.light_direction): izb_face_tiles.comp's order, +x, -x,
+// +y, -y, +z, -z.
+uint point_light_face() {
+  vec3 d = params.light_direction.xyz;
+  vec3 a = abs(d);
+  uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
+  return 2u * axis + (d[axis] < 0.0 ? 1u : 0u);
+}
+
 // The shadow-ray offset of a shading point at `position` (shadow_common.h).
 float izb_ray_offset(vec3 position) { return shadow_ray_offset(position, params.camera_position.xyz); }
 

@@ -105,6 +105,11 @@ SHARED_CONST uint IZB_FLAG_BOUNDED_FIT = 8388608u;
 // texel); the trace pairs a triangle with a texel where it touches the 2x2 block from that texel up
 // and right.
 SHARED_CONST uint IZB_FLAG_ANCHORED_NODES = 16777216u;
+// A point light's faces on a GPU, the term written directly (IZB_FLAG_DIRECT_TERM): before the first
+// face izb_face_tiles.comp lists each face's 8x8 tiles of pixels (those holding a point its cone
+// reaches) and writes the term of the points no face reaches; each face's build then runs a
+// workgroup per tile of its list, not over the whole frame.
+SHARED_CONST uint IZB_FLAG_FACE_TILES = 33554432u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted
@@ -270,6 +275,15 @@ SHARED_CONST uint IZB_BINDING_LIST_COUNTS = 29u;
 SHARED_CONST uint IZB_BINDING_LIST_CURSOR = 30u;
 // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the resolve alone reads.
 SHARED_CONST uint IZB_BINDING_RESOLVE_LIST = 31u;
+// IZB_FLAG_FACE_TILES keeps its lists there instead (a point light's faces list no resolve): for face
+// f (izb_face_tiles.comp's order: +x, -x, +y, -y, +z, -z) the words [4f, 4f + 4) hold its tile count
+// and its build's indirect dispatch (rows of kIzbDispatchRow); from kIzbFaceTilesAt, its tiles
+// (ty * izb_pixel_tiles_x + tx) at f * izb_pixel_tiles.
+SHARED_CONST uint kIzbFaceTilesAt = 32u;
+SHARED_CONST uint kIzbFaceTileBlock = 32u;  // pixels a side of izb_face_tiles.comp's workgroup (4x4 tiles)
+SHARED_INLINE uint izb_pixel_tiles_x(uint width) { return (width + 7u) / 8u; }
+SHARED_INLINE uint izb_pixel_tiles(uint width, uint height) { return izb_pixel_tiles_x(width) * ((height + 7u) / 8u); }
+SHARED_INLINE uint izb_face_tile_words(uint width, uint height) { return kIzbFaceTilesAt + 6u * izb_pixel_tiles(width, height); }
 SHARED_CONST uint kIzbScanBlock = 1024u;  // texels per block of the prefix sum (256 threads x 4)
 SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per workgroup (64 threads x 4)
 

@@ -866,8 +866,9 @@ void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_fac
   face_view.light_face = true;
   face_view.light_cos_outer = std::cos(std::acos(1.0f / std::sqrt(3.0f)) + glm::radians(0.5f));
   const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (const glm::vec3& axis : axes) {
-    face_view.light_direction = axis;
+  for (uint32_t face = 0; face < 6; ++face) {
+    face_view.light_direction = axes[face];
+    face_view.light_face_index = face;
     Frame f{frame.ctx, frame.cmd, frame.profiler, face_view, frame.gbuffer, frame.shadow_term, frame.overlay,
             frame.geometry, frame.draws, frame.slot, frame.slots};
     record_face(f);

@@ -27,6 +27,19 @@ void record_counting_sort(IzbState& s, Frame& frame, const gpu_shared::IzbComput
   s.dispatch_pixels(cmd, frame, s.p->scatter, push);
 }
 
+// A point light's faces (IZB_FLAG_FACE_TILES), before the first face's build: the six tile lists
+// (their counts and dispatches zeroed first) and the term of the points no face reaches.
+void record_face_tiles(IzbState& s, Frame& frame, const gpu_shared::IzbComputePush& push) {
+  VkCommandBuffer cmd = frame.cmd;
+  ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "point_light_tiles");
+  vkCmdFillBuffer(cmd, s.res.resolve_list.handle(), 0, VkDeviceSize(gpu_shared::kIzbFaceTilesAt) * 4, 0);
+  pass_barrier(frame.ctx, cmd);
+  const uint32_t block = gpu_shared::kIzbFaceTileBlock;
+  s.dispatch(cmd, frame, s.p->face_tiles, push, (frame.view.extent.width + block - 1) / block,
+             (frame.view.extent.height + block - 1) / block);
+  pass_barrier(frame.ctx, cmd);
+}
+
 }  // namespace
 
 void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan) {
@@ -42,10 +55,16 @@ void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan) {
 void record_izb_build(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
                       const gpu_shared::IzbComputePush& push) {
   VkCommandBuffer cmd = frame.cmd;
+  if (plan.face_tiles && frame.view.light_face_index == 0) record_face_tiles(s, frame, push);
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_build");
   {
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "build_classify");
-    s.dispatch_pixels(cmd, frame, s.p->build, push);
+    if (plan.face_tiles) {
+      s.bind_compute(cmd, frame, s.p->build, push);
+      vkCmdDispatchIndirect(cmd, s.res.resolve_list.handle(), VkDeviceSize(4 * frame.view.light_face_index + 1) * 4);
+    } else {
+      s.dispatch_pixels(cmd, frame, s.p->build, push);
+    }
   }
   if (plan.sorted) record_counting_sort(s, frame, push);
   pass_barrier(frame.ctx, cmd);

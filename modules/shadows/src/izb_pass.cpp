@@ -42,7 +42,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   plan.debug = izb_debug_code(debug);
   choose_izb_flags(s, frame, settings, hybrid, collect_stats, plan);
   s.last.penumbra = plan.penumbra;
-  s.res.ensure_resolve_list(frame.view.extent, plan.listed_resolve);
+  s.res.ensure_resolve_list(frame.view.extent, plan.listed_resolve, plan.face_tiles);
   s.p = &s.pipelines.set(s.res.samples, plan.flags);  // specialized for every flag of the plan
   write_izb_params(s, frame, settings, plan, light);
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, plan.debug, s.casters.triangle_count, 0u};

@@ -72,6 +72,7 @@ IzbPipelines& IzbPipelineCache::set(uint32_t samples_per_pixel, uint32_t flags) 
                            (flags & gpu_shared::IZB_FLAG_LISTED_RESOLVE);
   ps.build = compute("izb_build.comp", {{14, build_apart ? 1u : 0u}});
   if (build_apart) ps.build_insert = compute("izb_build.comp", {{14, 2u}});
+  if (flags & gpu_shared::IZB_FLAG_FACE_TILES) ps.face_tiles = compute("izb_face_tiles.comp");
   ps.fallback = compute("izb_fallback.comp");
   ps.list_stats = compute("izb_list_stats.comp");
   ps.grid_setup = compute("izb_triangles.comp");

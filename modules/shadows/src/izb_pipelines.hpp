@@ -22,6 +22,7 @@ struct IzbTracePipelines {
 struct IzbPipelines {
   engine::gpu::Pipeline fit, setup, build, fallback, list_stats, grid_setup, scan, scatter, list_dispatch;
   engine::gpu::Pipeline build_insert;  // valid where the build runs in two steps (izb_build.comp, kBuildStep)
+  engine::gpu::Pipeline face_tiles;    // valid with IZB_FLAG_FACE_TILES (izb_face_tiles.comp)
   // Steps 1-3 of the tile work, per work (IZB_WORK_*), made on first use (IzbPipelineCache::tile_work)
   // with the set's constants.
   struct TileWork {

@@ -172,6 +172,9 @@ uint32_t output_flags(const IzbState& s, const Frame& frame, const IzbSettings& 
   plan.direct_term = izb_direct_term(s.res.samples, hybrid, settings.max_distance, plan.debug,
                                      plan.spot && s.pipelines.cpu_device());
   if (plan.direct_term) flags |= gpu_shared::IZB_FLAG_DIRECT_TERM;
+  // A point light's faces: each face's build runs over the tiles its cone reaches, listed once.
+  plan.face_tiles = plan.direct_term && frame.view.light_face;
+  if (plan.face_tiles) flags |= gpu_shared::IZB_FLAG_FACE_TILES;
   // Otherwise, for the sun with no debug view, the build settles every pixel without a node and the
   // resolve reads only the others.
   plan.listed_resolve = !plan.direct_term && plan.debug == 0 && !plan.spot;

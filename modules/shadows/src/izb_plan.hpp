@@ -25,6 +25,7 @@ struct IzbPlan {
   bool cpu = false;
   bool direct_term = false;     // the build and trace write the term; no resolve
   bool listed_resolve = false;  // the resolve reads only the pixels with nodes
+  bool face_tiles = false;      // a point light's face builds over its listed tiles (IZB_FLAG_FACE_TILES)
   bool constant_ray_w = false;
   bool bounded_fit = false;
   bool penumbra = false;  // the hybrid with a sun of some size: occluder heights and the penumbra pass

@@ -27,8 +27,9 @@ struct IzbResources {
   // frame measured (a frame that overflows still finishes exactly, only slower). Unused (raster
   // passes only): small placeholders keep every binding valid.
   void ensure_work_lists(bool used, uint32_t triangle_count);
-  // Frame-sized where the resolve is listed; otherwise a placeholder keeps the binding valid.
-  void ensure_resolve_list(VkExtent2D e, bool listed);
+  // Frame-sized where the resolve is listed, a point light's face tile lists where its faces build
+  // over them (IZB_FLAG_FACE_TILES); otherwise a placeholder keeps the binding valid.
+  void ensure_resolve_list(VkExtent2D e, bool listed, bool face_tiles);
   // Frame-sized in hybrid; otherwise 1x1 placeholders keep the bindings valid (izb_hybrid.cpp).
   void ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid);
   // Whether csm_texels' texel view reaches all of its words (IZB_FLAG_LIT_FETCH).
@@ -37,7 +38,8 @@ struct IzbResources {
   engine::gpu::Context& ctx;
   engine::gpu::Buffer list_counts, list_cursor;  // the cursors' buffer also holds the prefix sum's block sums
   uint32_t scan_blocks = 0;
-  // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (frame-sized where it is on, else a placeholder).
+  // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes; IZB_FLAG_FACE_TILES: the faces' tile lists and
+  // their builds' indirect dispatches (izb.h, kIzbFaceTilesAt).
   engine::gpu::Buffer resolve_list;
   // Hybrid: the cascades' term and the pixels that blend toward it (frame-sized only in hybrid).
   engine::gpu::Image soft_term;
