@@ -54,18 +54,20 @@ bool spot_light() { return izb_flag(IZB_FLAG_SPOT); }
 
 // World position -> (grid x, grid y, light depth): grid in texels of the IZB, depth in [0,1]. A spot
 // light's points lie in front of it (w > 0: the build takes only points it reaches, and caster
-// triangles reaching behind its near plane are traced apart, izb_triangles.comp).
-vec3 to_grid(vec3 world) {
-  vec4 clip = izb.light_view_projection * vec4(world, 1.0);
+// triangles reaching behind its near plane are traced apart, izb_triangles.comp). clip_to_grid takes
+// the light clip position (izb.light_view_projection) where the caller also needs its w.
+vec3 clip_to_grid(vec4 clip) {
   if (spot_light()) clip.xyz /= clip.w;
   float res = float(izb_resolution());
   return vec3((clip.xy * 0.5 + 0.5) * res, clip.z);
 }
+vec3 to_grid(vec3 world) { return clip_to_grid(izb.light_view_projection * vec4(world, 1.0)); }
 
-// A straddler's grid bounds (izb_triangles.glsl's straddler_grid_bounds) packed for the resolve:
-// whole texels, widened by kStraddlerBoundsMargin texels for the rounding of the projections (near
-// the light a vertex's projection rounds most), clamped just outside the grid and offset to stay
-// positive, so a packed bound is never 0 (0: unbounded). `widen` < 0 for the low corner.
+// A straddler's grid bounds (izb_triangles.glsl's straddler_grid_bounds) packed for its ray tests
+// (izb_straddlers.glsl): whole texels, widened by kStraddlerBoundsMargin texels for the rounding of
+// the projections (near the light a vertex's projection rounds most), clamped just outside the grid
+// and offset to stay positive, so a packed bound is never 0 (0: unbounded). `widen` < 0 for the low
+// corner.
 const float kStraddlerBoundsMargin = 2.0;
 const float kStraddlerBoundsOffset = 8.0;
 uint pack_straddler_bound(vec2 g, float widen) {

@@ -41,7 +41,7 @@ uint straddler_samples(ivec2 pixel, PixelPoint p) {
     // front of the light shares its projection with its whole ray).
     vec4 clip = izb.light_view_projection * vec4(o, 1.0);
     bool projected = clip.w > 0.0;
-    vec2 g = projected ? (clip.xy / clip.w * 0.5 + 0.5) * float(izb_resolution()) : vec2(0.0);
+    vec2 g = projected ? clip_to_grid(clip).xy : vec2(0.0);
     for (uint k = 0u; k < count; ++k) {
       uvec4 entry = floatBitsToUint(grid_triangles[3u * push.triangle_count + k]);
       if (projected && entry.y != 0u &&

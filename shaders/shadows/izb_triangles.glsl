@@ -7,7 +7,7 @@
 // A spot light: a triangle reaching behind its near plane (where the projection folds over) or within
 // twice the light's radius of it is left out of the grid (degenerate, far outside it: every pass skips
 // it) and listed after the grid triangles, from 3 * triangle_count on, with its grid bounds
-// (pack_straddler_bound); the resolve ray-tests it in world space. w: 1 / light-view depth per
+// (pack_straddler_bound); it is ray-tested in world space (izb_straddlers.glsl). w: 1 / light-view depth per
 // vertex, for perspective-correct texture coordinates.
 
 // The grid bounds [lo, hi] of the part of a triangle reaching behind a local light's near plane that
@@ -88,7 +88,7 @@ bool set_up_triangle(uint t, out vec3 grid[3]) {
       for (uint i = 0u; i < 3u; ++i) grid_triangles[3u * t + i] = vec4(-1.0e9, -1.0e9, 2.0, 1.0);
       if (unreached) return false;
       uint k = atomicAdd(counters[IZB_COUNTER_STRADDLERS], 1u);
-      // (Unbounded: zero bounds words, which the resolve reads as "test every ray".)
+      // (Unbounded: zero bounds words, which straddler_samples reads as "test every ray".)
       grid_triangles[3u * push.triangle_count + k] =
           vec4(uintBitsToFloat(t), uintBitsToFloat(bounded ? pack_straddler_bound(grid_lo, -kStraddlerBoundsMargin) : 0u),
                uintBitsToFloat(bounded ? pack_straddler_bound(grid_hi, kStraddlerBoundsMargin) : 0u), 0.0);
