@@ -185,7 +185,7 @@ uint reserve_slots(uint counter, uint count) { return reserve_slots_raising(coun
 void add_sharded(uint counter, uint value, uint seed) {
   uint sum = subgroupAdd(value);
   if (subgroupElect() && sum > 0u)
-    atomicAdd(counters[IZB_COUNTER_SHARDS + counter * kIzbCounterShards + seed % kIzbCounterShards], sum);
+    atomicAdd(counters[izb_shard_word(counter, seed % kIzbCounterShards)], sum);
 }
 // A compute invocation's shard seed.
 #define IZB_SHARD_SEED (gl_WorkGroupID.x * 7u + gl_WorkGroupID.y * 13u + gl_SubgroupID)

@@ -31,7 +31,7 @@ Stats stats_from_counters(const IzbState& s, const uint32_t* c) {
   auto sharded = [&](uint32_t counter) {
     uint64_t sum = 0;
     for (uint32_t k = 0; k < gpu_shared::kIzbCounterShards; ++k)
-      sum += c[gpu_shared::IZB_COUNTER_SHARDS + counter * gpu_shared::kIzbCounterShards + k];
+      sum += c[gpu_shared::izb_shard_word(counter, k)];
     return sum;
   };
   Stats st{};
