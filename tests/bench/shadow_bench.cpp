@@ -834,6 +834,13 @@ int run_single(const Options& o) {
     }
     renderer.set_external_shadow_term({});
   }
+  if (!o.dump_dir.empty() && !bench.area_vis.empty() && !bench.area_vis[0].empty()) {
+    // The first light's area reference beside the techniques' terms (--dump), in the same layout.
+    std::ofstream out(o.dump_dir + "/area_reference_" + scene->name + "_v" + std::to_string(o.view) + ".f32",
+                      std::ios::binary);
+    out.write(reinterpret_cast<const char*>(bench.area_vis[0].data()),
+              std::streamsize(bench.area_vis[0].size() * sizeof(float)));
+  }
   if (!o.json_path.empty()) write_json(o.json_path, results);
   // The bounds make a benchmark run a check: each run over one fails it, named with its figure.
   int failed = 0;
