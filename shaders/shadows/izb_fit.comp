@@ -21,11 +21,30 @@ ivec2 fit_pixel(uint k) {
   return ivec2(block + gl_LocalInvocationID.xy + 16u * uvec2(k % kFitColumns, k / kFitColumns));
 }
 
+// IZB_FLAG_FIT_CLEARS_GRID: this workgroup's slice of the grid emptied (every list's head, or its
+// count with sorted lists, and every texel's and tile's farthest depth), neighbouring invocations on
+// neighbouring words. Nothing reads the grid before the build, after the light frustum's barrier.
+void clear_grid_slice() {
+  uint groups = gl_NumWorkGroups.x * gl_NumWorkGroups.y;
+  uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+  uint texels = izb_resolution() * izb_resolution();
+  uint words = texels + tiles_per_side() * tiles_per_side();  // farthest's (tile_farthest_index)
+  uint per_group = (words + groups - 1u) / groups;
+  uint last = min((group + 1u) * per_group, words);
+  for (uint i = group * per_group + gl_LocalInvocationIndex; i < last; i += gl_WorkGroupSize.x * gl_WorkGroupSize.y) {
+    farthest[i] = 0u;
+    if (i >= texels) continue;
+    if (sorted_lists()) list_counts[i] = 0u;
+    else heads[i] = kIzbEndOfList;
+  }
+}
+
 // Light frustum fit, step 1: light-view x/y bounds of every lit candidate's ray origin (and, at 32
 // spp, its μQuad corners), reduced over the workgroup's block of pixels and written once per
 // workgroup, not by atomics on the bounds' four addresses. One count per workgroup finds the last to
 // finish, which reduces the partials, fits the grid and culls the casters (izb_setup.glsl).
 void main() {
+  if (izb_flag(IZB_FLAG_FIT_CLEARS_GRID)) clear_grid_slice();
   vec2 lo = vec2(1.0e30), hi = vec2(-1.0e30);
   float reach = izb_reach();
   if (spot_light()) {

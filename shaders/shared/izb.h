@@ -110,6 +110,10 @@ SHARED_CONST uint IZB_FLAG_ANCHORED_NODES = 16777216u;
 // reaches) and writes the term of the points no face reaches; each face's build then runs a
 // workgroup per tile of its list, not over the whole frame.
 SHARED_CONST uint IZB_FLAG_FACE_TILES = 33554432u;
+// The sun on a GPU: the light frustum's fit, whose workgroups read every pixel, also empties the grid
+// (its lists' heads or counts and the farthest depths, a slice a workgroup) in place of record_izb_reset's
+// transfer fills, which cost more than the stores (a fill each, a barrier after).
+SHARED_CONST uint IZB_FLAG_FIT_CLEARS_GRID = 67108864u;
 
 // A list node is a uvec2 {next node, pixel}. Linked lists: heads[texel] is the first node, chained
 // through .x; with IZB_FLAG_DIRECT_NODES a node's index is its pixel's (the trace reads it so). Sorted

@@ -6,7 +6,8 @@
 
 namespace shadows::detail {
 
-// Clears what every record starts from: the counters, the lists' heads or counts, the farthest depths.
+// Clears what every record starts from: the counters, and the lists' heads or counts and the farthest
+// depths unless the fit empties those (IzbPlan::fit_clears_grid).
 void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan);
 // The IZB build: each pixel's node(s) into its texels' linked lists or, sorted, counted, prefix-summed
 // and scattered into contiguous ranges (izb_build.comp, izb_scan.comp, izb_scatter.comp).

@@ -175,6 +175,9 @@ uint32_t output_flags(const IzbState& s, const Frame& frame, const IzbSettings& 
   // A point light's faces: each face's build runs over the tiles its cone reaches, listed once.
   plan.face_tiles = plan.direct_term && frame.view.light_face;
   if (plan.face_tiles) flags |= gpu_shared::IZB_FLAG_FACE_TILES;
+  // The fit empties the grid where it runs many workgroups on a GPU (a spot light's runs one).
+  plan.fit_clears_grid = !plan.spot && !plan.cpu;
+  if (plan.fit_clears_grid) flags |= gpu_shared::IZB_FLAG_FIT_CLEARS_GRID;
   // Otherwise, for the sun with no debug view, the build settles every pixel without a node and the
   // resolve reads only the others.
   plan.listed_resolve = !plan.direct_term && plan.debug == 0 && !plan.spot;
