@@ -8,6 +8,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // A light with a size (ShadowMapResolveParams::pcss): the PCSS pipeline. A specialization constant
 // rather than a branch, since llvmpipe pays for both sides of one.
 layout(constant_id = 0) const bool kPcss = false;
+// A fixed filter (ShadowMapResolveParams::bias.y > 0: the cascades' spot-light maps), likewise: a CPU
+// device would run its 16 taps for every pixel, filter or not.
+layout(constant_id = 1) const bool kPcf = false;
 
 layout(set = 0, binding = SM_RESOLVE_BINDING_PARAMS) uniform Params { ShadowMapResolveParams params; };
 layout(set = 0, binding = SM_RESOLVE_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
@@ -75,7 +78,7 @@ void main() {
       ivec2 texel = clamp(ivec2(uv * vec2(params.extent.zw)), ivec2(0), ivec2(params.extent.zw) - 1);
       float stored = texelFetch(shadow_map, texel, 0).r;
       visibility = light.z <= stored + params.bias.x ? 1.0 : 0.0;
-      if (params.bias.y > 0.0) {
+      if (kPcf) {
         // Percentage-closer filtering: 16 taps on a disk of bias.y texels (a fixed golden-angle spiral).
         float lit = 0.0;
         for (int k = 0; k < 16; ++k) {

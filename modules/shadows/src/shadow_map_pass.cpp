@@ -40,8 +40,8 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
   d.depth_compare = VK_COMPARE_OP_LESS_OR_EQUAL;
   d.cull_mode = VK_CULL_MODE_NONE;
   d.depth_bias = true;
-  for (uint32_t pcss = 0; pcss < 2; ++pcss)
-    resolve_pipelines_[pcss] =
+  for (uint32_t variant = 0; variant < 4; ++variant)
+    resolve_pipelines_[variant] =
         factory.compute({"shadow_map_resolve.comp",
                          {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
                           {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
@@ -50,7 +50,7 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
                           {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                           {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
                          0,
-                         {{0, pcss}}});
+                         {{0, variant & 1u}, {1, variant >> 1}}});
   depth_pipeline_ = factory.graphics(d);
   alpha_depth_pipeline_ = alpha_depth_pipeline(ctx, d);
 }
@@ -99,7 +99,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     set_pcss_params(p, frame.view, light_vp, settings.size);
     record_update(ctx_, cmd, params_, &p, sizeof(p));
     const bool sized = (frame.view.local_light ? frame.view.light_radius : frame.view.light_tan_half_angle) > 0.0f;
-    const Pipeline& resolve_pipeline = resolve_pipelines_[sized ? 1 : 0];
+    const Pipeline& resolve_pipeline = resolve_pipelines_[(sized ? 1 : 0) | (filter_texels > 0.0f ? 2 : 0)];
     resolve_pipeline.bind(cmd);
     DescriptorWriter()
         .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())

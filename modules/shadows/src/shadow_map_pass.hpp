@@ -24,7 +24,7 @@ class ShadowMapPass {
   engine::gpu::Sampler sampler_;
   engine::gpu::Pipeline depth_pipeline_;
   engine::gpu::Pipeline alpha_depth_pipeline_;  // alpha-tested casters
-  engine::gpu::Pipeline resolve_pipelines_[2];  // [the light has a size: PCSS]
+  engine::gpu::Pipeline resolve_pipelines_[4];  // [PCSS (the light has a size) + 2 * a fixed PCF filter]
 };
 
 }  // namespace shadows::detail
