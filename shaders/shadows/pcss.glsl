@@ -149,23 +149,15 @@ float pcss_filter(PcssMap m, PcssReceiver r, float radius, vec2 rotation) {
 // cascades pass kPcssMaxTexels, shared/shadows.h). Returns -1 where no tap blocks or the penumbra's radius is
 // below `min_texels` texels of the coarser axis: there the caller keeps its own narrower filter or
 // one tap, so a small light changes nothing where its penumbra is narrower than that.
-//
-// A CPU device runs every lane of a SIMD row through both sides of a branch (an early return skips
-// nothing), but it skips a loop that no lane of the row enters. So the blocker search and the filter
-// each sit in a loop of at most one turn, whose count (1) comes from a uniform the compiler cannot
-// see through, so the loop stays a loop; their own taps keep their fixed counts.
 float pcss_visibility(PcssMap m, PcssReceiver r, vec2 rotation, float max_texels, float min_texels) {
   float search = pcss_search_radius(m, r.z, max_texels);
   float nearest = pcss_nearest_occluder(m, r, search, rotation);
-  uint once = uint(m.size > 0);
-  float lit = -1.0;
-  for (uint turn = 0u; turn < (nearest <= 1.0 ? once : 0u); ++turn) {
-    PcssBlockers b = pcss_blockers(m, r, min(search, pcss_reach(m, r.z, nearest)), rotation);
-    float radius = min(pcss_reach(m, r.z, b.depth), max_texels * min(m.texel.x, m.texel.y));
-    bool soft = b.count > 0u && radius >= min_texels * max(m.texel.x, m.texel.y);
-    for (uint pass = 0u; pass < (soft ? once : 0u); ++pass) lit = pcss_filter(m, r, radius, rotation);
-  }
-  return lit;
+  if (nearest > 1.0) return -1.0;
+  PcssBlockers b = pcss_blockers(m, r, min(search, pcss_reach(m, r.z, nearest)), rotation);
+  if (b.count == 0u) return -1.0;
+  float radius = min(pcss_reach(m, r.z, b.depth), max_texels * min(m.texel.x, m.texel.y));
+  if (radius < min_texels * max(m.texel.x, m.texel.y)) return -1.0;
+  return pcss_filter(m, r, radius, rotation);
 }
 
 // The receiver's tangent plane in a map (`plane_matrix`: the transpose of the inverse of the map's
