@@ -40,19 +40,25 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
   d.depth_compare = VK_COMPARE_OP_LESS_OR_EQUAL;
   d.cull_mode = VK_CULL_MODE_NONE;
   d.depth_bias = true;
-  for (uint32_t variant = 0; variant < 4; ++variant)
-    resolve_pipelines_[variant] =
-        factory.compute({"shadow_map_resolve.comp",
-                         {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-                          {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                          {gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                          {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                          {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                          {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
-                         0,
-                         {{0, variant & 1u}, {1, variant >> 1}}});
   depth_pipeline_ = factory.graphics(d);
   alpha_depth_pipeline_ = alpha_depth_pipeline(ctx, d);
+}
+
+const Pipeline& ShadowMapPass::resolve_pipeline(bool pcss, bool pcf) {
+  // Made on first use: a frame needs one of the four (the filtered ones serve the cascades' spot lights).
+  Pipeline& pipeline = resolve_pipelines_[(pcss ? 1 : 0) | (pcf ? 2 : 0)];
+  if (pipeline.valid()) return pipeline;
+  pipeline = PipelineFactory(ctx_).compute(
+      {"shadow_map_resolve.comp",
+       {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+        {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+        {gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+        {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+        {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+        {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+       0,
+       {{0, pcss ? 1u : 0u}, {1, pcf ? 1u : 0u}}});
+  return pipeline;
 }
 
 void ShadowMapPass::ensure_map(VkCommandBuffer cmd, uint32_t size) {
@@ -99,8 +105,8 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     set_pcss_params(p, frame.view, light_vp, settings.size);
     record_update(ctx_, cmd, params_, &p, sizeof(p));
     const bool sized = (frame.view.local_light ? frame.view.light_radius : frame.view.light_tan_half_angle) > 0.0f;
-    const Pipeline& resolve_pipeline = resolve_pipelines_[(sized ? 1 : 0) | (filter_texels > 0.0f ? 2 : 0)];
-    resolve_pipeline.bind(cmd);
+    const Pipeline& resolve = resolve_pipeline(sized, filter_texels > 0.0f);
+    resolve.bind(cmd);
     DescriptorWriter()
         .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
@@ -108,7 +114,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
         .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, frame.shadow_term.view())
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, frame.gbuffer.albedo)
-        .push(ctx_, cmd, resolve_pipeline);
+        .push(ctx_, cmd, resolve);
     vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
   }
 }

@@ -18,13 +18,15 @@ class ShadowMapPass {
 
  private:
   void ensure_map(VkCommandBuffer cmd, uint32_t size);
+  // The resolve for a light with a size (PCSS) and/or a fixed filter (`filter_texels` > 0).
+  const engine::gpu::Pipeline& resolve_pipeline(bool pcss, bool pcf);
   engine::gpu::Context& ctx_;
   engine::gpu::Image map_;
   engine::gpu::Buffer params_;
   engine::gpu::Sampler sampler_;
   engine::gpu::Pipeline depth_pipeline_;
   engine::gpu::Pipeline alpha_depth_pipeline_;  // alpha-tested casters
-  engine::gpu::Pipeline resolve_pipelines_[4];  // [PCSS (the light has a size) + 2 * a fixed PCF filter]
+  engine::gpu::Pipeline resolve_pipelines_[4];  // [PCSS + 2 * fixed filter], each made on first use
 };
 
 }  // namespace shadows::detail
