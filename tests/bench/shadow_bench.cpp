@@ -540,7 +540,7 @@ struct Bench {
       const bool tile_work = st.trace_choice.backend == "compute" || st.csm_choice.backend == "compute";
       return st.tile_work_choice.reason == "probing" || (gpu_device && tile_work && st.tile_work_choice.reason.empty());
     };
-    for (int f = 0; f < 32 && (module->stats().trace_choice.reason == "probing" ||
+    for (int f = 0; f < 48 && (module->stats().trace_choice.reason == "probing" ||
                                module->stats().csm_choice.reason == "probing" || lit_undecided() ||
                                csm_run_undecided() || shape_undecided() || f == 0);
          ++f)

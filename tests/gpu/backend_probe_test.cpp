@@ -1,5 +1,6 @@
 // The raster/compute probe: both backends timed on the first frames of a configuration, the faster
 // kept, and a configuration seen before decided at once (no second round of probe frames).
+#include <cstdlib>
 #include <string>
 
 #include "backend_probe.hpp"
@@ -26,14 +27,24 @@ TEST_F(GpuTest, BackendProbeTimesBothThenRemembersEachConfiguration) {
     return b;
   };
   const uint64_t first = 1, second = 2;
+  // Alternating, at least kFramesEach each, more (up to kMaxFramesEach) while a backend's last two
+  // frames disagree (probe_settled).
   int raster = 0, compute = 0;
-  for (size_t i = 0; i < 2 * BackendProbe::kFramesEach; ++i) {
-    (frame(first) == PassBackend::Raster ? raster : compute)++;
-    EXPECT_EQ(probe.choice().reason, "probing");
+  PassBackend kept = PassBackend::Auto;
+  for (size_t i = 0; i <= 2 * BackendProbe::kMaxFramesEach; ++i) {
+    const PassBackend b = frame(first);
+    if (probe.choice().reason != "probing") {
+      kept = b;
+      break;
+    }
+    (b == PassBackend::Raster ? raster : compute)++;
   }
-  EXPECT_EQ(raster, int(BackendProbe::kFramesEach));
-  EXPECT_EQ(compute, int(BackendProbe::kFramesEach));
-  const PassBackend kept = frame(first);
+  EXPECT_NE(kept, PassBackend::Auto) << "still probing after " << raster + compute << " frames";
+  EXPECT_GE(raster, int(BackendProbe::kFramesEach));
+  EXPECT_LE(raster, int(BackendProbe::kMaxFramesEach));
+  EXPECT_GE(compute, int(BackendProbe::kFramesEach));
+  EXPECT_LE(compute, int(BackendProbe::kMaxFramesEach));
+  EXPECT_LE(std::abs(raster - compute), 1);  // taken in turn
   EXPECT_EQ(probe.choice().reason.rfind("auto: ", 0), 0u) << probe.choice().reason;
   EXPECT_EQ(frame(first), kept);
 
@@ -44,6 +55,19 @@ TEST_F(GpuTest, BackendProbeTimesBothThenRemembersEachConfiguration) {
 
   EXPECT_EQ(probe.pick(PassBackend::Compute, true, true, first, profiler), PassBackend::Compute);
   EXPECT_EQ(probe.choice().reason, "forced");
+}
+
+// A GPU raising its clocks makes each probe frame faster than the last: the probe waits until each
+// backend's last two frames agree, so the backend timed later is not taken as the faster for it.
+TEST(BackendProbeSettle, WaitsUntilTheLastTwoFramesAgree) {
+  using shadows::detail::probe_settled;
+  EXPECT_FALSE(probe_settled({}));
+  EXPECT_FALSE(probe_settled({1.0}));
+  EXPECT_FALSE(probe_settled({1.75, 1.29}));         // still falling by a quarter
+  EXPECT_TRUE(probe_settled({1.75, 0.310, 0.303}));  // the last two agree: the first does not count
+  EXPECT_TRUE(probe_settled({0.303, 0.345}));        // within 15 %
+  EXPECT_FALSE(probe_settled({0.303, 0.426}));
+  EXPECT_TRUE(probe_settled({0.002, 0.011}));        // a short region: timestamp noise, not a trend
 }
 
 }  // namespace

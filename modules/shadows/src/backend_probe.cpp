@@ -1,6 +1,7 @@
 #include "backend_probe.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 namespace shadows::detail {
@@ -8,6 +9,12 @@ namespace shadows::detail {
 uint64_t mix_key(uint64_t key, uint64_t value) {
   key ^= value + 0x9e3779b97f4a7c15ull + (key << 6) + (key >> 2);
   return key;
+}
+
+bool probe_settled(const std::vector<double>& samples) {
+  if (samples.size() < 2) return false;
+  const double a = samples[samples.size() - 1], b = samples[samples.size() - 2];
+  return std::abs(a - b) <= std::max(0.15 * std::max(a, b), 0.02);
 }
 
 namespace {
@@ -55,14 +62,18 @@ PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, boo
   if (!raster_available) return use(PassBackend::Compute, "only " + compute + " available");
   if (!compute_available) return use(PassBackend::Raster, "only " + raster + " available");
   if (!profiler.enabled()) return use(PassBackend::Compute, "no GPU timestamps to probe with: " + compute);
-  if (!decided && samples[0].size() >= kFramesEach && samples[1].size() >= kFramesEach) {
+  const bool enough = samples[0].size() >= kFramesEach && samples[1].size() >= kFramesEach;
+  const bool settled = probe_settled(samples[0]) && probe_settled(samples[1]);
+  const bool exhausted = samples[0].size() >= kMaxFramesEach && samples[1].size() >= kMaxFramesEach;
+  if (!decided && enough && (settled || exhausted)) {
     decided = choice_.compute_ms <= choice_.raster_ms ? PassBackend::Compute : PassBackend::Raster;
   }
   if (decided) {
     std::ostringstream why;
     why.precision(3);
     why << "auto: " << names_[slot(*decided)] << " faster (" << raster << " " << choice_.raster_ms << " ms, "
-        << compute << " " << choice_.compute_ms << " ms, best of " << kFramesEach << " frames each)";
+        << compute << " " << choice_.compute_ms << " ms, best of " << samples[0].size() << " and "
+        << samples[1].size() << " frames)";
     return use(*decided, why.str());
   }
   const PassBackend next = samples[0].size() <= samples[1].size() ? PassBackend::Raster : PassBackend::Compute;

@@ -14,13 +14,18 @@ namespace shadows::detail {
 
 // Chooses raster or compute for one pass under PassBackend::Auto by timing both: the first frames
 // alternate the two, reading the pass's GPU region of the previous frame from the profiler, then the
-// faster (by its best probe frame) is kept for that configuration key. Each key's probe is
+// faster (by its best probe frame) is kept for that configuration key, once each backend's last two
+// frames agree (probe_settled), or after kMaxFramesEach: a GPU that has just woken runs its first
+// frames slower, each faster than the last, which favours the backend timed later in the alternation
+// (H200, contact 4K, the first run after idling: the lit map's probe timed 1.29 and 1.75 ms for ways
+// that settle at 0.30 and 0.43; in two runs of four it kept the slower). Each key's probe is
 // remembered, so a configuration seen before (dynamic resolution stepping back and forth between
 // sizes) takes its decision at once instead of probing again: a probe frame of the slower backend is
 // a visible hitch on a CPU device.
 class BackendProbe {
  public:
   static constexpr size_t kFramesEach = 2;
+  static constexpr size_t kMaxFramesEach = 4;
   static constexpr size_t kRememberedKeys = 64;  // beyond this many configurations, probing starts afresh
 
   explicit BackendProbe(std::string region) : regions_{std::move(region)} {}
@@ -58,6 +63,10 @@ class BackendProbe {
   Probe* probe_ = nullptr;  // the current key's
   Stats::BackendChoice choice_;
 };
+
+// Whether a backend's probe frames have settled: its last two times agree within 15 % (or 0.02 ms,
+// the noise of a short region's timestamps).
+bool probe_settled(const std::vector<double>& samples);
 
 // Mixes values into a configuration key.
 uint64_t mix_key(uint64_t key, uint64_t value);

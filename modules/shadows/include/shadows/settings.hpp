@@ -99,11 +99,11 @@ struct IzbSettings {
   // points), but the map visits every texel the casters touch short of whole tiles: it pays where
   // much of the view is lit ground under few casters and costs where many casters overlap
   // (tests/bench/BENCHMARKS.md, "Known-lit culling"). Auto (the default) times the IZB's passes with
-  // it off and on for two frames each, once the trace's and the CSM's own choices are made, and keeps
-  // the faster per configuration (Stats::lit_choice).
+  // it off and on (two to four frames each, until each way's last two frames agree), once the trace's
+  // and the CSM's own choices are made, and keeps the faster per configuration (Stats::lit_choice).
   LitCulling lit_culling = LitCulling::Auto;
   // With csm: where every caster in the CSM was chosen automatically (CsmChoice::Auto), also time the
-  // IZB's passes with the prepass and without it (two frames each, once the trace's and the CSM's
+  // IZB's passes with the prepass and without it (two to four frames each, once the trace's and the CSM's
   // backends are chosen, before the lit culling's probe) and skip it where it costs more than the
   // trace work it saves, per configuration (Stats::csm_run_choice). Exact either way. A caster put
   // in the CSM by CsmChoice::On keeps it running.
