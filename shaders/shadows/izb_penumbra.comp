@@ -266,7 +266,12 @@ float disc_below(float t) {
 // are exact, and a line separating the lit ones from the shadowed ones, perpendicular to the
 // difference of their means, sits between the nearest of each. The lit share of the disc of `radius`
 // on this pixel's side of that line is the term. False (the disc's average stands) where the pixels
-// are all lit or all shadowed, or no such line separates them (a corner, a thin caster).
+// are all lit or all shadowed, or no such line separates them (a corner, a thin caster). Only for a
+// disc of radius up to kFitMaxRadius pixels: a wider one averages enough pixels, and the 5x5 pixels
+// see only the part of its edge nearest the pixel (lavapipe, 256², 2-degree sun, soft_mae: atrium
+// v0 0.00154 -> 0.00147, Sponza v1 0.00368 -> 0.00346, canopy v1 0.00756 -> 0.00761, the six other
+// views of Views/SoftShadowsTest within 0.00001).
+const float kFitMaxRadius = 2.0;
 bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float radius, out float value) {
   // Two passes over the 5x5 pixels (the means, then the nearest of each side): holding the 25 points
   // in arrays costs the filter occupancy; the second pass's loads hit the cache.
@@ -346,7 +351,8 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
   if (weight == 0.0) return kNoValue;
   // (Where every tap agrees the edge lies beyond the disc: nothing to fit.)
   float average = sum / weight, fitted;
-  if (params.extent.w == 1u && average > 0.0 && average < 1.0 && fitted_edge(pixel, r, f, pixel_width, radius, fitted))
+  if (params.extent.w == 1u && radius <= kFitMaxRadius * pixel_width && average > 0.0 && average < 1.0 &&
+      fitted_edge(pixel, r, f, pixel_width, radius, fitted))
     return floatBitsToUint(fitted);
   return floatBitsToUint(average);
 }
