@@ -363,7 +363,11 @@ uint full_mask() { return izb_samples() == 32u ? 0xffffffffu : 1u; }
 void note_occluder_gap(uint pixel, float gap) {
   if (!izb_flag(IZB_FLAG_GAPS)) return;
   uint bits = floatBitsToUint(max(gap, 0.0));
-  if (bits < occluder_distance[pixel]) atomicMin(occluder_distance[pixel], bits);
+  // On a GPU an atomic whose result goes unread is sent without waiting for it, where a load first
+  // holds each occluding pair on a round trip to memory (H200, 4K, canopy: the hybrid's trace pairs
+  // step 0.180 -> 0.118 ms, `izb+csm`'s 0.107). On a CPU device the load spares most atomics.
+  if (!izb_flag(IZB_FLAG_CPU_DEVICE)) atomicMin(occluder_distance[pixel], bits);
+  else if (bits < occluder_distance[pixel]) atomicMin(occluder_distance[pixel], bits);
 }
 
 // A caster triangle in grid space, transformed once per frame by izb_triangles.comp: every trace

@@ -276,7 +276,36 @@ float disc_below(float t) {
 // 0.070 ms, atrium 0.106 -> 0.106, canopy 0.121 -> 0.118, Sponza v1 0.105 -> 0.109; its 16 floats
 // of ranges cost less than 8 directions' 32, which took 0.01-0.02 ms more.)
 const uint kFitDirections = 4u;
-bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float radius, out float value) {
+
+// The filter's tile and the 2 pixels around it, each pixel's point and term (-1: not valid), loaded
+// once a workgroup: the fit's 5x5 windows overlap, 144 pixels for a tile's 1600 loads.
+const int kFitBorder = 2;
+const int kFitWindow = int(kPenumbraTile) + 2 * kFitBorder;
+const uint kFitWindowPixels = kStep == kStepFilter ? uint(kFitWindow * kFitWindow) : 1u;
+shared vec4 fit_window[kFitWindowPixels];
+
+void load_fit_window(ivec2 tile_origin) {
+  for (uint k = gl_LocalInvocationIndex; k < uint(kFitWindow * kFitWindow); k += kPenumbraTile * kPenumbraTile) {
+    ivec2 pixel = tile_origin - kFitBorder + ivec2(int(k) % kFitWindow, int(k) / kFitWindow);
+    Receiver t = load_tap(pixel, false);
+    fit_window[k] = vec4(t.position, t.valid ? t.term : -1.0);
+  }
+  barrier();
+}
+
+Receiver fit_tap(ivec2 offset) {
+  vec4 w = fit_window[(int(gl_LocalInvocationID.y) + kFitBorder + offset.y) * kFitWindow +
+                      int(gl_LocalInvocationID.x) + kFitBorder + offset.x];
+  Receiver t;
+  t.position = w.xyz;
+  t.valid = w.w >= 0.0;
+  t.term = t.valid ? w.w : 1.0;
+  t.normal = vec3(0.0);
+  t.height = -1.0;
+  return t;
+}
+
+bool fitted_edge(Receiver r, Across f, float pixel_width, float radius, out float value) {
   // One pass over the 5x5 pixels: along each of kFitDirections directions (a half turn), the range of
   // the lit pixels' and of the shadowed pixels' points; the direction (either way along it) that
   // leaves the widest gap between the two separates them best.
@@ -289,7 +318,7 @@ bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float rad
   bool lit_seen = false, dark_seen = false;
   for (int dy = -2; dy <= 2; ++dy)
     for (int dx = -2; dx <= 2; ++dx) {
-      Receiver t = load_tap(pixel + ivec2(dx, dy), false);
+      Receiver t = fit_tap(ivec2(dx, dy));
       if (!same_surface(r, t, pixel_width)) continue;
       vec3 d = t.position - r.position;
       vec2 across = vec2(dot(d, f.u), dot(d, f.v));
@@ -367,7 +396,7 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
   if (weight == 0.0) return kNoValue;
   // (Where every tap agrees the edge lies beyond the disc: nothing to fit.)
   float average = sum / weight, fitted;
-  if (params.extent.w == 1u && average > 0.0 && average < 1.0 && fitted_edge(pixel, r, f, pixel_width, radius, fitted))
+  if (params.extent.w == 1u && average > 0.0 && average < 1.0 && fitted_edge(r, f, pixel_width, radius, fitted))
     return floatBitsToUint(fitted);
   return floatBitsToUint(average);
 }
@@ -395,6 +424,7 @@ void filter_tile() {
   uvec4 entry;
   if (!listed_tile(slot, entry)) return;
   ivec2 pixel = tile_pixel(entry.x);
+  if (params.extent.w == 1u) load_fit_window(pixel - ivec2(gl_LocalInvocationID.xy));
   entries[value_entry(slot)][gl_LocalInvocationIndex % 4u] =
       filtered_term(pixel, load_receiver(pixel), uintBitsToFloat(entry.y));
 }
