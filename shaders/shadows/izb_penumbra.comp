@@ -83,18 +83,21 @@ Receiver load_receiver(ivec2 pixel) {
 
 // A tap's pixel: its point and term (and with `heights`, its occluder's height), no more. A tap on the
 // receiver's own plane (same_surface) shares its facing; one on a surface that receives no shadow
-// reads as lit, which its term is.
+// reads as lit, which its term is. Every load goes out at once (at the pixel clamped into the image),
+// none waiting on another's value: the filter's taps are bound by the loads' round trips (H200, 4K,
+// `hybrid+csm` against loads that waited on the point's validity: atrium 0.506 -> 0.498 ms, canopy
+// 0.589 -> 0.586; the taps' loads in batches of four held in registers were slower, 0.507 / 0.610).
 Receiver load_tap(ivec2 pixel, bool heights) {
+  ivec2 at = clamp(pixel, ivec2(0), extent() - 1);
+  vec4 p = imageLoad(positions, at);
+  float term = imageLoad(shadow_term, at).r;
+  float height = heights ? occluder_height(uint(at.y) * params.extent.x + uint(at.x)) : -1.0;
   Receiver t;
   t.normal = vec3(0.0);
-  t.term = 1.0;
-  t.height = -1.0;
-  vec4 p = inside(pixel) ? imageLoad(positions, pixel) : vec4(0.0);
   t.position = p.xyz;
-  t.valid = p.w > 0.5 && distance(p.xyz, params.camera_position.xyz) <= range_limit();
-  if (!t.valid) return t;
-  t.term = imageLoad(shadow_term, pixel).r;
-  if (heights && t.term < 1.0) t.height = occluder_height(uint(pixel.y) * params.extent.x + uint(pixel.x));
+  t.valid = inside(pixel) && p.w > 0.5 && distance(p.xyz, params.camera_position.xyz) <= range_limit();
+  t.term = t.valid ? term : 1.0;
+  t.height = t.term < 1.0 ? height : -1.0;
   return t;
 }
 
