@@ -83,20 +83,23 @@ Receiver load_receiver(ivec2 pixel) {
 
 // A tap's pixel: its point and term (and with `heights`, its occluder's height), no more. A tap on the
 // receiver's own plane (same_surface) shares its facing; one on a surface that receives no shadow
-// reads as lit, which its term is. Every load goes out at once (at the pixel clamped into the image),
-// none waiting on another's value: the filter's taps are bound by the loads' round trips (H200, 4K,
-// `hybrid+csm` against loads that waited on the point's validity: atrium 0.506 -> 0.498 ms, canopy
-// 0.589 -> 0.586; the taps' loads in batches of four held in registers were slower, 0.507 / 0.610).
+// reads as lit, which its term is. On a GPU every load goes out at once (at the pixel clamped into the
+// image), none waiting on another's value: the filter's taps are bound by the loads' round trips (H200,
+// 4K, `hybrid+csm` against loads that waited on the point's validity: atrium 0.506 -> 0.498 ms, canopy
+// 0.589 -> 0.586; the taps' loads in batches of four held in registers were slower, 0.507 / 0.610). A
+// CPU device, which hides no latency, loads only what the tap's validity and term ask for.
 Receiver load_tap(ivec2 pixel, bool heights) {
+  bool cpu = izb_flag(IZB_FLAG_CPU_DEVICE);
   ivec2 at = clamp(pixel, ivec2(0), extent() - 1);
-  vec4 p = imageLoad(positions, at);
-  float term = imageLoad(shadow_term, at).r;
-  float height = heights ? occluder_height(uint(at.y) * params.extent.x + uint(at.x)) : -1.0;
+  vec4 p = cpu && !inside(pixel) ? vec4(0.0) : imageLoad(positions, at);
   Receiver t;
   t.normal = vec3(0.0);
   t.position = p.xyz;
   t.valid = inside(pixel) && p.w > 0.5 && distance(p.xyz, params.camera_position.xyz) <= range_limit();
+  float term = cpu && !t.valid ? 1.0 : imageLoad(shadow_term, at).r;
   t.term = t.valid ? term : 1.0;
+  bool height_read = heights && (!cpu || t.term < 1.0);
+  float height = height_read ? occluder_height(uint(at.y) * params.extent.x + uint(at.x)) : -1.0;
   t.height = t.term < 1.0 ? height : -1.0;
   return t;
 }
@@ -280,14 +283,18 @@ float disc_below(float t) {
 // of ranges cost less than 8 directions' 32, which took 0.01-0.02 ms more.)
 const uint kFitDirections = 4u;
 
-// The filter's tile and the 2 pixels around it, each pixel's point and term (-1: not valid), loaded
-// once a workgroup: the fit's 5x5 windows overlap, 144 pixels for a tile's 1600 loads.
+// On a GPU, the filter's tile and the 2 pixels around it, each pixel's point and term (-1: not valid),
+// loaded once a workgroup: the fit's 5x5 windows overlap, 144 pixels for a tile's 1600 loads. (A CPU
+// device reads the 5x5 pixels where a fit is made: loading every listed tile's window and the barrier
+// after it cost lavapipe more than the loads they spare.)
 const int kFitBorder = 2;
 const int kFitWindow = int(kPenumbraTile) + 2 * kFitBorder;
 const uint kFitWindowPixels = kStep == kStepFilter ? uint(kFitWindow * kFitWindow) : 1u;
 shared vec4 fit_window[kFitWindowPixels];
+bool fit_window_shared() { return !izb_flag(IZB_FLAG_CPU_DEVICE); }
 
 void load_fit_window(ivec2 tile_origin) {
+  if (!fit_window_shared()) return;
   for (uint k = gl_LocalInvocationIndex; k < uint(kFitWindow * kFitWindow); k += kPenumbraTile * kPenumbraTile) {
     ivec2 pixel = tile_origin - kFitBorder + ivec2(int(k) % kFitWindow, int(k) / kFitWindow);
     Receiver t = load_tap(pixel, false);
@@ -296,7 +303,8 @@ void load_fit_window(ivec2 tile_origin) {
   barrier();
 }
 
-Receiver fit_tap(ivec2 offset) {
+Receiver fit_tap(ivec2 pixel, ivec2 offset) {
+  if (!fit_window_shared()) return load_tap(pixel + offset, false);
   vec4 w = fit_window[(int(gl_LocalInvocationID.y) + kFitBorder + offset.y) * kFitWindow +
                       int(gl_LocalInvocationID.x) + kFitBorder + offset.x];
   Receiver t;
@@ -308,7 +316,7 @@ Receiver fit_tap(ivec2 offset) {
   return t;
 }
 
-bool fitted_edge(Receiver r, Across f, float pixel_width, float radius, out float value) {
+bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float radius, out float value) {
   // One pass over the 5x5 pixels: along each of kFitDirections directions (a half turn), the range of
   // the lit pixels' and of the shadowed pixels' points; the direction (either way along it) that
   // leaves the widest gap between the two separates them best.
@@ -321,7 +329,7 @@ bool fitted_edge(Receiver r, Across f, float pixel_width, float radius, out floa
   bool lit_seen = false, dark_seen = false;
   for (int dy = -2; dy <= 2; ++dy)
     for (int dx = -2; dx <= 2; ++dx) {
-      Receiver t = fit_tap(ivec2(dx, dy));
+      Receiver t = fit_tap(pixel, ivec2(dx, dy));
       if (!same_surface(r, t, pixel_width)) continue;
       vec3 d = t.position - r.position;
       vec2 across = vec2(dot(d, f.u), dot(d, f.v));
@@ -399,7 +407,7 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
   if (weight == 0.0) return kNoValue;
   // (Where every tap agrees the edge lies beyond the disc: nothing to fit.)
   float average = sum / weight, fitted;
-  if (params.extent.w == 1u && average > 0.0 && average < 1.0 && fitted_edge(r, f, pixel_width, radius, fitted))
+  if (params.extent.w == 1u && average > 0.0 && average < 1.0 && fitted_edge(pixel, r, f, pixel_width, radius, fitted))
     return floatBitsToUint(fitted);
   return floatBitsToUint(average);
 }

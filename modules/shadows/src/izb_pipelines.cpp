@@ -180,7 +180,8 @@ const Pipeline& IzbPipelineCache::hybrid_blend() {
 const Pipeline& IzbPipelineCache::penumbra(uint32_t step) {
   Pipeline& pipeline = penumbra_.at(step);
   if (!pipeline.valid())
-    pipeline = factory_.compute({"izb_penumbra.comp", izb_bindings(), sizeof(gpu_shared::IzbComputePush), {{14, step}}});
+    pipeline = factory_.compute({"izb_penumbra.comp", izb_bindings(), sizeof(gpu_shared::IzbComputePush),
+                                 {{14, step}, {11, cpu_device() ? gpu_shared::IZB_FLAG_CPU_DEVICE : 0u}}});
   return pipeline;
 }
 
