@@ -291,6 +291,8 @@ const int kFitBorder = 2;
 const int kFitWindow = int(kPenumbraTile) + 2 * kFitBorder;
 const uint kFitWindowPixels = kStep == kStepFilter ? uint(kFitWindow * kFitWindow) : 1u;
 shared vec4 fit_window[kFitWindowPixels];
+// (Sized by the step alone: an array size that also reads kIzbFlags made lavapipe's
+// vkCreateComputePipelines fail, so a CPU device declares the window and leaves it unused.)
 bool fit_window_shared() { return !izb_flag(IZB_FLAG_CPU_DEVICE); }
 
 void load_fit_window(ivec2 tile_origin) {
