@@ -275,7 +275,7 @@ float disc_below(float t) {
 // `radius` on this pixel's side of it is the term. False (the disc's average stands) where the pixels
 // are all lit or all shadowed, or no line separates them (a corner, a thin caster). (Lavapipe, 256²,
 // a 2-degree sun, soft_mae against the line perpendicular to the difference of the two sides' means,
-// fitted only where the disc's average was strictly between 0 and 1 as now: atrium v0 0.00154 ->
+// both fitted only where the disc's average was strictly between 0 and 1: atrium v0 0.00154 ->
 // 0.00121, v1 0.00058 -> 0.00049, contact v1 0.00045 -> 0.00042, Sponza v1 0.00368 -> 0.00338, the
 // other views of Views/SoftShadowsTest within 0.00003; 8 directions 0.00130 on atrium v0, 3 directions
 // 0.00061 on atrium v1. H200, 4K, the default sun, the pass against that line's: contact 0.073 ->
