@@ -395,10 +395,9 @@ void main() {
                      (count != 0u && (listed_resolve || izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));
     // (kBuildClassify: kBuildInsert writes them, for pixels with a node.)
     if (candidate != 0u && mask_read && inserts) visibility_mask[index] = mask;  // only candidates' are read
-    // None found yet (only the trace and the fallback find one). The penumbra pass reads a pixel's
-    // only where its term is below 1, which a pixel this build leaves lit with no node keeps.
-    bool stays_lit = direct_term && count == 0u && !shadowed;
-    if (izb_flag(IZB_FLAG_GAPS) && !stays_lit) occluder_distance[index] = floatBitsToUint(1.0e30);
+    // The penumbra pass reads every pixel's (a lit one's edge tangent too): none found yet (only the
+    // trace and the fallback find one).
+    if (izb_flag(IZB_FLAG_GAPS)) occluder_distance[index] = kIzbNoOccluder;
   }
   if (izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
     // A pixel without a node is settled here (no occluder distance: only the trace finds one); the

@@ -241,12 +241,57 @@ float blend1(float x, float y, float t) {
   return r;
 }
 
+// The hybrid's penumbra pass places a lit pixel's soft edge by the caster edges its lists held: the
+// smallest tangent (across-light distance over height) from the point to a triangle it lies outside
+// of, in world units, where it is below the sun's (a wider one leaves the whole disc lit).
+// shadows_point lowers it as the triangles go by; trace_node resets and records it. (Kept here, not
+// passed along: the fallback and the 32 spp paths share shadows_point and read no tangent.)
+float lit_tangent_seen = 3.0e38;
+
+// The smallest tangent from `s` to segment ab's points nearer the light, of its closest point across
+// the light, its ends and its middle (the height varies along it). `scale`: grid units to world
+// across the light; `depth_scale`: light depth to world.
+float segment_tangent(vec3 s, vec3 a, vec3 b, vec2 scale, float depth_scale) {
+  vec2 ab = (b.xy - a.xy) * scale;
+  vec2 as = (s.xy - a.xy) * scale;
+  float closest = clamp(dot(as, ab) / max(dot(ab, ab), 1.0e-30), 0.0, 1.0);
+  float best = 3.0e38;
+  for (int k = 0; k < 4; ++k) {
+    float t = k == 0 ? closest : k == 1 ? 0.0 : k == 2 ? 1.0 : 0.5;
+    float height = (s.z - mix(a.z, b.z, t)) * depth_scale;
+    if (height > 0.0) best = min(best, length(as - t * ab) / height);
+  }
+  return best;
+}
+
+// `w`: the point's barycentrics, one below 0 at least (it lies outside the triangle).
+void note_lit_tangent(vec3 s, vec3 a, vec3 b, vec3 c, vec3 w, float inv_area) {
+  float depth_scale = params.depth_range.y - params.depth_range.x;
+  float highest = (s.z - min(min(a.z, b.z), c.z)) * depth_scale;
+  if (highest <= 0.0) return;  // no point of it nearer the light
+  mat4 m = izb.light_view_projection;
+  vec2 scale = 2.0 / (float(izb_resolution()) *
+                      vec2(length(vec3(m[0][0], m[1][0], m[2][0])), length(vec3(m[0][1], m[1][1], m[2][1]))));
+  // Most pairs are settled by a bound: the point is at least as far across the light as the line of
+  // an edge it lies outside of, and the triangle at most `highest` above it.
+  vec2 edge = w.x <= min(w.y, w.z) ? c.xy - b.xy : w.y <= w.z ? a.xy - c.xy : b.xy - a.xy;
+  float outside = -min(min(w.x, w.y), w.z) / (abs(inv_area) * max(length(edge), 1.0e-30));
+  if (outside * min(scale.x, scale.y) >= params.penumbra.x * highest) return;
+  float tangent = min(segment_tangent(s, a, b, scale, depth_scale),
+                      min(segment_tangent(s, b, c, scale, depth_scale), segment_tangent(s, c, a, scale, depth_scale)));
+  lit_tangent_seen = min(lit_tangent_seen, tangent);
+}
+
 // `gap` keeps the smallest light-depth distance from an occluded sample up to the triangle.
 bool shadows_point(vec3 s, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_area, inout float gap) {
   precise float w0 = edge_fn(s.xy, b.xy, c.xy) * inv_area;
   precise float w1 = edge_fn(s.xy, c.xy, a.xy) * inv_area;
   precise float w2 = edge_fn(s.xy, a.xy, b.xy) * inv_area;
-  if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) return false;
+  if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) {
+    // (An alpha-tested caster's outline is not its shadow's: its texture's edges are.)
+    if (ca.threshold == 0u && izb_flag(IZB_FLAG_GAPS) && izb_samples() == 1u) note_lit_tangent(s, a, b, c, vec3(w0, w1, w2), inv_area);
+    return false;
+  }
   precise float depth = w0 * a.z + w1 * b.z + w2 * c.z;
   if (depth >= s.z) return false;
   if (!caster_solid_at(ca, vec3(w0, w1, w2))) return false;
@@ -368,6 +413,13 @@ void note_occluder_gap(uint pixel, float gap) {
   // step 0.180 -> 0.118 ms, `izb+csm`'s 0.107). On a CPU device the load spares most atomics.
   if (!izb_flag(IZB_FLAG_CPU_DEVICE)) atomicMin(occluder_distance[pixel], bits);
   else if (bits < occluder_distance[pixel]) atomicMin(occluder_distance[pixel], bits);
+}
+
+// A pair that left `pixel` lit: the tangent shadows_point saw, kept against the pixel's others (a gap
+// found by any pair outranks them all: kIzbLitTangentBit).
+void record_lit_tangent(uint pixel) {
+  if (izb_flag(IZB_FLAG_GAPS) && lit_tangent_seen < params.penumbra.x)
+    atomicMin(occluder_distance[pixel], kIzbLitTangentBit | floatBitsToUint(lit_tangent_seen));
 }
 
 // A caster triangle in grid space, transformed once per frame by izb_triangles.comp: every trace
@@ -671,9 +723,12 @@ bool trace_node(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_ar
     // The term (and the hybrid's occluder distance) is all that is read afterwards, and darkening it
     // again is harmless: no mask.
     float gap = 1.0e30;
+    lit_tangent_seen = 3.0e38;
     if (occluded_samples(pixel, ca, a, b, c, inv_area, gap) != 0u) {
       write_shadowed_term(pixel);
       note_occluder_gap(pixel, gap);
+    } else {
+      record_lit_tangent(pixel);
     }
     return true;
   }
@@ -682,7 +737,9 @@ bool trace_node(uint pixel, CasterAlpha ca, vec3 a, vec3 b, vec3 c, float inv_ar
   uint current = visibility_mask[pixel];
   if (izb_flag(IZB_FLAG_PROGRESSIVE) && current == full_mask()) return false;
   float gap = 1.0e30;
+  lit_tangent_seen = 3.0e38;
   uint bits = occluded_samples_of(points, ca, a, b, c, inv_area, gap);
+  if (bits == 0u) record_lit_tangent(pixel);
   if ((bits & ~current) != 0u) {
     atomicOr(visibility_mask[pixel], bits);
     if (izb_flag(IZB_FLAG_DIRECT_TERM)) write_shadowed_term(pixel);

@@ -12,7 +12,9 @@ layout(local_size_x = 8, local_size_y = 8) in;  // kPenumbraTile²: the filter a
 // edge (1) finds the blockers whose penumbra reaches it among the pixels around it (their occluder
 // heights, averaged), and (2) averages the hard term of the pixels within that radius on its own
 // plane, both with taps laid across the light and mapped onto the pixel's tangent plane and into the
-// image. Where the penumbra is narrower than a pixel the IZB's term stays as it is, exact.
+// image. A lit pixel whose lists held a caster edge within the sun's tangent takes the share of the
+// disc beyond that edge instead (the trace keeps the smallest tangent). Where the penumbra is narrower
+// than a pixel the IZB's term stays as it is, exact.
 //
 // Four steps, specialized apart (a CPU device runs every branch):
 //  kStepTiles:  a thread a row of a tile: the range of the hard term and the widest penumbra its shadowed
@@ -45,9 +47,19 @@ float range_limit() { return params.camera_position.w > 0.0 ? params.camera_posi
 float footprint(vec3 p) { return max(distance(p, params.camera_position.xyz) * params.penumbra.y, 1.0e-30); }
 
 // The light depth from the pixel up to the occluder the IZB found, in world units (-1: none found).
+// (The trace keeps a shadowed pixel's gap, or a lit pixel's edge tangent with the high bit set:
+// izb_common.glsl's note_lit_tangent.)
 float occluder_height(uint index) {
-  float gap = uintBitsToFloat(occluder_distance[index]);
-  return gap < 1.0e20 ? gap * (params.depth_range.y - params.depth_range.x) : -1.0;
+  uint bits = occluder_distance[index];
+  float gap = uintBitsToFloat(bits);
+  return bits < kIzbLitTangentBit && gap < 1.0e20 ? gap * (params.depth_range.y - params.depth_range.x) : -1.0;
+}
+
+// A lit pixel's smallest tangent (across-light distance over height) to the edges of the caster
+// triangles its lists held, or -1 where the trace tested none (izb_common.glsl's note_lit_tangent).
+float lit_tangent(uint index) {
+  uint bits = occluder_distance[index];
+  return bits >= kIzbLitTangentBit && bits != kIzbNoOccluder ? uintBitsToFloat(bits & ~kIzbLitTangentBit) : -1.0;
 }
 
 struct Receiver {
@@ -283,8 +295,8 @@ float disc_below(float t) {
 
 // At 1 spp the disc's taps each take a whole pixel's term, so its average places the edge to a pixel
 // (on a surface seen at a grazing angle, to a pixel that spans much of the disc one way) and, with a
-// few taps over a wide disc, with noise. The pixels around (5x5, on this surface) place a straight
-// edge better: their points across the light are exact, and of the lines that separate the lit ones
+// few taps over a wide disc, with noise. The pixels around (fit_half_window, on this surface) place a
+// straight edge better: their points across the light are exact, and of the lines that separate the lit ones
 // from the shadowed ones, the one along kFitDirections directions (a half turn, either way) that
 // leaves the widest gap between the two sits halfway across that gap. The lit share of the disc of
 // `radius` on this pixel's side of it is the term. False (the disc's average stands) where the pixels
@@ -298,11 +310,11 @@ float disc_below(float t) {
 // of ranges cost less than 8 directions' 32, which took 0.01-0.02 ms more.)
 const uint kFitDirections = 4u;
 
-// On a GPU, the filter's tile and the 2 pixels around it, each pixel's point and term (-1: not valid),
-// loaded once a workgroup: the fit's 5x5 windows overlap, 144 pixels for a tile's 1600 loads. (A CPU
-// device reads the 5x5 pixels where a fit is made: loading every listed tile's window and the barrier
-// after it cost lavapipe more than the loads they spare.)
-const int kFitBorder = 2;
+// On a GPU, the filter's tile and the kFitBorder pixels around it, each pixel's point and term (-1:
+// not valid), loaded once a workgroup: the fit windows overlap, 196 pixels for a tile's 1600 to 3136
+// loads. (A CPU device reads the window's pixels where a fit is made: loading every listed tile's
+// window and the barrier after it cost lavapipe more than the loads they spare.)
+const int kFitBorder = 3;
 const int kFitWindow = int(kPenumbraTile) + 2 * kFitBorder;
 const uint kFitWindowPixels = kStep == kStepFilter ? uint(kFitWindow * kFitWindow) : 1u;
 shared vec4 fit_window[kFitWindowPixels];
@@ -333,10 +345,18 @@ Receiver fit_tap(ivec2 pixel, ivec2 offset) {
   return t;
 }
 
+// The fit's window grows with the disc: 5x5 pixels, 7x7 where its radius is over 1.5 pixels, so that
+// a wider penumbra's edge is placed by pixels on both of its sides. (Lavapipe, 256², a 2-degree sun,
+// with the lit pixels' tangents, against 5x5 throughout: atrium v0 soft_mae 0.00117 -> 0.00094, Sponza
+// v1 0.00334 -> 0.00321, the other views of Views/SoftShadowsTest within 0.0001. 9x9 over 3 pixels
+// took Sponza v1 to 0.00306 and the filter step on the H200 at 4K from 0.045 to 0.077 ms on atrium;
+// 7x7 reading only half of its outer ring, atrium v0 0.00106.)
+int fit_half_window(float radius, float pixel_width) { return radius > 1.5 * pixel_width ? 3 : 2; }
+
 bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float radius, out float value) {
-  // One pass over the 5x5 pixels: along each of kFitDirections directions (a half turn), the range of
-  // the lit pixels' and of the shadowed pixels' points; the direction (either way along it) that
-  // leaves the widest gap between the two separates them best.
+  // One pass over the window's pixels: along each of kFitDirections directions (a half turn), the
+  // range of the lit pixels' and of the shadowed pixels' points; the direction (either way along it)
+  // that leaves the widest gap between the two separates them best.
   value = 1.0;
   float lit_low[kFitDirections], lit_high[kFitDirections], dark_low[kFitDirections], dark_high[kFitDirections];
   for (uint j = 0u; j < kFitDirections; ++j) {
@@ -344,8 +364,9 @@ bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float rad
     lit_high[j] = dark_high[j] = -3.0e38;
   }
   bool lit_seen = false, dark_seen = false;
-  for (int dy = -2; dy <= 2; ++dy)
-    for (int dx = -2; dx <= 2; ++dx) {
+  int half_window = fit_half_window(radius, pixel_width);
+  for (int dy = -half_window; dy <= half_window; ++dy)
+    for (int dx = -half_window; dx <= half_window; ++dx) {
       Receiver t = fit_tap(pixel, ivec2(dx, dy));
       if (!same_surface(r, t, pixel_width)) continue;
       vec3 d = t.position - r.position;
@@ -418,6 +439,15 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
   float radius = heights / blockers * tan_half_angle();
   if (radius < 0.5 * pixel_width) return kNoValue;  // narrower than a pixel: the exact term
   radius = min(radius, float(kPenumbraMaxRadius) * pixel_width);
+  // A lit pixel whose lists held a caster's edge in reach knows where that edge is: the share of the
+  // sun's disc beyond it (an edge straight over the disc) is what the pixel loses; no disc or fit.
+  // (Lavapipe, 256², a 2-degree sun, with the 7x7 fit window, against none: contact v1 soft_mae
+  // 0.00042 -> 0.00035, atrium v0 0.00098 -> 0.00094, foliage v1 0.00649 -> 0.00627, canopy v0 0.00728
+  // -> 0.00712, the other views lower or within 0.00001.)
+  if (params.extent.w == 1u && r.term >= 0.5) {
+    float tangent = lit_tangent(uint(pixel.y) * params.extent.x + uint(pixel.x));
+    if (tangent >= 0.0) return floatBitsToUint(disc_below(tangent / tan_half_angle()));
+  }
   // (2) The term averaged over the disc across the light, on this surface: each tap takes the term of
   // the pixel it falls in (the IZB's term held over the pixel's square), so even a disc of a pixel or
   // two weighs its neighbours by how much of them it covers.

@@ -259,6 +259,11 @@ SHARED_CONST uint IZB_BINDING_TRIANGLES = 16u;          // per caster triangle: 
 SHARED_CONST uint IZB_BINDING_OVERFLOW_LIST = 17u;
 SHARED_CONST uint IZB_BINDING_CSM_DEPTH = 18u;
 SHARED_CONST uint IZB_BINDING_OCCLUDER_DISTANCE = 19u;  // per pixel: nearest occluder's light depth above it
+// An occluder_distance word: a shadowed pixel's gap (a float's bits, below kIzbLitTangentBit); a lit
+// pixel's edge tangent (a float's bits with kIzbLitTangentBit set); kIzbNoOccluder where neither was
+// found. atomicMin keeps a gap over any tangent, and the smallest of each.
+SHARED_CONST uint kIzbLitTangentBit = 0x80000000u;
+SHARED_CONST uint kIzbNoOccluder = 0xffffffffu;
 SHARED_CONST uint IZB_BINDING_GRID_TRIANGLES = 20u;     // per caster triangle: 3 vec4 (grid x, grid y, light depth, -)
 SHARED_CONST uint IZB_BINDING_RECORDS = 21u;             // uvec4 records {triangle, tile row, first tile, last tile}
 SHARED_CONST uint IZB_BINDING_PAIRS = 22u;              // uvec2 {triangle, texel} surviving the depth cull
