@@ -249,11 +249,11 @@ float blend1(float x, float y, float t) {
 float lit_tangent_seen = 3.0e38;
 
 // The smallest tangent from `s` to segment ab's points nearer the light, of its closest point across
-// the light, its ends and its middle (the height varies along it). `scale`: grid units to world
-// across the light; `depth_scale`: light depth to world.
-float segment_tangent(vec3 s, vec3 a, vec3 b, vec2 scale, float depth_scale) {
-  vec2 ab = (b.xy - a.xy) * scale;
-  vec2 as = (s.xy - a.xy) * scale;
+// the light, its ends and its middle (the height varies along it). `texel`: a grid texel's world
+// size (the sun's texels are square); `depth_scale`: light depth to world.
+float segment_tangent(vec3 s, vec3 a, vec3 b, float texel, float depth_scale) {
+  vec2 ab = (b.xy - a.xy) * texel;
+  vec2 as = (s.xy - a.xy) * texel;
   float closest = clamp(dot(as, ab) / max(dot(ab, ab), 1.0e-30), 0.0, 1.0);
   float best = 3.0e38;
   for (int k = 0; k < 4; ++k) {
@@ -269,16 +269,14 @@ void note_lit_tangent(vec3 s, vec3 a, vec3 b, vec3 c, vec3 w, float inv_area) {
   float depth_scale = params.depth_range.y - params.depth_range.x;
   float highest = (s.z - min(min(a.z, b.z), c.z)) * depth_scale;
   if (highest <= 0.0) return;  // no point of it nearer the light
-  mat4 m = izb.light_view_projection;
-  vec2 scale = 2.0 / (float(izb_resolution()) *
-                      vec2(length(vec3(m[0][0], m[1][0], m[2][0])), length(vec3(m[0][1], m[1][1], m[2][1]))));
+  float texel = izb.grid.z;
   // Most pairs are settled by a bound: the point is at least as far across the light as the line of
   // an edge it lies outside of, and the triangle at most `highest` above it.
   vec2 edge = w.x <= min(w.y, w.z) ? c.xy - b.xy : w.y <= w.z ? a.xy - c.xy : b.xy - a.xy;
   float outside = -min(min(w.x, w.y), w.z) / (abs(inv_area) * max(length(edge), 1.0e-30));
-  if (outside * min(scale.x, scale.y) >= params.penumbra.x * highest) return;
-  float tangent = min(segment_tangent(s, a, b, scale, depth_scale),
-                      min(segment_tangent(s, b, c, scale, depth_scale), segment_tangent(s, c, a, scale, depth_scale)));
+  if (outside * texel >= params.penumbra.x * highest) return;
+  float tangent = min(segment_tangent(s, a, b, texel, depth_scale),
+                      min(segment_tangent(s, b, c, texel, depth_scale), segment_tangent(s, c, a, texel, depth_scale)));
   lit_tangent_seen = min(lit_tangent_seen, tangent);
 }
 
