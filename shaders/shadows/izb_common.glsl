@@ -242,8 +242,8 @@ float blend1(float x, float y, float t) {
 }
 
 // The hybrid's penumbra pass places a lit pixel's soft edge by the caster edges its lists held: the
-// smallest tangent (across-light distance over height) from the point to a triangle it lies outside
-// of, in world units, where it is below the sun's (a wider one leaves the whole disc lit).
+// smallest tangent (across-light distance over height, both in world units) from the point to a
+// triangle it lies outside of, where it is below the sun's (a wider one leaves the whole disc lit).
 // shadows_point lowers it as the triangles go by; trace_node resets and records it. (Kept here, not
 // passed along: the fallback and the 32 spp paths share shadows_point and read no tangent.)
 float lit_tangent_seen = 3.0e38;
