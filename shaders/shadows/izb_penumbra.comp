@@ -177,50 +177,71 @@ uvec3 block_tile(ivec2 tile, ivec2 block_origin) {
   return block_summary[(tile.y - block_origin.y) * kDilateBlock + (tile.x - block_origin.x)];
 }
 
-// A thread a tile: listed (with the widest penumbra that reaches it, in pixels) where some tile in
-// reach casts a penumbra over it and the term varies within that reach. The window's tiles fall in
-// rings (tile_ring): one pass over the window keeps each ring's range of the term beside the reach,
-// and the rings within the reach then give the range (the window read once, not twice, at offsets
-// known when the shader is compiled: H200, 4K, the step 0.017 -> 0.014 ms on contact, atrium and
-// canopy, the same pixels).
-const int kRingsPerAxis = kWindow;
+// A tile's reach (the widest penumbra in pixels that some tile within WINDOW tiles casts over it)
+// and whether the term varies within that reach. The window's tiles fall in rings (tile_ring): one
+// pass over the window keeps each ring's range of the term beside the reach, and the rings within
+// the reach then give the range (the window read once, not twice, at offsets known when the shader is
+// compiled: H200, 4K, the step 0.017 -> 0.014 ms on contact, atrium and canopy, the same pixels).
+#define DILATE_WITHIN(NAME, WINDOW)                                                                 \
+  bool NAME(ivec2 tile, ivec2 block_origin, out float reach) {                                      \
+    uint ring_low[WINDOW * WINDOW], ring_high[WINDOW * WINDOW];                                     \
+    for (int r = 0; r < WINDOW * WINDOW; ++r) {                                                     \
+      ring_low[r] = floatBitsToUint(1.0);                                                           \
+      ring_high[r] = 0u;                                                                            \
+    }                                                                                               \
+    reach = 0.0;                                                                                    \
+    for (int dy = -WINDOW; dy <= WINDOW; ++dy)                                                      \
+      for (int dx = -WINDOW; dx <= WINDOW; ++dx) {                                                  \
+        ivec2 offset = ivec2(dx, dy);                                                               \
+        uvec3 summary = block_tile(tile + offset, block_origin);                                    \
+        ivec2 ring = tile_ring(offset);                                                             \
+        float radius = min(uintBitsToFloat(summary.z), float(kPenumbraMaxRadius));                  \
+        if (radius >= 0.5 && radius >= ring_gap(ring)) reach = max(reach, radius);                  \
+        int r = ring.y * WINDOW + ring.x;                                                           \
+        ring_low[r] = min(ring_low[r], summary.x);                                                  \
+        ring_high[r] = max(ring_high[r], summary.y);                                                \
+      }                                                                                             \
+    uint low = floatBitsToUint(1.0), high = 0u;                                                     \
+    if (reach > 0.0)                                                                                \
+      for (int r = 0; r < WINDOW * WINDOW; ++r) {                                                   \
+        if (ring_gap(ivec2(r % WINDOW, r / WINDOW)) > reach) continue;                              \
+        low = min(low, ring_low[r]);                                                                \
+        high = max(high, ring_high[r]);                                                             \
+      }                                                                                             \
+    return low < high;                                                                              \
+  }
+// Penumbrae under kNarrowWindow tiles' width reach no tile in ring kNarrowWindow or beyond (its
+// nearest pixels are that far apart): a workgroup whose block casts none wider reads the narrow
+// window, with the same result. (The window for kPenumbraMaxRadius = 48, which 4K needs, read
+// throughout cost every row 0.015 ms on the H200 against 24's.)
+const int kNarrowWindow = 3;
+DILATE_WITHIN(varies_within_narrow, kNarrowWindow)
+DILATE_WITHIN(varies_within_full, kWindow)
+shared uint block_widest;
+
+// A thread a tile: listed, with its reach, where some tile in reach casts a penumbra over it and the
+// term varies within that reach.
 void dilate_tile() {
   ivec2 tile = ivec2(gl_GlobalInvocationID.xy);
   ivec2 tiles = ivec2(tiles_x(), penumbra_tiles_y(params.extent.y));
   ivec2 block_origin = ivec2(gl_WorkGroupID.xy) * 8 - kWindow;
+  if (gl_LocalInvocationIndex == 0u) block_widest = 0u;
+  barrier();
+  uint widest = 0u;
   for (uint k = gl_LocalInvocationIndex; k < uint(kDilateBlock * kDilateBlock); k += 64u) {
     ivec2 at = block_origin + ivec2(int(k) % kDilateBlock, int(k) / kDilateBlock);
     uint index = uint(clamp(at.y, 0, tiles.y - 1)) * tiles_x() + uint(clamp(at.x, 0, tiles.x - 1));
     block_summary[k] = entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y) + index].xyz;
+    widest = max(widest, block_summary[k].z);  // radii >= 0: their bits order as they do
   }
+  widest = subgroupMax(widest);
+  if (subgroupElect()) atomicMax(block_widest, widest);
   barrier();
   bool needed = false;
   float reach = 0.0;
   if (all(lessThan(tile, tiles))) {
-    uint ring_low[kRingsPerAxis * kRingsPerAxis], ring_high[kRingsPerAxis * kRingsPerAxis];
-    for (int r = 0; r < kRingsPerAxis * kRingsPerAxis; ++r) {
-      ring_low[r] = floatBitsToUint(1.0);
-      ring_high[r] = 0u;
-    }
-    for (int dy = -kWindow; dy <= kWindow; ++dy)
-      for (int dx = -kWindow; dx <= kWindow; ++dx) {
-        ivec2 offset = ivec2(dx, dy);
-        uvec3 summary = block_tile(tile + offset, block_origin);
-        ivec2 ring = tile_ring(offset);
-        float radius = min(uintBitsToFloat(summary.z), float(kPenumbraMaxRadius));
-        if (radius >= 0.5 && radius >= ring_gap(ring)) reach = max(reach, radius);
-        int r = ring.y * kRingsPerAxis + ring.x;
-        ring_low[r] = min(ring_low[r], summary.x);
-        ring_high[r] = max(ring_high[r], summary.y);
-      }
-    uint low = floatBitsToUint(1.0), high = 0u;
-    if (reach > 0.0)
-      for (int r = 0; r < kRingsPerAxis * kRingsPerAxis; ++r) {
-        if (ring_gap(ivec2(r % kRingsPerAxis, r / kRingsPerAxis)) > reach) continue;
-        low = min(low, ring_low[r]);
-        high = max(high, ring_high[r]);
-      }
-    needed = low < high;
+    bool narrow = uintBitsToFloat(block_widest) < float(kNarrowWindow * int(kPenumbraTile));
+    needed = narrow ? varies_within_narrow(tile, block_origin, reach) : varies_within_full(tile, block_origin, reach);
   }
   // One atomic per subgroup; the filter and apply steps' dispatch in rows of kIzbDispatchRow.
   uint count = subgroupAdd(needed ? 1u : 0u);

@@ -304,13 +304,14 @@ SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per 
 
 // The hybrid's penumbra pass (izb_penumbra.comp) works in square tiles of kPenumbraTile pixels, a
 // workgroup each. A penumbra is filtered over at most kPenumbraMaxRadius pixels (wider ones are
-// filtered at that radius), with kPenumbraSearchTaps taps to find the blockers and kPenumbraFilterTaps
+// filtered at that radius; 24 narrowed Sponza's at 4K under the real sun: soft_mae 0.00124 against
+// 0.00055 on view 1), with kPenumbraSearchTaps taps to find the blockers and kPenumbraFilterTaps
 // to filter.
 SHARED_CONST uint kPenumbraTile = 8u;
 // The tile summaries' step: a workgroup of 64 threads, a thread a row of a tile, so this many tiles
 // side by side a workgroup.
 SHARED_CONST uint kPenumbraSummaryTiles = 64u / kPenumbraTile;
-SHARED_CONST uint kPenumbraMaxRadius = 24u;
+SHARED_CONST uint kPenumbraMaxRadius = 48u;
 SHARED_CONST uint kPenumbraSearchTaps = 12u;
 SHARED_CONST uint kPenumbraFilterTaps = 16u;
 SHARED_INLINE uint penumbra_tiles_x(uint width) { return (width + kPenumbraTile - 1u) / kPenumbraTile; }

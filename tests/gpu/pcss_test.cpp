@@ -187,6 +187,27 @@ TEST_P(PcssHeightTest, PenumbraWidensWithOccluderHeight) {
   EXPECT_LT(high, 1.6 * expected_width(kHighEdge.height, 2.0f));
 }
 
+// The hybrid filters a penumbra as wide as gpu_shared::kPenumbraMaxRadius pixels at its own width:
+// under an 8-degree sun the high plank's penumbra is 26 to 38 pixels in radius at 384x384 (as wide as
+// a 4K screen's under the real sun), which a reach of 24 pixels filtered 0.84 as wide.
+TEST_F(PcssTest, HybridPenumbraWiderThanTwentyFourPixelsKeepsItsWidth) {
+  constexpr float kDegrees = 8.0f;
+  setup(planks_level(), 0, TechniqueCase{"hybrid", shadows::Technique::Hybrid, 1, false}.applied_to(shadows::Settings{}),
+        kDegrees);
+  const Capture c = render();
+  const double width = penumbra_width(c, kHighEdge, 4.0f, 6.0f);
+  const double expected = expected_width(kHighEdge.height, kDegrees);
+  const double pixel_at_6 = 6.0 * 2.0 * std::tan(0.5 * double(renderer_->frame_view().vertical_fov)) / kSize;
+  const double radius_pixels = double(kHighEdge.height) * std::tan(0.5 * double(kDegrees) * 3.14159265358979 / 180.0) *
+                               (1.0 + double(kSunSlope) * kSunSlope) / pixel_at_6;
+  std::printf("[pcss] hybrid, %g-degree sun: high plank's penumbra 10-90 %% width %.4f at view depths 4-6 "
+              "(geometry %.4f; radius %.1f pixels or more, at most 1.5 times that)\n",
+              double(kDegrees), width, expected, radius_pixels);
+  ASSERT_GT(radius_pixels, 24.0) << "the case must need more than the old reach";
+  ASSERT_GT(width, 0.0);
+  EXPECT_NEAR(width / expected, 1.0, 0.12);
+}
+
 // A sun too small to widen any penumbra past half a texel (sm) or past the cascades' kernel runs the
 // PCSS pipelines yet writes the hard path's term bit for bit, with every masking mode; on the planks a
 // sun 2 degrees wide does change the term (the PCSS path is live). (On `contact` its casters stand

@@ -6,6 +6,8 @@
 
 #include <glm/glm.hpp>
 
+#include <shared/izb.h>
+
 #include "reference/embree_tracer.hpp"
 #include "reference/shading_points.hpp"
 
@@ -17,13 +19,15 @@ namespace support {
 // above it along the light (Embree, from the shadow ray's origin; unbounded where the bisection
 // finds none within its limit), a the sun's angular radius
 // (`tan_half_angle`); it reaches the pixels within that radius, widened by `reach_margin` times and
-// a pixel, of its pixel within `window` pixels. A pixel's width at a point is its distance from the eye
+// a pixel, of its pixel within `window` pixels (by default as far as the hybrid's filter reaches,
+// gpu_shared::kPenumbraMaxRadius, and a pixel either side). A pixel's width at a point is its distance from the eye
 // times `pixel_angle` (2 tan(vertical fov / 2) / height).
 std::vector<uint8_t> sub_pixel_penumbra_mask(const reference::ShadingPoints& points,
                                              const std::vector<float>& hard_reference,
                                              const reference::EmbreeTracer& tracer, const glm::vec3& to_light,
                                              float tan_half_angle, float pixel_angle, float fraction = 0.4f,
-                                             float reach_margin = 1.25f, int window = 26);
+                                             float reach_margin = 1.25f,
+                                             int window = int(gpu_shared::kPenumbraMaxRadius) + 2);
 
 // The nearest occluder's distance along `dir` (unit) from `origin`, by bisection on
 // EmbreeTracer::occluded_within (within 2^-20 of `limit`); -1 where nothing lies within `limit`.
