@@ -316,18 +316,21 @@ SHARED_CONST uint kPenumbraSearchTaps = 12u;
 SHARED_CONST uint kPenumbraFilterTaps = 16u;
 SHARED_INLINE uint penumbra_tiles_x(uint width) { return (width + kPenumbraTile - 1u) / kPenumbraTile; }
 SHARED_INLINE uint penumbra_tiles_y(uint height) { return (height + kPenumbraTile - 1u) / kPenumbraTile; }
-// In the hybrid list's buffer (uvec4 entries), after the fade band's width * height: per tile its
-// summary {min term, max term, widest penumbra radius in pixels (float bits), -}; then the listed
-// tiles {tile, widest penumbra in reach in pixels (float bits), -, -}; then per listed tile its kPenumbraTile² filtered terms (float bits, 4 an entry).
-SHARED_INLINE uint izb_penumbra_tiles_at(uint width, uint height) { return width * height; }
-SHARED_INLINE uint izb_penumbra_list_at(uint width, uint height) {
-  return width * height + penumbra_tiles_x(width) * penumbra_tiles_y(height);
+// The hybrid list's buffer, in uvec4 entries. With a limited range (`limited`: IzbParams'
+// camera_position.w > 0) it opens with width * height for the pixels the cascades take part of
+// (izb_pixel.glsl); with none they are never listed and take no room (133 MB at 3840x2160). Then per
+// tile its summary {min term, max term, widest penumbra radius in pixels (float bits), -}; then the
+// listed tiles {tile, widest penumbra in reach in pixels (float bits), -, -}; then per listed tile
+// its kPenumbraTile² filtered terms (float bits, 4 an entry).
+SHARED_INLINE uint izb_penumbra_tiles_at(uint width, uint height, bool limited) { return limited ? width * height : 0u; }
+SHARED_INLINE uint izb_penumbra_list_at(uint width, uint height, bool limited) {
+  return izb_penumbra_tiles_at(width, height, limited) + penumbra_tiles_x(width) * penumbra_tiles_y(height);
 }
-SHARED_INLINE uint izb_penumbra_values_at(uint width, uint height) {
-  return width * height + 2u * penumbra_tiles_x(width) * penumbra_tiles_y(height);
+SHARED_INLINE uint izb_penumbra_values_at(uint width, uint height, bool limited) {
+  return izb_penumbra_tiles_at(width, height, limited) + 2u * penumbra_tiles_x(width) * penumbra_tiles_y(height);
 }
-SHARED_INLINE uint izb_hybrid_list_entries(uint width, uint height) {
-  return izb_penumbra_values_at(width, height) +
+SHARED_INLINE uint izb_hybrid_list_entries(uint width, uint height, bool limited) {
+  return izb_penumbra_values_at(width, height, limited) +
          penumbra_tiles_x(width) * penumbra_tiles_y(height) * (kPenumbraTile * kPenumbraTile / 4u);
 }
 

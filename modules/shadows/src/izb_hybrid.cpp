@@ -7,22 +7,28 @@ namespace shadows::detail {
 
 using namespace engine::gpu;
 
-void IzbResources::ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid) {
+void IzbResources::ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid, bool limited_range) {
   // A frame may shadow the sun with the hybrid and then a local light with the plain IZB: the
-  // hybrid's images stay until the extent changes.
+  // hybrid's images stay until the extent or the range changes.
   if (!hybrid && soft_term.valid()) return;
   const VkExtent2D want = hybrid ? e : VkExtent2D{1, 1};
-  if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height) return;
+  // The soft term and the list's pixels serve a limited range alone (the cascades' share of the
+  // blend); with none the list holds the penumbra pass's tiles alone (3840x2160: 37 MB, not 170).
+  const bool limited = hybrid && limited_range;
+  if (soft_term.valid() && want.width == hybrid_extent.width && want.height == hybrid_extent.height &&
+      limited == hybrid_limited)
+    return;
   hybrid_extent = want;
-  soft_term = Image(ctx, want, VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-                    "izb hybrid soft term");
+  hybrid_limited = limited;
+  soft_term = Image(ctx, limited ? want : VkExtent2D{1, 1}, VK_FORMAT_R32_SFLOAT,
+                    VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, "izb hybrid soft term");
   // -1 (not filtered) everywhere; the blend restores that after each frame (izb_hybrid_blend.comp).
   to_general(ctx, cmd, soft_term);
   const VkClearColorValue unfiltered{{-1.0f, 0.0f, 0.0f, 0.0f}};
   const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
   vkCmdClearColorImage(cmd, soft_term.handle(), VK_IMAGE_LAYOUT_GENERAL, &unfiltered, 1, &range);
   pass_barrier(ctx, cmd);
-  hybrid_list = Buffer(ctx, VkDeviceSize(gpu_shared::izb_hybrid_list_entries(want.width, want.height)) * 16,
+  hybrid_list = Buffer(ctx, VkDeviceSize(gpu_shared::izb_hybrid_list_entries(want.width, want.height, limited)) * 16,
                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb hybrid pixel list");
 }
 

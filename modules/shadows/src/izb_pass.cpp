@@ -30,7 +30,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (settings.resolution == 0 || settings.resolution > 16384)
     throw std::invalid_argument("IZB resolution must be in 1..16384");
   s.res.ensure_buffers(frame, settings);
-  s.res.ensure_hybrid(frame.cmd, frame.view.extent, hybrid);
+  s.res.ensure_hybrid(frame.cmd, frame.view.extent, hybrid, settings.max_distance > 0.0f);
   s.casters.update(frame, s.pipelines);
   IzbPlan plan;
   plan.run_csm = s.csm->plan(frame, settings, s.res.resolution);

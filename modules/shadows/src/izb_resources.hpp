@@ -30,8 +30,9 @@ struct IzbResources {
   // Frame-sized where the resolve is listed, a point light's face tile lists where its faces build
   // over them (IZB_FLAG_FACE_TILES); otherwise a placeholder keeps the binding valid.
   void ensure_resolve_list(VkExtent2D e, bool listed, bool face_tiles);
-  // Frame-sized in hybrid; otherwise 1x1 placeholders keep the bindings valid (izb_hybrid.cpp).
-  void ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid);
+  // Hybrid: the list frame-sized (its pixels only with a limited range, which the soft term needs
+  // too); otherwise 1x1 placeholders keep the bindings valid (izb_hybrid.cpp).
+  void ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid, bool limited_range);
   // Whether csm_texels' texel view reaches all of its words (IZB_FLAG_LIT_FETCH).
   bool lit_view_whole() const { return csm_texels.size() / 4 <= ctx.properties().limits.maxTexelBufferElements; }
 
@@ -41,10 +42,12 @@ struct IzbResources {
   // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes; IZB_FLAG_FACE_TILES: the faces' tile lists and
   // their builds' indirect dispatches (izb.h, kIzbFaceTilesAt).
   engine::gpu::Buffer resolve_list;
-  // Hybrid: the cascades' term and the pixels that blend toward it (frame-sized only in hybrid).
+  // Hybrid: the cascades' term and the pixels that blend toward it (frame-sized only in hybrid with a
+  // limited range), and the penumbra pass's tiles.
   engine::gpu::Image soft_term;
   engine::gpu::Buffer hybrid_list;
   VkExtent2D hybrid_extent{};
+  bool hybrid_limited = false;  // the hybrid's range is limited: the list's pixels and the soft term
   engine::gpu::Image trace_depth;
   engine::gpu::Buffer params, counters;
   // The frame the fit writes (IzbFrame), then its per-workgroup bounds from vec4 kIzbPartialsAt on
