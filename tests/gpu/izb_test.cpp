@@ -1043,6 +1043,19 @@ TEST_F(IzbTest, HybridFiltersOnlyThePixelsItBlends) {
   EXPECT_EQ(hard_only.stats.expensive_path_pixels, 0u);  // the cascades filtered nothing
   none.hybrid_izb_distance = 0.0f;  // unlimited: no cascades at all
   EXPECT_EQ(render("contact", 0, none, false).visibility, plain_izb.visibility);
+  // Only a limited range hands pixels to the cascades: without one the hybrid holds neither a pixel
+  // list nor a soft term of the frame's size (at 3840x2160, 158 MiB).
+  constexpr uint32_t kMemorySize = 256;
+  const uint64_t pixels = uint64_t(kMemorySize) * kMemorySize;
+  for (const float range : {1.0e6f, 0.0f}) {
+    SCOPED_TRACE(range);
+    shadows::Settings hybrid = none;
+    hybrid.hybrid_izb_distance = range;
+    const auto held = render("contact", 0, hybrid, false, 1, kMemorySize).stats.memory_bytes;
+    ASSERT_TRUE(held.count("izb hybrid pixel list") && held.count("izb hybrid soft term"));
+    EXPECT_EQ(held.at("izb hybrid pixel list") >= 16 * pixels, range > 0.0f);
+    EXPECT_EQ(held.at("izb hybrid soft term") >= 4 * pixels, range > 0.0f);
+  }
 
   shadows::Settings cascades_only;
   cascades_only.technique = shadows::Technique::Cascades;
