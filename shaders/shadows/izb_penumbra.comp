@@ -44,6 +44,11 @@ float tan_half_angle() { return params.penumbra.x; }
 // The IZB's range (izb_pixel.glsl's izb_reach, which comes with bindings this pass names otherwise).
 bool range_limited() { return params.camera_position.w > 0.0; }
 float range_limit() { return range_limited() ? params.camera_position.w : 3.0e38; }
+// Where this pass's parts lie in the hybrid list (izb.h): the tile summaries, the listed tiles, their
+// filtered terms.
+uint summaries_at() { return izb_penumbra_tiles_at(params.extent.x, params.extent.y, range_limited()); }
+uint listed_at() { return izb_penumbra_list_at(params.extent.x, params.extent.y, range_limited()); }
+uint values_at() { return izb_penumbra_values_at(params.extent.x, params.extent.y, range_limited()); }
 // A pixel's width in world units at `p`.
 float footprint(vec3 p) { return max(distance(p, params.camera_position.xyz) * params.penumbra.y, 1.0e-30); }
 
@@ -158,7 +163,7 @@ void summarize_tiles() {
     uvec3 row = row_summary[lane + r];
     tile = uvec3(min(tile.x, row.x), max(tile.y, row.y), max(tile.z, row.z));
   }
-  entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y, range_limited()) + gl_WorkGroupID.y * tiles_x() + tile_x] =
+  entries[summaries_at() + gl_WorkGroupID.y * tiles_x() + tile_x] =
       uvec4(tile, 0u);
 }
 
@@ -232,7 +237,7 @@ void dilate_tile() {
   for (uint k = gl_LocalInvocationIndex; k < uint(kDilateBlock * kDilateBlock); k += 64u) {
     ivec2 at = block_origin + ivec2(int(k) % kDilateBlock, int(k) / kDilateBlock);
     uint index = uint(clamp(at.y, 0, tiles.y - 1)) * tiles_x() + uint(clamp(at.x, 0, tiles.x - 1));
-    block_summary[k] = entries[izb_penumbra_tiles_at(params.extent.x, params.extent.y, range_limited()) + index].xyz;
+    block_summary[k] = entries[summaries_at() + index].xyz;
     widest = max(widest, block_summary[k].z);  // radii >= 0: their bits order as they do
   }
   widest = subgroupMax(widest);
@@ -259,7 +264,7 @@ void dilate_tile() {
   }
   uint slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(needed ? 1u : 0u);
   if (needed)
-    entries[izb_penumbra_list_at(params.extent.x, params.extent.y, range_limited()) + slot] =
+    entries[listed_at() + slot] =
         uvec4(uint(tile.y) * tiles_x() + uint(tile.x), floatBitsToUint(reach), 0u, 0u);
 }
 
@@ -494,7 +499,7 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
 bool listed_tile(out uint slot, out uvec4 entry) {
   slot = gl_WorkGroupID.y * kIzbDispatchRow + gl_WorkGroupID.x;
   if (slot >= counters[IZB_COUNTER_PENUMBRA_TILES]) return false;
-  entry = entries[izb_penumbra_list_at(params.extent.x, params.extent.y, range_limited()) + slot];
+  entry = entries[listed_at() + slot];
   return true;
 }
 
@@ -504,7 +509,7 @@ ivec2 tile_pixel(uint tile) {
 
 // Where a listed tile's filtered terms are kept: 4 an entry.
 uint value_entry(uint slot) {
-  return izb_penumbra_values_at(params.extent.x, params.extent.y, range_limited()) + slot * (kPenumbraTile * kPenumbraTile / 4u) +
+  return values_at() + slot * (kPenumbraTile * kPenumbraTile / 4u) +
          gl_LocalInvocationIndex / 4u;
 }
 

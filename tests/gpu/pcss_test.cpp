@@ -27,15 +27,18 @@ constexpr float kSunSlope = 0.3f;  // the sun's x travel per unit of descent
 constexpr Edge kHighEdge{0.2f + kSunSlope * 6.05f, 6.05f};
 constexpr Edge kLowEdge{-2.2f + kSunSlope * 3.05f, 3.05f};
 
-// The width between the 10 % and 90 % lit points of the penumbra of an edge `height` above the
-// ground, for a sun of `degrees` angular diameter: the sun's disc, cut by a straight edge, is lit over
-// the fraction of a disc beyond a chord, which crosses 0.1 and 0.9 at 0.687 of the radius either side
-// of the hard boundary. The disc's radius on the ground across the edge is the distance along the
-// light times tan(radius), stretched by the sun's slant: height * tan * (1 + slope²).
-double expected_width(float height, float degrees) {
+// The radius on the ground, across the edge, of the sun's disc seen past an edge `height` above it,
+// for a sun of `degrees` angular diameter: the distance along the light times tan(radius), stretched
+// by the sun's slant: height * tan * (1 + slope²).
+double penumbra_radius(float height, float degrees) {
   const double tan_half = std::tan(0.5 * double(degrees) * 3.14159265358979 / 180.0);
-  return 2.0 * 0.687 * double(height) * tan_half * (1.0 + double(kSunSlope) * kSunSlope);
+  return double(height) * tan_half * (1.0 + double(kSunSlope) * kSunSlope);
 }
+
+// The width between the 10 % and 90 % lit points of that penumbra: the sun's disc, cut by a straight
+// edge, is lit over the fraction of a disc beyond a chord, which crosses 0.1 and 0.9 at 0.687 of the
+// radius either side of the hard boundary.
+double expected_width(float height, float degrees) { return 2.0 * 0.687 * penumbra_radius(height, degrees); }
 
 struct Capture {
   std::vector<float> term;
@@ -198,8 +201,7 @@ TEST_F(PcssTest, HybridPenumbraWiderThanTwentyFourPixelsKeepsItsWidth) {
   const double width = penumbra_width(c, kHighEdge, 4.0f, 6.0f);
   const double expected = expected_width(kHighEdge.height, kDegrees);
   const double pixel_at_6 = 6.0 * 2.0 * std::tan(0.5 * double(renderer_->frame_view().vertical_fov)) / kSize;
-  const double radius_pixels = double(kHighEdge.height) * std::tan(0.5 * double(kDegrees) * 3.14159265358979 / 180.0) *
-                               (1.0 + double(kSunSlope) * kSunSlope) / pixel_at_6;
+  const double radius_pixels = penumbra_radius(kHighEdge.height, kDegrees) / pixel_at_6;
   std::printf("[pcss] hybrid, %g-degree sun: high plank's penumbra 10-90 %% width %.4f at view depths 4-6 "
               "(geometry %.4f; radius %.1f pixels or more, at most 1.5 times that)\n",
               double(kDegrees), width, expected, radius_pixels);
