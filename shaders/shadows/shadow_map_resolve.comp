@@ -1,5 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "shadows.h"
 #include "shadow_common.h"
 #include "local_light.h"
@@ -11,6 +13,15 @@ layout(constant_id = 0) const bool kPcss = false;
 // A fixed filter (ShadowMapResolveParams::bias.y > 0: the cascades' spot-light maps), likewise: a CPU
 // device would run its 16 taps for every pixel, filter or not.
 layout(constant_id = 1) const bool kPcf = false;
+// PCSS's masking (ShadowMapSettings::masking): taps the depth map's blocks settle are not read.
+layout(constant_id = 2) const bool kMasking = false;
+// Stats: the resolve counts its facing receivers and those whose PCSS taps ran (SM_COUNTER_*).
+layout(constant_id = 3) const bool kCount = false;
+// With masking on a CPU device, which runs both sides of an `if` for every lane of a row (so a pixel
+// the blocks settle would still pay for its neighbours' taps), the resolve runs in three passes
+// (SM_STAGE_*): every pixel but the PCSS taps, listing the pixels the blocks do not settle; the
+// list's dispatch; the listed pixels' taps. A GPU resolves each pixel in one pass (SM_STAGE_WHOLE).
+layout(constant_id = 4) const uint kStage = SM_STAGE_WHOLE;
 
 layout(set = 0, binding = SM_RESOLVE_BINDING_PARAMS) uniform Params { ShadowMapResolveParams params; };
 layout(set = 0, binding = SM_RESOLVE_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
@@ -18,9 +29,49 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, rgba16f) readonly
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_MAP) uniform sampler2D shadow_map;
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
 layout(set = 0, binding = SM_RESOLVE_BINDING_RECEIVERS, rgba8) readonly uniform image2D receivers;
+layout(set = 0, binding = SM_RESOLVE_BINDING_BLOCKS, std430) readonly buffer Blocks { vec4 blocks[]; };
+layout(set = 0, binding = SM_RESOLVE_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
+// SM_STAGE_*: its count, the listed pass's dispatch (x, y, z), then a pixel an entry (x | y << 16).
+layout(set = 0, binding = SM_RESOLVE_BINDING_LIST, std430) buffer TapList { uint tap_list[]; };
 
 float pcss_map_depth(int layer, ivec2 texel) { return texelFetch(shadow_map, texel, 0).r; }
 #include "pcss.glsl"
+
+// Whether the depth map's blocks (shadow_map_blocks.comp) settle every tap PCSS could make for `r`
+// (those within `search` map units, which hold the blocker search's and the filter's: neither
+// radius exceeds it): 1 every tap lit, 0 every tap shadowed, -1 not settled (or too wide a footprint,
+// or one reaching past the map's edge, where the taps' texels are clamped). A tap at texel T compares
+// z(T) = r.z + dot(g, T + 0.5 - r.t) with depth(T) + bias; over a block, depth(T) lies within its
+// distance of the block's plane, and z(T) minus that plane is linear in T, so its extremes over the
+// block's tap texels lie at their rectangle's corners. kSettleMargin covers the two evaluations'
+// rounding (depths in [0, 1]).
+const float kSettleMargin = 1.0e-5;
+const int kMaxSettleBlocks = 4;  // a side
+int pcss_settled(PcssMap m, PcssReceiver r, float search) {
+  vec2 reach = search / m.texel;
+  ivec2 lo = ivec2(floor(r.t - reach)), hi = ivec2(floor(r.t + reach));
+  if (any(lessThan(lo, ivec2(0))) || any(greaterThanEqual(hi, ivec2(m.size)))) return -1;
+  int block = int(kSmBlock);
+  ivec2 first = lo / block, last = hi / block;
+  if (any(greaterThanEqual(last - first, ivec2(kMaxSettleBlocks)))) return -1;
+  int blocks_x = (m.size + block - 1) / block;
+  bool lit = true, shadowed = true;
+  for (int by = first.y; by <= last.y; ++by)
+    for (int bx = first.x; bx <= last.x; ++bx) {
+      vec4 plane = blocks[by * blocks_x + bx];
+      ivec2 origin = ivec2(bx, by) * block;
+      vec2 centre = vec2(origin) + 0.5 * float(block - 1);
+      float at_centre = r.z + dot(r.gradient, centre + 0.5 - r.t) - plane.x;
+      vec2 slope = r.gradient - plane.yz;
+      vec2 near = vec2(max(lo, origin)) - centre, far = vec2(min(hi, origin + block - 1)) - centre;
+      vec2 highest = max(slope * near, slope * far), lowest = min(slope * near, slope * far);
+      lit = lit && at_centre + highest.x + highest.y + plane.w + kSettleMargin <= r.bias;
+      shadowed = shadowed && at_centre + lowest.x + lowest.y - plane.w - kSettleMargin > r.bias;
+    }
+  return lit ? 1 : shadowed ? 0 : -1;
+}
+
+bool sized = false, taps_ran = false;  // for the counts
 
 // Where the light has a size: the PCSS term from the shading point p (normal n) at map position uv,
 // or `hard` (the one tap, or the fixed filter) where no tap blocks or the penumbra is narrower than
@@ -39,6 +90,15 @@ float soft_visibility(ivec2 pixel, vec3 p, vec3 n, vec2 uv, float z, float hard)
   r.z = z;
   r.gradient = pcss_plane_gradient(params.light_plane_matrix, p, n, m.size, pcss_max_slope(m, z));
   r.bias = params.bias.x;
+  // Settled lit, PCSS would find no blocker and leave `hard`; settled shadowed, it would give 0 or
+  // leave `hard`, which is then 0 too. (The listed pass takes only pixels the first did not settle.)
+  sized = true;
+  if (kMasking && kStage != SM_STAGE_LISTED) {
+    int settled = pcss_settled(m, r, pcss_search_radius(m, r.z, params.pcss_texel.z));
+    if (settled == 1 || (settled == 0 && hard == 0.0)) return hard;
+  }
+  taps_ran = true;
+  if (kStage == SM_STAGE_LIST) return hard;  // its taps are the listed pass's
   float soft = pcss_visibility(m, r, pcss_rotation(pixel), params.pcss_texel.z, max(params.bias.y, 0.5));
   return soft >= 0.0 ? soft : hard;
 }
@@ -48,9 +108,38 @@ float soft_visibility(ivec2 pixel, vec3 p, vec3 n, vec2 uv, float z, float hard)
 // is a perspective one from the light (a point light's, one per cube-face cone); points it does not
 // reach or that turn away from it are 0; a point that does not receive shadows (its receiver flag) and
 // faces the light is 1, as in every technique.
+const uint kListGroup = 64u;  // the listed pass's pixels a workgroup
+const uint kListHeader = 4u;  // tap_list's words before its entries
+
+// SM_STAGE_LIST_DISPATCH: the listed pass's workgroups, in rows of at most 65535.
+void size_list_dispatch() {
+  if (gl_LocalInvocationIndex != 0u) return;
+  uint groups = (tap_list[0] + kListGroup - 1u) / kListGroup;
+  tap_list[1] = min(groups, 65535u);
+  tap_list[2] = (groups + 65534u) / 65535u;
+  tap_list[3] = 1u;
+}
+
+// This invocation's pixel: its own, or in the listed pass its entry's (false past the list's end).
+bool stage_pixel(out ivec2 pixel) {
+  if (kStage != SM_STAGE_LISTED) {
+    pixel = ivec2(gl_GlobalInvocationID.xy);
+    return true;
+  }
+  uint entry = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * kListGroup + gl_LocalInvocationIndex;
+  if (entry >= tap_list[0]) return false;
+  uint packed = tap_list[kListHeader + entry];
+  pixel = ivec2(packed & 0xffffu, packed >> 16u);
+  return true;
+}
+
 void main() {
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-  if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
+  if (kStage == SM_STAGE_LIST_DISPATCH) {
+    size_list_dispatch();
+    return;
+  }
+  ivec2 pixel;
+  if (!stage_pixel(pixel) || any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
   vec4 p = imageLoad(world_position, pixel);
   if (p.w == 0.0) return;
   // One of a point light's cube-face cones: the points outside it belong to another face's map.
@@ -93,5 +182,20 @@ void main() {
       if (kPcss) visibility = soft_visibility(pixel, origin, n, uv, light.z, visibility);
     }
   }
-  imageStore(shadow_term, pixel, vec4(visibility));
+  // A listed pixel's term is the listed pass's to store.
+  bool listed = kStage == SM_STAGE_LIST && taps_ran;
+  if (!listed) imageStore(shadow_term, pixel, vec4(visibility));
+  if (kStage == SM_STAGE_LIST) {
+    uint count = subgroupAdd(listed ? 1u : 0u), base = 0u;
+    if (subgroupElect() && count != 0u) base = atomicAdd(tap_list[0], count);
+    uint slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(listed ? 1u : 0u);
+    if (listed) tap_list[kListHeader + slot] = uint(pixel.x) | (uint(pixel.y) << 16u);
+  }
+  if (kCount && kStage != SM_STAGE_LISTED) {
+    uint facing_count = subgroupAdd(sized ? 1u : 0u), tapped = subgroupAdd(taps_ran ? 1u : 0u);
+    if (subgroupElect() && facing_count != 0u) {
+      atomicAdd(counters[SM_COUNTER_FACING], facing_count);
+      atomicAdd(counters[SM_COUNTER_TAPPED], tapped);
+    }
+  }
 }

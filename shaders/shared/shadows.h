@@ -38,6 +38,24 @@ SHARED_CONST uint SM_RESOLVE_BINDING_GEOMETRIC_NORMAL = 2u;
 SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_MAP = 3u;
 SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_TERM = 4u;
 SHARED_CONST uint SM_RESOLVE_BINDING_RECEIVERS = 5u;  // RGBA8, a > 0.5: receives shadows
+SHARED_CONST uint SM_RESOLVE_BINDING_BLOCKS = 6u;     // kSmBlock² depth blocks' planes (shadow_map_blocks.comp)
+SHARED_CONST uint SM_RESOLVE_BINDING_COUNTERS = 7u;   // SM_COUNTER_* (with stats)
+SHARED_CONST uint SM_RESOLVE_BINDING_LIST = 8u;       // the CPU device's list of pixels to tap (SM_STAGE_*)
+// The resolve's passes (shadow_map_resolve.comp's kStage): whole on a GPU; on a CPU device with
+// masking, every pixel listing those whose PCSS taps must run, that list's dispatch, the listed taps.
+SHARED_CONST uint SM_STAGE_WHOLE = 0u;
+SHARED_CONST uint SM_STAGE_LIST = 1u;
+SHARED_CONST uint SM_STAGE_LIST_DISPATCH = 2u;
+SHARED_CONST uint SM_STAGE_LISTED = 3u;
+// PCSS's masking in the sm resolve: the depth map in blocks of kSmBlock² texels, each with the plane
+// that fits its depths and the largest distance of a depth from it (a vec4: the depth at the block's
+// centre, the slopes along x and y per texel, that distance; shadow_map_blocks.comp).
+SHARED_CONST uint kSmBlock = 8u;
+// The resolve's counts, per frame (summed over a point light's faces): facing receivers it resolved
+// with a light size, and those of them whose PCSS taps ran (the blocks did not settle them).
+SHARED_CONST uint SM_COUNTER_FACING = 0u;
+SHARED_CONST uint SM_COUNTER_TAPPED = 1u;
+SHARED_CONST uint SM_COUNTER_WORDS = 4u;
 
 // ---- Alpha-tested casters in the shadow-map depth passes (sm, cascades) ----
 struct AlphaDepthPush {

@@ -305,6 +305,7 @@ std::vector<RunConfig> expand_runs(const Options& o) {
       auto m = shadows::parse_masking(o.masking);
       if (!m) throw std::runtime_error("--masking '" + o.masking + "': expected off, edge, depth-extent or auto");
       base.cascades.masking = *m;
+      base.shadow_map.masking = *m != shadows::Masking::Off;  // sm has one kind of masking: on or off
     }
     auto settings = shadows::parse_mode(mode, base);
     if (!settings) throw std::runtime_error("--mode '" + mode + "' is not a shadow mode (see --help)");

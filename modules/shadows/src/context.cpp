@@ -889,7 +889,9 @@ void ContextImpl::record_local_light(Frame& frame, const Settings& settings) {
       // PCF-filtered for cascades.
       if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
       const float filter = settings.technique == Technique::Cascades ? kSpotFilterTexels : 0.0f;
-      auto map = [&](Frame& f) { shadow_map_->record(f, settings.shadow_map, filter); };
+      // (The counts are sm's: the cascades report their own filter's.)
+      const bool count = collect_stats_ && settings.technique == Technique::ShadowMap;
+      auto map = [&](Frame& f) { shadow_map_->record(f, settings.shadow_map, filter, count); };
       if (point) record_point_light_faces(frame, map);
       else map(frame);
       break;
@@ -917,7 +919,7 @@ void ContextImpl::record_technique(Frame& frame) {
       break;
     case Technique::ShadowMap:
       if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
-      shadow_map_->record(frame, settings.shadow_map);
+      shadow_map_->record(frame, settings.shadow_map, 0.0f, collect_stats_);
       break;
     case Technique::Cascades:
       cascades().record(frame, settings.cascades, frame.shadow_term.view(), settings.debug);
@@ -984,6 +986,7 @@ void ContextImpl::complete_slot(Slot& slot) {
     if (slot.csm) fresh.csm_choice = local_choice(slot.lights.back().kind);
   }
   if ((t == Technique::Cascades || t == Technique::Hybrid) && cascades_) cascades_->after_frame(fresh, index);
+  if (t == Technique::ShadowMap && shadow_map_) shadow_map_->after_frame(fresh, index);
   if (collect_stats_) {
     const std::vector<PassTime> times = pass_times();
     auto region_ms = [&](const std::string& name) {

@@ -42,11 +42,15 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
   d.depth_bias = true;
   depth_pipeline_ = factory.graphics(d);
   alpha_depth_pipeline_ = alpha_depth_pipeline(ctx, d);
+  cpu_paths_ = takes_cpu_paths(ctx);
+  counters_ = Buffer(ctx, gpu_shared::SM_COUNTER_WORDS * 4,
+                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                     false, "sm counters");
 }
 
-const Pipeline& ShadowMapPass::resolve_pipeline(bool pcss, bool pcf) {
-  // Made on first use: a frame needs one of the four (the filtered ones serve the cascades' spot lights).
-  Pipeline& pipeline = resolve_pipelines_[(pcss ? 1 : 0) | (pcf ? 2 : 0)];
+const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
+  // Made on first use (the filtered ones serve the cascades' spot lights).
+  Pipeline& pipeline = resolve_pipelines_[v.key()];
   if (pipeline.valid()) return pipeline;
   pipeline = PipelineFactory(ctx_).compute(
       {"shadow_map_resolve.comp",
@@ -55,10 +59,37 @@ const Pipeline& ShadowMapPass::resolve_pipeline(bool pcss, bool pcf) {
         {gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
         {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
         {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-        {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
+        {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+        {gpu_shared::SM_RESOLVE_BINDING_BLOCKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+        {gpu_shared::SM_RESOLVE_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+        {gpu_shared::SM_RESOLVE_BINDING_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
        0,
-       {{0, pcss ? 1u : 0u}, {1, pcf ? 1u : 0u}}});
+       {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage}}});
   return pipeline;
+}
+
+void ShadowMapPass::record_blocks(Frame& frame, uint32_t size) {
+  VkCommandBuffer cmd = frame.cmd;
+  const uint32_t blocks = (size + gpu_shared::kSmBlock - 1) / gpu_shared::kSmBlock;
+  const VkDeviceSize bytes = VkDeviceSize(blocks) * blocks * 16;
+  if (!blocks_.valid() || blocks_.size() < bytes)
+    blocks_ = Buffer(ctx_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
+  if (!blocks_pipeline_.valid())
+    blocks_pipeline_ = PipelineFactory(ctx_).compute(
+        {"shadow_map_blocks.comp",
+         {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+          {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {gpu_shared::SM_RESOLVE_BINDING_BLOCKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}});
+  ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_blocks");
+  blocks_pipeline_.bind(cmd);
+  DescriptorWriter()
+      .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
+      .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
+      .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_BLOCKS, blocks_.handle())
+      .push(ctx_, cmd, blocks_pipeline_);
+  vkCmdDispatch(cmd, (blocks + 7) / 8, (blocks + 7) / 8, 1);
+  // The blocks' stores before the resolve's loads.
+  pass_barrier(ctx_, cmd);
 }
 
 void ShadowMapPass::ensure_map(VkCommandBuffer cmd, uint32_t size) {
@@ -68,7 +99,7 @@ void ShadowMapPass::ensure_map(VkCommandBuffer cmd, uint32_t size) {
   to_general(ctx_, cmd, map_);
 }
 
-void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, float filter_texels) {
+void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, float filter_texels, bool count) {
   ensure_map(frame.cmd, settings.size);
   VkCommandBuffer cmd = frame.cmd;
   const glm::mat4 light_vp = frame.view.local_light ? spot_view_projection(frame.view) : [&] {
@@ -76,6 +107,10 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     const Aabb bounds = caster_bounds(frame);
     return fit_orthographic(light_view, bounds, 0.01f * glm::length(bounds.extent())) * light_view;
   }();
+  // A point light's six faces count into one total: zeroed before the first, read after the last.
+  const bool first_map = !frame.view.light_face || frame.view.light_face_index == 0;
+  const bool last_map = !frame.view.light_face || frame.view.light_face_index == 5;
+  if (count && first_map) vkCmdFillBuffer(cmd, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
 
   {
     ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_depth");
@@ -90,22 +125,44 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     vkCmdEndRendering(cmd);
   }
   pass_barrier(ctx_, cmd);
-  {
-    ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_resolve");
-    gpu_shared::ShadowMapResolveParams p{};
-    p.light_view_projection = light_vp;
-    p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
-    if (frame.view.local_light) {
-      p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
-      p.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
-    }
-    p.bias = glm::vec4(settings.constant_bias, filter_texels, 0.0f, 0.0f);
-    p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
-    p.camera_position = glm::vec4(frame.view.camera_position, 1.0f);
-    set_pcss_params(p, frame.view, light_vp, settings.size);
-    record_update(ctx_, cmd, params_, &p, sizeof(p));
-    const bool sized = (frame.view.local_light ? frame.view.light_radius : frame.view.light_tan_half_angle) > 0.0f;
-    const Pipeline& resolve = resolve_pipeline(sized, filter_texels > 0.0f);
+  gpu_shared::ShadowMapResolveParams p{};
+  p.light_view_projection = light_vp;
+  p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
+  if (frame.view.local_light) {
+    p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
+    p.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
+  }
+  p.bias = glm::vec4(settings.constant_bias, filter_texels, 0.0f, 0.0f);
+  p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
+  p.camera_position = glm::vec4(frame.view.camera_position, 1.0f);
+  set_pcss_params(p, frame.view, light_vp, settings.size);
+  record_update(ctx_, cmd, params_, &p, sizeof(p));
+  const bool sized = (frame.view.local_light ? frame.view.light_radius : frame.view.light_tan_half_angle) > 0.0f;
+  // (Under the sun: a local light's search spans kPcssMaxTexels either way, wider than the blocks
+  // a pixel's settling reads, and its map is left unmasked.)
+  const bool masking = sized && settings.masking && !frame.view.local_light;
+  if (masking) record_blocks(frame, settings.size);
+  const bool split = masking && cpu_paths_;
+  const uint32_t pixels = frame.view.extent.width * frame.view.extent.height;
+  if (!blocks_.valid())  // bound though unread
+    blocks_ = Buffer(ctx_, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
+  const VkDeviceSize list_bytes = split ? (VkDeviceSize(pixels) + 4) * 4 : 16;
+  if (!tap_list_.valid() || tap_list_.size() < list_bytes)
+    tap_list_ = Buffer(ctx_, list_bytes,
+                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                       false, "sm tap list");
+  record_resolve(frame, {sized, filter_texels > 0.0f, masking, count && sized, gpu_shared::SM_STAGE_WHOLE}, split);
+  // The counts are read on the host once this frame has completed.
+  if (count && last_map)
+    readback_.record_copy(frame, counters_, gpu_shared::SM_COUNTER_WORDS * 4, pass_shader_stages(ctx_),
+                          VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, "sm counters readback");
+}
+
+void ShadowMapPass::record_resolve(Frame& frame, ResolveVariant variant, bool split) {
+  VkCommandBuffer cmd = frame.cmd;
+  ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_resolve");
+  const auto bind = [&](const ResolveVariant& v) {
+    const Pipeline& resolve = resolve_pipeline(v);
     resolve.bind(cmd);
     DescriptorWriter()
         .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
@@ -114,9 +171,43 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
         .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, frame.shadow_term.view())
         .storage_image(gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, frame.gbuffer.albedo)
+        .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_BLOCKS, blocks_.handle())
+        .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_COUNTERS, counters_.handle())
+        .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_LIST, tap_list_.handle())
         .push(ctx_, cmd, resolve);
+  };
+  const auto over_frame = [&] {
     vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
+  };
+  if (!split) {
+    bind(variant);
+    over_frame();
+    return;
   }
+  // The list's count zeroed (its transfer write before the listing pass's atomics).
+  vkCmdFillBuffer(cmd, tap_list_.handle(), 0, 16, 0);
+  pass_barrier(ctx_, cmd);
+  variant.stage = gpu_shared::SM_STAGE_LIST;
+  bind(variant);
+  over_frame();
+  pass_barrier(ctx_, cmd);  // the list's stores before its dispatch's sizing
+  variant.stage = gpu_shared::SM_STAGE_LIST_DISPATCH;
+  variant.count = false;
+  bind(variant);
+  vkCmdDispatch(cmd, 1, 1, 1);
+  pass_barrier(ctx_, cmd);  // the dispatch's words before the indirect read, the list before its loads
+  variant.stage = gpu_shared::SM_STAGE_LISTED;
+  bind(variant);
+  vkCmdDispatchIndirect(cmd, tap_list_.handle(), 4);
+}
+
+void ShadowMapPass::after_frame(Stats& stats, uint32_t slot) {
+  const Buffer* readback = readback_.take(slot);
+  if (!readback) return;
+  const uint32_t* c = readback->as<uint32_t>();
+  stats.expensive_path_pixels = c[gpu_shared::SM_COUNTER_TAPPED];
+  const uint64_t facing = c[gpu_shared::SM_COUNTER_FACING];
+  stats.expensive_path_fraction = facing ? double(stats.expensive_path_pixels) / double(facing) : 0.0;
 }
 
 }  // namespace shadows::detail

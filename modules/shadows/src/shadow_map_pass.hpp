@@ -1,4 +1,6 @@
 #pragma once
+#include <map>
+
 #include "gpu/resources.hpp"
 #include "frame.hpp"
 #include "shadows/settings.hpp"
@@ -14,19 +16,42 @@ class ShadowMapPass {
   // `filter_texels` > 0: percentage-closer filtering over a disk of that radius in map texels (a spot
   // light's counterpart of the cascades' filtered term; with a light size, the narrowest PCSS filter);
   // 0: one tap.
-  void record(Frame& frame, const ShadowMapSettings& settings, float filter_texels = 0.0f);
+  // `count`: the resolve counts its pixels for Stats (after_frame).
+  void record(Frame& frame, const ShadowMapSettings& settings, float filter_texels = 0.0f, bool count = false);
+  // Once the frame in `slot` has completed: the counts of its PCSS resolves (expensive_path_*: the
+  // pixels whose taps ran, of those resolved with a light size), when it counted.
+  void after_frame(Stats& stats, uint32_t slot);
 
  private:
   void ensure_map(VkCommandBuffer cmd, uint32_t size);
   // The resolve for a light with a size (PCSS) and/or a fixed filter (`filter_texels` > 0).
-  const engine::gpu::Pipeline& resolve_pipeline(bool pcss, bool pcf);
+  // The resolve's pipelines, one per combination, each made on first use.
+  struct ResolveVariant {
+    bool pcss = false;     // the light has a size
+    bool pcf = false;      // a fixed filter
+    bool masking = false;  // PCSS's masking (ShadowMapSettings::masking)
+    bool count = false;    // the counts for Stats
+    uint32_t stage = 0;    // SM_STAGE_*
+    uint32_t key() const { return uint32_t(pcss) | uint32_t(pcf) << 1 | uint32_t(masking) << 2 | uint32_t(count) << 3 | stage << 4; }
+  };
+  const engine::gpu::Pipeline& resolve_pipeline(const ResolveVariant& variant);
+  // The resolve's passes over the frame (a CPU device with masking: listing, then the listed taps).
+  void record_resolve(Frame& frame, ResolveVariant variant, bool split);
+  // PCSS's masking: the depth map's block planes (shadow_map_blocks.comp), before the resolve.
+  void record_blocks(Frame& frame, uint32_t size);
   engine::gpu::Context& ctx_;
   engine::gpu::Image map_;
   engine::gpu::Buffer params_;
   engine::gpu::Sampler sampler_;
   engine::gpu::Pipeline depth_pipeline_;
   engine::gpu::Pipeline alpha_depth_pipeline_;  // alpha-tested casters
-  engine::gpu::Pipeline resolve_pipelines_[4];  // [PCSS + 2 * fixed filter], each made on first use
+  std::map<uint32_t, engine::gpu::Pipeline> resolve_pipelines_;  // by ResolveVariant::key
+  bool cpu_paths_ = false;         // a CPU device: the resolve split where it masks
+  engine::gpu::Buffer tap_list_;   // the split resolve's list (SM_STAGE_*)
+  engine::gpu::Pipeline blocks_pipeline_;
+  engine::gpu::Buffer blocks_;    // vec4 per kSmBlock² block of the map
+  engine::gpu::Buffer counters_;  // SM_COUNTER_*
+  ReadbackRing readback_;
 };
 
 }  // namespace shadows::detail

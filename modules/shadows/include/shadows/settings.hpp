@@ -64,6 +64,13 @@ struct ShadowMapSettings {
   uint32_t size = 1024;
   float constant_bias = 1.0e-4f;  // in light depth units ([0,1] over the fitted depth range)
   float slope_bias = 1.0f;        // rasterizer slope-scaled bias
+  // A sun with a size (PCSS): skip the blocker search and the filter where the map's 8x8-texel blocks
+  // show every tap of a pixel would agree (its surface lies on a plane the blocks fit and nothing
+  // nearer the light lies within its search radius, or it lies wholly behind the map's surface
+  // there). The same term bit for bit; false runs every pixel's taps (Stats::expensive_path_fraction:
+  // the share of the pixels that ran them). Spot and point lights' maps are not masked (their search
+  // spans more blocks than a pixel reads).
+  bool masking = true;
 };
 
 struct CascadeSettings {
@@ -241,7 +248,8 @@ struct Stats {
   // with the renderer (G-buffer, scene geometry) are not counted.
   std::map<std::string, uint64_t> memory_bytes;
   uint64_t memory_total_bytes = 0;
-  // Cascades
+  // Cascades, and `sm` with a light size (its resolve's pixels whose PCSS taps ran, of those it
+  // resolved with the light's size; ShadowMapSettings::masking)
   double expensive_path_fraction = 0.0;
   uint64_t expensive_path_pixels = 0;
   uint64_t blurred_pixels = 0;
