@@ -79,9 +79,7 @@ void ShadowMapPass::record_blocks(Frame& frame, uint32_t size) {
         {"shadow_map_blocks.comp",
          {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
           {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-          {gpu_shared::SM_RESOLVE_BINDING_BLOCKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
-         0,
-         {{0, cpu_paths_ ? 1u : 0u}}});
+          {gpu_shared::SM_RESOLVE_BINDING_BLOCKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}});
   ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_blocks");
   blocks_pipeline_.bind(cmd);
   DescriptorWriter()
@@ -89,9 +87,7 @@ void ShadowMapPass::record_blocks(Frame& frame, uint32_t size) {
       .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
       .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_BLOCKS, blocks_.handle())
       .push(ctx_, cmd, blocks_pipeline_);
-  // (A CPU device's thread a block, 8x8 blocks a workgroup; a GPU's workgroup a block.)
-  if (cpu_paths_) vkCmdDispatch(cmd, (blocks + 7) / 8, (blocks + 7) / 8, 1);
-  else vkCmdDispatch(cmd, blocks, blocks, 1);
+  vkCmdDispatch(cmd, (blocks + 7) / 8, (blocks + 7) / 8, 1);
   // The blocks' stores before the resolve's loads.
   pass_barrier(ctx_, cmd);
 }
