@@ -51,19 +51,14 @@ int pcss_settled(PcssMap m, PcssReceiver r, float search) {
   vec2 reach = search / m.texel;
   ivec2 lo = ivec2(floor(r.t - reach)), hi = ivec2(floor(r.t + reach));
   if (any(lessThan(lo, ivec2(0))) || any(greaterThanEqual(hi, ivec2(m.size)))) return -1;
-  // The blocks, or where the taps span too many the coarse blocks (after the blocks in the buffer).
-  int block = int(kSmBlock), blocks_x = (m.size + block - 1) / block, at = 0;
-  if (any(greaterThanEqual(hi / block - lo / block, ivec2(kMaxSettleBlocks)))) {
-    at = blocks_x * blocks_x;
-    block *= int(kSmCoarseBlocks);
-    blocks_x = (blocks_x + int(kSmCoarseBlocks) - 1) / int(kSmCoarseBlocks);
-  }
+  int block = int(kSmBlock);
   ivec2 first = lo / block, last = hi / block;
   if (any(greaterThanEqual(last - first, ivec2(kMaxSettleBlocks)))) return -1;
+  int blocks_x = (m.size + block - 1) / block;
   bool lit = true, shadowed = true;
   for (int by = first.y; by <= last.y; ++by)
     for (int bx = first.x; bx <= last.x; ++bx) {
-      vec4 plane = blocks[at + by * blocks_x + bx];
+      vec4 plane = blocks[by * blocks_x + bx];
       ivec2 origin = ivec2(bx, by) * block;
       vec2 centre = vec2(origin) + 0.5 * float(block - 1);
       float at_centre = r.z + dot(r.gradient, centre + 0.5 - r.t) - plane.x;

@@ -51,10 +51,6 @@ SHARED_CONST uint SM_STAGE_LISTED = 3u;
 // that fits its depths and the largest distance of a depth from it (a vec4: the depth at the block's
 // centre, the slopes along x and y per texel, that distance; shadow_map_blocks.comp).
 SHARED_CONST uint kSmBlock = 8u;
-// And in coarse blocks of kSmCoarseBlocks² blocks (a plane fitted to theirs, its deviation bounding
-// theirs), after the blocks in the same buffer: a spot or point light's search spans kPcssMaxTexels
-// either way, wider than the few blocks a pixel reads.
-SHARED_CONST uint kSmCoarseBlocks = 4u;
 // The resolve's counts, per frame (summed over a point light's faces): facing receivers it resolved
 // with a light size, and those of them whose PCSS taps ran (the blocks did not settle them).
 SHARED_CONST uint SM_COUNTER_FACING = 0u;

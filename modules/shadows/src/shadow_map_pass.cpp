@@ -71,32 +71,25 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
 void ShadowMapPass::record_blocks(Frame& frame, uint32_t size) {
   VkCommandBuffer cmd = frame.cmd;
   const uint32_t blocks = (size + gpu_shared::kSmBlock - 1) / gpu_shared::kSmBlock;
-  const uint32_t coarse = (blocks + gpu_shared::kSmCoarseBlocks - 1) / gpu_shared::kSmCoarseBlocks;
-  const VkDeviceSize bytes = (VkDeviceSize(blocks) * blocks + VkDeviceSize(coarse) * coarse) * 16;
+  const VkDeviceSize bytes = VkDeviceSize(blocks) * blocks * 16;
   if (!blocks_.valid() || blocks_.size() < bytes)
     blocks_ = Buffer(ctx_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
+  if (!blocks_pipeline_.valid())
+    blocks_pipeline_ = PipelineFactory(ctx_).compute(
+        {"shadow_map_blocks.comp",
+         {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+          {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+          {gpu_shared::SM_RESOLVE_BINDING_BLOCKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}});
   ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_blocks");
-  for (uint32_t level = 0; level < 2; ++level) {
-    Pipeline& pipeline = blocks_pipelines_[level];
-    if (!pipeline.valid())
-      pipeline = PipelineFactory(ctx_).compute(
-          {"shadow_map_blocks.comp",
-           {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
-            {gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-            {gpu_shared::SM_RESOLVE_BINDING_BLOCKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
-           0,
-           {{0, level}}});
-    pipeline.bind(cmd);
-    DescriptorWriter()
-        .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
-        .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
-        .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_BLOCKS, blocks_.handle())
-        .push(ctx_, cmd, pipeline);
-    const uint32_t side = level == 0 ? blocks : coarse;  // a thread a block, 8x8 a workgroup
-    vkCmdDispatch(cmd, (side + 7) / 8, (side + 7) / 8, 1);
-    // The blocks' stores before the coarse blocks' loads, then those before the resolve's.
-    pass_barrier(ctx_, cmd);
-  }
+  blocks_pipeline_.bind(cmd);
+  DescriptorWriter()
+      .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
+      .sampled_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_MAP, map_.view(), sampler_.handle(), VK_IMAGE_LAYOUT_GENERAL)
+      .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_BLOCKS, blocks_.handle())
+      .push(ctx_, cmd, blocks_pipeline_);
+  vkCmdDispatch(cmd, (blocks + 7) / 8, (blocks + 7) / 8, 1);
+  // The blocks' stores before the resolve's loads.
+  pass_barrier(ctx_, cmd);
 }
 
 void ShadowMapPass::ensure_map(VkCommandBuffer cmd, uint32_t size) {
@@ -145,7 +138,9 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
   set_pcss_params(p, frame.view, light_vp, settings.size);
   record_update(ctx_, cmd, params_, &p, sizeof(p));
   const bool sized = (frame.view.local_light ? frame.view.light_radius : frame.view.light_tan_half_angle) > 0.0f;
-  const bool masking = sized && settings.masking;
+  // (Under the sun: a local light's search spans kPcssMaxTexels either way, wider than the blocks
+  // a pixel's settling reads, and its map is left unmasked.)
+  const bool masking = sized && settings.masking && !frame.view.local_light;
   if (masking) record_blocks(frame, settings.size);
   const bool split = masking && cpu_paths_;
   const uint32_t pixels = frame.view.extent.width * frame.view.extent.height;

@@ -48,7 +48,7 @@ class ShadowMapPass {
   std::map<uint32_t, engine::gpu::Pipeline> resolve_pipelines_;  // by ResolveVariant::key
   bool cpu_paths_ = false;         // a CPU device: the resolve split where it masks
   engine::gpu::Buffer tap_list_;   // the split resolve's list (SM_STAGE_*)
-  engine::gpu::Pipeline blocks_pipelines_[2];  // the blocks, the coarse blocks
+  engine::gpu::Pipeline blocks_pipeline_;
   engine::gpu::Buffer blocks_;    // vec4 per kSmBlock² block of the map
   engine::gpu::Buffer counters_;  // SM_COUNTER_*
   ReadbackRing readback_;

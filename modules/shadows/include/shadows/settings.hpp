@@ -64,12 +64,12 @@ struct ShadowMapSettings {
   uint32_t size = 1024;
   float constant_bias = 1.0e-4f;  // in light depth units ([0,1] over the fitted depth range)
   float slope_bias = 1.0f;        // rasterizer slope-scaled bias
-  // A light with a size (PCSS): skip the blocker search and the filter where the map's 8x8-texel
-  // blocks (32x32 for a search too wide for them, as a spot or point light's is) show every tap of a
-  // pixel would agree: its surface lies on a plane the blocks fit and nothing nearer the light lies
-  // within its search radius, or it lies wholly behind the map's surface there. The same term bit for
-  // bit; false runs every pixel's taps (Stats::expensive_path_fraction: the share of the pixels that
-  // ran them).
+  // A sun with a size (PCSS): skip the blocker search and the filter where the map's 8x8-texel blocks
+  // show every tap of a pixel would agree (its surface lies on a plane the blocks fit and nothing
+  // nearer the light lies within its search radius, or it lies wholly behind the map's surface
+  // there). The same term bit for bit; false runs every pixel's taps (Stats::expensive_path_fraction:
+  // the share of the pixels that ran them). Spot and point lights' maps are not masked (their search
+  // spans more blocks than a pixel reads).
   bool masking = true;
 };
 
