@@ -138,11 +138,14 @@ uint32_t work_flags(const IzbState& s, const Frame& frame, const IzbSettings& se
   if (plan.sorted) flags |= gpu_shared::IZB_FLAG_SORTED_LISTS;
   if (plan.run_csm) flags |= gpu_shared::IZB_FLAG_CSM;
   // At 32 spp also unasked: a pixel's 32 samples are often all shadowed long before its last node is
-  // tested (Sponza v1 4K: the trace 0.49 -> 0.44 ms on an H100). The hybrid's penumbrae then take the
-  // nearest occluder among those tested before: any occluder's height serves their estimate.
+  // tested (Sponza v1 4K: the trace 0.49 -> 0.44 ms on an H100). Not where the hybrid keeps occluder
+  // heights: a pixel would keep the nearest occluder among those tested before it was covered, which
+  // depends on the order the trace tests them in, so the penumbrae around it would differ between
+  // the raster and compute traces and with known-lit culling on or off (lavapipe, atrium v0, 256²,
+  // hybrid+csm at 32 spp: 7 pixels).
   plan.penumbra = hybrid && !plan.spot && frame.view.light_tan_half_angle > 0.0f;
   const bool gaps = plan.penumbra;
-  if (settings.progressive_removal || s.res.samples == 32) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
+  if (settings.progressive_removal || (s.res.samples == 32 && !gaps)) flags |= gpu_shared::IZB_FLAG_PROGRESSIVE;
   if (plan.lit) flags |= gpu_shared::IZB_FLAG_LIT;
   if (std::any_of(frame.draws.begin(), frame.draws.end(),
                   [](const DrawItem& d) { return d.shadow.casts_shadow && d.alpha_tested(); }))

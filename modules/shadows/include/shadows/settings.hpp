@@ -138,8 +138,10 @@ struct IzbSettings {
   // the trace's pair walks 0.27 -> 0.21 ms, the whole IZB 1.25 -> 1.16, tests/bench/BENCHMARKS.md).
   // Ignored at 1 spp and by the raster trace.
   bool anchored_nodes = true;
-  bool progressive_removal = false;   // skip nodes whose pixel is already fully shadowed (at 32 spp also
-                                      // when false, unless the hybrid blends by occluder distance)
+  // Skip nodes whose pixel is already fully shadowed. At 32 spp also when false, except where the
+  // hybrid keeps occluder heights for its penumbrae (with a light size): true there leaves a pixel the
+  // nearest occluder among those tested before it was covered, which depends on the trace's order.
+  bool progressive_removal = false;
   float node_pool_factor = 1.25f;     // pool size = factor * pixels * (1 or expected texels per μQuad)
   uint32_t node_pool_override = 0;    // nonzero: fixed pool size in nodes (tests of overflow)
   // Validation path: no lists at all; every candidate is tested against every caster triangle by the
