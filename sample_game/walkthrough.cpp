@@ -333,6 +333,7 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
     int masking = int(s.cascades.masking);
     if (ImGui::Combo("masking", &masking, maskings, IM_ARRAYSIZE(maskings))) s.cascades.masking = shadows::Masking(masking);
     ImGui::Checkbox("selective blur", &s.cascades.blur);
+    ImGui::Checkbox("sm masking (the same term)", &s.shadow_map.masking);
     const char* debug_views[] = {"none", "visibility mask", "IZB list length", "cascades", "CSM coverage", "expensive path"};
     int debug = int(s.debug);
     if (ImGui::Combo("overlay", &debug, debug_views, IM_ARRAYSIZE(debug_views))) s.debug = shadows::DebugView(debug);
@@ -464,6 +465,7 @@ std::string save_settings(const std::string& path, shadows::ShadowModule& module
   j["csm_backend"] = shadows::backend_name(s.izb.csm_backend);
   j["masking"] = shadows::masking_name(s.cascades.masking);
   j["blur"] = s.cascades.blur;
+  j["sm_masking"] = s.shadow_map.masking;
   j["debug"] = int(s.debug);
   j["izb_resolution"] = s.izb.resolution;
   j["hybrid_izb_distance"] = s.hybrid_izb_distance;
@@ -523,6 +525,7 @@ std::string load_settings(const std::string& path, shadows::ShadowModule& module
         if (!m) return bad("unknown masking");
         s.cascades.masking = *m;
       } else if (k == "blur") s.cascades.blur = v.get<bool>();
+      else if (k == "sm_masking") s.shadow_map.masking = v.get<bool>();
       else if (k == "debug") {
         const int d = v.get<int>();
         if (d < 0 || d > 5) return bad("must be 0..5");
