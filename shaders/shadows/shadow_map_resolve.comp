@@ -103,20 +103,16 @@ float soft_visibility(ivec2 pixel, vec3 p, vec3 n, vec2 uv, float z, float hard)
   return soft >= 0.0 ? soft : hard;
 }
 
-// One tap, no filtering: the baseline whose aliasing the other techniques remove (a light with a size
-// widens it to the PCSS penumbra where that is at least half a texel, soft_visibility). A spot light's map
-// is a perspective one from the light (a point light's, one per cube-face cone); points it does not
-// reach or that turn away from it are 0; a point that does not receive shadows (its receiver flag) and
-// faces the light is 1, as in every technique.
 const uint kListGroup = 64u;  // the listed pass's pixels a workgroup
 const uint kListHeader = 4u;  // tap_list's words before its entries
+const uint kListRow = 65535u;  // workgroups a row: the portable limit of a dispatch's dimension
 
-// SM_STAGE_LIST_DISPATCH: the listed pass's workgroups, in rows of at most 65535.
+// SM_STAGE_LIST_DISPATCH: the listed pass's workgroups, in rows of kListRow.
 void size_list_dispatch() {
   if (gl_LocalInvocationIndex != 0u) return;
   uint groups = (tap_list[0] + kListGroup - 1u) / kListGroup;
-  tap_list[1] = min(groups, 65535u);
-  tap_list[2] = (groups + 65534u) / 65535u;
+  tap_list[1] = min(groups, kListRow);
+  tap_list[2] = (groups + kListRow - 1u) / kListRow;
   tap_list[3] = 1u;
 }
 
@@ -133,6 +129,11 @@ bool stage_pixel(out ivec2 pixel) {
   return true;
 }
 
+// One tap, no filtering: the baseline whose aliasing the other techniques remove (a light with a size
+// widens it to the PCSS penumbra where that is at least half a texel, soft_visibility). A spot light's map
+// is a perspective one from the light (a point light's, one per cube-face cone); points it does not
+// reach or that turn away from it are 0; a point that does not receive shadows (its receiver flag) and
+// faces the light is 1, as in every technique.
 void main() {
   if (kStage == SM_STAGE_LIST_DISPATCH) {
     size_list_dispatch();

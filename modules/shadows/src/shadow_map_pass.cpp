@@ -46,6 +46,11 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
   counters_ = Buffer(ctx, gpu_shared::SM_COUNTER_WORDS * 4,
                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                      false, "sm counters");
+  // Placeholders that keep the resolve's bindings valid until a frame needs the real ones.
+  blocks_ = Buffer(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
+  tap_list_ = Buffer(ctx, 16,
+                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                     false, "sm tap list");
 }
 
 const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
@@ -72,8 +77,7 @@ void ShadowMapPass::record_blocks(Frame& frame, uint32_t size) {
   VkCommandBuffer cmd = frame.cmd;
   const uint32_t blocks = (size + gpu_shared::kSmBlock - 1) / gpu_shared::kSmBlock;
   const VkDeviceSize bytes = VkDeviceSize(blocks) * blocks * 16;
-  if (!blocks_.valid() || blocks_.size() < bytes)
-    blocks_ = Buffer(ctx_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
+  if (blocks_.size() < bytes) blocks_ = Buffer(ctx_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
   if (!blocks_pipeline_.valid())
     blocks_pipeline_ = PipelineFactory(ctx_).compute(
         {"shadow_map_blocks.comp",
@@ -143,11 +147,8 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
   const bool masking = sized && settings.masking && !frame.view.local_light;
   if (masking) record_blocks(frame, settings.size);
   const bool split = masking && cpu_paths_;
-  const uint32_t pixels = frame.view.extent.width * frame.view.extent.height;
-  if (!blocks_.valid())  // bound though unread
-    blocks_ = Buffer(ctx_, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
-  const VkDeviceSize list_bytes = split ? (VkDeviceSize(pixels) + 4) * 4 : 16;
-  if (!tap_list_.valid() || tap_list_.size() < list_bytes)
+  const VkDeviceSize list_bytes = (VkDeviceSize(frame.view.extent.width) * frame.view.extent.height + 4) * 4;
+  if (split && tap_list_.size() < list_bytes)
     tap_list_ = Buffer(ctx_, list_bytes,
                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                        false, "sm tap list");
