@@ -329,7 +329,7 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
     int csm_backend = int(s.izb.csm_backend);
     if (ImGui::Combo("CSM pass", &csm_backend, backends, IM_ARRAYSIZE(backends)))
       s.izb.csm_backend = shadows::PassBackend(csm_backend);
-    const char* maskings[] = {"off", "edge", "depth extent", "auto"};
+    const char* maskings[] = {"off", "edge", "depth extent", "auto", "planes"};  // shadows::Masking's order
     int masking = int(s.cascades.masking);
     if (ImGui::Combo("masking", &masking, maskings, IM_ARRAYSIZE(maskings))) s.cascades.masking = shadows::Masking(masking);
     ImGui::Checkbox("selective blur", &s.cascades.blur);

@@ -1,11 +1,13 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "cascades.h"
+#include "shadows.h"
 layout(local_size_x = 8, local_size_y = 8) in;
 
-// Two pipelines: kNeighbourhoods 0 builds each mask texel from the depth map; 1 then combines each
+// Three pipelines: kNeighbourhoods 0 builds each mask texel from the depth map; 1 then combines each
 // texel with its right, lower and lower-right neighbours, so the filter reads one entry whatever the
-// (at most 2x2) mask texels its kernel covers.
+// (at most 2x2) mask texels its kernel covers. 2 (CASCADE_MASKING_PLANES, whose mask level is that of
+// kSmBlock² texels) builds each block's plane (depth_blocks.glsl) into the neighbourhoods' buffer.
 layout(constant_id = 0) const uint kNeighbourhoods = 0u;
 
 layout(push_constant) uniform Push { CascadeMaskPush push; };
@@ -17,6 +19,12 @@ layout(set = 0, binding = CASCADE_MASK_BINDING_MASKS) buffer Masks { uvec2 masks
 // Four entries per mask texel, for the texels lo..hi with hi - lo = (k & 1, k >> 1): x whether any is
 // an edge, y the union of their depth extents.
 layout(set = 0, binding = CASCADE_MASK_BINDING_NEIGHBOURHOODS) writeonly buffer Neighbourhoods { uvec2 neighbourhoods[]; };
+// The same buffer a block's plane an entry (kNeighbourhoods 2).
+layout(set = 0, binding = CASCADE_MASK_BINDING_NEIGHBOURHOODS) writeonly buffer Planes { vec4 planes[]; };
+
+float depth_block_texel(ivec2 texel) { return texelFetch(depth_map, ivec3(texel, int(push.cascade)), 0).r; }
+#define DEPTH_BLOCKS_FIT
+#include "depth_blocks.glsl"
 
 // One cascade's masks at the only level the filter reads (mask_level), straight from the depth map.
 // A map texel is an edge when any 3x3 neighbour's depth differs by more than a slope of two texels
@@ -57,6 +65,10 @@ void main() {
   ivec4 rect = params.mask_rect[c];
   ivec2 id = rect.xy + ivec2(gl_GlobalInvocationID.xy);
   if (id.x > rect.z || id.y > rect.w) return;
+  if (kNeighbourhoods == 2u) {
+    planes[mask_index(c, id)] = fit_depth_block(id, ivec2(params.extent.z));
+    return;
+  }
   if (kNeighbourhoods != 0u) {
     build_neighbourhood(c, id);
     return;

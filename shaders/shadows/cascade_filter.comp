@@ -3,6 +3,7 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #include "cascades.h"
+#include "shadows.h"
 #include "shadow_common.h"
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -30,6 +31,9 @@ layout(set = 0, binding = CASCADE_FILTER_BINDING_DEPTH) uniform sampler2DArray d
 // Per mask texel, four entries for the texels lo..hi with hi - lo = (k & 1, k >> 1): x whether any
 // is an edge, y the union of their packed depth extents (see cascade_edges.comp).
 layout(set = 0, binding = CASCADE_FILTER_BINDING_NEIGHBOURHOODS) readonly buffer Neighbourhoods { uvec2 neighbourhoods[]; };
+// CASCADE_MASKING_PLANES: the same buffer a kSmBlock² block's plane an entry (cascade_edges.comp), over
+// each cascade's mask_rect at the blocks' level, rows of its width from mask_offset.
+layout(set = 0, binding = CASCADE_FILTER_BINDING_NEIGHBOURHOODS) readonly buffer Planes { vec4 planes[]; };
 layout(set = 0, binding = CASCADE_FILTER_BINDING_ROTATION) uniform sampler2D rotation;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
 layout(set = 0, binding = CASCADE_FILTER_BINDING_RECEIVERS, rgba8) readonly uniform image2D receivers;
@@ -56,6 +60,15 @@ PcssMap pcss_map(int c) {
   m.near_far = vec2(0.0);
   return m;
 }
+
+// A block outside the cascade's rectangle was not built: an infinite distance settles nothing.
+vec4 depth_block(int c, ivec2 block) {
+  ivec4 rect = params.mask_rect[c];
+  if (any(lessThan(block, rect.xy)) || any(greaterThan(block, rect.zw))) return vec4(0.0, 0.0, 0.0, 3.0e38);
+  return planes[params.mask_offset[c] + uint((block.y - rect.y) * (rect.z - rect.x + 1) + (block.x - rect.x))];
+}
+#define DEPTH_BLOCKS_SETTLE
+#include "depth_blocks.glsl"
 
 // A receiver's position in cascade c's map.
 struct Probe {
@@ -127,6 +140,12 @@ Probe probe(int c, vec3 p, vec3 n) {
   // PCSS's taps lie within its search radius (its filter's radius, the reach of the average blocker,
   // is never wider): the mask test over that footprint keeps skipping exact.
   pr.reach = kPcss ? max(pr.r, pcss_search_radius(pcss_map(c), pr.z, params.pcss.y) / params.texel_world[c]) : pr.r;
+  if (kMasking == CASCADE_MASKING_PLANES) {
+    // Every tap (the kernel's, or PCSS's searches and filter) within the reach settled alike: the one
+    // tap at the receiver's texel, which is among them, is the filtered term, bit for bit.
+    pr.expensive = depth_blocks_settled(c, pr.t, pr.z, pr.gradient, pr.bias, vec2(pr.reach), int(size)) < 0 || grazing;
+    return pr;
+  }
   float spread = (abs(pr.gradient.x) + abs(pr.gradient.y)) * (pr.reach + 1.0);
   pr.expensive = needs_kernel(c, pr.t, pr.reach, pr.z - spread, pr.z + spread) || grazing;
   return pr;

@@ -37,38 +37,18 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_LIST, std430) buffer TapList { uint
 float pcss_map_depth(int layer, ivec2 texel) { return texelFetch(shadow_map, texel, 0).r; }
 #include "pcss.glsl"
 
+vec4 depth_block(int layer, ivec2 block) {
+  int blocks_x = (int(params.extent.z) + int(kSmBlock) - 1) / int(kSmBlock);
+  return blocks[block.y * blocks_x + block.x];
+}
+#define DEPTH_BLOCKS_SETTLE
+#include "depth_blocks.glsl"
+
 // Whether the depth map's blocks (shadow_map_blocks.comp) settle every tap PCSS could make for `r`
 // (those within `search` map units, which hold the blocker search's and the filter's: neither
-// radius exceeds it): 1 every tap lit, 0 every tap shadowed, -1 not settled (or too wide a footprint,
-// or one reaching past the map's edge, where the taps' texels are clamped). A tap at texel T compares
-// z(T) = r.z + dot(g, T + 0.5 - r.t) with depth(T) + bias; over a block, depth(T) lies within its
-// distance of the block's plane, and z(T) minus that plane is linear in T, so its extremes over the
-// block's tap texels lie at their rectangle's corners. kSettleMargin covers the two evaluations'
-// rounding (depths in [0, 1]).
-const float kSettleMargin = 1.0e-5;
-const int kMaxSettleBlocks = 4;  // a side
+// radius exceeds it): 1 every tap lit, 0 every tap shadowed, -1 not settled.
 int pcss_settled(PcssMap m, PcssReceiver r, float search) {
-  vec2 reach = search / m.texel;
-  ivec2 lo = ivec2(floor(r.t - reach)), hi = ivec2(floor(r.t + reach));
-  if (any(lessThan(lo, ivec2(0))) || any(greaterThanEqual(hi, ivec2(m.size)))) return -1;
-  int block = int(kSmBlock);
-  ivec2 first = lo / block, last = hi / block;
-  if (any(greaterThanEqual(last - first, ivec2(kMaxSettleBlocks)))) return -1;
-  int blocks_x = (m.size + block - 1) / block;
-  bool lit = true, shadowed = true;
-  for (int by = first.y; by <= last.y; ++by)
-    for (int bx = first.x; bx <= last.x; ++bx) {
-      vec4 plane = blocks[by * blocks_x + bx];
-      ivec2 origin = ivec2(bx, by) * block;
-      vec2 centre = vec2(origin) + 0.5 * float(block - 1);
-      float at_centre = r.z + dot(r.gradient, centre + 0.5 - r.t) - plane.x;
-      vec2 slope = r.gradient - plane.yz;
-      vec2 near = vec2(max(lo, origin)) - centre, far = vec2(min(hi, origin + block - 1)) - centre;
-      vec2 highest = max(slope * near, slope * far), lowest = min(slope * near, slope * far);
-      lit = lit && at_centre + highest.x + highest.y + plane.w + kSettleMargin <= r.bias;
-      shadowed = shadowed && at_centre + lowest.x + lowest.y - plane.w - kSettleMargin > r.bias;
-    }
-  return lit ? 1 : shadowed ? 0 : -1;
+  return depth_blocks_settled(0, r.t, r.z, r.gradient, r.bias, search / m.texel, m.size);
 }
 
 bool sized = false, taps_ran = false;  // for the counts

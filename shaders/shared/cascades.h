@@ -28,6 +28,7 @@ const vec2 kPoissonDisk[12] = vec2[12](
 SHARED_CONST uint CASCADE_MASKING_OFF = 0u;
 SHARED_CONST uint CASCADE_MASKING_EDGE = 1u;
 SHARED_CONST uint CASCADE_MASKING_DEPTH_EXTENT = 2u;
+SHARED_CONST uint CASCADE_MASKING_PLANES = 3u;  // depth blocks' planes (depth_blocks.glsl): settles exactly, a mask level of kSmBlock texels
 
 // Debug overlays (CascadeParams::mode.z).
 SHARED_CONST uint CASCADE_DEBUG_NONE = 0u;

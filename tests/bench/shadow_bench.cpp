@@ -79,7 +79,7 @@ struct Options {
 
 const char* kUsage =
     "usage: shadow_bench [--scene NAME|FILE.gltf] [--view N] [--size WxH] [--izb N] [--cascade-size N] [--mode LIST]\n"
-    "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent|auto]\n"
+    "                    [--spp 1|32] [--csm-test LIST] [--masking off|edge|depth-extent|planes|auto]\n"
     "                    [--csm-choice on|off|auto] [--raster auto|hardware|software] [--node-pool N]\n"
     "                    [--trace LIST] [--csm-backend LIST] [--lists linked|sorted] [--lit-culling LIST]\n"
     "                    [--anchored-nodes on|off] [--csm-timed] [--step-times] [--frames N] [--warmup N] [--reference] [--faceted-terminator] [--device gpu|lavapipe|INDEX]\n"
@@ -303,7 +303,7 @@ std::vector<RunConfig> expand_runs(const Options& o) {
     }
     if (!o.masking.empty()) {
       auto m = shadows::parse_masking(o.masking);
-      if (!m) throw std::runtime_error("--masking '" + o.masking + "': expected off, edge, depth-extent or auto");
+      if (!m) throw std::runtime_error("--masking '" + o.masking + "': expected off, edge, depth-extent, planes or auto");
       base.cascades.masking = *m;
       base.shadow_map.masking = *m != shadows::Masking::Off;  // sm has one kind of masking: on or off
     }

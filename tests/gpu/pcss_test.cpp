@@ -225,7 +225,8 @@ TEST_F(PcssTest, TinyLightGivesTheHardTermBitForBit) {
     for (const Case& k : {Case{"sm", shadows::Technique::ShadowMap, shadows::Masking::Auto},
                           Case{"cascades off", shadows::Technique::Cascades, shadows::Masking::Off},
                           Case{"cascades edge", shadows::Technique::Cascades, shadows::Masking::Edge},
-                          Case{"cascades depth-extent", shadows::Technique::Cascades, shadows::Masking::DepthExtent}}) {
+                          Case{"cascades depth-extent", shadows::Technique::Cascades, shadows::Masking::DepthExtent},
+                          Case{"cascades planes", shadows::Technique::Cascades, shadows::Masking::Planes}}) {
       SCOPED_TRACE(scene + ", " + k.name);
       shadows::Settings settings;
       settings.technique = k.technique;
@@ -265,10 +266,11 @@ TEST_F(PcssTest, MaskingStaysExactWithWidePenumbrae) {
     settings.technique = shadows::Technique::Cascades;
     settings.cascades.map_size = 512;
     setup(scene, 0, settings, scene == "contact" ? 8.0f : 2.0f, 192);
-    const shadows::Masking modes[3] = {shadows::Masking::Off, shadows::Masking::Edge, shadows::Masking::DepthExtent};
-    std::vector<float> term[3];
-    double fraction[3] = {};
-    for (int m = 0; m < 3; ++m) {
+    const shadows::Masking modes[4] = {shadows::Masking::Off, shadows::Masking::Edge, shadows::Masking::DepthExtent,
+                                       shadows::Masking::Planes};
+    std::vector<float> term[4];
+    double fraction[4] = {};
+    for (int m = 0; m < 4; ++m) {
       module_->settings().cascades.masking = modes[m];
       term[m] = render().term;
       fraction[m] = module_->stats().expensive_path_fraction;
@@ -288,6 +290,12 @@ TEST_F(PcssTest, MaskingStaysExactWithWidePenumbrae) {
     EXPECT_EQ(flips, 0u);
     EXPECT_LT(fraction[1], fraction[0]);
     EXPECT_LT(fraction[2], fraction[0]);
+    // The plane blocks: every tap of PCSS's searches and filter settled, the unmasked term bit for bit.
+    size_t planes_diff = 0;
+    for (size_t i = 0; i < term[0].size(); ++i) planes_diff += std::memcmp(&term[0][i], &term[3][i], sizeof(float)) != 0;
+    std::printf("[pcss] %s masking: planes expensive %.4f, planes!=off %zu\n", scene_->name.c_str(), fraction[3], planes_diff);
+    EXPECT_EQ(planes_diff, 0u);
+    EXPECT_LT(fraction[3], fraction[0]);
     renderer_.reset();
     module_.reset();
   }

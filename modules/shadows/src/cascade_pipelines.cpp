@@ -1,5 +1,7 @@
 #include "cascade_pipelines.hpp"
 
+#include <type_traits>
+
 #include "light_space.hpp"
 #include "shared/cascades.h"
 
@@ -26,7 +28,7 @@ CascadePipelines::CascadePipelines(Context& ctx) : ctx_(ctx) {
     depth[cull] = factory.graphics(d);
     if (!cull) alpha_depth = alpha_depth_pipeline(ctx, d);
   }
-  for (uint32_t neighbourhoods = 0; neighbourhoods < 2; ++neighbourhoods)
+  for (uint32_t neighbourhoods = 0; neighbourhoods < 3; ++neighbourhoods)
     edges[neighbourhoods] =
         factory.compute({"cascade_edges.comp",
                          {{gs::CASCADE_MASK_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
@@ -50,6 +52,7 @@ CascadePipelines::CascadePipelines(Context& ctx) : ctx_(ctx) {
 }
 
 const Pipeline& CascadePipelines::filter(uint32_t stage, uint32_t masking, uint32_t debug, uint32_t pcss) {
+  static_assert(std::extent_v<decltype(filters_), 1> == gs::CASCADE_MASKING_PLANES + 1, "a pipeline per masking mode");
   Pipeline& pipeline = filters_[stage][masking][debug][pcss];
   if (pipeline.valid()) return pipeline;
   PipelineFactory factory(ctx_);

@@ -17,13 +17,13 @@ class CascadePipelines {
 
   engine::gpu::Pipeline depth[2];  // [cull_front_faces]
   engine::gpu::Pipeline alpha_depth;  // alpha-tested casters, either culling setting
-  engine::gpu::Pipeline edges[2];  // [neighbourhoods]
+  engine::gpu::Pipeline edges[3];  // masks, their neighbourhoods; the planes (cascade_edges.comp)
   engine::gpu::Pipeline args;
   engine::gpu::Pipeline blur[2];  // [apply]
 
  private:
   engine::gpu::Context& ctx_;
-  engine::gpu::Pipeline filters_[4][3][3][2];  // [stage][masking][debug][pcss]
+  engine::gpu::Pipeline filters_[4][4][3][2];  // [stage][masking: CASCADE_MASKING_*][debug][pcss]
 };
 
 }  // namespace shadows::detail

@@ -59,6 +59,9 @@ namespace {
 
 // A neighbour step steeper than this many texels of depth per texel counts as an edge.
 constexpr float kEdgeSlopeTexels = 2.0f;
+// Masking::Planes: the mask level whose texels are the depth blocks' (kSmBlock texels a side).
+constexpr uint32_t kPlanesLevel = 3;
+static_assert((1u << kPlanesLevel) == gs::kSmBlock);
 
 uint32_t mip_count(uint32_t size) {
   uint32_t levels = 1;
@@ -228,11 +231,13 @@ struct CascadesPass::Impl {
       p.normal_offset[c] = s.normal_offset * texel;
       p.edge_threshold[c] = kEdgeSlopeTexels * texel / range;
       // Smallest level whose texels are at least as wide as the kernel: its footprint then spans at
-      // most 2x2 texels there.
+      // most 2x2 texels there. Capped so the mask pass's row buffer stays small; a wider kernel then
+      // just visits more texels. The planes' level is their blocks'.
       const float width = std::max(2.0f * kernel, 1.0f);
-      // Capped so the mask pass's row buffer stays small; a wider kernel then just visits more texels.
-      const uint32_t level = std::min({uint32_t(std::ceil(std::log2(width) - 1e-4f)), top_level,
-                                       uint32_t(gs::CASCADE_MASK_MAX_LEVEL)});
+      const uint32_t level =
+          s.masking == Masking::Planes ? kPlanesLevel
+                                       : std::min({uint32_t(std::ceil(std::log2(width) - 1e-4f)), top_level,
+                                                   uint32_t(gs::CASCADE_MASK_MAX_LEVEL)});
       p.mask_level[c] = int(level);
       p.mask_rect[c] = c < fit.count ? mask_rect(frame, c, level, kernel) : glm::ivec4(0, 0, -1, -1);
       p.mask_offset[c] = mask_texels;
@@ -250,6 +255,7 @@ struct CascadesPass::Impl {
     uint32_t masking = gs::CASCADE_MASKING_OFF;
     if (s.masking == Masking::Edge) masking = gs::CASCADE_MASKING_EDGE;
     if (s.masking == Masking::DepthExtent) masking = gs::CASCADE_MASKING_DEPTH_EXTENT;
+    if (s.masking == Masking::Planes) masking = gs::CASCADE_MASKING_PLANES;
     uint32_t view = gs::CASCADE_DEBUG_NONE;
     if (debug == DebugView::Cascades) view = gs::CASCADE_DEBUG_CASCADES;
     if (debug == DebugView::ExpensivePath) view = gs::CASCADE_DEBUG_EXPENSIVE;
@@ -334,12 +340,14 @@ void CascadesPass::Impl::record_masks(Frame& frame, const CascadeSettings& s,
                                       const std::array<glm::ivec4, kMaxCascadeCount>& rects) {
   VkCommandBuffer cmd = frame.cmd;
   const bool extent = s.masking == Masking::DepthExtent;
+  const bool planes = s.masking == Masking::Planes;  // one step: each block's plane
   ScopedGpuRegion region(ctx, frame.profiler, cmd, "cascade_masks");
-  for (uint32_t combined = 0; combined < 2; ++combined) {
+  for (uint32_t combined = 0; combined < (planes ? 1u : 2u); ++combined) {
+    // The masks' stores before the neighbourhoods' loads.
     if (combined)
       memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
-    const Pipeline& pipeline = pipelines.edges[combined];
+    const Pipeline& pipeline = pipelines.edges[planes ? 2u : combined];
     pipeline.bind(cmd);
     for (uint32_t c = 0; c < fit.count; ++c) {
       const glm::ivec4 rect = rects[c];

@@ -63,6 +63,7 @@ std::optional<Masking> parse_masking(const std::string& name) {
   if (name == "edge") return Masking::Edge;
   if (name == "depth-extent") return Masking::DepthExtent;
   if (name == "auto") return Masking::Auto;
+  if (name == "planes") return Masking::Planes;
   return std::nullopt;
 }
 
@@ -72,6 +73,7 @@ std::string masking_name(Masking masking) {
     case Masking::Edge: return "edge";
     case Masking::DepthExtent: return "depth-extent";
     case Masking::Auto: return "auto";
+    case Masking::Planes: return "planes";
   }
   return "?";
 }

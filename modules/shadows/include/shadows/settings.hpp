@@ -28,12 +28,20 @@ enum class CsmTest {
   InnerHw,        // conservative rasterization underestimation (fully covered fragments only)
 };
 
+// Where the cascades' filter (12 taps, or PCSS's) is skipped for one tap. Edge: no depth step near
+// the kernel's footprint in the map (an edge mask per texel at the kernel's level, then its 2x2
+// neighbourhoods); DepthExtent: also where the receiver's depth clears the footprint's depth range.
+// Planes: each 8x8 block of the map kept as its least-squares plane and largest distance from it; a
+// pixel is skipped where its tangent plane clears every block its taps reach, so every tap has the
+// one tap's result: the unmasked term bit for bit, where Edge may differ from it by a few taps on a
+// few pixels. With a sun of some size the tests cover the PCSS blocker search's footprint (which
+// holds every PCSS tap), so a pixel with a wide penumbra is never skipped wrongly; wide searches just
+// skip less.
 // Auto: Edge where the cascades filter the whole frame; Off in the hybrid, where they filter only the
 // pixels the IZB leaves them, and building masks over the whole view costs more than the taps they
-// would skip (measured on lavapipe and the H200). With a sun of some size the masks are tested over
-// the PCSS blocker search's footprint (which holds every PCSS tap), so a pixel with a wide penumbra
-// is never skipped wrongly; wide searches just skip less.
-enum class Masking { Off, Edge, DepthExtent, Auto };
+// would skip (measured on lavapipe and the H200). (Planes settles more pixels than Edge but its test
+// costs a CPU device's filter more than the taps it spares: BENCHMARKS, "Shadow maps and cascades".)
+enum class Masking { Off, Edge, DepthExtent, Auto, Planes };
 
 enum class DebugView { None, VisibilityMask, ListLength, Cascades, CsmCoverage, ExpensivePath };
 
