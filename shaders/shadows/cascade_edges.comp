@@ -36,10 +36,7 @@ float depth_block_texel(ivec2 texel) { return texelFetch(depth_map, ivec3(texel,
 // adjacent texels, so the result equals the per-texel 3x3 definition exactly.
 const int kMaxRow = (2 << CASCADE_MASK_MAX_LEVEL) + 2;
 
-uint mask_index(int c, ivec2 id) {
-  ivec4 rect = params.mask_rect[c];
-  return params.mask_offset[c] + uint((id.y - rect.y) * (rect.z - rect.x + 1) + (id.x - rect.x));
-}
+uint mask_index(int c, ivec2 id) { return cascade_mask_entry(params.mask_rect[c], params.mask_offset[c], id); }
 
 uvec2 combine(uvec2 a, uvec2 b) {
   return uvec2(a.x | b.x, (min(a.y >> 16u, b.y >> 16u) << 16u) | max(a.y & 0xffffu, b.y & 0xffffu));

@@ -65,7 +65,7 @@ PcssMap pcss_map(int c) {
 vec4 depth_block(int c, ivec2 block) {
   ivec4 rect = params.mask_rect[c];
   if (any(lessThan(block, rect.xy)) || any(greaterThan(block, rect.zw))) return vec4(0.0, 0.0, 0.0, 3.0e38);
-  return planes[params.mask_offset[c] + uint((block.y - rect.y) * (rect.z - rect.x + 1) + (block.x - rect.x))];
+  return planes[cascade_mask_entry(rect, params.mask_offset[c], block)];
 }
 #define DEPTH_BLOCKS_SETTLE
 #include "depth_blocks.glsl"
@@ -101,7 +101,7 @@ bool needs_kernel(int c, vec2 t, float r, float z_lo, float z_hi) {
   // The (at most) 2x2 texels lo..hi: one entry of lo's neighbourhood. (Clamped into the rectangle so
   // that the read stays inside the buffer where the result is not used.)
   ivec2 at = max(min(lo, rect.zw), rect.xy);
-  uint texel = params.mask_offset[c] + uint(max((at.y - rect.y) * (rect.z - rect.x + 1) + (at.x - rect.x), 0));
+  uint texel = cascade_mask_entry(rect, params.mask_offset[c], at);
   uint k = uint(hi.x > lo.x) + 2u * uint(hi.y > lo.y);
   uvec2 m = neighbourhoods[texel * 4u + k];
   bool edge = m.x != 0u;
