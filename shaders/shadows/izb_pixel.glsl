@@ -243,7 +243,7 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
     // they need no blend. (Unlimited range: reach is huge and the fade 0.)
     float reach = izb_reach();
     float dist = distance(position, params.camera_position.xyz);
-    float fade = beyond ? 1.0 : clamp((dist - 0.9 * reach) / (0.1 * reach), 0.0, 1.0);
+    float fade = beyond ? 1.0 : clamp((dist - kIzbHybridFadeStart * reach) / (kIzbHybridFadeWidth * reach), 0.0, 1.0);
     bool listed = covered && facing && fade > 0.0;
     // One atomic per subgroup; the dispatch over the list grows with it. A CPU device: an atomic per
     // lane, and the dispatch after the resolve (izb_list_dispatch.comp).

@@ -301,6 +301,10 @@ SHARED_INLINE uint izb_pixel_tiles(uint width, uint height) { return izb_pixel_t
 SHARED_INLINE uint izb_face_tile_words(uint width, uint height) { return kIzbFaceTilesAt + 6u * izb_pixel_tiles(width, height); }
 SHARED_CONST uint kIzbScanBlock = 1024u;  // texels per block of the prefix sum (256 threads x 4)
 SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per workgroup (64 threads x 4)
+// With a limited range the hybrid fades from the IZB's term to the cascades' over the range's last
+// tenth: the pixels from kIzbHybridFadeStart of it on are listed for the cascades.
+SHARED_CONST float kIzbHybridFadeStart = 0.9f;
+SHARED_CONST float kIzbHybridFadeWidth = 0.1f;
 
 // The hybrid's penumbra pass (izb_penumbra.comp) works in square tiles of kPenumbraTile pixels, a
 // workgroup each. A penumbra is filtered over at most kPenumbraMaxRadius pixels (wider ones are

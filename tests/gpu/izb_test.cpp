@@ -1078,6 +1078,42 @@ TEST_F(IzbTest, HybridFiltersOnlyThePixelsItBlends) {
   EXPECT_GT(soft_only.stats.expensive_path_pixels, 0u);
 }
 
+// With a limited range the hybrid hands the cascades only the pixels past 0.9 of it: the cascades
+// that end nearer the camera than any of those are not drawn, and the pixels past the range still get
+// the term the cascades alone give them.
+TEST_F(IzbTest, HybridDrawsOnlyTheCascadesItsPixelsRead) {
+  for (const std::string scene : {"atrium", "canopy"}) {
+    SCOPED_TRACE(scene);
+    shadows::Settings cascades_only;
+    cascades_only.technique = shadows::Technique::Cascades;
+    cascades_only.cascades.masking = shadows::Masking::Off;  // what Auto takes in the hybrid
+    cascades_only.cascades.blur = false;  // the hybrid's blur takes no neighbours from unlisted pixels
+    const auto soft = render(scene, 0, cascades_only, false);
+    const std::vector<float> splits = soft.stats.cascade_splits;
+    ASSERT_EQ(splits.size(), 5u);
+    EXPECT_EQ(soft.stats.cascades_drawn, 4u);
+    // A range whose fade band starts past the second split even at the frustum's corners (60 degrees
+    // vertically, a square image: their rays make 37.8 degrees with the axis).
+    const float range = 1.5f * splits[2] / 0.9f;
+    shadows::Settings hybrid = cascades_only;
+    hybrid.technique = shadows::Technique::Hybrid;
+    hybrid.izb.resolution = kSize;
+    hybrid.hybrid_izb_distance = range;
+    const auto mixed = render(scene, 0, hybrid, false);
+    EXPECT_LE(mixed.stats.cascades_drawn, 2u);
+    const auto positions = renderer_->read_world_positions();
+    const glm::vec3 eye = scene_->views[0].eye;
+    size_t beyond = 0, differing = 0;
+    for (size_t i = 0; i < positions.size(); ++i) {
+      if (positions[i].w == 0.0f || glm::distance(glm::vec3(positions[i]), eye) <= 1.001f * range) continue;
+      ++beyond;
+      differing += mixed.visibility[i] != soft.visibility[i] ? 1 : 0;
+    }
+    EXPECT_GT(beyond, 500u);
+    EXPECT_EQ(differing, 0u);
+  }
+}
+
 }  // namespace
 
 namespace {

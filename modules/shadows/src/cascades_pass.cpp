@@ -151,6 +151,7 @@ struct CascadesPass::Impl {
   CascadeFit fit;
   ReadbackRing readback;
   bool blur_enabled = false;
+  uint32_t drawn = 0;  // cascades whose maps the last record drew (Stats::cascades_drawn)
 
   void ensure_maps(VkCommandBuffer cmd, uint32_t size) {
     if (map_size == size) return;
@@ -453,6 +454,12 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, VkImage
   if (s.masking == Masking::Auto) s.masking = only ? Masking::Off : Masking::Edge;
   gs::CascadeParams p = m.make_params(frame, s, debug, &levels, &rects);
   if (only) p.mode.w = only->count_word;
+  // A pixel reads the cascade its view depth falls in and, in a blend band, the next one: those that
+  // end before the nearest listed pixel are read by none, and neither drawn nor masked.
+  for (uint32_t c = 0; only && c < m.fit.count; ++c)
+    if (m.fit.splits[c + 1] <= only->nearest_view_depth) rects[c] = glm::ivec4(0, 0, -1, -1);
+  m.drawn = 0;
+  for (uint32_t c = 0; c < m.fit.count; ++c) m.drawn += rects[c].z >= rects[c].x && rects[c].w >= rects[c].y ? 1u : 0u;
   record_update(m.ctx, cmd, m.params, &p, sizeof(p));
   m.ensure_masks(p, rects);
   m.blur_enabled = settings.blur;
@@ -480,6 +487,7 @@ void CascadesPass::after_frame(Stats& stats, uint32_t slot) {
   const uint64_t facing = c[gs::CASCADE_COUNTER_FACING];
   stats.expensive_path_fraction = facing ? double(stats.expensive_path_pixels) / double(facing) : 0.0;
   stats.cascade_splits.assign(m.fit.splits.begin(), m.fit.splits.begin() + m.fit.count + 1);
+  stats.cascades_drawn = m.drawn;
 }
 
 }  // namespace shadows::detail

@@ -11,6 +11,8 @@
 #include "context_impl.hpp"
 #include "embedded_shaders.hpp"
 #include "input_checks.hpp"
+#include "light_space.hpp"
+#include "shared/izb.h"
 
 namespace shadows {
 
@@ -938,7 +940,8 @@ void ContextImpl::record_technique(Frame& frame) {
       izb().record_hybrid_penumbra(frame, settings.izb.step_timings);
       if (near.max_distance <= 0.0f) break;
       pass_barrier(*gpu_, frame.cmd);
-      const PixelList listed = izb().hybrid_list();
+      PixelList listed = izb().hybrid_list();
+      listed.nearest_view_depth = detail::nearest_view_depth_at(frame.view, gpu_shared::kIzbHybridFadeStart * near.max_distance);
       cascades().record(frame, settings.cascades, izb().soft_term().view(), settings.debug, &listed);
       pass_barrier(*gpu_, frame.cmd);
       izb().record_hybrid_blend(frame);

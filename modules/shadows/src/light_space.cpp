@@ -41,6 +41,23 @@ glm::mat4 fit_orthographic(const glm::mat4& light_view, const Aabb& box, float m
   return glm::orthoRH_ZO(lo.x, hi.x, lo.y, hi.y, -hi.z, -lo.z);
 }
 
+float nearest_view_depth_at(const View& view, float distance) {
+  const glm::mat4& proj = view.projection;
+  if (proj[3][3] != 0.0f || proj[2][3] == 0.0f) return 0.0f;
+  // In view space the camera is at the origin looking down -Z: every corner ray starts there.
+  const glm::mat4 inverse_projection = glm::inverse(proj);
+  float cos_widest = 1.0f;
+  for (int i = 0; i < 4; ++i) {
+    const glm::vec4 h = inverse_projection * glm::vec4((i & 1) ? 1.0f : -1.0f, (i & 2) ? 1.0f : -1.0f, 0.5f, 1.0f);
+    const glm::vec3 ray = glm::vec3(h) / h.w;
+    const float len = glm::length(ray);
+    if (!(len > 0.0f) || !(-ray.z > 0.0f)) return 0.0f;
+    cos_widest = std::min(cos_widest, -ray.z / len);
+  }
+  // A thousandth less: the pixels' own distances and depths are rounded in float.
+  return std::max(distance * cos_widest * 0.999f, 0.0f);
+}
+
 Aabb caster_bounds(const Frame& frame) {
   Aabb bounds;
   for (const auto& d : frame.draws)

@@ -30,6 +30,11 @@ Aabb scene_bounds(const Frame& frame);
 // The eight corners of the camera frustum between view depths d0 and d1 (near quad first).
 void view_slice_corners(const View& view, float d0, float d1, glm::vec3 corners[8]);
 
+// A lower bound on the view depth (along the camera's forward axis) of any point the camera sees at
+// `distance` or farther from it: `distance` times the cosine of the widest angle a frustum corner
+// makes with that axis. 0 where the projection is not a perspective one.
+float nearest_view_depth_at(const View& view, float distance);
+
 // Which shadow-casting draws draw_casters issues.
 enum class CasterSet { All, Opaque, AlphaTested };
 

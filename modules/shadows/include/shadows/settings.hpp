@@ -264,6 +264,9 @@ struct Stats {
   uint64_t expensive_path_pixels = 0;
   uint64_t blurred_pixels = 0;
   std::vector<float> cascade_splits;
+  // Of those cascades, how many were drawn: the hybrid with a limited range draws none that ends
+  // before the nearest pixel it hands the cascades (hybrid_izb_distance).
+  uint32_t cascades_drawn = 0;
   // CSM caster choice, and whether the prepass ran this frame ("ran", "off", or "skipped: why")
   std::vector<CsmDecision> csm_decisions;
   std::string csm_status = "off";
