@@ -22,6 +22,9 @@ layout(constant_id = 3) const bool kCount = false;
 // (SM_STAGE_*): every pixel but the PCSS taps, listing the pixels the blocks do not settle; the
 // list's dispatch; the listed pixels' taps. A GPU resolves each pixel in one pass (SM_STAGE_WHOLE).
 layout(constant_id = 4) const uint kStage = SM_STAGE_WHOLE;
+// A spot light or one of a point light's faces (a perspective map) rather than the sun: a CPU device
+// would run the local light's reach and cone tests for every pixel under the sun too.
+layout(constant_id = 5) const bool kLocalLight = false;
 
 layout(set = 0, binding = SM_RESOLVE_BINDING_PARAMS) uniform Params { ShadowMapResolveParams params; };
 layout(set = 0, binding = SM_RESOLVE_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
@@ -62,7 +65,7 @@ float soft_visibility(ivec2 pixel, vec3 p, vec3 n, vec2 uv, float z, float hard)
   m.size = int(params.extent.z);
   m.texel = params.pcss_texel.xy;
   m.light_size = params.pcss.x;
-  m.perspective = params.pcss_texel.w > 0.0;
+  m.perspective = kLocalLight;
   m.depth_range = params.pcss.y;
   m.near_far = params.pcss.zw;
   PcssReceiver r;
@@ -124,14 +127,13 @@ void main() {
   vec4 p = imageLoad(world_position, pixel);
   if (p.w == 0.0) return;
   // One of a point light's cube-face cones: the points outside it belong to another face's map.
-  if (params.light_cone.z > 0.0 && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
+  if (kLocalLight && params.light_cone.z > 0.0 && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
                                        params.light_cone.x * length(p.xyz - params.light_position.xyz))
     return;
   vec4 normal = imageLoad(geometric_normal, pixel);
   vec3 n = normal.xyz;
   float visibility = 0.0;
-  bool spot = params.light_position.w > 0.0;
-  bool facing = spot ? local_light_reaches(params.light_position.xyz, params.light_position.w, params.light_direction.xyz,
+  bool facing = kLocalLight ? local_light_reaches(params.light_position.xyz, params.light_position.w, params.light_direction.xyz,
                                            params.light_cone.x, true, p.xyz) &&
                            faces_local_light(n, p.xyz, params.light_position.xyz)
                      : faces_light(normal);

@@ -69,7 +69,7 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
         {gpu_shared::SM_RESOLVE_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
         {gpu_shared::SM_RESOLVE_BINDING_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
        0,
-       {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage}}});
+       {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage}, {5, v.local ? 1u : 0u}}});
   return pipeline;
 }
 
@@ -152,7 +152,8 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     tap_list_ = Buffer(ctx_, list_bytes,
                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                        false, "sm tap list");
-  record_resolve(frame, {sized, filter_texels > 0.0f, masking, count && sized, gpu_shared::SM_STAGE_WHOLE}, split);
+  record_resolve(frame, {sized, filter_texels > 0.0f, masking, count && sized, gpu_shared::SM_STAGE_WHOLE, frame.view.local_light},
+                 split);
   // The counts are read on the host once this frame has completed.
   if (count && last_map)
     readback_.record_copy(frame, counters_, gpu_shared::SM_COUNTER_WORDS * 4, pass_shader_stages(ctx_),

@@ -32,7 +32,11 @@ class ShadowMapPass {
     bool masking = false;  // PCSS's masking (ShadowMapSettings::masking)
     bool count = false;    // the counts for Stats
     uint32_t stage = 0;    // SM_STAGE_*
-    uint32_t key() const { return uint32_t(pcss) | uint32_t(pcf) << 1 | uint32_t(masking) << 2 | uint32_t(count) << 3 | stage << 4; }
+    bool local = false;    // a spot light or a point light's face (a perspective map), not the sun
+    uint32_t key() const {
+      return uint32_t(pcss) | uint32_t(pcf) << 1 | uint32_t(masking) << 2 | uint32_t(count) << 3 | uint32_t(local) << 4 |
+             stage << 5;
+    }
   };
   const engine::gpu::Pipeline& resolve_pipeline(const ResolveVariant& variant);
   // The resolve's passes over the frame (a CPU device with masking: listing, then the listed taps).
