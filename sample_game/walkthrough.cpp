@@ -374,8 +374,11 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
       if (!st.csm_choice.backend.empty())
         ImGui::TextWrapped("CSM: %s (%s)", st.csm_choice.backend.c_str(), st.csm_choice.reason.c_str());
     }
-    if (s.technique == shadows::Technique::Cascades || s.technique == shadows::Technique::Hybrid)
+    if (s.technique == shadows::Technique::Cascades || s.technique == shadows::Technique::Hybrid) {
       ImGui::Text("expensive path %.1f%%", st.expensive_path_fraction * 100.0);
+      if (!st.cascade_splits.empty())
+        ImGui::Text("cascades drawn %u of %zu", st.cascades_drawn, st.cascade_splits.size() - 1);
+    }
     if (s.technique == shadows::Technique::RayTraced)
       ImGui::Text("rays %llu (%.2f per point), occluded %llu; %llu instances", (unsigned long long)st.rays_traced,
                   st.lit_candidates ? double(st.rays_traced) / double(st.lit_candidates) : 0.0,

@@ -73,6 +73,7 @@ struct Options {
   bool rigid = false;                // --rigid: skinned and morphing meshes drawn rigid in their rest pose
   std::optional<double> light_size;  // --light-size: the sun's angular diameter, degrees
   std::optional<double> light_radius;  // --light-radius: every spot and point light's radius, world units
+  double hybrid_izb_distance = 0.0;   // --hybrid-izb-distance: Settings::hybrid_izb_distance, metres
   uint32_t rt_rays = 0;              // --rt-rays: Settings::rt_light_samples
   uint32_t reference_rays = 256;     // --reference-rays: the area-light reference's rays a pixel
 };
@@ -87,7 +88,7 @@ const char* kUsage =
     "                    [--json FILE] [--diff DIR] [--screenshot DIR] [--dump DIR] [--instances N] [--detail full|low]\n"
     "                    [--light sun|spot|point] [--scale S] [--offset X,Y,Z] [--large-world] [--sun]\n"
     "                    [--time SECONDS] [--rigid] [--light-size DEGREES] [--light-radius R] [--rt-rays N]\n"
-    "                    [--reference-rays N]\n"
+    "                    [--reference-rays N] [--hybrid-izb-distance M]\n"
     "       shadow_bench --suite paper [--quick] [--out DIR] [--scene LIST] [--views LIST] [--instances LIST]\n"
     "                    [--spp LIST] [--sizes WxH:IZB,...] [--frames N] [--warmup N] [--device ...]\n"
     "  LIST is comma-separated; modes: off, sm, cascades, izb, izb+csm, hybrid, hybrid+csm, rt;\n"
@@ -118,6 +119,9 @@ const char* kUsage =
     "  against an area-light reference of --reference-rays N stratified rays a pixel (default 256; figures\n"
     "  worth quoting use 256 or more), computed once per view and size; the hard metrics stay against the\n"
     "  hard reference. The sun's default size (0.53) counts: --light-size 0 skips the area reference.\n"
+    "  --hybrid-izb-distance M: the hybrid's IZB covers the points within M metres of the camera and the\n"
+    "  cascades the rest, as the walkthrough on a CPU device (Settings::hybrid_izb_distance; 0, the\n"
+    "  default: every point).\n"
     "  --instances N places N copies of the scene on a grid (shared meshes). The paper suite runs the IIEEJ\n"
     "  paper's Table 2 (izb vs izb+csm per pass) and Table 3 (CSM time and culling per coverage test) for\n"
     "  every view at 1920x1080/IZB 1024 and 3840x2160/IZB 2048 (--quick: 160x90/128 and 320x180/256),\n"
@@ -222,6 +226,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--rigid") o.rigid = true;
     else if (a == "--light-size") o.light_size = parse_number(a, args.value());
     else if (a == "--light-radius") o.light_radius = parse_number(a, args.value());
+    else if (a == "--hybrid-izb-distance") o.hybrid_izb_distance = parse_number(a, args.value());
     else if (a == "--rt-rays") o.rt_rays = split_uints(a, args.value()).at(0);
     else if (a == "--reference-rays") o.reference_rays = split_uints(a, args.value()).at(0);
     else if (a == "--offset") {
@@ -285,6 +290,7 @@ std::vector<RunConfig> expand_runs(const Options& o) {
     base.izb.node_pool_override = o.node_pool;
     base.izb.csm_timed = o.csm_timed;
     base.izb.step_timings = o.step_times;
+    base.hybrid_izb_distance = float(o.hybrid_izb_distance);
     if (!o.lists.empty()) {
       auto layout = shadows::parse_list_layout(o.lists);
       if (!layout) throw std::runtime_error("--lists '" + o.lists + "': expected linked or sorted");
@@ -614,7 +620,10 @@ struct Bench {
     if (!st.lit_choice.backend.empty()) entry["lit_choice"] = choice_json(st.lit_choice);
     if (!st.csm_run_choice.backend.empty()) entry["csm_run_choice"] = choice_json(st.csm_run_choice);
     if (!st.tile_work_choice.backend.empty()) entry["tile_work_choice"] = choice_json(st.tile_work_choice);
-    if (!st.cascade_splits.empty()) entry["cascade_splits"] = st.cascade_splits;
+    if (!st.cascade_splits.empty()) {
+      entry["cascade_splits"] = st.cascade_splits;
+      entry["cascades_drawn"] = st.cascades_drawn;
+    }
     json decisions = json::array();
     for (const auto& d : st.csm_decisions)
       decisions.push_back({{"name", d.name}, {"in_csm", d.in_csm}, {"automatic", d.automatic},

@@ -907,8 +907,20 @@ TEST_F(HostBadInput, EveryFrameDescRefusalNamesItsField) {
     mutate(f);
     expect_refused(f, argument);
   }
-  module_->settings().units_per_metre = 0.0f;
-  expect_refused(frame_, "Settings.units_per_metre must be finite and > 0");
+  const std::pair<std::function<void(shadows::Settings&)>, std::string> bad_settings[] = {
+      {[](shadows::Settings& s) { s.hybrid_izb_distance = -1.0f; }, "Settings.hybrid_izb_distance -1.000000 must be"},
+      {[&](shadows::Settings& s) { s.izb.max_distance = nan; }, "Settings.izb.max_distance nan must be"},
+      {[](shadows::Settings& s) { s.cascades.max_distance = -60.0f; }, "Settings.cascades.max_distance -60.000000 must"},
+      {[](shadows::Settings& s) { s.cascades.kernel_radius = INFINITY; }, "Settings.cascades.kernel_radius inf must be"},
+      {[](shadows::Settings& s) { s.units_per_metre = 0.0f; }, "Settings.units_per_metre must be finite and > 0"},
+  };
+  for (const auto& [mutate, argument] : bad_settings) {
+    SCOPED_TRACE(argument);
+    module_->settings() = valid_settings_;
+    mutate(module_->settings());
+    expect_refused(frame_, argument);
+  }
+  module_->settings() = valid_settings_;
   expect_one_line_naming(error_of([&] { module_->record(VK_NULL_HANDLE, frame_); }), "record: cmd is VK_NULL_HANDLE");
   expect_valid_frame();
 }

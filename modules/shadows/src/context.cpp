@@ -452,6 +452,14 @@ void ContextImpl::validate(const FrameDesc& f) const {
   if (!finite(f.origin, 3)) throw Error("shadows: FrameDesc.origin has a value that is not finite");
   if (!(settings_.units_per_metre > 0.0f) || !std::isfinite(settings_.units_per_metre))
     throw Error("shadows: Settings.units_per_metre must be finite and > 0");
+  // Distances in metres (Settings::units_per_metre): 0 means unlimited where a field says so.
+  const std::pair<float, const char*> distances[] = {{settings_.hybrid_izb_distance, "hybrid_izb_distance"},
+                                                     {settings_.izb.max_distance, "izb.max_distance"},
+                                                     {settings_.cascades.max_distance, "cascades.max_distance"},
+                                                     {settings_.cascades.kernel_radius, "cascades.kernel_radius"}};
+  for (const auto& [value, field] : distances)
+    if (!(value >= 0.0f) || !std::isfinite(value))
+      throw Error("shadows: Settings." + std::string(field) + " " + std::to_string(value) + " must be finite and >= 0");
   if (settings_.rt_light_samples > 64)
     throw Error("shadows: Settings.rt_light_samples " + std::to_string(settings_.rt_light_samples) + " is not in 0..64");
   // A technique the device cannot run is refused here, before anything is recorded.

@@ -186,7 +186,8 @@ struct Settings {
   uint32_t rt_light_samples = 0;
   // How many of the host's world units make a metre (1: metres, 100: centimetres, 0.01: hectometres).
   // The distances above stated in world units are taken in metres and scaled by it: cascades.max_distance
-  // and kernel_radius, izb.max_distance and hybrid_izb_distance. Nothing else in
+  // and kernel_radius, izb.max_distance and hybrid_izb_distance (each finite and >= 0: record refuses
+  // another in one line naming it). Nothing else in
   // the module depends on the world's units or on how far the scene is from the world's origin (see
   // FrameDesc::origin). Finite and > 0.
   float units_per_metre = 1.0f;
