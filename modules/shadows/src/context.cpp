@@ -383,6 +383,21 @@ void ContextImpl::check_paths(const Light& light, const std::string& name) const
   if (raster_csm) refuse("Settings.izb.csm_backend raster", l.raster_csm);
 }
 
+void ContextImpl::validate_settings() const {
+  if (!(settings_.units_per_metre > 0.0f) || !std::isfinite(settings_.units_per_metre))
+    throw Error("shadows: Settings.units_per_metre must be finite and > 0");
+  // Distances in metres (Settings::units_per_metre): 0 means unlimited where a field says so.
+  const std::pair<float, const char*> distances[] = {{settings_.hybrid_izb_distance, "hybrid_izb_distance"},
+                                                     {settings_.izb.max_distance, "izb.max_distance"},
+                                                     {settings_.cascades.max_distance, "cascades.max_distance"},
+                                                     {settings_.cascades.kernel_radius, "cascades.kernel_radius"}};
+  for (const auto& [value, field] : distances)
+    if (!(value >= 0.0f) || !std::isfinite(value))
+      throw Error("shadows: Settings." + std::string(field) + " " + std::to_string(value) + " must be finite and >= 0");
+  if (settings_.rt_light_samples > 64)
+    throw Error("shadows: Settings.rt_light_samples " + std::to_string(settings_.rt_light_samples) + " is not in 0..64");
+}
+
 void ContextImpl::validate(const FrameDesc& f) const {
   check_image(f.depth, "FrameDesc.depth",
               {VK_FORMAT_D32_SFLOAT, VK_FORMAT_D24_UNORM_S8_UINT, VK_FORMAT_D32_SFLOAT_S8_UINT, VK_FORMAT_D16_UNORM},
@@ -450,18 +465,7 @@ void ContextImpl::validate(const FrameDesc& f) const {
   if (!finite(f.camera.view, 16)) throw Error("shadows: FrameDesc.camera.view has a value that is not finite");
   if (!finite(f.camera.projection, 16)) throw Error("shadows: FrameDesc.camera.projection has a value that is not finite");
   if (!finite(f.origin, 3)) throw Error("shadows: FrameDesc.origin has a value that is not finite");
-  if (!(settings_.units_per_metre > 0.0f) || !std::isfinite(settings_.units_per_metre))
-    throw Error("shadows: Settings.units_per_metre must be finite and > 0");
-  // Distances in metres (Settings::units_per_metre): 0 means unlimited where a field says so.
-  const std::pair<float, const char*> distances[] = {{settings_.hybrid_izb_distance, "hybrid_izb_distance"},
-                                                     {settings_.izb.max_distance, "izb.max_distance"},
-                                                     {settings_.cascades.max_distance, "cascades.max_distance"},
-                                                     {settings_.cascades.kernel_radius, "cascades.kernel_radius"}};
-  for (const auto& [value, field] : distances)
-    if (!(value >= 0.0f) || !std::isfinite(value))
-      throw Error("shadows: Settings." + std::string(field) + " " + std::to_string(value) + " must be finite and >= 0");
-  if (settings_.rt_light_samples > 64)
-    throw Error("shadows: Settings.rt_light_samples " + std::to_string(settings_.rt_light_samples) + " is not in 0..64");
+  validate_settings();
   // A technique the device cannot run is refused here, before anything is recorded.
   if (settings_.technique == Technique::RayTraced && !gpu_->features().ray_tracing_pipeline)
     throw Error(capabilities().of(Technique::RayTraced).reason);  // the line capabilities() gives

@@ -57,6 +57,7 @@ class ContextImpl final : public Context {
   };
 
   void validate(const FrameDesc& frame) const;
+  void validate_settings() const;  // the fields record refuses (Settings' documented ranges)
   void record_geometry(VkCommandBuffer cmd, const FrameDesc& frame, engine::gpu::GpuProfiler& profiler);
   void ensure_targets(VkExtent2D extent);
   // `clear`: `term` to 1 and (with a debug view) the overlay to 0, where no input pass does.
