@@ -163,16 +163,7 @@ void main() {
   }
   const bool inserts = kBuildStep != kBuildClassify;
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-  if (izb_flag(IZB_FLAG_FACE_TILES)) {
-    // A point light's face: a workgroup a tile of its list (izb_face_tiles.comp). Past the list's end
-    // the whole workgroup leaves, before any barrier.
-    uint face = point_light_face();
-    uint slot = IZB_ROW_DISPATCH_GROUP;
-    if (slot >= resolve_list[4u * face]) return;
-    uint tile = resolve_list[kIzbFaceTilesAt + face * izb_pixel_tiles(params.extent.x, params.extent.y) + slot];
-    uint tiles_x = izb_pixel_tiles_x(params.extent.x);
-    pixel = ivec2(tile % tiles_x, tile / tiles_x) * 8 + ivec2(gl_LocalInvocationID.xy);
-  }
+  if (izb_flag(IZB_FLAG_FACE_TILES) && !face_tile_pixel(pixel)) return;
   bool inside = all(lessThan(uvec2(pixel), params.extent.xy));
   uint covered = 0u, candidate = 0u, culled = 0u, lit_culled = 0u;
   uint index = uint(pixel.y) * params.extent.x + uint(pixel.x);

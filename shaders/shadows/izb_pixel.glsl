@@ -202,8 +202,22 @@ void block_micro_quad_corners(ivec2 pixel, ivec2 block_origin, PixelPoint p, out
 }
 #endif
 
-// IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the build lists.
+// IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the build lists; with
+// IZB_FLAG_FACE_TILES, a point light's six lists of tiles (izb.h, kIzbFaceTilesAt).
 layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
+// A point light's face (IZB_FLAG_FACE_TILES): this invocation's pixel in the face's list of 8x8 tiles
+// (izb_face_tiles.comp), a workgroup of 8x8 a tile; false for a workgroup past the list's end, which
+// then leaves whole, before any barrier.
+bool face_tile_pixel(out ivec2 pixel) {
+  uint face = point_light_face();
+  uint slot = IZB_ROW_DISPATCH_GROUP;
+  pixel = ivec2(0);
+  if (slot >= resolve_list[4u * face]) return false;
+  uint tile = resolve_list[kIzbFaceTilesAt + face * izb_pixel_tiles(params.extent.x, params.extent.y) + slot];
+  uint tiles_x = izb_pixel_tiles_x(params.extent.x);
+  pixel = ivec2(tile % tiles_x, tile / tiles_x) * 8 + ivec2(gl_LocalInvocationID.xy);
+  return true;
+}
 // The resolve list's pixel of this invocation (one a thread, in rows of kIzbDispatchRow workgroups of
 // 64: IZB_COUNTER_RESOLVE_LIST's dispatch); false past the list's end.
 bool listed_pixel(out uint index) {

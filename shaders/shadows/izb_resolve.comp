@@ -61,6 +61,14 @@ void resolve(ivec2 pixel, bool inside) {
 }
 
 void main() {
+  if (izb_flag(IZB_FLAG_FACE_TILES)) {
+    // A point light's face: the tiles its build ran over (the others' pixels are another face's, or
+    // izb_face_tiles.comp wrote them).
+    ivec2 pixel;
+    if (!face_tile_pixel(pixel)) return;
+    resolve(pixel, all(lessThan(uvec2(pixel), params.extent.xy)));
+    return;
+  }
   if (!izb_flag(IZB_FLAG_LISTED_RESOLVE)) {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     resolve(pixel, all(lessThan(uvec2(pixel), params.extent.xy)));
