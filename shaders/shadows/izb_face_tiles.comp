@@ -26,16 +26,46 @@ uint pixel_faces(ivec2 pixel) {
   if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return 0u;
   vec4 position = imageLoad(world_position_image, pixel);
   bool covered = position.w > 0.5;
+  // local_light_reaches for each face's cone, its range and square root once: along a unit axis its
+  // dot product is the component itself, exactly, so each face's verdict is the build's.
   uint faces = 0u;
-  for (uint f = 0u; f < 6u && covered; ++f)
-    if (local_light_reaches(params.light_position.xyz, params.light_position.w, kFaceAxes[f], params.light_cone.x, true,
-                            position.xyz))
-      faces |= 1u << f;
+  if (covered && local_light_reaches(params.light_position.xyz, params.light_position.w, vec3(0.0), -1.0, false,
+                                     position.xyz)) {
+    precise vec3 from_light = position.xyz - params.light_position.xyz;
+    precise float reach = params.light_cone.x * sqrt(shared_dot(from_light, from_light));
+    for (uint f = 0u; f < 6u; ++f)
+      if (shared_dot(from_light, kFaceAxes[f]) >= reach) faces |= 1u << f;
+  }
   if (faces == 0u) imageStore(shadow_term, pixel, vec4(covered ? 0.0 : 1.0));
   return faces;
 }
 
+// A CPU device: a thread a tile, with neither shared memory nor barriers (lavapipe switches between a
+// workgroup's invocations at every barrier: the blocks took it 15 ms at 1280x720), an atomic per face
+// a tile on the lists' counts.
+void list_tile_alone() {
+  uvec2 tile = gl_GlobalInvocationID.xy;
+  uint tiles_x = izb_pixel_tiles_x(params.extent.x);
+  if (tile.x >= tiles_x || tile.y >= (params.extent.y + 7u) / 8u) return;
+  uint faces = 0u;
+  for (uint k = 0u; k < 64u; ++k) faces |= pixel_faces(ivec2(tile * 8u + uvec2(k % 8u, k / 8u)));
+  uint tile_index = tile.y * tiles_x + tile.x;
+  uint tiles = izb_pixel_tiles(params.extent.x, params.extent.y);
+  for (uint f = 0u; f < 6u; ++f) {
+    if ((faces & (1u << f)) == 0u) continue;
+    uint slot = atomicAdd(resolve_list[4u * f], 1u);
+    atomicMax(resolve_list[4u * f + 1u], min(slot + 1u, kIzbDispatchRow));
+    atomicMax(resolve_list[4u * f + 2u], slot / kIzbDispatchRow + 1u);
+    atomicMax(resolve_list[4u * f + 3u], 1u);
+    resolve_list[kIzbFaceTilesAt + f * tiles + slot] = tile_index;
+  }
+}
+
 void main() {
+  if (izb_flag(IZB_FLAG_CPU_DEVICE)) {
+    list_tile_alone();
+    return;
+  }
   uint lane = gl_LocalInvocationIndex;
   if (lane < kBlockTiles * kBlockTiles) tile_faces[lane] = 0u;
   if (lane < 6u) face_tile_count[lane] = 0u;
