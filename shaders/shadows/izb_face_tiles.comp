@@ -8,7 +8,8 @@ layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 
-// IZB_FLAG_FACE_TILES, run once before a point light's first face, with a face's parameters (its cone,
+// IZB_FLAG_FACE_TILES, run once before a point light's first face (and, on a CPU device, before a
+// spot light's build, whose one list holds the tiles its cone reaches), with a face's parameters (its cone,
 // params.light_cone.x, is every face's): lists the 8x8 tiles of pixels holding a covered point each
 // face's cone reaches (local_light_reaches, as the build's load_local_light_pixel asks it), and
 // writes the term of every point no face reaches, as each face's build would have: lit where nothing
@@ -29,8 +30,11 @@ uint pixel_faces(ivec2 pixel) {
   // local_light_reaches for each face's cone, its range and square root once: along a unit axis its
   // dot product is the component itself, exactly, so each face's verdict is the build's.
   uint faces = 0u;
-  if (covered && local_light_reaches(params.light_position.xyz, params.light_position.w, vec3(0.0), -1.0, false,
-                                     position.xyz)) {
+  if (params.light_cone.z <= 0.0) {
+    // A spot light on a CPU device: one list, of the tiles its cone reaches.
+    faces = covered && local_light_reaches_point(position.xyz) ? 1u : 0u;
+  } else if (covered && local_light_reaches(params.light_position.xyz, params.light_position.w, vec3(0.0), -1.0, false,
+                                            position.xyz)) {
     precise vec3 from_light = position.xyz - params.light_position.xyz;
     precise float reach = params.light_cone.x * sqrt(shared_dot(from_light, from_light));
     for (uint f = 0u; f < 6u; ++f)

@@ -176,8 +176,9 @@ uint32_t output_flags(const IzbState& s, const Frame& frame, const IzbSettings& 
                                      plan.spot && s.pipelines.cpu_device());
   if (plan.direct_term) flags |= gpu_shared::IZB_FLAG_DIRECT_TERM;
   // A point light's faces: each face's build (and resolve, where one runs) over the tiles its cone
-  // reaches, listed once.
-  plan.face_tiles = frame.view.light_face;
+  // reaches, listed once; on a CPU device, which runs every workgroup it is given whole, a spot
+  // light's too.
+  plan.face_tiles = frame.view.light_face || (plan.spot && s.pipelines.cpu_device());
   if (plan.face_tiles) flags |= gpu_shared::IZB_FLAG_FACE_TILES;
   // The fit empties the grid where it runs many workgroups on a GPU (a spot light's runs one).
   plan.fit_clears_grid = !plan.spot && !plan.cpu;

@@ -25,7 +25,7 @@ struct IzbPlan {
   bool cpu = false;
   bool direct_term = false;     // the build and trace write the term; no resolve
   bool listed_resolve = false;  // the resolve reads only the pixels with nodes
-  bool face_tiles = false;      // a point light's face builds over its listed tiles (IZB_FLAG_FACE_TILES)
+  bool face_tiles = false;      // a point light face (a spot light on a CPU device) builds over listed tiles (IZB_FLAG_FACE_TILES)
   bool fit_clears_grid = false;  // the fit empties the grid, not record_izb_reset (IZB_FLAG_FIT_CLEARS_GRID)
   bool constant_ray_w = false;
   bool bounded_fit = false;
