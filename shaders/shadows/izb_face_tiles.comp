@@ -44,9 +44,8 @@ uint pixel_faces(ivec2 pixel) {
   return faces;
 }
 
-// A CPU device: a thread a tile, with neither shared memory nor barriers (lavapipe switches between a
-// workgroup's invocations at every barrier: the blocks took it 15 ms at 1280x720), an atomic per face
-// a tile on the lists' counts.
+// A CPU device: a thread a tile, with neither shared memory nor barriers (lavapipe runs a barrier as a
+// switch between a workgroup's invocations), an atomic per face a tile on the lists' counts.
 void list_tile_alone() {
   uvec2 tile = gl_GlobalInvocationID.xy;
   uint tiles_x = izb_pixel_tiles_x(params.extent.x);
