@@ -206,9 +206,8 @@ void block_micro_quad_corners(ivec2 pixel, ivec2 block_origin, PixelPoint p, out
 // IZB_FLAG_FACE_TILES, a point light's six lists of tiles (izb.h, kIzbFaceTilesAt).
 layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
 // A point light's face, or a spot light on a CPU device (IZB_FLAG_FACE_TILES): this invocation's pixel
-// in the face's (the spot's) list of 8x8 tiles
-// (izb_face_tiles.comp), a workgroup of 8x8 a tile; false for a workgroup past the list's end, which
-// then leaves whole, before any barrier.
+// in the face's (the spot's) list of 8x8 tiles (izb_face_tiles.comp), a workgroup of 8x8 a tile;
+// false for a workgroup past the list's end, which then leaves whole, before any barrier.
 bool face_tile_pixel(out ivec2 pixel) {
   uint face = params.light_cone.z > 0.0 ? point_light_face() : 0u;  // (a spot light's one list: 0)
   uint slot = IZB_ROW_DISPATCH_GROUP;

@@ -62,8 +62,8 @@ void resolve(ivec2 pixel, bool inside) {
 
 void main() {
   if (izb_flag(IZB_FLAG_FACE_TILES)) {
-    // A point light's face: the tiles its build ran over (the others' pixels are another face's, or
-    // izb_face_tiles.comp wrote them).
+    // A point light's face, or a spot light on a CPU device: the tiles its build ran over (the other
+    // pixels are another face's, or izb_face_tiles.comp wrote them).
     ivec2 pixel;
     if (!face_tile_pixel(pixel)) return;
     resolve(pixel, all(lessThan(uvec2(pixel), params.extent.xy)));

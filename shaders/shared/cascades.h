@@ -132,7 +132,6 @@ SHARED_CONST uint CASCADE_BLUR_BINDING_COUNTERS = 3u;
 SHARED_CONST uint CASCADE_BLUR_BINDING_BLUR_LIST = 4u;
 SHARED_CONST uint CASCADE_BLUR_BINDING_BLURRED = 5u;
 
-// Packs a light-depth range into one uint, rounding outwards so the packed range contains it.
 // The entry of mask texel `id` (at its cascade's mask level, inside that cascade's mask_rect `rect`)
 // in the mask buffers, where each cascade's rectangle lies in rows of its width from its `offset`
 // (CascadeParams::mask_offset).
@@ -140,6 +139,7 @@ SHARED_INLINE uint cascade_mask_entry(SHARED_IN(ivec4) rect, uint offset, SHARED
   return offset + uint((id.y - rect.y) * (rect.z - rect.x + 1) + (id.x - rect.x));
 }
 
+// Packs a light-depth range into one uint, rounding outwards so the packed range contains it.
 SHARED_INLINE uint cascade_pack_extent(float lo, float hi) {
   uint a = uint(clamp(floor(lo * 65535.0f), 0.0f, 65535.0f));
   uint b = uint(clamp(ceil(hi * 65535.0f), 0.0f, 65535.0f));

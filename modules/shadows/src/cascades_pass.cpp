@@ -63,6 +63,13 @@ constexpr float kEdgeSlopeTexels = 2.0f;
 constexpr uint32_t kPlanesLevel = 3;
 static_assert((1u << kPlanesLevel) == gs::kSmBlock);
 
+// A mask rectangle (lo.x, lo.y, hi.x, hi.y, inclusive, in mask texels) that no receiver reads, and
+// the texels one holds (0 for that one).
+const glm::ivec4 kNoRect(0, 0, -1, -1);
+uint64_t rect_texels(const glm::ivec4& r) {
+  return r.z >= r.x && r.w >= r.y ? uint64_t(r.z - r.x + 1) * uint64_t(r.w - r.y + 1) : 0;
+}
+
 uint32_t mip_count(uint32_t size) {
   uint32_t levels = 1;
   while ((size >> levels) > 0) ++levels;
@@ -201,7 +208,7 @@ struct CascadesPass::Impl {
     const glm::ivec2 a = glm::clamp(lo, glm::ivec2(0), glm::ivec2(int(map_size) - 1)) >> int(level);
     const glm::ivec2 b = glm::clamp(hi, glm::ivec2(0), glm::ivec2(int(map_size) - 1)) >> int(level);
     if (hi.x < 0 || hi.y < 0 || lo.x >= int(map_size) || lo.y >= int(map_size) || r.x > r.z || r.y > r.w)
-      return glm::ivec4(0, 0, -1, -1);
+      return kNoRect;
     return glm::ivec4(glm::min(a, glm::ivec2(last)), glm::min(b, glm::ivec2(last)));
   }
 
@@ -240,10 +247,9 @@ struct CascadesPass::Impl {
                                        : std::min({uint32_t(std::ceil(std::log2(width) - 1e-4f)), top_level,
                                                    uint32_t(gs::CASCADE_MASK_MAX_LEVEL)});
       p.mask_level[c] = int(level);
-      p.mask_rect[c] = c < fit.count ? mask_rect(frame, c, level, kernel) : glm::ivec4(0, 0, -1, -1);
+      p.mask_rect[c] = c < fit.count ? mask_rect(frame, c, level, kernel) : kNoRect;
       p.mask_offset[c] = mask_texels;
-      const glm::ivec4 r = p.mask_rect[c];
-      if (r.z >= r.x && r.w >= r.y) mask_texels += uint32_t(r.z - r.x + 1) * uint32_t(r.w - r.y + 1);
+      mask_texels += uint32_t(rect_texels(p.mask_rect[c]));
       (*levels)[c] = level;
       (*rects)[c] = p.mask_rect[c];
     }
@@ -295,7 +301,7 @@ struct CascadesPass::Impl {
     const Pipeline& pipeline = pipelines.depth[s.cull_front_faces ? 1 : 0];
     for (uint32_t c = 0; c < fit.count; ++c) {
       const glm::ivec4 r = rects[c];
-      if (r.z < r.x || r.w < r.y) continue;  // no receiver reads this cascade
+      if (rect_texels(r) == 0) continue;  // no receiver reads this cascade
       const int level = int(levels[c]), last = int(map_size) - 1;
       const glm::ivec2 lo = glm::ivec2(r.x, r.y) << level;
       const glm::ivec2 hi = glm::min(((glm::ivec2(r.z, r.w) + 1) << level) - 1, glm::ivec2(last));
@@ -323,10 +329,8 @@ struct CascadesPass::Impl {
 
 // Replaced buffers outlive the frames in flight that use them (Context::defer_releases).
 void CascadesPass::Impl::ensure_masks(const gs::CascadeParams& p, const std::array<glm::ivec4, kMaxCascadeCount>& rects) {
-  const VkDeviceSize texels = std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + [&] {
-    const glm::ivec4 r = rects[kMaxCascadeCount - 1];
-    return r.z >= r.x && r.w >= r.y ? VkDeviceSize(r.z - r.x + 1) * VkDeviceSize(r.w - r.y + 1) : VkDeviceSize(0);
-  }(), 1);
+  const VkDeviceSize texels =
+      std::max<VkDeviceSize>(p.mask_offset[kMaxCascadeCount - 1] + rect_texels(rects[kMaxCascadeCount - 1]), 1);
   if (texels > mask_capacity) {
     mask_capacity = texels + texels / 4;
     masks = Buffer(ctx, mask_capacity * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "cascade masks");
@@ -352,7 +356,7 @@ void CascadesPass::Impl::record_masks(Frame& frame, const CascadeSettings& s,
     pipeline.bind(cmd);
     for (uint32_t c = 0; c < fit.count; ++c) {
       const glm::ivec4 rect = rects[c];
-      if (rect.z < rect.x || rect.w < rect.y) continue;
+      if (rect_texels(rect) == 0) continue;
       DescriptorWriter()
           .uniform_buffer(gs::CASCADE_MASK_BINDING_PARAMS, params.handle())
           .sampled_image(gs::CASCADE_MASK_BINDING_DEPTH, depth.view(), nearest.handle(), VK_IMAGE_LAYOUT_GENERAL)
@@ -457,9 +461,9 @@ void CascadesPass::record(Frame& frame, const CascadeSettings& settings, VkImage
   // A pixel reads the cascade its view depth falls in and, in a blend band, the next one: those that
   // end before the nearest listed pixel are read by none, and neither drawn nor masked.
   for (uint32_t c = 0; only && c < m.fit.count; ++c)
-    if (m.fit.splits[c + 1] <= only->nearest_view_depth) rects[c] = glm::ivec4(0, 0, -1, -1);
+    if (m.fit.splits[c + 1] <= only->nearest_view_depth) rects[c] = kNoRect;
   m.drawn = 0;
-  for (uint32_t c = 0; c < m.fit.count; ++c) m.drawn += rects[c].z >= rects[c].x && rects[c].w >= rects[c].y ? 1u : 0u;
+  for (uint32_t c = 0; c < m.fit.count; ++c) m.drawn += rect_texels(rects[c]) != 0 ? 1u : 0u;
   record_update(m.ctx, cmd, m.params, &p, sizeof(p));
   m.ensure_masks(p, rects);
   m.blur_enabled = settings.blur;

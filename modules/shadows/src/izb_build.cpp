@@ -66,12 +66,8 @@ void record_izb_build(IzbState& s, Frame& frame, const IzbSettings& settings, co
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_build");
   {
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "build_classify");
-    if (plan.face_tiles) {
-      s.bind_compute(cmd, frame, s.p->build, push);
-      vkCmdDispatchIndirect(cmd, s.res.resolve_list.handle(), VkDeviceSize(4 * frame.view.light_face_index + 1) * 4);
-    } else {
-      s.dispatch_pixels(cmd, frame, s.p->build, push);
-    }
+    if (plan.face_tiles) s.dispatch_face_tiles(cmd, frame, s.p->build, push);
+    else s.dispatch_pixels(cmd, frame, s.p->build, push);
   }
   if (plan.sorted) record_counting_sort(s, frame, push);
   pass_barrier(frame.ctx, cmd);

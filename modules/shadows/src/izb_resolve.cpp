@@ -23,15 +23,10 @@ void record_izb_resolve(IzbState& s, Frame& frame, const IzbPlan& plan, bool hyb
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_resolve");
   const Pipeline& resolve = s.pipelines.resolve(s.res.samples, plan.flags, plan.debug, hybrid);
-  if (plan.face_tiles) {
-    // A point light's face: over the tiles its build ran over (izb_build.cpp).
-    s.bind_compute(cmd, frame, resolve, push);
-    vkCmdDispatchIndirect(cmd, s.res.resolve_list.handle(), VkDeviceSize(4 * frame.view.light_face_index + 1) * 4);
-  } else if (plan.listed_resolve) {
-    s.dispatch_indirect(cmd, frame, resolve, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
-  } else {
-    s.dispatch_pixels(cmd, frame, resolve, push);
-  }
+  // With face tiles, over the tiles the build ran over.
+  if (plan.face_tiles) s.dispatch_face_tiles(cmd, frame, resolve, push);
+  else if (plan.listed_resolve) s.dispatch_indirect(cmd, frame, resolve, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
+  else s.dispatch_pixels(cmd, frame, resolve, push);
   pass_barrier(frame.ctx, cmd);
   if (hybrid && plan.cpu) s.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_HYBRID);
 }

@@ -92,6 +92,12 @@ void IzbState::dispatch_indirect(VkCommandBuffer cmd, const Frame& frame, const 
   vkCmdDispatchIndirect(cmd, res.counters.handle(), VkDeviceSize(counter) * 4);
 }
 
+void IzbState::dispatch_face_tiles(VkCommandBuffer cmd, const Frame& frame, const Pipeline& pipeline,
+                                   gpu_shared::IzbComputePush push) {
+  bind_compute(cmd, frame, pipeline, push);
+  vkCmdDispatchIndirect(cmd, res.resolve_list.handle(), VkDeviceSize(4 * frame.view.light_face_index + 1) * 4);
+}
+
 void IzbState::record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,
                                 uint32_t mode, const std::string& region, bool time_steps) {
   push.mode = mode;

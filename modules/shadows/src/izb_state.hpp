@@ -65,6 +65,10 @@ struct IzbState {
   // The dispatch's size from counter `counter` (IZB_COUNTER_*), which an earlier pass raised.
   void dispatch_indirect(VkCommandBuffer cmd, const Frame& frame, const engine::gpu::Pipeline& pipeline,
                          gpu_shared::IzbComputePush push, uint32_t counter);
+  // A point light's face, or a spot light on a CPU device (IZB_FLAG_FACE_TILES): a workgroup of 8x8 a
+  // tile of the face's list (izb_face_tiles.comp; a spot light's is list 0).
+  void dispatch_face_tiles(VkCommandBuffer cmd, const Frame& frame, const engine::gpu::Pipeline& pipeline,
+                           gpu_shared::IzbComputePush push);
   // A CPU device: the dispatch over list `which` (IZB_LIST_*) from its length, visible to what follows.
   void size_list_dispatch(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push, uint32_t which);
   // Compute trace / compute CSM / lit map, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*); with
