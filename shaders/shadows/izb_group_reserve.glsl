@@ -9,7 +9,10 @@ shared uint group_reserved_base;
 // workgroups of `per_group`, for the pass that reads them. Every invocation of the workgroup calls it
 // together, in uniform control flow.
 uint reserve_group_slots(uint counter, uint count, uint dispatch_at, uint capacity, uint per_group) {
-  if (gl_NumSubgroups == 1u) return reserve_slots_raising(counter, count, true, dispatch_at, capacity, per_group);
+  // A CPU device runs a workgroup's invocations one batch after another and pays for each barrier a
+  // switch through all of them; its atomics are cheap (reserve_slots_raising: one a lane).
+  if (gl_NumSubgroups == 1u || izb_flag(IZB_FLAG_CPU_DEVICE))
+    return reserve_slots_raising(counter, count, true, dispatch_at, capacity, per_group);
   uint offset = subgroupExclusiveAdd(count);
   uint total = subgroupAdd(count);
   barrier();  // the previous call's reads are done
