@@ -22,6 +22,14 @@ bool ray_hits_triangle(vec3 o, vec3 dir, float t_max, vec3 v0, vec3 v1, vec3 v2,
   return t >= 0.0 && t <= t_max;
 }
 
+// Whether a ray from grid position `g` may meet straddler `k`: a point in front of the light shares its
+// projection with its whole ray, so only within the straddler's grid bounds (where it has them).
+bool straddler_in_bounds(uint k, bool projected, vec2 g) {
+  uvec4 entry = floatBitsToUint(grid_triangles[3u * push.triangle_count + k]);
+  return !projected || entry.y == 0u ||
+         !(any(lessThan(g, unpack_straddler_bound(entry.y))) || any(greaterThan(g, unpack_straddler_bound(entry.z))));
+}
+
 // The samples of candidate `p` that the straddlers shadow. With the term written by the build and
 // the trace (IZB_FLAG_DIRECT_TERM) the build asks before it gives the point a node; otherwise the
 // resolve asks for the candidates the trace left lit.
@@ -37,17 +45,18 @@ uint straddler_samples(ivec2 pixel, PixelPoint p) {
     float t_max = local_shadow_ray_length(o, params.light_position.xyz, params.light_position.w);
     if (t_max <= 0.0) continue;
     vec3 dir = normalize(params.light_position.xyz - o);
-    // The ray meets a straddler only where the sample's grid position lies in its bounds (a point in
-    // front of the light shares its projection with its whole ray).
     vec4 clip = izb.light_view_projection * vec4(o, 1.0);
     bool projected = clip.w > 0.0;
     vec2 g = projected ? clip_to_grid(clip).xy : vec2(0.0);
     for (uint k = 0u; k < count; ++k) {
-      uvec4 entry = floatBitsToUint(grid_triangles[3u * push.triangle_count + k]);
-      if (projected && entry.y != 0u &&
-          (any(lessThan(g, unpack_straddler_bound(entry.y))) || any(greaterThan(g, unpack_straddler_bound(entry.z)))))
-        continue;
-      uint t = entry.x;
+      // On a CPU device a lane's skipped triangle still costs its batch the ray test, unless every lane
+      // skips it: each lane first scans to its next triangle in bounds, and a ray test follows only
+      // where some lane found one (lavapipe, lamps 1280x720, the point light's resolve 39 -> 22 ms).
+      if (izb_flag(IZB_FLAG_CPU_DEVICE))
+        while (k < count && !straddler_in_bounds(k, projected, g)) ++k;
+      if (k >= count) break;
+      if (!straddler_in_bounds(k, projected, g)) continue;
+      uint t = floatBitsToUint(grid_triangles[3u * push.triangle_count + k].x);
       vec2 uv;
       if (!ray_hits_triangle(o, dir, t_max, casters[t].p0.xyz, casters[t].p1.xyz, casters[t].p2.xyz, uv)) continue;
       CasterAlpha ca = load_caster_alpha(t);
