@@ -29,6 +29,50 @@ void quad_pairs(uint group, uint mode, uint count) {
   }
 }
 
+// Outside the grid, or no node's depth raised its farthest bound (trace_pair_outcome culls it).
+bool texel_without_nodes(ivec2 texel) {
+  return !all(lessThan(uvec2(texel), uvec2(izb_resolution()))) || uintBitsToFloat(farthest[texel_index(texel)]) <= 0.0;
+}
+
+// The trace on a CPU device: a thread per row of a pair's tile (kIzbTilePairsPerGroup pairs of
+// kIzbTile rows fill the workgroup), its kIzbTile texels one after another: the pair and its triangle
+// are read and set up once a row, not once a texel, and a kept pair takes its slot with one atomic, no
+// barrier (lavapipe runs a workgroup's invocations in batches and pays a barrier with a switch through
+// all of them). The same outcomes and pairs as the texel a thread below, in another order.
+void trace_tile_rows(uint group, uint count) {
+  uint unit = gl_LocalInvocationIndex / kIzbTile, row = gl_LocalInvocationIndex % kIzbTile;
+  uint index = group * kIzbTilePairsPerGroup + unit;
+  bool valid = unit < kIzbTilePairsPerGroup && index < count;
+  uvec2 pair = valid ? tile_pairs[index] : uvec2(0u);
+  vec3 a = vec3(0.0), b = vec3(0.0), c = vec3(0.0);
+  if (valid) load_grid_triangle(pair.x, a, b, c);
+  float area = edge_fn(c.xy, a.xy, b.xy);
+  uvec2 tile = uvec2(pair.y % tiles_per_side(), pair.y / tiles_per_side());
+  uint fragments = 0u, kept = 0u;
+  // Without statistics (which count the texels a triangle touches) a texel without nodes is culled
+  // whatever the triangle: each lane scans past those first, so a batch tests a texel only where some
+  // lane has nodes in one.
+  bool skip_empty = !izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_NO_DEPTH_CULL);
+  for (uint x = 0u; valid && x < kIzbTile; ++x) {
+    if (skip_empty)
+      while (x < kIzbTile && texel_without_nodes(ivec2(tile * kIzbTile + uvec2(x, row)))) ++x;
+    if (x >= kIzbTile) break;
+    ivec2 texel = ivec2(tile * kIzbTile + uvec2(x, row));
+    bool inside = all(lessThan(uvec2(texel), uvec2(izb_resolution())));
+    uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;
+    fragments += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
+    if (outcome != IZB_PAIR_KEPT) continue;
+    ++kept;
+    uint slot = reserve_slots_raising(IZB_COUNTER_PAIRS, 1u, true, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
+    if (slot < params.limits.w) pairs[slot] = uvec2(pair.x, texel_index(texel));
+    else trace_texel_list(texel_index(texel), pair.x, a, b, c, 1.0 / area);
+  }
+  if (izb_flag(IZB_FLAG_STATS)) {
+    add_sharded(IZB_COUNTER_FRAGMENTS, fragments, IZB_SHARD_SEED);
+    add_sharded(IZB_COUNTER_FRAGMENTS_KEPT, kept, IZB_SHARD_SEED);
+  }
+}
+
 // Compute trace / compute CSM, step 3 (see izb.h): a thread per texel of kIzbTilePairsPerGroup
 // (triangle, tile) pairs (the CSM and lit map: per 2x2 texels of tile_pairs_per_group pairs). The CSM writes
 // fully covered texels' depth bounds, the lit map touched texels' nearest-depth bounds; the trace
@@ -41,6 +85,10 @@ void main() {
   uint count = tile_pair_count(mode);
   if (works_texel_quads(mode)) {  // a specialization constant
     quad_pairs(group, mode, count);
+    return;
+  }
+  if (izb_flag(IZB_FLAG_CPU_DEVICE) && mode == IZB_WORK_TRACE && kIzbTilePairsPerGroup * kIzbTile == kIzbTile * kIzbTile) {
+    trace_tile_rows(group, count);
     return;
   }
   uint fragments = 0u, kept = 0u;
