@@ -38,7 +38,7 @@ bool texel_without_nodes(ivec2 texel) {
 // kIzbTile rows fill the workgroup), its kIzbTile texels one after another: the pair and its triangle
 // are read and set up once a row, not once a texel, and a kept pair takes its slot with one atomic, no
 // barrier (lavapipe runs a workgroup's invocations in batches and pays a barrier with a switch through
-// all of them). The same outcomes and pairs as the texel a thread below, in another order.
+// all of them). The same outcomes and pairs as a thread a texel (below), in another order.
 void trace_tile_rows(uint group, uint count) {
   uint unit = gl_LocalInvocationIndex / kIzbTile, row = gl_LocalInvocationIndex % kIzbTile;
   uint index = group * kIzbTilePairsPerGroup + unit;
@@ -87,7 +87,7 @@ void main() {
     quad_pairs(group, mode, count);
     return;
   }
-  if (izb_flag(IZB_FLAG_CPU_DEVICE) && mode == IZB_WORK_TRACE && kIzbTilePairsPerGroup * kIzbTile == kIzbTile * kIzbTile) {
+  if (izb_flag(IZB_FLAG_CPU_DEVICE) && mode == IZB_WORK_TRACE && kIzbTilePairsPerGroup == kIzbTile) {  // (a CPU device's 16)
     trace_tile_rows(group, count);
     return;
   }

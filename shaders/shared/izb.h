@@ -205,8 +205,9 @@ SHARED_CONST uint IZB_COUNTER_COUNT = IZB_COUNTER_STEP_DISPATCH + 21u;
 // large triangle spreads over many workgroups instead of serializing a thread. Step 2's workgroup shape is specialization
 // constants (ids 0, 1, 4): on a GPU kIzbTileStepRecordsGpu records side by side, 32 lanes each, so a
 // workgroup appends its pairs with one atomic; on a CPU device, which pays for every workgroup, many
-// records per workgroup one after another; likewise step 3's tile pairs per workgroup (id 2). Dispatches use rows of kIzbDispatchRow workgroups (the portable limit per
-// dimension is 65535).
+// records per workgroup one after another; likewise step 3's tile pairs per workgroup (id 2), where the
+// trace on a CPU device takes a thread per row of a pair's tile instead (izb_texel_bin.comp).
+// Dispatches use rows of kIzbDispatchRow workgroups (the portable limit per dimension is 65535).
 SHARED_CONST uint kIzbTile = 16u;
 SHARED_CONST uint kIzbRecordTiles = 32u;
 SHARED_CONST uint kIzbRecordsPerGroupGpu = 1u;
