@@ -50,13 +50,18 @@ void trace_tile_rows(uint group, uint count) {
   uvec2 tile = uvec2(pair.y % tiles_per_side(), pair.y / tiles_per_side());
   uint fragments = 0u, kept = 0u;
   // Without statistics (which count the texels a triangle touches) a texel without nodes is culled
-  // whatever the triangle: each lane scans past those first, so a batch tests a texel only where some
-  // lane has nodes in one.
+  // whatever the triangle: the row's farthest depths are read first, straight through (no loop control
+  // a texel), into a mask of the texels left, so a batch tests a texel only where some lane has nodes
+  // in one (lavapipe, lamps' point light at 1280x720: the step 26.2 -> 18.4 ms scanning texel by texel
+  // in the loop below, 13.5-13.8 with the mask).
   bool skip_empty = !izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_NO_DEPTH_CULL);
-  for (uint x = 0u; valid && x < kIzbTile; ++x) {
-    if (skip_empty)
-      while (x < kIzbTile && texel_without_nodes(ivec2(tile * kIzbTile + uvec2(x, row)))) ++x;
-    if (x >= kIzbTile) break;
+  uint todo = valid ? (1u << kIzbTile) - 1u : 0u;
+  if (skip_empty && valid)
+    for (uint x = 0u; x < kIzbTile; ++x)
+      if (texel_without_nodes(ivec2(tile * kIzbTile + uvec2(x, row)))) todo &= ~(1u << x);
+  while (todo != 0u) {
+    uint x = uint(findLSB(todo));
+    todo &= todo - 1u;
     ivec2 texel = ivec2(tile * kIzbTile + uvec2(x, row));
     bool inside = all(lessThan(uvec2(texel), uvec2(izb_resolution())));
     uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;
