@@ -30,7 +30,7 @@ uint pixel_faces(ivec2 pixel) {
   // local_light_reaches for each face's cone, its range and square root once: along a unit axis its
   // dot product is the component itself, exactly, so each face's verdict is the build's.
   uint faces = 0u;
-  if (params.light_cone.z <= 0.0) {
+  if (!point_light_face_pass()) {
     // A spot light on a CPU device: one list, of the tiles its cone reaches.
     faces = covered && local_light_reaches_point(position.xyz) ? 1u : 0u;
   } else if (covered && local_light_reaches(params.light_position.xyz, params.light_position.w, vec3(0.0), -1.0, false,

@@ -33,11 +33,14 @@ PixelPoint load_surface(ivec2 pixel) {
   return p;
 }
 
-// One face of a point light (six overlapping cones that cover every direction, params.light_cone.z):
-// whether `position` lies outside this face's cone, so that another face's pass writes its term.
+// Whether this pass is one face of a point light (six overlapping cones that cover every direction,
+// params.light_cone.z), not a spot light or the sun.
+bool point_light_face_pass() { return params.light_cone.z > 0.0; }
+// A point light's face: whether `position` lies outside this face's cone, so that another face's pass
+// writes its term.
 bool outside_light_face(vec3 position) {
   vec3 from_light = position - params.light_position.xyz;
-  return spot_light() && params.light_cone.z > 0.0 &&
+  return spot_light() && point_light_face_pass() &&
          dot(from_light, params.light_direction.xyz) < params.light_cone.x * length(from_light);
 }
 
@@ -209,7 +212,7 @@ layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint re
 // in the face's (the spot's) list of 8x8 tiles (izb_face_tiles.comp), a workgroup of 8x8 a tile;
 // false for a workgroup past the list's end, which then leaves whole, before any barrier.
 bool face_tile_pixel(out ivec2 pixel) {
-  uint face = params.light_cone.z > 0.0 ? point_light_face() : 0u;  // (a spot light's one list: 0)
+  uint face = point_light_face_pass() ? point_light_face() : 0u;  // (a spot light's one list: 0)
   uint slot = IZB_ROW_DISPATCH_GROUP;
   pixel = ivec2(0);
   if (slot >= resolve_list[4u * face]) return false;

@@ -52,10 +52,12 @@ uint straddler_samples(ivec2 pixel, PixelPoint p) {
       // On a CPU device a lane's skipped triangle still costs its batch the ray test, unless every lane
       // skips it: each lane first scans to its next triangle in bounds, and a ray test follows only
       // where some lane found one (lavapipe, lamps 1280x720, the point light's resolve 39 -> 22 ms).
-      if (izb_flag(IZB_FLAG_CPU_DEVICE))
+      if (izb_flag(IZB_FLAG_CPU_DEVICE)) {
         while (k < count && !straddler_in_bounds(k, projected, g)) ++k;
-      if (k >= count) break;
-      if (!straddler_in_bounds(k, projected, g)) continue;
+        if (k >= count) break;
+      } else if (!straddler_in_bounds(k, projected, g)) {
+        continue;
+      }
       uint t = floatBitsToUint(grid_triangles[3u * push.triangle_count + k].x);
       vec2 uv;
       if (!ray_hits_triangle(o, dir, t_max, casters[t].p0.xyz, casters[t].p1.xyz, casters[t].p2.xyz, uv)) continue;
