@@ -334,6 +334,7 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
     if (ImGui::Combo("masking", &masking, maskings, IM_ARRAYSIZE(maskings))) s.cascades.masking = shadows::Masking(masking);
     ImGui::Checkbox("selective blur", &s.cascades.blur);
     ImGui::Checkbox("sm masking (the same term)", &s.shadow_map.masking);
+    ImGui::Checkbox("sm local light tiles (the same term)", &s.shadow_map.local_light_tiles);
     const char* debug_views[] = {"none", "visibility mask", "IZB list length", "cascades", "CSM coverage", "expensive path"};
     int debug = int(s.debug);
     if (ImGui::Combo("overlay", &debug, debug_views, IM_ARRAYSIZE(debug_views))) s.debug = shadows::DebugView(debug);
@@ -469,6 +470,7 @@ std::string save_settings(const std::string& path, shadows::ShadowModule& module
   j["masking"] = shadows::masking_name(s.cascades.masking);
   j["blur"] = s.cascades.blur;
   j["sm_masking"] = s.shadow_map.masking;
+  j["sm_local_light_tiles"] = s.shadow_map.local_light_tiles;
   j["debug"] = int(s.debug);
   j["izb_resolution"] = s.izb.resolution;
   j["hybrid_izb_distance"] = s.hybrid_izb_distance;
@@ -529,6 +531,7 @@ std::string load_settings(const std::string& path, shadows::ShadowModule& module
         s.cascades.masking = *m;
       } else if (k == "blur") s.cascades.blur = v.get<bool>();
       else if (k == "sm_masking") s.shadow_map.masking = v.get<bool>();
+      else if (k == "sm_local_light_tiles") s.shadow_map.local_light_tiles = v.get<bool>();
       else if (k == "debug") {
         const int d = v.get<int>();
         if (d < 0 || d > 5) return bad("must be 0..5");

@@ -206,20 +206,15 @@ void block_micro_quad_corners(ivec2 pixel, ivec2 block_origin, PixelPoint p, out
 #endif
 
 // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the build lists; with
-// IZB_FLAG_FACE_TILES, a point light's six lists of tiles (izb.h, kIzbFaceTilesAt).
+// IZB_FLAG_FACE_TILES, a point light's six lists of tiles (light_tiles.h).
 layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
+#define LIGHT_TILES_LIST resolve_list
+#include "shadows/light_tiles.glsl"
 // A point light's face, or a spot light on a CPU device (IZB_FLAG_FACE_TILES): this invocation's pixel
 // in the face's (the spot's) list of 8x8 tiles (izb_face_tiles.comp), a workgroup of 8x8 a tile;
 // false for a workgroup past the list's end, which then leaves whole, before any barrier.
 bool face_tile_pixel(out ivec2 pixel) {
-  uint face = point_light_face_pass() ? point_light_face() : 0u;  // (a spot light's one list: 0)
-  uint slot = IZB_ROW_DISPATCH_GROUP;
-  pixel = ivec2(0);
-  if (slot >= resolve_list[4u * face]) return false;
-  uint tile = resolve_list[kIzbFaceTilesAt + face * izb_pixel_tiles(params.extent.x, params.extent.y) + slot];
-  uint tiles_x = izb_pixel_tiles_x(params.extent.x);
-  pixel = ivec2(tile % tiles_x, tile / tiles_x) * 8 + ivec2(gl_LocalInvocationID.xy);
-  return true;
+  return light_tile_pixel(point_light_face_pass() ? point_light_face() : 0u, params.extent.xy, pixel);
 }
 // The resolve list's pixel of this invocation (one a thread, in rows of kIzbDispatchRow workgroups of
 // 64: IZB_COUNTER_RESOLVE_LIST's dispatch); false past the list's end.

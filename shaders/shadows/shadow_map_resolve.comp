@@ -25,6 +25,9 @@ layout(constant_id = 4) const uint kStage = SM_STAGE_WHOLE;
 // A spot light or one of a point light's faces (a perspective map) rather than the sun: a CPU device
 // would run the local light's reach and cone tests for every pixel under the sun too.
 layout(constant_id = 5) const bool kLocalLight = false;
+// A point light's face (on a CPU device, a spot light too): a workgroup a tile of the face's list
+// (shadow_map_tiles.comp), not the whole frame.
+layout(constant_id = 6) const bool kTiles = false;
 
 layout(set = 0, binding = SM_RESOLVE_BINDING_PARAMS) uniform Params { ShadowMapResolveParams params; };
 layout(set = 0, binding = SM_RESOLVE_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
@@ -36,6 +39,9 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_BLOCKS, std430) readonly buffer Blo
 layout(set = 0, binding = SM_RESOLVE_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
 // SM_STAGE_*: its count, the listed pass's dispatch (x, y, z), then a pixel an entry (x | y << 16).
 layout(set = 0, binding = SM_RESOLVE_BINDING_LIST, std430) buffer TapList { uint tap_list[]; };
+layout(set = 0, binding = SM_RESOLVE_BINDING_TILES, std430) readonly buffer TileLists { uint tile_lists[]; };
+#define LIGHT_TILES_LIST tile_lists
+#include "shadows/light_tiles.glsl"
 
 float pcss_map_depth(int layer, ivec2 texel) { return texelFetch(shadow_map, texel, 0).r; }
 #include "pcss.glsl"
@@ -99,8 +105,10 @@ void size_list_dispatch() {
   tap_list[3] = 1u;
 }
 
-// This invocation's pixel: its own, or in the listed pass its entry's (false past the list's end).
+// This invocation's pixel: its own, its face's tile's (kTiles), or in the listed pass its entry's (false
+// past the list's end).
 bool stage_pixel(out ivec2 pixel) {
+  if (kTiles) return light_tile_pixel(params.light_cone.z > 0.0 ? uint(params.light_cone.w) : 0u, params.extent.xy, pixel);
   if (kStage != SM_STAGE_LISTED) {
     pixel = ivec2(gl_GlobalInvocationID.xy);
     return true;

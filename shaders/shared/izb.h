@@ -2,6 +2,7 @@
 #ifndef IZB_H
 #define IZB_H
 #include "shared_prelude.h"
+#include "light_tiles.h"
 
 SHARED_BEGIN
 
@@ -291,15 +292,8 @@ SHARED_CONST uint IZB_BINDING_LIST_COUNTS = 29u;
 SHARED_CONST uint IZB_BINDING_LIST_CURSOR = 30u;
 // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the resolve alone reads.
 SHARED_CONST uint IZB_BINDING_RESOLVE_LIST = 31u;
-// IZB_FLAG_FACE_TILES keeps its lists there instead (a point light's faces list no resolve): for face
-// f (izb_face_tiles.comp's order: +x, -x, +y, -y, +z, -z) the words [4f, 4f + 4) hold its tile count
-// and its build's indirect dispatch (rows of kIzbDispatchRow); from kIzbFaceTilesAt, its tiles
-// (ty * izb_pixel_tiles_x + tx) at f * izb_pixel_tiles.
-SHARED_CONST uint kIzbFaceTilesAt = 32u;
-SHARED_CONST uint kIzbFaceTileBlock = 32u;  // pixels a side of izb_face_tiles.comp's workgroup (4x4 tiles)
-SHARED_INLINE uint izb_pixel_tiles_x(uint width) { return (width + 7u) / 8u; }
-SHARED_INLINE uint izb_pixel_tiles(uint width, uint height) { return izb_pixel_tiles_x(width) * ((height + 7u) / 8u); }
-SHARED_INLINE uint izb_face_tile_words(uint width, uint height) { return kIzbFaceTilesAt + 6u * izb_pixel_tiles(width, height); }
+// IZB_FLAG_FACE_TILES keeps its tile lists there instead (light_tiles.h; a point light's faces list
+// no resolve).
 SHARED_CONST uint kIzbScanBlock = 1024u;  // texels per block of the prefix sum (256 threads x 4)
 SHARED_CONST uint kIzbHybridEntriesPerGroup = 256u;  // hybrid list entries per workgroup (64 threads x 4)
 // With a limited range the hybrid fades from the IZB's term to the cascades' over the range's last

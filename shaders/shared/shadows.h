@@ -2,6 +2,7 @@
 #ifndef SHADOWS_H
 #define SHADOWS_H
 #include "shared_prelude.h"
+#include "light_tiles.h"
 
 SHARED_BEGIN
 
@@ -19,7 +20,8 @@ struct ShadowMapResolveParams {
   mat4 light_view_projection;
   vec4 light_direction;  // xyz travel direction
   vec4 light_position;   // xyz: a spot light's position; w: its range (0: the sun)
-  vec4 light_cone;       // x: cosine of the spot light's outer cone
+  vec4 light_cone;       // x: cosine of the spot light's outer cone; z: 1 for a point light's face, w its
+                         // index (light_tiles.h's order)
   vec4 bias;             // x: constant depth bias; y: PCF radius in map texels (0: one tap)
   uvec4 extent;          // xy render size, zw map size
   vec4 camera_position;  // xyz (the shadow-ray offset, shadow_common.h)
@@ -41,6 +43,9 @@ SHARED_CONST uint SM_RESOLVE_BINDING_RECEIVERS = 5u;  // RGBA8, a > 0.5: receive
 SHARED_CONST uint SM_RESOLVE_BINDING_BLOCKS = 6u;     // kSmBlock² depth blocks' planes (shadow_map_blocks.comp)
 SHARED_CONST uint SM_RESOLVE_BINDING_COUNTERS = 7u;   // SM_COUNTER_* (with stats)
 SHARED_CONST uint SM_RESOLVE_BINDING_LIST = 8u;       // the CPU device's list of pixels to tap (SM_STAGE_*)
+// A point light's faces (a spot light's one cone on a CPU device): the tiles each resolves
+// (light_tiles.h, listed by shadow_map_tiles.comp).
+SHARED_CONST uint SM_RESOLVE_BINDING_TILES = 9u;
 // The resolve's passes (shadow_map_resolve.comp's kStage): whole on a GPU; on a CPU device with
 // masking, every pixel listing those whose PCSS taps must run, that list's dispatch, the listed taps.
 SHARED_CONST uint SM_STAGE_WHOLE = 0u;

@@ -362,6 +362,51 @@ INSTANTIATE_TEST_SUITE_P(Lamps, LampsTest,
                                   std::to_string(info.param.view) + "_" + std::to_string(info.param.size);
                          });
 
+// A local light's maps resolved over the tiles each face's cone reaches (a point light's six faces; on
+// a CPU device a spot light's one map too: ShadowMapSettings::local_light_tiles, shadow_map_tiles.comp)
+// give the whole-frame resolve's terms bit for bit: sm and the cascades' filtered maps, hard and with
+// a light radius (PCSS), both lamps of `lamps` at both views, on a CPU device on its own paths and a
+// GPU's (which lists its tiles by blocks and leaves a spot light's map whole).
+TEST_F(RayTracedTest, LocalLightTilesGiveTheWholeFrameTermsBitForBit) {
+  const bool cpu = ctx_->properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  for (int gpu_paths = 0; gpu_paths < (cpu ? 2 : 1); ++gpu_paths)
+    for (size_t view : {0u, 1u})
+      for (shadows::Technique technique : {shadows::Technique::ShadowMap, shadows::Technique::Cascades})
+        for (float radius : {0.0f, 0.1f}) {
+          SCOPED_TRACE(shadows::mode_name(shadows::Settings{.technique = technique}) + " view " + std::to_string(view) +
+                       " radius " + std::to_string(radius) + (gpu_paths ? ", GPU paths" : ""));
+          auto& r = make_renderer("lamps", view, 128, 128);
+          scene_->registry.each<engine::SpotLight>([&](engine::Entity, engine::SpotLight& l) { l.radius = radius; });
+          scene_->registry.each<engine::PointLight>([&](engine::Entity, engine::PointLight& l) { l.radius = radius; });
+          shadows::Settings settings;
+          settings.technique = technique;
+          if (gpu_paths) setenv("SHADOWS_GPU_PATHS", "1", 1);
+          module_ = shadows::install(r, settings);
+          unsetenv("SHADOWS_GPU_PATHS");  // read when the module was created
+          std::vector<std::vector<float>> terms[2];
+          for (int tiles = 0; tiles < 2; ++tiles) {
+            module_->settings().shadow_map.local_light_tiles = tiles == 1;
+            r.render_frame(0.0f);
+            const engine::FrameView frame = r.frame_view();
+            ASSERT_EQ(frame.local_lights.size(), 2u) << "both lamps reach the view";
+            for (uint32_t i = 0; i < 2; ++i) terms[tiles].push_back(r.read_local_shadow_term(i));
+          }
+          for (uint32_t i = 0; i < 2; ++i) {
+            size_t differ = 0, lit = 0, shadowed = 0;
+            for (size_t k = 0; k < terms[0][i].size(); ++k) {
+              differ += std::memcmp(&terms[0][i][k], &terms[1][i][k], sizeof(float)) != 0;
+              lit += terms[0][i][k] == 1.0f;
+              shadowed += terms[0][i][k] == 0.0f;
+            }
+            EXPECT_EQ(differ, 0u) << "lamp " << i << ": " << differ << " pixels differ from the whole frame's";
+            EXPECT_GT(lit, 0u) << "lamp " << i;
+            EXPECT_GT(shadowed, 0u) << "lamp " << i;
+          }
+          module_.reset();
+          renderer_.reset();
+        }
+}
+
 // Several lights in one record: the renderer's moon and both lamps of `lamps` go through the module
 // together, each into its own term, and each term equals the one the light gets recorded alone (the
 // same passes, restarted per light; a pass that leaked one light's state into the next would differ).

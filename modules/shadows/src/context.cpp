@@ -1053,17 +1053,20 @@ std::vector<Context::PassTime> ContextImpl::pass_times() const {
 
 // The technique's own passes (statistics-only passes such as izb_stats and csm_coverage excluded).
 std::vector<std::string> ContextImpl::pass_names() const {
-  std::vector<std::string> izb = {"light_frustum", "izb_build", "frustum_trace", "izb_fallback", "izb_resolve"};
+  // (A point light's passes once before its faces: point_light_tiles, sm_light_tiles.)
+  std::vector<std::string> izb = {"light_frustum", "point_light_tiles", "izb_build", "frustum_trace", "izb_fallback",
+                                  "izb_resolve"};
   if (settings_.izb.csm) izb.insert(izb.begin() + 1, "csm");
   if (settings_.izb.lit_culling != LitCulling::Off) izb.insert(izb.begin() + 1, "lit_map");
   const std::vector<std::string> cascades = {"cascade_depth", "cascade_masks", "cascade_filter", "cascade_blur"};
+  const std::vector<std::string> shadow_map = {"sm_depth", "sm_blocks", "sm_light_tiles", "sm_resolve"};
   switch (settings_.technique) {
     case Technique::Off: return {};
-    case Technique::ShadowMap: return {"sm_depth", "sm_resolve"};
+    case Technique::ShadowMap: return shadow_map;
     case Technique::Cascades: {
       // A local light's filtered maps are the shadow map's passes.
       std::vector<std::string> names = cascades;
-      names.insert(names.end(), {"sm_depth", "sm_resolve"});
+      names.insert(names.end(), shadow_map.begin(), shadow_map.end());
       return names;
     }
     case Technique::Izb: return izb;

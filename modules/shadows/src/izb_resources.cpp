@@ -121,7 +121,7 @@ void IzbResources::ensure_work_lists(bool used, uint32_t triangle_count) {
 
 void IzbResources::ensure_resolve_list(VkExtent2D e, bool listed, bool face_tiles) {
   VkDeviceSize want = listed ? VkDeviceSize(e.width) * e.height * 4 : 4;
-  if (face_tiles) want = std::max<VkDeviceSize>(want, VkDeviceSize(gpu_shared::izb_face_tile_words(e.width, e.height)) * 4);
+  if (face_tiles) want = std::max<VkDeviceSize>(want, VkDeviceSize(gpu_shared::light_tile_words(e.width, e.height)) * 4);
   if (resolve_list.valid() && resolve_list.size() >= want) return;
   resolve_list = Buffer(ctx, want,
                         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |

@@ -40,7 +40,7 @@ struct IzbResources {
   engine::gpu::Buffer list_counts, list_cursor;  // the cursors' buffer also holds the prefix sum's block sums
   uint32_t scan_blocks = 0;
   // IZB_FLAG_LISTED_RESOLVE: the pixels with nodes; IZB_FLAG_FACE_TILES: the faces' tile lists and
-  // their builds' indirect dispatches (izb.h, kIzbFaceTilesAt).
+  // their builds' indirect dispatches (light_tiles.h).
   engine::gpu::Buffer resolve_list;
   // Hybrid: the cascades' term and the pixels that blend toward it (frame-sized only in hybrid with a
   // limited range), and the penumbra pass's tiles.

@@ -11,6 +11,9 @@ using namespace engine::gpu;
 
 namespace {
 constexpr VkFormat kMapFormat = VK_FORMAT_D32_SFLOAT;
+// A list a pass appends to and a later one dispatches over, its count zeroed by a fill.
+constexpr VkBufferUsageFlags kListUsage =
+    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
 
 // The PCSS fields of the resolve's parameters (pcss.glsl's PcssMap). `light_vp` is a projection
 // times a rigid light view, so the norms of its rows' xyz are the projection's scales: a texel's size
@@ -48,9 +51,8 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
                      false, "sm counters");
   // Placeholders that keep the resolve's bindings valid until a frame needs the real ones.
   blocks_ = Buffer(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
-  tap_list_ = Buffer(ctx, 16,
-                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                     false, "sm tap list");
+  tap_list_ = Buffer(ctx, 16, kListUsage, false, "sm tap list");
+  light_tiles_ = Buffer(ctx, 16, kListUsage, false, "sm light tiles");
 }
 
 const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
@@ -67,9 +69,11 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
         {gpu_shared::SM_RESOLVE_BINDING_RECEIVERS, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
         {gpu_shared::SM_RESOLVE_BINDING_BLOCKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
         {gpu_shared::SM_RESOLVE_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-        {gpu_shared::SM_RESOLVE_BINDING_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+        {gpu_shared::SM_RESOLVE_BINDING_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+        {gpu_shared::SM_RESOLVE_BINDING_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
        0,
-       {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage}, {5, v.local ? 1u : 0u}}});
+       {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage},
+        {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}}});
   return pipeline;
 }
 
@@ -93,6 +97,39 @@ void ShadowMapPass::record_blocks(Frame& frame, uint32_t size) {
       .push(ctx_, cmd, blocks_pipeline_);
   vkCmdDispatch(cmd, (blocks + 7) / 8, (blocks + 7) / 8, 1);
   // The blocks' stores before the resolve's loads.
+  pass_barrier(ctx_, cmd);
+}
+
+void ShadowMapPass::record_light_tiles(Frame& frame) {
+  VkCommandBuffer cmd = frame.cmd;
+  const VkExtent2D e = frame.view.extent;
+  const VkDeviceSize bytes = VkDeviceSize(gpu_shared::light_tile_words(e.width, e.height)) * 4;
+  if (light_tiles_.size() < bytes) light_tiles_ = Buffer(ctx_, bytes, kListUsage, false, "sm light tiles");
+  if (!light_tiles_pipeline_.valid())
+    light_tiles_pipeline_ = PipelineFactory(ctx_).compute(
+        {"shadow_map_tiles.comp",
+         {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
+          {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+          {gpu_shared::SM_RESOLVE_BINDING_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+         0,
+         {{0, cpu_paths_ ? 1u : 0u}}});
+  ScopedGpuRegion region(ctx_, frame.profiler, cmd, "sm_light_tiles");
+  // The lists' counts and dispatches zeroed (the fill before the listing's atomics).
+  vkCmdFillBuffer(cmd, light_tiles_.handle(), 0, VkDeviceSize(gpu_shared::kLightTilesAt) * 4, 0);
+  pass_barrier(ctx_, cmd);
+  light_tiles_pipeline_.bind(cmd);
+  DescriptorWriter()
+      .uniform_buffer(gpu_shared::SM_RESOLVE_BINDING_PARAMS, params_.handle())
+      .storage_image(gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, frame.gbuffer.world_position)
+      .storage_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, frame.shadow_term.view())
+      .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_TILES, light_tiles_.handle())
+      .push(ctx_, cmd, light_tiles_pipeline_);
+  // A workgroup of 16x16 threads: on a GPU a block of kLightTileBlock² pixels, on a CPU device a
+  // thread a tile of 8x8.
+  const uint32_t block = cpu_paths_ ? 16 * 8 : gpu_shared::kLightTileBlock;
+  vkCmdDispatch(cmd, (e.width + block - 1) / block, (e.height + block - 1) / block, 1);
+  // The lists and the term's stores before the faces' indirect dispatches and resolves.
   pass_barrier(ctx_, cmd);
 }
 
@@ -134,7 +171,8 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
   p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
   if (frame.view.local_light) {
     p.light_position = glm::vec4(frame.view.light_position, frame.view.light_range);
-    p.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, frame.view.light_face ? 1.0f : 0.0f, 0.0f);
+    p.light_cone = glm::vec4(frame.view.light_cos_outer, 0.0f, frame.view.light_face ? 1.0f : 0.0f,
+                             frame.view.light_face ? float(frame.view.light_face_index) : 0.0f);
   }
   p.bias = glm::vec4(settings.constant_bias, filter_texels, 0.0f, 0.0f);
   p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.size, settings.size);
@@ -149,10 +187,13 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
   const bool split = masking && cpu_paths_;
   const VkDeviceSize list_bytes = (VkDeviceSize(frame.view.extent.width) * frame.view.extent.height + 4) * 4;
   if (split && tap_list_.size() < list_bytes)
-    tap_list_ = Buffer(ctx_, list_bytes,
-                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                       false, "sm tap list");
-  record_resolve(frame, {sized, filter_texels > 0.0f, masking, count && sized, gpu_shared::SM_STAGE_WHOLE, frame.view.local_light},
+    tap_list_ = Buffer(ctx_, list_bytes, kListUsage, false, "sm tap list");
+  // A point light's faces each resolve the tiles their cones reach, not the whole frame; so does a spot
+  // light on a CPU device, which would pay for every pixel outside its cone too.
+  const bool tiles = settings.local_light_tiles && (frame.view.light_face || (frame.view.local_light && cpu_paths_));
+  if (tiles && first_map) record_light_tiles(frame);
+  record_resolve(frame,
+                 {sized, filter_texels > 0.0f, masking, count && sized, gpu_shared::SM_STAGE_WHOLE, frame.view.local_light, tiles},
                  split);
   // The counts are read on the host once this frame has completed.
   if (count && last_map)
@@ -176,9 +217,15 @@ void ShadowMapPass::record_resolve(Frame& frame, ResolveVariant variant, bool sp
         .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_BLOCKS, blocks_.handle())
         .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_COUNTERS, counters_.handle())
         .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_LIST, tap_list_.handle())
+        .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_TILES, light_tiles_.handle())
         .push(ctx_, cmd, resolve);
   };
   const auto over_frame = [&] {
+    if (variant.tiles) {
+      const uint32_t list = frame.view.light_face ? frame.view.light_face_index : 0;
+      vkCmdDispatchIndirect(cmd, light_tiles_.handle(), VkDeviceSize(4 * list + 1) * 4);
+      return;
+    }
     vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
   };
   if (!split) {

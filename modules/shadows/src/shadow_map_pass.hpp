@@ -33,9 +33,10 @@ class ShadowMapPass {
     bool count = false;    // the counts for Stats
     uint32_t stage = 0;    // SM_STAGE_*
     bool local = false;    // a spot light or a point light's face (a perspective map), not the sun
+    bool tiles = false;    // over the tiles of the light's list (record_light_tiles), not the frame
     uint32_t key() const {
       return uint32_t(pcss) | uint32_t(pcf) << 1 | uint32_t(masking) << 2 | uint32_t(count) << 3 | uint32_t(local) << 4 |
-             stage << 5;
+             uint32_t(tiles) << 5 | stage << 6;
     }
   };
   const engine::gpu::Pipeline& resolve_pipeline(const ResolveVariant& variant);
@@ -43,6 +44,9 @@ class ShadowMapPass {
   void record_resolve(Frame& frame, ResolveVariant variant, bool split);
   // PCSS's masking: the depth map's block planes (shadow_map_blocks.comp), before the resolve.
   void record_blocks(Frame& frame, uint32_t size);
+  // Before a point light's first face is resolved (on a CPU device, a spot light's map too): the tiles
+  // each face's cone reaches (shadow_map_tiles.comp), and the term of the points none does.
+  void record_light_tiles(Frame& frame);
   engine::gpu::Context& ctx_;
   engine::gpu::Image map_;
   engine::gpu::Buffer params_;
@@ -52,6 +56,8 @@ class ShadowMapPass {
   std::map<uint32_t, engine::gpu::Pipeline> resolve_pipelines_;  // by ResolveVariant::key
   bool cpu_paths_ = false;         // a CPU device: the resolve split where it masks
   engine::gpu::Buffer tap_list_;   // the split resolve's list (SM_STAGE_*)
+  engine::gpu::Buffer light_tiles_;  // a local light's tile lists (light_tiles.h)
+  engine::gpu::Pipeline light_tiles_pipeline_;
   engine::gpu::Pipeline blocks_pipeline_;
   engine::gpu::Buffer blocks_;    // vec4 per kSmBlock² block of the map
   engine::gpu::Buffer counters_;  // SM_COUNTER_*

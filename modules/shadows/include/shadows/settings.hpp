@@ -79,6 +79,11 @@ struct ShadowMapSettings {
   // the share of the pixels that ran them). Spot and point lights' maps are not masked (their search
   // spans more blocks than a pixel reads).
   bool masking = true;
+  // A point light's six face maps (on a CPU device, a spot light's map too; the cascades' filtered
+  // maps of local lights alike): one pass lists the 8x8 pixel tiles each face's cone reaches, and each
+  // face resolves its tiles alone instead of the whole frame. The same term bit for bit; false resolves
+  // every face over the whole frame.
+  bool local_light_tiles = true;
 };
 
 struct CascadeSettings {
