@@ -38,6 +38,43 @@ uint walk_owner(uint j, bool rows) {
   return lo;
 }
 
+// The trace on a CPU device, without statistics (which count every texel a triangle touches): the
+// small triangles' texels a row of a rectangle a thread, as izb_texel_bin.comp's trace_tile_rows
+// walks a tile's: the row's farthest depths read first into a mask of the texels with nodes (a texel
+// without is culled whatever the triangle), then only those tested, a kept pair taking its slot with
+// one atomic. A texel a thread paid the walk's search and loads for every texel of the rectangles and
+// tested each twice (counting, then writing). The same pairs, in another order.
+bool walks_direct_rows(uint mode) {
+  return izb_flag(IZB_FLAG_CPU_DEVICE) && mode == IZB_WORK_TRACE && !izb_flag(IZB_FLAG_STATS);
+}
+void trace_direct_rows(uint total_rows) {
+  bool skip_empty = !izb_flag(IZB_FLAG_NO_DEPTH_CULL);
+  for (uint j = gl_LocalInvocationIndex; j < total_rows; j += 64u) {
+    uint owner = walk_owner(j, false);
+    uint t = walk_triangle[owner];
+    ivec4 d = walk_direct[owner];
+    vec3 a, b, c;
+    float area;
+    walked_triangle(owner, a, b, c, area);
+    int y = d.y + int(j - walk_texel_start[owner]);
+    for (int x0 = d.x; x0 <= d.z; x0 += 32) {
+      uint width = uint(min(d.z - x0 + 1, 32));
+      uint todo = width == 32u ? 0xffffffffu : (1u << width) - 1u;
+      if (skip_empty)
+        for (uint x = 0u; x < width; ++x)
+          if (texel_without_nodes(ivec2(x0 + int(x), y))) todo &= ~(1u << x);
+      while (todo != 0u) {
+        ivec2 texel = ivec2(x0 + findLSB(todo), y);
+        todo &= todo - 1u;
+        if (trace_pair_outcome(texel, a, b, c, area) != IZB_PAIR_KEPT) continue;
+        uint slot = reserve_slots_raising(IZB_COUNTER_PAIRS, 1u, true, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
+        if (slot < params.limits.w) pairs[slot] = uvec2(t, texel_index(texel));
+        else trace_texel_list(texel_index(texel), t, a, b, c, 1.0 / area);
+      }
+    }
+  }
+}
+
 // Compute trace / compute CSM, step 1 (see izb.h): a thread per listed caster triangle finds its few
 // texels (a small triangle) or its rows of tiles; then the workgroup works all its triangles' texels
 // and rows together, a thread per texel or row (a triangle's many would otherwise serialize its one
@@ -100,8 +137,10 @@ void main() {
   walk_first_row[lane] = rows.x;
   // Where each thread's texels and rows start: inclusive sums in the subgroup, plus the subgroups'
   // before it (subgroups of any size that divides 64).
-  uvec2 items = uvec2(direct.x <= direct.z ? uint((direct.z - direct.x + 1) * (direct.w - direct.y + 1)) : 0u,
-                      rows.x <= rows.y ? uint(rows.y - rows.x + 1) : 0u);
+  // (walks_direct_rows: a direct rectangle's rows, not its texels.)
+  uint direct_items = walks_direct_rows(mode) ? uint(direct.w - direct.y + 1)
+                                              : uint((direct.z - direct.x + 1) * (direct.w - direct.y + 1));
+  uvec2 items = uvec2(direct.x <= direct.z ? direct_items : 0u, rows.x <= rows.y ? uint(rows.y - rows.x + 1) : 0u);
   uvec2 through = subgroupInclusiveAdd(items);
   if (gl_SubgroupInvocationID == gl_SubgroupSize - 1u) walk_subgroup_sums[gl_SubgroupID] = through;
   barrier();
@@ -119,7 +158,8 @@ void main() {
   // (The count's outcomes of a thread's first 32 texels are kept for the write, as bits.)
   uint total_texels = walk_texel_start[64];
   uint kept_total = 0u, fragments = 0u, kept_bits = 0u;
-  for (uint pass = (mode == IZB_WORK_TRACE ? 0u : 1u); pass < 2u; ++pass) {  // trace: count, then write
+  if (walks_direct_rows(mode)) trace_direct_rows(total_texels);
+  for (uint pass = walks_direct_rows(mode) ? 2u : mode == IZB_WORK_TRACE ? 0u : 1u; pass < 2u; ++pass) {  // trace: count, then write
     uint slot = 0u;
     if (pass == 1u && mode == IZB_WORK_TRACE)
       slot = reserve_group_slots(IZB_COUNTER_PAIRS, kept_total, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);

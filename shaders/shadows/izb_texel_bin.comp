@@ -29,11 +29,6 @@ void quad_pairs(uint group, uint mode, uint count) {
   }
 }
 
-// Outside the grid, or no node's depth raised its farthest bound (trace_pair_outcome culls it).
-bool texel_without_nodes(ivec2 texel) {
-  return !all(lessThan(uvec2(texel), uvec2(izb_resolution()))) || uintBitsToFloat(farthest[texel_index(texel)]) <= 0.0;
-}
-
 // The trace on a CPU device: a thread per row of a pair's tile (kIzbTilePairsPerGroup pairs of
 // kIzbTile rows fill the workgroup), its kIzbTile texels one after another: the pair and its triangle
 // are read and set up once a row, not once a texel, and a kept pair takes its slot with one atomic, no

@@ -128,6 +128,11 @@ bool tile_survives(uvec2 tile, vec3 a, vec3 b, vec3 c, float area, uint mode) {
   return rect_touches_triangle(lo, hi, a, b, c, sign(area));
 }
 
+// Outside the grid, or no node's depth raised its farthest bound (trace_pair_outcome culls it).
+bool texel_without_nodes(ivec2 texel) {
+  return !all(lessThan(uvec2(texel), uvec2(izb_resolution()))) || uintBitsToFloat(farthest[texel_index(texel)]) <= 0.0;
+}
+
 // Trace: what becomes of a (triangle, texel) pair. The cheap depth cull against the texel's farthest
 // node runs first; the touch test after it, or first when statistics count the fragments before the
 // cull.

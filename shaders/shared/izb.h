@@ -195,7 +195,7 @@ SHARED_CONST uint IZB_COUNTER_COUNT = IZB_COUNTER_STEP_DISPATCH + 21u;
 //     (kIzbStepOne*); the workgroup then works all its triangles' texels (the CSM and lit map
 //     write them, the trace lists its pairs for step 4) and cuts each row's exact span into records
 //     (triangle, tile row, first tile, last tile) of at most kIzbRecordTiles tiles, a thread per texel
-//     or row;
+//     or row (the trace on a CPU device: a thread per row of a small triangle's texels, izb_records.comp);
 //  2. a thread per (record, tile) keeps the (triangle, tile) pairs the triangle touches (and, for the
 //     trace, does not lie behind every node of);
 //  3. a workgroup per (triangle, tile), a thread per texel: the CSM writes fully covered texels, the
