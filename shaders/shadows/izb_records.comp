@@ -42,8 +42,8 @@ uint walk_owner(uint j, bool rows) {
 // small triangles' texels a row of a rectangle a thread, as izb_texel_bin.comp's trace_tile_rows
 // walks a tile's: the row's farthest depths read first into a mask of the texels with nodes (a texel
 // without is culled whatever the triangle), then only those tested, a kept pair taking its slot with
-// one atomic. A texel a thread paid the walk's search and loads for every texel of the rectangles and
-// tested each twice (counting, then writing). The same pairs, in another order.
+// one atomic. (A thread a texel paid the walk's search and loads for every texel of the rectangles,
+// and tested each twice: counting, then writing.) The same pairs, in another order.
 bool walks_direct_rows(uint mode) {
   return izb_flag(IZB_FLAG_CPU_DEVICE) && mode == IZB_WORK_TRACE && !izb_flag(IZB_FLAG_STATS);
 }
