@@ -40,38 +40,22 @@ uint walk_owner(uint j, bool rows) {
 
 // The trace on a CPU device, without statistics (which count every texel a triangle touches): the
 // small triangles' texels a row of a rectangle a thread, as izb_texel_bin.comp's trace_tile_rows
-// walks a tile's: the row's farthest depths read first into a mask of the texels with nodes (a texel
-// without is culled whatever the triangle), then only those tested, a kept pair taking its slot with
-// one atomic. (A thread a texel paid the walk's search and loads for every texel of the rectangles,
-// and tested each twice: counting, then writing.) The same pairs, in another order.
+// walks a tile's (trace_texel_row: only the row's texels with nodes tested, a kept pair taking its
+// slot with one atomic). (A thread a texel paid the walk's search and loads for every texel of the
+// rectangles, and tested each twice: counting, then writing.) The same pairs, in another order.
 bool walks_direct_rows(uint mode) {
   return izb_flag(IZB_FLAG_CPU_DEVICE) && mode == IZB_WORK_TRACE && !izb_flag(IZB_FLAG_STATS);
 }
 void trace_direct_rows(uint total_rows) {
-  bool skip_empty = !izb_flag(IZB_FLAG_NO_DEPTH_CULL);
   for (uint j = gl_LocalInvocationIndex; j < total_rows; j += 64u) {
     uint owner = walk_owner(j, false);
-    uint t = walk_triangle[owner];
     ivec4 d = walk_direct[owner];
     vec3 a, b, c;
     float area;
     walked_triangle(owner, a, b, c, area);
     int y = d.y + int(j - walk_texel_start[owner]);
-    for (int x0 = d.x; x0 <= d.z; x0 += 32) {
-      uint width = uint(min(d.z - x0 + 1, 32));
-      uint todo = width == 32u ? 0xffffffffu : (1u << width) - 1u;
-      if (skip_empty)
-        for (uint x = 0u; x < width; ++x)
-          if (texel_without_nodes(ivec2(x0 + int(x), y))) todo &= ~(1u << x);
-      while (todo != 0u) {
-        ivec2 texel = ivec2(x0 + findLSB(todo), y);
-        todo &= todo - 1u;
-        if (trace_pair_outcome(texel, a, b, c, area) != IZB_PAIR_KEPT) continue;
-        uint slot = reserve_slots_raising(IZB_COUNTER_PAIRS, 1u, true, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
-        if (slot < params.limits.w) pairs[slot] = uvec2(t, texel_index(texel));
-        else trace_texel_list(texel_index(texel), t, a, b, c, 1.0 / area);
-      }
-    }
+    for (int x0 = d.x; x0 <= d.z; x0 += 32)
+      trace_texel_row(ivec2(x0, y), uint(min(d.z - x0 + 1, 32)), walk_triangle[owner], a, b, c, area);
   }
 }
 
@@ -159,7 +143,7 @@ void main() {
   uint total_texels = walk_texel_start[64];
   uint kept_total = 0u, fragments = 0u, kept_bits = 0u;
   if (walks_direct_rows(mode)) trace_direct_rows(total_texels);
-  for (uint pass = walks_direct_rows(mode) ? 2u : mode == IZB_WORK_TRACE ? 0u : 1u; pass < 2u; ++pass) {  // trace: count, then write
+  else for (uint pass = mode == IZB_WORK_TRACE ? 0u : 1u; pass < 2u; ++pass) {  // trace: count, then write
     uint slot = 0u;
     if (pass == 1u && mode == IZB_WORK_TRACE)
       slot = reserve_group_slots(IZB_COUNTER_PAIRS, kept_total, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);

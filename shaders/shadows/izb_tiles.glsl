@@ -154,6 +154,34 @@ uint trace_pair_outcome(ivec2 texel, vec3 a, vec3 b, vec3 c, float area) {
   return IZB_PAIR_KEPT;
 }
 
+// The trace on a CPU device: triangle `t` against the `width` (at most 32) texels of a row from
+// `first`, a thread's, each kept pair taking its slot with one atomic (no workgroup barrier). Without
+// statistics (which count the texels a triangle touches) a texel without nodes is culled whatever the
+// triangle: the row's farthest depths are read first, straight through (no loop control a texel), into
+// a mask of the texels left, so a batch tests a texel only where some lane has nodes in one (lavapipe,
+// lamps' point light at 1280x720: step 3 26.2 -> 18.4 ms scanning texel by texel, 13.5-13.8 with the
+// mask). Returns the touched texels (fragments) and the kept pairs, for the statistics.
+uvec2 trace_texel_row(ivec2 first, uint width, uint t, vec3 a, vec3 b, vec3 c, float area) {
+  uint todo = width == 32u ? 0xffffffffu : (1u << width) - 1u;
+  if (!izb_flag(IZB_FLAG_STATS) && !izb_flag(IZB_FLAG_NO_DEPTH_CULL))
+    for (uint x = 0u; x < width; ++x)
+      if (texel_without_nodes(first + ivec2(x, 0))) todo &= ~(1u << x);
+  uvec2 counts = uvec2(0u);
+  while (todo != 0u) {
+    ivec2 texel = first + ivec2(findLSB(todo), 0);
+    todo &= todo - 1u;
+    bool inside = all(lessThan(uvec2(texel), uvec2(izb_resolution())));
+    uint outcome = inside ? trace_pair_outcome(texel, a, b, c, area) : IZB_PAIR_OUTSIDE;
+    counts.x += outcome != IZB_PAIR_OUTSIDE ? 1u : 0u;
+    if (outcome != IZB_PAIR_KEPT) continue;
+    ++counts.y;
+    uint slot = reserve_slots_raising(IZB_COUNTER_PAIRS, 1u, true, IZB_COUNTER_PAIR_DISPATCH, params.limits.w, kIzbPairGroup);
+    if (slot < params.limits.w) pairs[slot] = uvec2(t, texel_index(texel));
+    else trace_texel_list(texel_index(texel), t, a, b, c, 1.0 / area);
+  }
+  return counts;
+}
+
 // CSM at one corner of a texel: its barycentric weights (each against the test's slack: true when the
 // corner is inside) and the triangle's plane depth there.
 bool csm_corner(vec2 corner, vec3 a, vec3 b, vec3 c, float area, out float depth) {

@@ -17,6 +17,9 @@ SHARED_CONST uint kLightTileRow = 32768u;  // workgroups a row of a list's dispa
 SHARED_INLINE uint light_tiles_x(uint width) { return (width + 7u) / 8u; }
 SHARED_INLINE uint light_tiles(uint width, uint height) { return light_tiles_x(width) * ((height + 7u) / 8u); }
 SHARED_INLINE uint light_tile_words(uint width, uint height) { return kLightTilesAt + 6u * light_tiles(width, height); }
+// Pixels a side of a listing workgroup of 16x16 threads: a GPU's takes a 2x2 of pixels a thread, a CPU
+// device's a tile a thread (light_tiles.glsl).
+SHARED_INLINE uint light_tile_listing_block(bool cpu_device) { return cpu_device ? 16u * 8u : kLightTileBlock; }
 
 SHARED_END
 #endif

@@ -34,9 +34,7 @@ void record_face_tiles(IzbState& s, Frame& frame, const gpu_shared::IzbComputePu
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "point_light_tiles");
   vkCmdFillBuffer(cmd, s.res.resolve_list.handle(), 0, VkDeviceSize(gpu_shared::kLightTilesAt) * 4, 0);
   pass_barrier(frame.ctx, cmd);
-  // A workgroup of 16x16 threads a block of kLightTileBlock² pixels, or on a CPU device (a thread a
-  // tile, izb_face_tiles.comp) of 16x16 tiles.
-  const uint32_t block = s.pipelines.cpu_device() ? 16 * 8 : gpu_shared::kLightTileBlock;
+  const uint32_t block = gpu_shared::light_tile_listing_block(s.pipelines.cpu_device());
   s.dispatch(cmd, frame, s.p->face_tiles, push, (frame.view.extent.width + block - 1) / block,
              (frame.view.extent.height + block - 1) / block);
   pass_barrier(frame.ctx, cmd);

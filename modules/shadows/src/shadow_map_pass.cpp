@@ -125,9 +125,7 @@ void ShadowMapPass::record_light_tiles(Frame& frame) {
       .storage_image(gpu_shared::SM_RESOLVE_BINDING_SHADOW_TERM, frame.shadow_term.view())
       .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_TILES, light_tiles_.handle())
       .push(ctx_, cmd, light_tiles_pipeline_);
-  // A workgroup of 16x16 threads: on a GPU a block of kLightTileBlock² pixels, on a CPU device a
-  // thread a tile of 8x8.
-  const uint32_t block = cpu_paths_ ? 16 * 8 : gpu_shared::kLightTileBlock;
+  const uint32_t block = gpu_shared::light_tile_listing_block(cpu_paths_);
   vkCmdDispatch(cmd, (e.width + block - 1) / block, (e.height + block - 1) / block, 1);
   // The lists and the term's stores before the faces' indirect dispatches and resolves.
   pass_barrier(ctx_, cmd);
