@@ -2,6 +2,10 @@
 #extension GL_GOOGLE_include_directive : require
 #include "host.h"
 layout(local_size_x = 8, local_size_y = 8) in;
+// A CPU device (uniform_branch.glsl: the flags and the depth step decide branches).
+layout(constant_id = 0) const bool kCpuDevice = false;
+#define UNIFORM_BRANCH_CPU kCpuDevice
+#include "shadows/uniform_branch.glsl"
 
 layout(set = 0, binding = HOST_INPUTS_BINDING_PARAMS) uniform Params { HostInputs params; };
 layout(set = 0, binding = HOST_INPUTS_BINDING_DEPTH) uniform sampler2D depth_image;
@@ -35,7 +39,7 @@ vec3 decode_normal(vec4 texel, uint bits, float scale, float bias, vec3 position
 void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
-  uint flags = params.extent.z;
+  uint flags = uniform_branch(params.extent.z);
   imageStore(term_out, pixel, vec4(1.0));
   // Only a debug view draws into the overlay; without one the output pass writes the host's zeros.
   if ((flags & HOST_CLEAR_OVERLAY) != 0u) imageStore(overlay_out, pixel, vec4(0.0));
@@ -59,7 +63,7 @@ void main() {
   // the surface, where its own surface would shadow it (a 16-bit standard-Z buffer: about 5 mm 8
   // units out). It is pushed off the surface by the distance that rounding spans, below. (A float
   // depth's rounding is far below the shadow-ray offset, which covers it.)
-  float step = params.camera_position.w;
+  float step = uniform_branch(params.camera_position.w);
   float uncertainty = 0.0;
   if (step > 0.0) {
     vec4 nearer = params.inverse_view_projection * vec4(ndc, depth + 0.5 * step, 1.0);

@@ -47,6 +47,8 @@ uint izb_resolution() { return params.extent.z; }
 uint tile_farthest_index(uint tile) { return izb_resolution() * izb_resolution() + tile; }
 uint izb_samples() { return kIzbSamples; }
 bool izb_flag(uint flag) { return (kIzbFlags & flag) != 0u; }
+#define UNIFORM_BRANCH_CPU izb_flag(IZB_FLAG_CPU_DEVICE)
+#include "shadows/uniform_branch.glsl"
 
 // A spot light (else the sun): its grid is a perspective one from its position (izb_setup.comp), in
 // which rays toward the light run along the depth axis as the sun's do in its orthographic grid.

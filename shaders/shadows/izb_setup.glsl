@@ -119,14 +119,15 @@ const uint kDrawsPerThread = 4u;  // fewer rounds of the workgroup's scan
 // search), and writes the dispatch over those triangles. The passes after it touch only them: the
 // frame's cost follows the casters near the view, not the scene's size.
 void cull_draws(mat4 light_view_projection) {
-  for (uint first = 0u; first < caster_draw_count(); first += kSetupThreads * kDrawsPerThread) {
+  uint draws = uniform_branch(caster_draw_count());
+  for (uint first = 0u; first < draws; first += kSetupThreads * kDrawsPerThread) {
     uint draw0 = first + gl_LocalInvocationIndex * kDrawsPerThread;
     uint kept = 0u, triangles = 0u, kept_bits = 0u;
     uint first_triangle[kDrawsPerThread], draw_triangles[kDrawsPerThread];
     for (uint k = 0u; k < kDrawsPerThread; ++k) {
       first_triangle[k] = 0u;
       draw_triangles[k] = 0u;
-      if (draw0 + k >= caster_draw_count()) continue;
+      if (draw0 + k >= draws) continue;
       IzbDrawBounds b = load_draw_bounds(draw0 + k);
       if (!draw_in_frustum(b, light_view_projection)) continue;
       first_triangle[k] = floatBitsToUint(b.lo.w);
@@ -167,9 +168,9 @@ void cull_draws(mat4 light_view_projection) {
 // bounds); then lists the caster draws whose bounds reach the grid. The fit's last workgroup runs it.
 void set_up_frustum() {
   // One per fit workgroup (a spot light's fit runs one).
-  uint partials = spot_light() ? 1u
-                               : ((params.extent.x + kIzbFitBlockWidth - 1u) / kIzbFitBlockWidth) *
-                                     ((params.extent.y + kIzbFitBlockHeight - 1u) / kIzbFitBlockHeight);
+  uint partials = uniform_branch(spot_light() ? 1u
+                                              : ((params.extent.x + kIzbFitBlockWidth - 1u) / kIzbFitBlockWidth) *
+                                                    ((params.extent.y + kIzbFitBlockHeight - 1u) / kIzbFitBlockHeight));
   vec4 b = vec4(1.0e30, 1.0e30, -1.0e30, -1.0e30);
   for (uint i = gl_LocalInvocationIndex; i < partials; i += kSetupThreads) {
     vec4 p = bounds_partials[kIzbPartialsAt + i];

@@ -28,6 +28,10 @@ layout(constant_id = 5) const bool kLocalLight = false;
 // A point light's face (on a CPU device, a spot light too): a workgroup a tile of the face's list
 // (shadow_map_tiles.comp), not the whole frame.
 layout(constant_id = 6) const bool kTiles = false;
+// A CPU device (uniform_branch.glsl).
+layout(constant_id = 7) const bool kCpuDevice = false;
+#define UNIFORM_BRANCH_CPU kCpuDevice
+#include "shadows/uniform_branch.glsl"
 
 layout(set = 0, binding = SM_RESOLVE_BINDING_PARAMS) uniform Params { ShadowMapResolveParams params; };
 layout(set = 0, binding = SM_RESOLVE_BINDING_WORLD_POSITION, rgba32f) readonly uniform image2D world_position;
@@ -105,10 +109,13 @@ void size_list_dispatch() {
   tap_list[3] = 1u;
 }
 
+// One of a point light's six faces (else a spot light, or the sun).
+bool point_light_face() { return uniform_branch(params.light_cone.z) > 0.0; }
+
 // This invocation's pixel: its own, its face's tile's (kTiles), or in the listed pass its entry's (false
 // past the list's end).
 bool stage_pixel(out ivec2 pixel) {
-  if (kTiles) return light_tile_pixel(params.light_cone.z > 0.0 ? uint(params.light_cone.w) : 0u, params.extent.xy, pixel);
+  if (kTiles) return light_tile_pixel(point_light_face() ? uint(params.light_cone.w) : 0u, params.extent.xy, pixel);
   if (kStage != SM_STAGE_LISTED) {
     pixel = ivec2(gl_GlobalInvocationID.xy);
     return true;
@@ -135,7 +142,7 @@ void main() {
   vec4 p = imageLoad(world_position, pixel);
   if (p.w == 0.0) return;
   // One of a point light's cube-face cones: the points outside it belong to another face's map.
-  if (kLocalLight && params.light_cone.z > 0.0 && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
+  if (kLocalLight && point_light_face() && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
                                        params.light_cone.x * length(p.xyz - params.light_position.xyz))
     return;
   vec4 normal = imageLoad(geometric_normal, pixel);

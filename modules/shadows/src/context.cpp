@@ -244,7 +244,8 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
                     sampled(gs::HOST_INPUTS_BINDING_GEOMETRIC), sampled(gs::HOST_INPUTS_BINDING_OFFSET),
                     sampled(gs::HOST_INPUTS_BINDING_RECEIVER), storage(gs::HOST_INPUTS_BINDING_WORLD_POSITION),
                     storage(gs::HOST_INPUTS_BINDING_GEOMETRIC_OUT), storage(gs::HOST_INPUTS_BINDING_ALBEDO_OUT),
-                    storage(gs::HOST_INPUTS_BINDING_TERM_OUT), storage(gs::HOST_INPUTS_BINDING_OVERLAY_OUT)}});
+                    storage(gs::HOST_INPUTS_BINDING_TERM_OUT), storage(gs::HOST_INPUTS_BINDING_OVERLAY_OUT)},
+       .specialization = {{0, cpu_paths_ ? 1u : 0u}}});
   // The output pass into an R8 output with no overlay, made here rather than in the first frame; the
   // other formats and overlay choices are made on first use.
   (void)output_pipeline(0, 0u);

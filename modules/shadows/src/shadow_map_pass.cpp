@@ -73,7 +73,7 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
         {gpu_shared::SM_RESOLVE_BINDING_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
        0,
        {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage},
-        {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}}});
+        {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u}}});
   return pipeline;
 }
 
