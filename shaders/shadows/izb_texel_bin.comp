@@ -32,8 +32,9 @@ void quad_pairs(uint group, uint mode, uint count) {
 // The trace on a CPU device: a thread per row of a pair's tile (kIzbTilePairsPerGroup pairs of
 // kIzbTile rows fill the workgroup), its kIzbTile texels one after another (trace_texel_row): the pair
 // and its triangle are read and set up once a row, not once a texel, and a kept pair takes its slot
-// with one atomic, no barrier (lavapipe runs a workgroup's invocations in batches and pays a barrier with a switch through
-// all of them). The same outcomes and pairs as a thread a texel (below), in another order.
+// with one atomic, no barrier (lavapipe runs a workgroup's invocations in batches and pays a barrier
+// with a switch through all of them). The same outcomes and pairs as a thread a texel (below), in
+// another order.
 void trace_tile_rows(uint group, uint count) {
   uint unit = gl_LocalInvocationIndex / kIzbTile, row = gl_LocalInvocationIndex % kIzbTile;
   uint index = group * kIzbTilePairsPerGroup + unit;

@@ -109,13 +109,14 @@ void size_list_dispatch() {
   tap_list[3] = 1u;
 }
 
-// One of a point light's six faces (else a spot light, or the sun).
-bool point_light_face() { return uniform_branch(params.light_cone.z) > 0.0; }
+// One of a point light's six faces (else a spot light, or the sun); izb_pixel.glsl's function of the
+// same name reads the IZB's parameters.
+bool point_light_face_pass() { return uniform_branch(params.light_cone.z) > 0.0; }
 
 // This invocation's pixel: its own, its face's tile's (kTiles), or in the listed pass its entry's (false
 // past the list's end).
 bool stage_pixel(out ivec2 pixel) {
-  if (kTiles) return light_tile_pixel(point_light_face() ? uint(params.light_cone.w) : 0u, params.extent.xy, pixel);
+  if (kTiles) return light_tile_pixel(point_light_face_pass() ? uint(params.light_cone.w) : 0u, params.extent.xy, pixel);
   if (kStage != SM_STAGE_LISTED) {
     pixel = ivec2(gl_GlobalInvocationID.xy);
     return true;
@@ -142,7 +143,7 @@ void main() {
   vec4 p = imageLoad(world_position, pixel);
   if (p.w == 0.0) return;
   // One of a point light's cube-face cones: the points outside it belong to another face's map.
-  if (kLocalLight && point_light_face() && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
+  if (kLocalLight && point_light_face_pass() && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
                                        params.light_cone.x * length(p.xyz - params.light_position.xyz))
     return;
   vec4 normal = imageLoad(geometric_normal, pixel);
