@@ -18,7 +18,7 @@ void main() {
     imageStore(world_position, ivec2(pixel), vec4(0.0));
     return;
   }
-  // `precise`, as in the shadow module's input pass (host_inputs.comp), which makes the same points from
+  // `precise`, as in the shadow module's input pass (host_inputs.glsl), which makes the same points from
   // a host's depth: a multiply-add fused in one shader and not in the other would move a point by a
   // rounding step, and a filter's tap at a shadow's edge with it.
   precise vec2 ndc = (vec2(pixel) + 0.5) / vec2(frame.extent.xy) * 2.0 - 1.0;

@@ -607,7 +607,8 @@ void Context::detect_features(const DeviceSupport& device, const FeatureChain& e
   p2.pNext = &subgroup;
   vkGetPhysicalDeviceProperties2(physical_device_, &p2);
   features_.subgroup_size = subgroup.subgroupSize;
-  const VkSubgroupFeatureFlags needed_ops = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+  const VkSubgroupFeatureFlags needed_ops =
+      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
   const VkShaderStageFlags needed_stages = VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
   features_.subgroup_arithmetic_compute_fragment = (subgroup.supportedOperations & needed_ops) == needed_ops &&
                                                    (subgroup.supportedStages & needed_stages) == needed_stages &&

@@ -214,7 +214,9 @@ Result run(const Options& o) {
   const uint32_t F = o.frames_in_flight;
   Device d({.device = o.device, .validation = o.validation, .sync_validation = o.sync_validation});
   const VkDevice dev = d.device;
-  auto module = shadows::Context::create(d.context_desc(F, *settings));
+  shadows::ContextDesc desc = d.context_desc(F, *settings);
+  desc.masked_features = o.masked_features;
+  auto module = shadows::Context::create(desc);
   if (o.output_term != "occlusion" && o.output_term != "combined")
     throw std::runtime_error("unknown output term '" + o.output_term + "' (occlusion or combined)");
   const shadows::OutputTerm output_term =

@@ -56,6 +56,7 @@ struct Options {
   bool deformed_cubes = false;
   shadows::CsmMode cube_csm = shadows::CsmMode::Auto;  // the cube instances' Instance::csm
   bool still = false;                                   // every frame the scene of frame 0 (nothing slides)
+  std::vector<std::string> masked_features;             // ContextDesc::masked_features (tests of other devices)
 };
 
 // The terminator offset the host writes with Options::terminator_offset: this far along the outward normal.

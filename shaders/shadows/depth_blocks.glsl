@@ -7,7 +7,7 @@
 // they lie on one side for every block a receiver's footprint touches, every tap there has the same
 // result, which is then known without reading any. A planar surface's block fits it to a rounding
 // step, so a receiver on it settles; a block across an occluder's edge or a crease fits loosely and
-// settles nothing. Used by sm's PCSS (shadow_map_blocks.comp, shadow_map_resolve.comp) and the
+// settles nothing. Used by sm's PCSS (shadow_map_blocks.comp, shadow_map_resolve.glsl) and the
 // cascades' masking (cascade_edges.comp, cascade_filter.comp).
 //
 // Before including, define DEPTH_BLOCKS_FIT and declare `float depth_block_texel(ivec2 texel)` (the

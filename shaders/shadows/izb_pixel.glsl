@@ -280,7 +280,7 @@ float write_pixel_term(ivec2 pixel, bool has_pixel, uint state, uint mask, vec3 
   // others); they keep what the other faces write.
   if ((state & IZB_PIXEL_OTHER_FACE) != 0u) return visibility;
   written = true;
-  // The sun's term starts lit (ContextImpl::clear_term_and_overlay, host_inputs.comp) and only the IZB
+  // The sun's term starts lit (ContextImpl::clear_term_and_overlay, host_inputs.glsl) and only the IZB
   // writes it before the trace and resolve: storing a lit pixel's 1 would rewrite what is there (a
   // CPU device pays for every store it makes, a GPU for the bandwidth). Spot lights and point-light
   // faces (IZB_FLAG_SPOT) store every point: a point light's faces overlap, and a later face's lit

@@ -1,6 +1,6 @@
 // Percentage-closer soft shadows (PCSS) over one depth map: a blocker search around the receiver, the
 // penumbra its average blocker depth gives, and a percentage-closer filter over a disc of that radius.
-// shadow_map_resolve.comp (sm, and the spot and point-light face maps) and cascade_filter.comp (in the
+// shadow_map_resolve.glsl (sm, and the spot and point-light face maps) and cascade_filter.comp (in the
 // pixel's cascade) use it; so may any pass that holds a light-space depth map.
 //
 // What the includer provides. Before `#include "pcss.glsl"`, declare

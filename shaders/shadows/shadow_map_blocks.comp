@@ -3,7 +3,7 @@
 #include "shadows.h"
 layout(local_size_x = 8, local_size_y = 8) in;  // a thread a block of kSmBlock² texels
 
-// PCSS's masking in the sm resolve (shadow_map_resolve.comp's pcss_settled): the map's depth blocks
+// PCSS's masking in the sm resolve (shadow_map_resolve.glsl's pcss_settled): the map's depth blocks
 // (depth_blocks.glsl). A thread a block, its texels in two loops: a workgroup a block summing through
 // shared memory took lavapipe 51 ms for a 1024² map, its barriers being the cost, and summing by
 // subgroups took the H200 0.018 ms at 4K against this one's 0.011.

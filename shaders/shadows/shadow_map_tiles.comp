@@ -9,7 +9,7 @@ layout(local_size_x = 16, local_size_y = 16) in;
 // that map's parameters (a face's cone, params.light_cone.x, is every face's): lists the 8x8 tiles
 // holding a covered point each face's cone reaches (light_tiles.glsl) and writes 0 where a covered
 // point lies beyond the light's range (a spot light's: outside its cone too), as each face's resolve
-// would have. Each face's resolve then runs over its tiles alone (shadow_map_resolve.comp's kTiles),
+// would have. Each face's resolve then runs over its tiles alone (shadow_map_resolve.glsl's kTiles),
 // six times a frame's pixels no longer.
 layout(constant_id = 0) const bool kCpuDevice = false;
 

@@ -46,7 +46,7 @@ SHARED_CONST uint SM_RESOLVE_BINDING_LIST = 8u;       // the CPU device's list o
 // A point light's faces (a spot light's one cone on a CPU device): the tiles each resolves
 // (light_tiles.h, listed by shadow_map_tiles.comp).
 SHARED_CONST uint SM_RESOLVE_BINDING_TILES = 9u;
-// The resolve's passes (shadow_map_resolve.comp's kStage): whole on a GPU; on a CPU device with
+// The resolve's passes (shadow_map_resolve.glsl's kStage): whole on a GPU; on a CPU device with
 // masking, every pixel listing those whose PCSS taps must run, that list's dispatch, the listed taps.
 SHARED_CONST uint SM_STAGE_WHOLE = 0u;
 SHARED_CONST uint SM_STAGE_LIST = 1u;

@@ -29,7 +29,7 @@ std::string test_device() {
 using vulkan_host::Result;
 
 // The host's shading points of a captured frame, rebuilt on the CPU the way the module's inputs pass
-// builds them (shaders/shadows/host_inputs.comp): position from the standard depth, the decoded
+// builds them (shaders/shadows/host_inputs.glsl): position from the standard depth, the decoded
 // shading normal turned toward the camera (no geometric normals given: it also pushes the ray
 // origins), facing `light` (a sun; local lights are faced by the reference itself) decided from it.
 reference::ShadingPoints shading_points(const vulkan_host::FrameCapture& f, uint32_t width, uint32_t height,
@@ -1200,6 +1200,32 @@ TEST(HostDevice, WithoutPushDescriptorCreateThrowsNamingIt) {
   EXPECT_NE(what.find("VK_KHR_push_descriptor"), std::string::npos) << "message: '" << what << "'";
   EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   EXPECT_EQ(device.validation_messages(), 0u);
+}
+
+// A device without subgroup arithmetic and ballot operations (masked as absent): the plain shadow map
+// and the input pass take their variants without them and give the full device's pixels; capabilities()
+// marks the techniques that need them unavailable, naming what is missing, and the host refuses those.
+TEST(HostDevice, WithoutSubgroupOperationsSmGivesTheSamePixelsAndTheOthersSayWhy) {
+  vulkan_host::Options o = options("sm", 0, 1);
+  const Result full = vulkan_host::run(o);
+  o.masked_features = {"subgroup_arithmetic"};
+  const Result masked = vulkan_host::run(o);
+  EXPECT_EQ(masked.validation_messages, 0u);
+  EXPECT_EQ(masked.visibility, full.visibility);
+  const reference::Comparison cmp = compare_with_embree(masked, 1);
+  EXPECT_GT(cmp.pixels, 256u * 256u / 4u);
+  EXPECT_LE(cmp.mismatch_rate, kFilteredMismatchBound);
+  for (const char* mode : {"cascades", "izb", "izb+csm", "hybrid"}) {
+    o.mode = mode;
+    std::string what;
+    try {
+      vulkan_host::run(o);
+    } catch (const std::exception& e) {
+      what = e.what();
+    }
+    EXPECT_NE(what.find("subgroup arithmetic and ballot"), std::string::npos) << mode << ": '" << what << "'";
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
 }
 
 }  // namespace

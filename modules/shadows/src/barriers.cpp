@@ -14,6 +14,10 @@ bool takes_cpu_paths(const engine::gpu::Context& ctx) {
   return ctx.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && !forced;
 }
 
+std::string subgroup_shader(const engine::gpu::Context& ctx, const std::string& stem) {
+  return stem + (ctx.features().subgroup_arithmetic_compute_fragment ? ".comp" : "_portable.comp");
+}
+
 VkPipelineStageFlags2 pass_shader_stages(const engine::gpu::Context& ctx) {
   VkPipelineStageFlags2 stages = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
                                  VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;

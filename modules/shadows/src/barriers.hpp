@@ -2,6 +2,8 @@
 // Barriers between the module's own passes. Each names the stages the passes run on this device
 // (geometry and ray tracing stages only where enabled) and the accesses they make; none is an
 // ALL_COMMANDS barrier.
+#include <string>
+
 #include "gpu/context.hpp"
 
 namespace shadows::detail {
@@ -14,6 +16,11 @@ VkPipelineStageFlags2 pass_shader_stages(const engine::gpu::Context& ctx);
 // variable SHADOWS_GPU_PATHS is 1, which makes it take the paths a GPU takes (for tests: both must give
 // the same pixels). Read once, when a module is created (its passes, made later, take that answer).
 bool takes_cpu_paths(const engine::gpu::Context& ctx);
+
+// The compute shader `stem` (e.g. "shadow_map_resolve") for this device: `stem`.comp, or on a device
+// without subgroup arithmetic and ballot operations its variant without them, `stem`_portable.comp
+// (only the passes every technique or the plain shadow map needs have one).
+std::string subgroup_shader(const engine::gpu::Context& ctx, const std::string& stem);
 
 // Every earlier pass's writes (shader storage, depth and colour attachments, copies and fills) before
 // every later pass's reads and writes (shaders, indirect arguments, vertex and index fetch, depth

@@ -117,8 +117,8 @@ Image create_rotation_texture(Context& ctx) {
 // Refuses a device without what the cascades' shaders need, before anything is made on it.
 Context& with_cascade_features(Context& c) {
   if (!c.features().subgroup_arithmetic_compute_fragment)
-    throw VulkanError("the cascades need subgroup arithmetic in compute shaders, which " + c.device_name() +
-                      " lacks");
+    throw VulkanError("the cascades need subgroup arithmetic and ballot operations in compute shaders, which " +
+                      c.device_name() + " lacks");
   return c;
 }
 

@@ -238,7 +238,7 @@ ContextImpl::ContextImpl(const ContextDesc& desc) : settings_(desc.settings) {
   const auto storage = storage_image_binding;
   namespace gs = gpu_shared;
   inputs_pipeline_ = engine::gpu::PipelineFactory(ctx).compute(
-      {.shader = "host_inputs.comp",
+      {.shader = subgroup_shader(ctx, "host_inputs"),
        .bindings = {{gs::HOST_INPUTS_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
                     sampled(gs::HOST_INPUTS_BINDING_DEPTH), sampled(gs::HOST_INPUTS_BINDING_NORMAL),
                     sampled(gs::HOST_INPUTS_BINDING_GEOMETRIC), sampled(gs::HOST_INPUTS_BINDING_OFFSET),
@@ -279,6 +279,7 @@ Capabilities ContextImpl::capabilities() const {
 }
 
 Capabilities ContextImpl::find_capabilities() const {
+  if (!gpu_->features().subgroup_arithmetic_compute_fragment) return capabilities_without_subgroup_operations();
   Capabilities c;
   auto& self = const_cast<ContextImpl&>(*this);
   const engine::gpu::DeviceFeatures& features = gpu_->features();
@@ -325,6 +326,32 @@ Capabilities ContextImpl::find_capabilities() const {
   std::copy(std::begin(sun.technique), std::end(sun.technique), std::begin(c.technique));
   std::copy(std::begin(sun.csm_test), std::end(sun.csm_test), std::begin(c.csm_test));
   c.hardware_conservative_raster = self.izb().hardware_raster_available();
+  return c;
+}
+
+// A device without subgroup arithmetic and ballot operations runs the plain shadow map (and rt) alone:
+// the cascades' and the IZB's passes reduce and reserve by subgroups and have no variant without them.
+Capabilities ContextImpl::capabilities_without_subgroup_operations() const {
+  const std::string lacks = " need subgroup arithmetic and ballot operations, which " + gpu_->device_name() + " lacks";
+  const Capability izb{false, "the IZB's passes" + lacks};
+  Capabilities c;
+  for (LightCapabilities& l : c.light) {
+    l.technique[int(Technique::Off)].available = l.technique[int(Technique::ShadowMap)].available = true;
+    const std::string technique = "shadows: Settings.technique ";
+    l.technique[int(Technique::Cascades)] = Capability{false, technique + "cascades: the cascades" + lacks};
+    l.technique[int(Technique::Izb)] = Capability{false, technique + "izb: the IZB's passes" + lacks};
+    l.technique[int(Technique::Hybrid)] = Capability{false, technique + "hybrid: the IZB and the cascades" + lacks};
+    l.technique[int(Technique::RayTraced)] =
+        gpu_->features().ray_tracing_pipeline
+            ? Capability{true, ""}
+            : Capability{false, "shadows: Settings.technique rt: " + gpu_->features().ray_tracing_missing};
+    l.raster_trace = l.compute_trace = l.raster_csm = l.compute_csm = izb;
+    for (Capability& test : l.csm_test) test = izb;
+  }
+  const LightCapabilities& sun = c.light[int(LightType::Directional)];
+  std::copy(std::begin(sun.technique), std::end(sun.technique), std::begin(c.technique));
+  std::copy(std::begin(sun.csm_test), std::end(sun.csm_test), std::begin(c.csm_test));
+  c.hardware_conservative_raster = false;
   return c;
 }
 
@@ -540,7 +567,7 @@ void ContextImpl::record_inputs(VkCommandBuffer cmd, const FrameDesc& f, const V
   p.inverse_view_projection = view.inverse_view_projection;
   p.view_to_world = glm::inverse(view.view);
   // w: the host depth's step (UNORM formats; 0 for float ones, whose rounding the ray offset covers):
-  // how far a rebuilt point may lie behind its surface, which host_inputs.comp pushes it off by.
+  // how far a rebuilt point may lie behind its surface, which host_inputs.glsl pushes it off by.
   const float depth_step = f.depth.format == VK_FORMAT_D16_UNORM           ? 1.0f / 65535.0f
                            : f.depth.format == VK_FORMAT_D24_UNORM_S8_UINT ? 1.0f / 16777215.0f
                                                                            : 0.0f;
@@ -815,7 +842,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     prepare_targets(cmd, !off && f.native.present() && (f.light_count == 0 || !writes_every_pixel(f.lights[0])),
                     term_target(f, 0));
   }
-  // The input pass stores whether each point faces the sun (host_inputs.comp): for the sun of this
+  // The input pass stores whether each point faces the sun (host_inputs.glsl): for the sun of this
   // record, not the light the previous record left in view_ (a spot's axis, or none on the first
   // frame). A later sun of another direction in the same record runs the pass again (below).
   const bool host_inputs = !off && !f.native.present();

@@ -13,8 +13,8 @@ namespace {
 // Refuses a device without what the IZB's shaders need, before anything is made on it.
 Context& with_izb_features(Context& c) {
   if (!c.features().subgroup_arithmetic_compute_fragment)
-    throw VulkanError("the IZB needs subgroup arithmetic in compute and fragment shaders, which " +
-                      c.device_name() + " lacks");
+    throw VulkanError("the IZB needs subgroup arithmetic and ballot operations in compute and fragment shaders, "
+                      "which " + c.device_name() + " lacks");
   if (!c.features().depth_clamp)
     throw VulkanError("the IZB trace needs the depthClamp feature, which " + c.device_name() + " lacks");
   return c;

@@ -60,7 +60,7 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
   Pipeline& pipeline = resolve_pipelines_[v.key()];
   if (pipeline.valid()) return pipeline;
   pipeline = PipelineFactory(ctx_).compute(
-      {"shadow_map_resolve.comp",
+      {subgroup_shader(ctx_, "shadow_map_resolve"),
        {{gpu_shared::SM_RESOLVE_BINDING_PARAMS, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER},
         {gpu_shared::SM_RESOLVE_BINDING_WORLD_POSITION, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
         {gpu_shared::SM_RESOLVE_BINDING_GEOMETRIC_NORMAL, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},

@@ -43,8 +43,9 @@ struct DeviceFeatures {
   bool fragment_stores_and_atomics = false;
   bool vertex_stores_and_atomics = false;
   uint32_t subgroup_size = 0;
-  // Subgroup basic + arithmetic operations in compute and fragment shaders (the shadow passes reduce
-  // their counters per subgroup).
+  // Subgroup basic, arithmetic and ballot operations in compute and fragment shaders (the shadow
+  // passes reduce their counters per subgroup and reserve list slots a subgroup at a time). Without
+  // them, a shader that declares either capability is refused when its module is made (ShaderModule).
   bool subgroup_arithmetic_compute_fragment = false;
 
   bool operator==(const DeviceFeatures&) const = default;

@@ -448,7 +448,10 @@ struct Capability {
 };
 // What the module can do for one light type (LightType) on this device. record() refuses exactly what
 // is unavailable here, for a light of this type, with the settings that ask for it, in a line that
-// names the light (FrameDesc.lights[i]) and carries `reason`; everything available records.
+// names the light (FrameDesc.lights[i]) and carries `reason`; everything available records. A device
+// without subgroup arithmetic and ballot operations in compute and fragment shaders (or with
+// "subgroup_arithmetic" in ContextDesc::masked_features) runs Off, ShadowMap and RayTraced only: the
+// cascades' and the IZB's passes need them.
 struct LightCapabilities {
   Capability technique[6];  // indexed by Technique
   // The IZB's paths (Technique::Izb and Hybrid; a local light's grid is traced by compute passes only):
