@@ -27,20 +27,32 @@ EmbeddedRegistry& embedded_registry() {
   return registry;
 }
 
-// The subgroup capabilities a shader declares that the device does not offer (DeviceFeatures::
-// subgroup_arithmetic_compute_fragment, or masked as absent): a pipeline made from it would be invalid,
-// so the shader is refused in one line instead. Capabilities lead a module, after its 5-word header.
-void check_subgroup_capabilities(const Context& ctx, const std::string& name, std::span<const uint32_t> code) {
+// The capabilities a shader declares that depend on an optional feature this device lacks (or has
+// masked as absent): a pipeline made from it would be invalid, so the shader is refused in one line
+// instead. Capabilities lead a module, after its 5-word header.
+void check_capabilities(const Context& ctx, const std::string& name, std::span<const uint32_t> code) {
   constexpr uint32_t kOpCapability = 17, kOpExtension = 10;
-  constexpr uint32_t kGroupNonUniformArithmetic = 63, kGroupNonUniformBallot = 64;
-  if (ctx.features().subgroup_arithmetic_compute_fragment) return;
+  const DeviceFeatures& f = ctx.features();
+  struct Needs {
+    uint32_t capability;
+    bool present;
+    const char* what;
+  };
+  const Needs needs[] = {
+      {2, f.geometry_shader, "geometry shaders (Geometry)"},
+      {11, f.shader_int64, "64-bit integers (Int64)"},
+      {63, f.subgroup_arithmetic_compute_fragment, "subgroup arithmetic and ballot operations"},
+      {64, f.subgroup_arithmetic_compute_fragment, "subgroup arithmetic and ballot operations"},
+      {4479, f.ray_tracing_pipeline, "ray tracing pipelines (RayTracingKHR)"},
+      {5284, f.fragment_shader_barycentric, "fragment_shader_barycentric"},
+  };
   for (size_t at = 5; at < code.size();) {
     const uint32_t opcode = code[at] & 0xffffu, words = code[at] >> 16;
     if ((opcode != kOpCapability && opcode != kOpExtension) || words == 0) break;
-    if (opcode == kOpCapability && words > 1 &&
-        (code[at + 1] == kGroupNonUniformArithmetic || code[at + 1] == kGroupNonUniformBallot))
-      throw VulkanError("shader " + name + " needs subgroup arithmetic and ballot operations, which " +
-                        ctx.device_name() + " lacks");
+    if (opcode == kOpCapability && words > 1)
+      for (const Needs& n : needs)
+        if (code[at + 1] == n.capability && !n.present)
+          throw VulkanError("shader " + name + " needs " + n.what + ", which " + ctx.device_name() + " lacks");
     at += words;
   }
 }
@@ -66,7 +78,7 @@ std::span<const uint32_t> embedded_shader(const std::string& name) {
 
 ShaderModule::ShaderModule(const Context& ctx, const std::string& name) : ctx_(ctx) {
   if (const std::span<const uint32_t> embedded = embedded_shader(name); !embedded.empty()) {
-    check_subgroup_capabilities(ctx, name, embedded);
+    check_capabilities(ctx, name, embedded);
     VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     info.codeSize = embedded.size_bytes();
     info.pCode = embedded.data();
@@ -82,7 +94,7 @@ ShaderModule::ShaderModule(const Context& ctx, const std::string& name) : ctx_(c
   std::vector<uint32_t> code(size / 4);
   file.seekg(0);
   file.read(reinterpret_cast<char*>(code.data()), static_cast<std::streamsize>(size));
-  check_subgroup_capabilities(ctx, name, code);
+  check_capabilities(ctx, name, code);
   VkShaderModuleCreateInfo info{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   info.codeSize = size;
   info.pCode = code.data();

@@ -175,6 +175,29 @@ TEST_P(MaskedFeatureTest, PathsThatNeedTheFeatureRefuseInOneLine) {
   for (const auto& [what, settings] : forced) expect_refusal(render(settings, false), GetParam().phrase, what);
 }
 
+// A shader that declares the feature's SPIR-V capability is refused when its module is made, in one line
+// naming the shader and the feature; one that does not is made (the plain shadow map's resolve without
+// subgroup operations). Conservative rasterization is pipeline state, not a capability.
+TEST_P(MaskedFeatureTest, ShadersThatDeclareTheFeatureAreRefusedInOneLine) {
+  const std::map<std::string, std::string> declaring = {{"geometry_shader", "csm.geom"},
+                                                        {"fragment_shader_barycentric", "csm_bary_hw.frag"},
+                                                        {"subgroup_arithmetic", "shadow_map_resolve.comp"}};
+  const auto shader = declaring.find(GetParam().feature);
+  if (shader == declaring.end()) GTEST_SKIP() << GetParam().feature << " is no SPIR-V capability";
+  use_context({GetParam().feature});
+  prepare(settings_for("sm"));  // the module's shaders are registered with the engine's
+  std::string what;
+  try {
+    engine::gpu::ShaderModule module(*ctx_, shader->second);
+  } catch (const engine::gpu::VulkanError& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find(shader->second), std::string::npos) << "'" << what << "'";
+  EXPECT_NE(what.find(GetParam().phrase), std::string::npos) << "'" << what << "'";
+  EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  EXPECT_NO_THROW(engine::gpu::ShaderModule(*ctx_, "shadow_map_resolve_portable.comp"));
+}
+
 INSTANTIATE_TEST_SUITE_P(Features, MaskedFeatureTest,
                          testing::Values(MaskCase{"conservative_rasterization", "conservative_rasterization"},
                                          MaskCase{"geometry_shader", "geometry shaders"},

@@ -44,8 +44,10 @@ struct DeviceFeatures {
   bool vertex_stores_and_atomics = false;
   uint32_t subgroup_size = 0;
   // Subgroup basic, arithmetic and ballot operations in compute and fragment shaders (the shadow
-  // passes reduce their counters per subgroup and reserve list slots a subgroup at a time). Without
-  // them, a shader that declares either capability is refused when its module is made (ShaderModule).
+  // passes reduce their counters per subgroup and reserve list slots a subgroup at a time).
+  // A shader declaring a SPIR-V capability whose feature is absent here (geometry shaders, 64-bit
+  // integers, these subgroup operations, ray tracing pipelines, fragment shader barycentrics) is
+  // refused in one line when its module is made (ShaderModule).
   bool subgroup_arithmetic_compute_fragment = false;
 
   bool operator==(const DeviceFeatures&) const = default;

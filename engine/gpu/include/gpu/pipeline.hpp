@@ -32,7 +32,8 @@ std::span<const uint32_t> embedded_shader(const std::string& name);
 class ShaderModule {
  public:
   // `name` is the source file name, e.g. "gbuffer.vert": the embedded SPIR-V of that name if a library
-  // registered one, else <shader_directory>/<name>.spv.
+  // registered one, else <shader_directory>/<name>.spv. Throws VulkanError (one line) where the shader
+  // declares a capability whose optional feature the device lacks or has masked (DeviceFeatures).
   ShaderModule(const Context& ctx, const std::string& name);
   ~ShaderModule();
   ShaderModule(const ShaderModule&) = delete;
