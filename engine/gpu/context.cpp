@@ -11,6 +11,10 @@ namespace engine::gpu {
 
 namespace {
 
+// The subgroup operations DeviceFeatures::subgroup_arithmetic_compute_fragment stands for.
+constexpr VkSubgroupFeatureFlags kSubgroupOps =
+    VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+
 std::mutex g_message_mutex;
 
 bool env_flag(const char* name) {
@@ -607,10 +611,8 @@ void Context::detect_features(const DeviceSupport& device, const FeatureChain& e
   p2.pNext = &subgroup;
   vkGetPhysicalDeviceProperties2(physical_device_, &p2);
   features_.subgroup_size = subgroup.subgroupSize;
-  const VkSubgroupFeatureFlags needed_ops =
-      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
   const VkShaderStageFlags needed_stages = VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
-  features_.subgroup_arithmetic_compute_fragment = (subgroup.supportedOperations & needed_ops) == needed_ops &&
+  features_.subgroup_arithmetic_compute_fragment = (subgroup.supportedOperations & kSubgroupOps) == kSubgroupOps &&
                                                    (subgroup.supportedStages & needed_stages) == needed_stages &&
                                                    !masked("subgroup_arithmetic");
   driver_description_ = std::string(driver.driverName) + " " + driver.driverInfo;
