@@ -64,7 +64,8 @@ struct ContextOptions {
   std::string application_name = "shadow_engine";
   // Optional features to treat as absent, as on a device without them (tests of the other paths):
   // "conservative_rasterization", "geometry_shader", "fragment_shader_barycentric",
-  // "subgroup_arithmetic". ENGINE_MASK_FEATURES (comma-separated) adds to the list.
+  // "subgroup_arithmetic" (subgroup arithmetic and ballot operations). ENGINE_MASK_FEATURES
+  // (comma-separated) adds to the list.
   std::vector<std::string> masked_features;
   // The validation layer's synchronization checks (hazards between commands); needs validation.
   // Also forced on by ENGINE_SYNC_VALIDATION=1 (which turns validation on too).

@@ -180,7 +180,9 @@ struct ContextDesc {
   Settings settings;                                            // initial settings (settings() changes them)
   // Counts validation messages on the host's instance (needs VK_EXT_debug_utils enabled there); tests.
   bool count_validation_messages = false;
-  // Optional features to treat as absent (tests of the other paths): see capabilities().
+  // Optional features to treat as absent (tests of the other paths): "conservative_rasterization",
+  // "geometry_shader", "fragment_shader_barycentric", "subgroup_arithmetic" (subgroup arithmetic and
+  // ballot operations); see capabilities(). Another name is refused in one line.
   std::vector<std::string> masked_features;
 };
 
