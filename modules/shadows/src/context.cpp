@@ -279,7 +279,6 @@ Capabilities ContextImpl::capabilities() const {
 }
 
 Capabilities ContextImpl::find_capabilities() const {
-  if (!gpu_->features().subgroup_arithmetic_compute_fragment) return capabilities_without_subgroup_operations();
   Capabilities c;
   auto& self = const_cast<ContextImpl&>(*this);
   const engine::gpu::DeviceFeatures& features = gpu_->features();
@@ -292,6 +291,10 @@ Capabilities ContextImpl::find_capabilities() const {
       l.technique[t].available = true;
       if (Technique(t) == Technique::RayTraced && !features.ray_tracing_pipeline)
         l.technique[t] = unavailable("shadows: Settings.technique rt: " + features.ray_tracing_missing);
+    }
+    if (!features.subgroup_arithmetic_compute_fragment) {
+      mark_needing_subgroup_operations(l);
+      continue;
     }
     l.compute_trace.available = true;
     l.compute_csm.available = true;
@@ -325,34 +328,22 @@ Capabilities ContextImpl::find_capabilities() const {
   const LightCapabilities& sun = c.light[int(LightType::Directional)];
   std::copy(std::begin(sun.technique), std::end(sun.technique), std::begin(c.technique));
   std::copy(std::begin(sun.csm_test), std::end(sun.csm_test), std::begin(c.csm_test));
-  c.hardware_conservative_raster = self.izb().hardware_raster_available();
+  c.hardware_conservative_raster =
+      features.subgroup_arithmetic_compute_fragment && self.izb().hardware_raster_available();
   return c;
 }
 
-// A device without subgroup arithmetic and ballot operations runs the plain shadow map (and rt) alone:
+// A device without subgroup arithmetic and ballot operations runs off, the plain shadow map and rt alone:
 // the cascades' and the IZB's passes reduce and reserve by subgroups and have no variant without them.
-Capabilities ContextImpl::capabilities_without_subgroup_operations() const {
+void ContextImpl::mark_needing_subgroup_operations(LightCapabilities& l) const {
   const std::string lacks = " need subgroup arithmetic and ballot operations, which " + gpu_->device_name() + " lacks";
+  const std::string technique = "shadows: Settings.technique ";
+  l.technique[int(Technique::Cascades)] = Capability{false, technique + "cascades: the cascades" + lacks};
+  l.technique[int(Technique::Izb)] = Capability{false, technique + "izb: the IZB's passes" + lacks};
+  l.technique[int(Technique::Hybrid)] = Capability{false, technique + "hybrid: the IZB and the cascades" + lacks};
   const Capability izb{false, "the IZB's passes" + lacks};
-  Capabilities c;
-  for (LightCapabilities& l : c.light) {
-    l.technique[int(Technique::Off)].available = l.technique[int(Technique::ShadowMap)].available = true;
-    const std::string technique = "shadows: Settings.technique ";
-    l.technique[int(Technique::Cascades)] = Capability{false, technique + "cascades: the cascades" + lacks};
-    l.technique[int(Technique::Izb)] = Capability{false, technique + "izb: the IZB's passes" + lacks};
-    l.technique[int(Technique::Hybrid)] = Capability{false, technique + "hybrid: the IZB and the cascades" + lacks};
-    l.technique[int(Technique::RayTraced)] =
-        gpu_->features().ray_tracing_pipeline
-            ? Capability{true, ""}
-            : Capability{false, "shadows: Settings.technique rt: " + gpu_->features().ray_tracing_missing};
-    l.raster_trace = l.compute_trace = l.raster_csm = l.compute_csm = izb;
-    for (Capability& test : l.csm_test) test = izb;
-  }
-  const LightCapabilities& sun = c.light[int(LightType::Directional)];
-  std::copy(std::begin(sun.technique), std::end(sun.technique), std::begin(c.technique));
-  std::copy(std::begin(sun.csm_test), std::end(sun.csm_test), std::begin(c.csm_test));
-  c.hardware_conservative_raster = false;
-  return c;
+  l.raster_trace = l.compute_trace = l.raster_csm = l.compute_csm = izb;
+  for (Capability& test : l.csm_test) test = izb;
 }
 
 MeshId ContextImpl::register_mesh(const MeshDesc& mesh) { return geometry_.add(mesh); }

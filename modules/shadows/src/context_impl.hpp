@@ -79,7 +79,7 @@ class ContextImpl final : public Context {
   void validate_light(const Light& light, const std::string& name) const;
   void check_paths(const Light& light, const std::string& name) const;
   Capabilities find_capabilities() const;
-  Capabilities capabilities_without_subgroup_operations() const;
+  void mark_needing_subgroup_operations(LightCapabilities& l) const;
   void record_inputs(VkCommandBuffer cmd, const FrameDesc& frame, const View& view);
   void record_technique(Frame& frame);
   void record_output(VkCommandBuffer cmd, const FrameDesc& frame, const ImageInput& output, bool with_overlay,
