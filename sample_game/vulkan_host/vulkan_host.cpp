@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 #include <fstream>
+#include <functional>
 #include <stdexcept>
 
 #include <glm/glm.hpp>
@@ -150,9 +151,12 @@ FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, boo
   return out;
 }
 
-VkShaderModule load_shader(VkDevice device, const char* name) {
-  // The program's SPIR-V lies in vulkan_host_shaders/ next to the executable.
-  const auto path = std::filesystem::read_symlink("/proc/self/exe").parent_path() / "vulkan_host_shaders" / name;
+VkShaderModule load_shader(VkDevice device, const std::string& directory, const char* name) {
+  // The program's SPIR-V lies in vulkan_host_shaders/ next to the executable unless told otherwise.
+  const std::filesystem::path folder = directory.empty()
+                                           ? std::filesystem::read_symlink("/proc/self/exe").parent_path() / "vulkan_host_shaders"
+                                           : std::filesystem::path(directory);
+  const auto path = folder / name;
   std::ifstream file(path, std::ios::binary);
   const std::vector<char> code((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
   if (code.empty() || code.size() % 4) throw std::runtime_error("cannot read shader " + path.string());
@@ -199,6 +203,29 @@ float output_texel(const void* data, size_t i, VkFormat format) {
   return static_cast<const float*>(data)[i];
 }
 
+// What run() made on the host's device, destroyed newest first when run() leaves: at its end, or when a
+// step throws (a missing shader, a refused input), so that an error leaves no object alive when the
+// device goes. Each step holds copies of its handles (the variables may be gone by then); the device
+// is idle first, and the module goes before the host's objects it was handed.
+class Teardown {
+ public:
+  Teardown(VkDevice device, std::unique_ptr<shadows::Context>& module) : device_(device), module_(module) {}
+  ~Teardown() { run(); }
+  Teardown(const Teardown&) = delete;
+  Teardown& operator=(const Teardown&) = delete;
+  void add(std::function<void()> step) { steps_.push_back(std::move(step)); }
+  void run() {
+    vkDeviceWaitIdle(device_);
+    module_.reset();
+    for (; !steps_.empty(); steps_.pop_back()) steps_.back()();
+  }
+
+ private:
+  VkDevice device_;
+  std::unique_ptr<shadows::Context>& module_;
+  std::vector<std::function<void()>> steps_;
+};
+
 }  // namespace
 
 Result run(const Options& o) {
@@ -217,6 +244,15 @@ Result run(const Options& o) {
   shadows::ContextDesc desc = d.context_desc(F, *settings);
   desc.masked_features = o.masked_features;
   auto module = shadows::Context::create(desc);
+  Teardown teardown(dev, module);
+  const auto kept_buffer = [&](Buffer b) {
+    teardown.add([&d, b]() mutable { destroy(d, b); });
+    return b;
+  };
+  const auto kept_image = [&](Image i) {
+    teardown.add([&d, i]() mutable { destroy(d, i); });
+    return i;
+  };
   if (o.output_term != "occlusion" && o.output_term != "combined")
     throw std::runtime_error("unknown output term '" + o.output_term + "' (occlusion or combined)");
   const shadows::OutputTerm output_term =
@@ -238,7 +274,7 @@ Result run(const Options& o) {
   Buffer shape_buffers[3];
   for (uint32_t k = 0; k < 3; ++k) {
     const VkDeviceSize vertex_bytes = shapes[k].vertices.size() * sizeof(Vertex);
-    shape_buffers[k] = make_buffer(d, vertex_bytes + shapes[k].indices.size() * 4, mesh_usage);
+    shape_buffers[k] = kept_buffer(make_buffer(d, vertex_bytes + shapes[k].indices.size() * 4, mesh_usage));
     auto* bytes = static_cast<uint8_t*>(shape_buffers[k].mapped);
     std::memcpy(bytes, shapes[k].vertices.data(), vertex_bytes);
     std::memcpy(bytes + vertex_bytes, shapes[k].indices.data(), shapes[k].indices.size() * 4);
@@ -252,7 +288,7 @@ Result run(const Options& o) {
     const VkDeviceSize vertex_bytes = mesh.vertices.size() * sizeof(Vertex);
     const uint32_t index_size = index_types[m] == VK_INDEX_TYPE_UINT16 ? 2 : 4;
     index_offsets[m] = vertex_bytes;
-    mesh_buffers[m] = make_buffer(d, vertex_bytes + mesh.indices.size() * index_size, mesh_usage);
+    mesh_buffers[m] = kept_buffer(make_buffer(d, vertex_bytes + mesh.indices.size() * index_size, mesh_usage));
     auto* bytes = static_cast<uint8_t*>(mesh_buffers[m].mapped);
     std::memcpy(bytes, mesh.vertices.data(), vertex_bytes);
     for (size_t i = 0; i < mesh.indices.size(); ++i) {
@@ -278,25 +314,25 @@ Result run(const Options& o) {
   // ----- Targets: the host's G-buffer in its own formats, the module's output, the lit frame.
   const VkExtent2D extent{o.width, o.height};
   const VkImageUsageFlags read = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-  Image depth = make_image(d, extent, depth_format, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | read);
-  Image albedo = make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
-  Image normals = make_image(d, extent, VK_FORMAT_R16G16_SNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
+  Image depth = kept_image(make_image(d, extent, depth_format, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | read));
+  Image albedo = kept_image(make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
+  Image normals = kept_image(make_image(d, extent, VK_FORMAT_R16G16_SNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
   // What the module reads as normals (octahedral world: the lighting's own image), and the geometric
   // normals; both always drawn, handed over as the options say.
   const bool own_normals = o.normals != "oct" || o.view_space_normals;
-  Image module_normals = make_image(d, extent, o.normals == "xyz" ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R16G16_SNORM,
-                                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
-  Image geometric_normals = make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
-  Image terminator = make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read);
+  Image module_normals = kept_image(make_image(d, extent, o.normals == "xyz" ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R16G16_SNORM,
+                                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
+  Image geometric_normals = kept_image(make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
+  Image terminator = kept_image(make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
   // The module's outputs, one per light (the first lights the frame; the others are light_outputs).
   const uint32_t light_count = uint32_t(o.lights.size());
   std::vector<Image> visibility;
   std::vector<shadows::ImageInput> light_outputs;
   for (uint32_t l = 0; l < light_count; ++l) {
-    visibility.push_back(make_image(d, extent, output_format, VK_IMAGE_USAGE_STORAGE_BIT | read));
+    visibility.push_back(kept_image(make_image(d, extent, output_format, VK_IMAGE_USAGE_STORAGE_BIT | read)));
     if (l > 0) light_outputs.push_back(visibility.back().input(VK_IMAGE_LAYOUT_GENERAL));
   }
-  Image lit = make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read);
+  Image lit = kept_image(make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read));
   const size_t pixels = size_t(o.width) * o.height;
   // Read-backs per frame slot, read when the host waits for that slot's fence (so frames stay in
   // flight while every one of them is captured).
@@ -312,11 +348,11 @@ Result run(const Options& o) {
   std::vector<SlotCapture> captures(F);
   auto readbacks_of = [&](SlotCapture& c) -> SlotCapture& {
     if (!c.depth.buffer) {
-      c.depth = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
-      c.normals = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
-      c.lit = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
-      c.albedo = make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
-      for (uint32_t l = 0; l < light_count; ++l) c.visibility.push_back(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      c.depth = kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      c.normals = kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      c.lit = kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      c.albedo = kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      for (uint32_t l = 0; l < light_count; ++l) c.visibility.push_back(kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT)));
     }
     return c;
   };
@@ -325,6 +361,7 @@ Result run(const Options& o) {
   VkSampler sampler;
   VkSamplerCreateInfo sampler_info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
   check(vkCreateSampler(dev, &sampler_info, nullptr, &sampler), "vkCreateSampler");
+  teardown.add([dev, sampler] { vkDestroySampler(dev, sampler, nullptr); });
   VkPushConstantRange draw_push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(DrawPush)};
   // gbuffer.frag: the frame's uniform buffer (DrawFrame), a push descriptor.
   const VkDescriptorSetLayoutBinding frame_binding{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
@@ -334,6 +371,7 @@ Result run(const Options& o) {
   frame_set_info.pBindings = &frame_binding;
   VkDescriptorSetLayout draw_set;
   check(vkCreateDescriptorSetLayout(dev, &frame_set_info, nullptr, &draw_set), "vkCreateDescriptorSetLayout");
+  teardown.add([dev, draw_set] { vkDestroyDescriptorSetLayout(dev, draw_set, nullptr); });
   VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   layout_info.setLayoutCount = 1;
   layout_info.pSetLayouts = &draw_set;
@@ -341,6 +379,7 @@ Result run(const Options& o) {
   layout_info.pPushConstantRanges = &draw_push;
   VkPipelineLayout draw_layout, light_layout;
   check(vkCreatePipelineLayout(dev, &layout_info, nullptr, &draw_layout), "vkCreatePipelineLayout");
+  teardown.add([dev, draw_layout] { vkDestroyPipelineLayout(dev, draw_layout, nullptr); });
   // light.comp: albedo, normals, visibility (sampled), the lit frame (storage).
   VkDescriptorSetLayoutBinding bindings[4];
   for (uint32_t b = 0; b < 4; ++b)
@@ -352,14 +391,21 @@ Result run(const Options& o) {
   set_info.pBindings = bindings;
   VkDescriptorSetLayout light_set;
   check(vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &light_set), "vkCreateDescriptorSetLayout");
+  teardown.add([dev, light_set] { vkDestroyDescriptorSetLayout(dev, light_set, nullptr); });
   VkPushConstantRange light_push{VK_SHADER_STAGE_COMPUTE_BIT, 0, 16};
   layout_info.setLayoutCount = 1;
   layout_info.pSetLayouts = &light_set;
   layout_info.pPushConstantRanges = &light_push;
   check(vkCreatePipelineLayout(dev, &layout_info, nullptr, &light_layout), "vkCreatePipelineLayout");
+  teardown.add([dev, light_layout] { vkDestroyPipelineLayout(dev, light_layout, nullptr); });
 
-  VkShaderModule vs = load_shader(dev, "gbuffer.vert.spv"), fs = load_shader(dev, "gbuffer.frag.spv");
-  VkShaderModule cs = load_shader(dev, "light.comp.spv");
+  // (The modules live until the teardown: a later one's missing file must not leave the first.)
+  VkShaderModule vs = load_shader(dev, o.shader_directory, "gbuffer.vert.spv");
+  teardown.add([dev, vs] { vkDestroyShaderModule(dev, vs, nullptr); });
+  VkShaderModule fs = load_shader(dev, o.shader_directory, "gbuffer.frag.spv");
+  teardown.add([dev, fs] { vkDestroyShaderModule(dev, fs, nullptr); });
+  VkShaderModule cs = load_shader(dev, o.shader_directory, "light.comp.spv");
+  teardown.add([dev, cs] { vkDestroyShaderModule(dev, cs, nullptr); });
   VkPipelineShaderStageCreateInfo stages[2] = {
       {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_VERTEX_BIT, vs, "main"},
       {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_FRAGMENT_BIT, fs, "main"}};
@@ -414,11 +460,12 @@ Result run(const Options& o) {
   gp.layout = draw_layout;
   VkPipeline draw_pipeline, light_pipeline;
   check(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &gp, nullptr, &draw_pipeline), "vkCreateGraphicsPipelines");
+  teardown.add([dev, draw_pipeline] { vkDestroyPipeline(dev, draw_pipeline, nullptr); });
   VkComputePipelineCreateInfo cp{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   cp.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_COMPUTE_BIT, cs, "main"};
   cp.layout = light_layout;
   check(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cp, nullptr, &light_pipeline), "vkCreateComputePipelines");
-  for (VkShaderModule m : {vs, fs, cs}) vkDestroyShaderModule(dev, m, nullptr);
+  teardown.add([dev, light_pipeline] { vkDestroyPipeline(dev, light_pipeline, nullptr); });
   auto push_descriptors = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(dev, "vkCmdPushDescriptorSetKHR"));
 
   // ----- Frames in flight: a command buffer and a fence per slot.
@@ -427,15 +474,19 @@ Result run(const Options& o) {
   pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pool_info.queueFamilyIndex = d.family;
   check(vkCreateCommandPool(dev, &pool_info, nullptr, &pool), "vkCreateCommandPool");
+  teardown.add([dev, pool] { vkDestroyCommandPool(dev, pool, nullptr); });
   std::vector<VkCommandBuffer> cmds(F);
   VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO, nullptr, pool,
                                     VK_COMMAND_BUFFER_LEVEL_PRIMARY, F};
   check(vkAllocateCommandBuffers(dev, &alloc, cmds.data()), "vkAllocateCommandBuffers");
   std::vector<VkFence> fences(F);
   std::vector<Buffer> draw_frames;
-  for (uint32_t k = 0; k < F; ++k) draw_frames.push_back(make_buffer(d, sizeof(DrawFrame), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT));
+  for (uint32_t k = 0; k < F; ++k) draw_frames.push_back(kept_buffer(make_buffer(d, sizeof(DrawFrame), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT)));
   VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, nullptr, VK_FENCE_CREATE_SIGNALED_BIT};
-  for (VkFence& f : fences) check(vkCreateFence(dev, &fence_info, nullptr, &f), "vkCreateFence");
+  for (VkFence& f : fences) {
+    check(vkCreateFence(dev, &fence_info, nullptr, &f), "vkCreateFence");
+    teardown.add([dev, f] { vkDestroyFence(dev, f, nullptr); });
+  }
 
   const CameraSetup camera = camera_for(o.view, float(o.width) / float(o.height), o.reversed_z);
   const glm::mat4 view_projection = camera.projection * camera.view;
@@ -719,24 +770,8 @@ Result run(const Options& o) {
   r.light_direction = last.lights[0].direction;
   r.caster_triangles = last.caster_triangles;
 
-  // ----- Teardown: the module first (it holds objects of the host's device).
-  module.reset();
-  for (VkFence f : fences) vkDestroyFence(dev, f, nullptr);
-  vkDestroyCommandPool(dev, pool, nullptr);
-  for (VkPipeline p : {draw_pipeline, light_pipeline}) vkDestroyPipeline(dev, p, nullptr);
-  for (VkPipelineLayout l : {draw_layout, light_layout}) vkDestroyPipelineLayout(dev, l, nullptr);
-  for (VkDescriptorSetLayout l : {light_set, draw_set}) vkDestroyDescriptorSetLayout(dev, l, nullptr);
-  for (Buffer& b : draw_frames) destroy(d, b);
-  vkDestroySampler(dev, sampler, nullptr);
-  for (Image* i : {&depth, &albedo, &normals, &module_normals, &geometric_normals, &terminator, &lit}) destroy(d, *i);
-  for (Image& v : visibility) destroy(d, v);
-  for (SlotCapture& c : captures) {
-    for (Buffer* b : {&c.depth, &c.normals, &c.lit, &c.albedo})
-      if (b->buffer) destroy(d, *b);
-    for (Buffer& b : c.visibility) destroy(d, b);
-  }
-  for (Buffer& b : mesh_buffers) destroy(d, b);
-  for (Buffer& b : shape_buffers) destroy(d, b);
+  // ----- Teardown (the module first: it holds objects of the host's device), before the messages are counted.
+  teardown.run();
   r.validation_messages = d.validation_messages();
   return r;
 }

@@ -57,6 +57,9 @@ struct Options {
   shadows::CsmMode cube_csm = shadows::CsmMode::Auto;  // the cube instances' Instance::csm
   bool still = false;                                   // every frame the scene of frame 0 (nothing slides)
   std::vector<std::string> masked_features;             // ContextDesc::masked_features (tests of other devices)
+  // Where the program's own SPIR-V lies (gbuffer.vert.spv, gbuffer.frag.spv, light.comp.spv); empty:
+  // vulkan_host_shaders/ next to the executable. A file missing there is an error naming it.
+  std::string shader_directory;
 };
 
 // The terminator offset the host writes with Options::terminator_offset: this far along the outward normal.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <limits>
 
@@ -373,6 +374,29 @@ Reach classify(const reference::ShadingPoints& sp, size_t i, const vulkan_host::
     if (angle > light.outer_cone - 0.01f) return Reach::Unsure;
   }
   return faces;
+}
+
+// A host whose own step fails after it has made objects on the device (here its shaders' folder is
+// empty) gets the error in one line, and leaves no object alive when its device goes: the validation
+// layer, which reports each one at vkDestroyDevice, prints nothing.
+TEST(HostTeardown, AnErrorAfterObjectsAreMadeLeavesNoneAlive) {
+  const std::filesystem::path empty = std::filesystem::temp_directory_path() / "vulkan_host_no_shaders";
+  std::filesystem::create_directories(empty);
+  vulkan_host::Options o = options("izb", 0, 1);
+  o.width = o.height = 64;
+  o.shader_directory = empty.string();
+  testing::internal::CaptureStderr();
+  std::string error;
+  try {
+    vulkan_host::run(o);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  const std::string printed = testing::internal::GetCapturedStderr();
+  std::filesystem::remove_all(empty);
+  EXPECT_NE(error.find("cannot read shader " + (empty / "gbuffer.vert.spv").string()), std::string::npos) << error;
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+  EXPECT_EQ(printed.find("[vulkan]"), std::string::npos) << printed;
 }
 
 // The same frame with each term, a sun, a spot and a point light (their ranges cut so that ground lies
