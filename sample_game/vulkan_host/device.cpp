@@ -21,6 +21,16 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Device::on_message(VkDebugUtilsMessageSeverityFla
 }
 
 Device::Device(const DeviceOptions& options) {
+  // A constructor that throws runs no destructor: what it made so far goes here.
+  try {
+    create(options);
+  } catch (...) {
+    release();
+    throw;
+  }
+}
+
+void Device::create(const DeviceOptions& options) {
   // Instance: Vulkan 1.3, with the validation layer (and its synchronization checks) when asked here or
   // by ENGINE_VALIDATION=1 / ENGINE_SYNC_VALIDATION=1 (the latter implies the layer).
   auto env = [](const char* name) { return std::getenv(name) && std::strcmp(std::getenv(name), "0") != 0; };
@@ -103,7 +113,9 @@ Device::Device(const DeviceOptions& options) {
   vkGetDeviceQueue(device, family, 0, &queue);
 }
 
-Device::~Device() {
+Device::~Device() { release(); }
+
+void Device::release() {
   if (device) vkDestroyDevice(device, nullptr);
   if (messenger_) {
     auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
@@ -111,6 +123,9 @@ Device::~Device() {
     destroy(instance, messenger_, nullptr);
   }
   if (instance) vkDestroyInstance(instance, nullptr);
+  device = VK_NULL_HANDLE;
+  messenger_ = VK_NULL_HANDLE;
+  instance = VK_NULL_HANDLE;
 }
 
 shadows::ContextDesc Device::context_desc(uint32_t frames_in_flight, const shadows::Settings& settings) const {
@@ -146,15 +161,20 @@ Buffer make_buffer(const Device& d, VkDeviceSize size, VkBufferUsageFlags usage)
   info.size = size;
   info.usage = usage;
   check(vkCreateBuffer(d.device, &info, nullptr, &b.buffer), "vkCreateBuffer");
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(d.device, b.buffer, &req);
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex =
-      d.memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
-  check(vkAllocateMemory(d.device, &alloc, nullptr, &b.memory), "vkAllocateMemory");
-  check(vkBindBufferMemory(d.device, b.buffer, b.memory, 0), "vkBindBufferMemory");
-  check(vkMapMemory(d.device, b.memory, 0, VK_WHOLE_SIZE, 0, &b.mapped), "vkMapMemory");
+  try {
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(d.device, b.buffer, &req);
+    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex =
+        d.memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+    check(vkAllocateMemory(d.device, &alloc, nullptr, &b.memory), "vkAllocateMemory");
+    check(vkBindBufferMemory(d.device, b.buffer, b.memory, 0), "vkBindBufferMemory");
+    check(vkMapMemory(d.device, b.memory, 0, VK_WHOLE_SIZE, 0, &b.mapped), "vkMapMemory");
+  } catch (...) {
+    destroy(d, b);  // the buffer (and its memory, if made) with the error
+    throw;
+  }
   return b;
 }
 
@@ -181,20 +201,25 @@ Image make_image(const Device& d, VkExtent2D extent, VkFormat format, VkImageUsa
   info.tiling = VK_IMAGE_TILING_OPTIMAL;
   info.usage = usage;
   check(vkCreateImage(d.device, &info, nullptr, &i.image), "vkCreateImage");
-  VkMemoryRequirements req;
-  vkGetImageMemoryRequirements(d.device, i.image, &req);
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex = d.memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  check(vkAllocateMemory(d.device, &alloc, nullptr, &i.memory), "vkAllocateMemory");
-  check(vkBindImageMemory(d.device, i.image, i.memory, 0), "vkBindImageMemory");
-  // Depth/stencil: the view holds the depth aspect only (what the module samples).
-  VkImageViewCreateInfo view{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-  view.image = i.image;
-  view.viewType = VK_IMAGE_VIEW_TYPE_2D;
-  view.format = format;
-  view.subresourceRange = {i.aspect, 0, 1, 0, 1};
-  check(vkCreateImageView(d.device, &view, nullptr, &i.view), "vkCreateImageView");
+  try {
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(d.device, i.image, &req);
+    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex = d.memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    check(vkAllocateMemory(d.device, &alloc, nullptr, &i.memory), "vkAllocateMemory");
+    check(vkBindImageMemory(d.device, i.image, i.memory, 0), "vkBindImageMemory");
+    // Depth/stencil: the view holds the depth aspect only (what the module samples).
+    VkImageViewCreateInfo view{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    view.image = i.image;
+    view.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    view.format = format;
+    view.subresourceRange = {i.aspect, 0, 1, 0, 1};
+    check(vkCreateImageView(d.device, &view, nullptr, &i.view), "vkCreateImageView");
+  } catch (...) {
+    destroy(d, i);  // what was made of it, with the error
+    throw;
+  }
   return i;
 }
 

@@ -42,6 +42,8 @@ class Device {
   std::unique_ptr<shadows::DeviceSetup> setup;  // the module's features and extensions, as created
 
  private:
+  void create(const DeviceOptions& options);
+  void release();  // what create() made, newest first (also when it threw part-way)
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
   std::atomic<uint32_t> messages_{0};
   static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT,
