@@ -345,8 +345,9 @@ add_test(NAME vulkan_host_writes_png
 --out \"$2\" && \"$1\" \"$2\" --min-size 160x90 --min-colors 8"
                  $<TARGET_FILE:vulkan_host> $<TARGET_FILE:png_check> ${CMAKE_CURRENT_BINARY_DIR}/vulkan_host.png)
 set_tests_properties(vulkan_host_writes_png PROPERTIES LABELS gpu FAIL_REGULAR_EXPRESSION "\\[vulkan\\]")
-add_executable(host_tests host/host_test.cpp)
+add_executable(host_tests host/host_test.cpp support/penumbra_mask.cpp)
 target_link_libraries(host_tests PRIVATE vulkan_host_app shadow_reference GTest::gtest_main)
+target_include_directories(host_tests PRIVATE support)
 target_strict_warnings(host_tests)
 # The host path's smoke set: every refusal (capabilities per light type, mesh bounds computed on the
 # device included), several lights in one record, frames in flight, a few of the input matrix's

@@ -116,7 +116,8 @@ struct FrameLights {
   std::vector<shadows::Light> module;
   std::vector<HostLight> host;
 };
-FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun, float range_scale) {
+FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun, float range_scale,
+                      float sun_size_degrees) {
   FrameLights out;
   for (const std::string& kind : kinds) {
     shadows::Light l;
@@ -125,6 +126,8 @@ FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, boo
       const glm::vec3 d = sun_direction(frame, moving_sun);
       l.type = shadows::LightType::Directional;
       std::memcpy(l.direction, &d, 12);
+      l.angular_diameter_degrees = sun_size_degrees;
+      h.angular_diameter_degrees = sun_size_degrees;
     } else if (kind == "spot") {
       const glm::vec3 position(3.0f, 4.5f, 3.5f), d = glm::normalize(glm::vec3(0.0f, 0.3f, 0.0f) - position);
       l.type = shadows::LightType::Spot;
@@ -560,7 +563,7 @@ Result run(const Options& o) {
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun, o.local_range_scale);
+    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun, o.local_range_scale, o.sun_size_degrees);
     const bool capture = o.capture_every_frame || frame + 1 == o.frames;
 
     // G-buffer. Earlier frames read it (module, lighting, capture copies); their contents are discarded.
