@@ -4,7 +4,7 @@
 //               [--lights sun,spot,point] [--moving-sun] [--depth d32|d24s8|d32s8|d16] [--reversed-z]
 //               [--normals oct|xyz] [--view-normals] [--geometric-normals] [--facing-in-alpha]
 //               [--output r8|r16f|r32f] [--output-term occlusion|combined] [--no-mesh-bounds]
-//               [--sun-size DEGREES] [--shaders DIR]   (its own SPIR-V; default vulkan_host_shaders/ beside the executable)
+//               [--sun-size DEGREES] [--light-radius R] [--shaders DIR]   (its own SPIR-V; default vulkan_host_shaders/ beside the executable)
 // Exits non-zero on any error, and on any validation message when the layer is on (--validation,
 // ENGINE_VALIDATION=1 or ENGINE_SYNC_VALIDATION=1).
 #include <cstdio>
@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
     else if (arg == "--output-term") o.output_term = value;
     else if (arg == "--shaders") o.shader_directory = value;
     else if (arg == "--sun-size") o.sun_size_degrees = float(std::atof(value));
+    else if (arg == "--light-radius") o.local_radius = float(std::atof(value));
     else if (arg == "--lights") {
       o.lights.clear();
       for (std::string list = value; !list.empty();) {

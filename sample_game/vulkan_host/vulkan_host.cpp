@@ -117,7 +117,7 @@ struct FrameLights {
   std::vector<HostLight> host;
 };
 FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun, float range_scale,
-                      float sun_size_degrees) {
+                      float sun_size_degrees, float local_radius) {
   FrameLights out;
   for (const std::string& kind : kinds) {
     shadows::Light l;
@@ -144,6 +144,7 @@ FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, boo
     } else {
       throw std::runtime_error("unknown light '" + kind + "' (sun, spot or point)");
     }
+    if (kind != "sun") l.radius = h.radius = local_radius;
     std::memcpy(h.direction.data(), l.direction, 12);
     std::memcpy(h.position.data(), l.position, 12);
     h.range = l.range;
@@ -563,7 +564,7 @@ Result run(const Options& o) {
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun, o.local_range_scale, o.sun_size_degrees);
+    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun, o.local_range_scale, o.sun_size_degrees, o.local_radius);
     const bool capture = o.capture_every_frame || frame + 1 == o.frames;
 
     // G-buffer. Earlier frames read it (module, lighting, capture copies); their contents are discarded.

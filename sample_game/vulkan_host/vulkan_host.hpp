@@ -29,6 +29,7 @@ struct Options {
   bool moving_sun = false;        // the sun turns a little every frame (frame 0 as when still)
   float local_range_scale = 1.0f;  // scales the spot and point lights' ranges (below 1: ground they no longer reach)
   float sun_size_degrees = 0.53f;  // the sun's Light::angular_diameter_degrees (0: hard shadows)
+  float local_radius = 0.0f;       // the spot and point lights' Light::radius, world units (0: hard shadows)
   bool capture_every_frame = false;  // Result::frames holds every frame, not only the last
   // Calls Context::frame_completed() for each frame whose fence it has waited for, as a host that
   // knows its frames' completion does (statistics and the automatic choices' measures come back then).
@@ -74,6 +75,7 @@ struct HostLight {
   float range = 0.0f;                // spot and point
   float outer_cone = 0.0f;           // spot: half angle, radians
   float angular_diameter_degrees = 0.0f;  // sun: Light::angular_diameter_degrees (0: a point sun)
+  float radius = 0.0f;                    // spot and point: Light::radius (0: a point light)
 };
 
 // One captured frame, pixel (x, y) at index y * width + x.

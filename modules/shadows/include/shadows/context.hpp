@@ -321,9 +321,10 @@ struct Light {
   // The light's size, which sets how fast penumbrae widen with the distance from occluder to receiver.
   // Directional: the sun's angular diameter in degrees, finite, 0 (a point: hard shadows) to 10; the
   // real sun is 0.53. Spot and point: the radius of the emitting sphere in world units, finite, >= 0.
-  // `sm`, `cascades` and `hybrid` filter by it (PCSS; the hybrid keeps the exact IZB term wherever the
-  // penumbra is narrower than a pixel), `rt` samples it with Settings::rt_light_samples rays; `izb`
-  // and `izb+csm` draw the exact hard shadow of the light's centre whatever its size.
+  // `sm` and `cascades` filter by it (PCSS), and `hybrid` by the sun's (keeping the exact IZB term
+  // wherever the penumbra is narrower than a pixel; a spot or point light takes the IZB's hard term
+  // whatever its radius); `rt` samples it with Settings::rt_light_samples rays; `izb` and `izb+csm`
+  // draw the exact hard shadow of the light's centre whatever its size.
   float angular_diameter_degrees = 0.53f;
   float radius = 0.0f;
 };
