@@ -4,7 +4,8 @@
 //               [--lights sun,spot,point] [--moving-sun] [--depth d32|d24s8|d32s8|d16] [--reversed-z]
 //               [--normals oct|xyz] [--view-normals] [--geometric-normals] [--facing-in-alpha]
 //               [--output r8|r16f|r32f] [--output-term occlusion|combined] [--no-mesh-bounds]
-//               [--sun-size DEGREES] [--light-radius R] [--shaders DIR]   (its own SPIR-V; default vulkan_host_shaders/ beside the executable)
+//               [--sun-size DEGREES] [--light-radius R] [--world-scale S] [--world-offset X,Y,Z]
+//               [--origin-step X,Y,Z] [--shaders DIR]   (its own SPIR-V; default vulkan_host_shaders/ beside the executable)
 // Exits non-zero on any error, and on any validation message when the layer is on (--validation,
 // ENGINE_VALIDATION=1 or ENGINE_SYNC_VALIDATION=1).
 #include <cstdio>
@@ -47,6 +48,11 @@ int main(int argc, char** argv) {
     else if (arg == "--shaders") o.shader_directory = value;
     else if (arg == "--sun-size") o.sun_size_degrees = float(std::atof(value));
     else if (arg == "--light-radius") o.local_radius = float(std::atof(value));
+    else if (arg == "--world-scale") ok = (o.world_scale = float(std::atof(value))) > 0.0f;
+    else if (arg == "--world-offset")
+      ok = std::sscanf(value, "%lf,%lf,%lf", &o.world_offset[0], &o.world_offset[1], &o.world_offset[2]) == 3;
+    else if (arg == "--origin-step")
+      ok = std::sscanf(value, "%lf,%lf,%lf", &o.origin_step[0], &o.origin_step[1], &o.origin_step[2]) == 3;
     else if (arg == "--lights") {
       o.lights.clear();
       for (std::string list = value; !list.empty();) {

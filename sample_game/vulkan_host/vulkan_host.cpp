@@ -86,14 +86,37 @@ std::vector<Object> scene_at(uint32_t frame) {
           {1, box({-0.5f + 1.5f * slide, 1.0f, -0.2f}, glm::vec3(0.7f), 45.0f), {0.9f, 0.8f, 0.3f, 1}}};
 }
 
+// Frame k's placement of the scene (Options::world_scale, world_offset, origin_step): a scene point p
+// (metres, at the origin) stands at world_offset + scale * p, which is shift + scale * p relative to
+// the frame's origin.
+struct Placement {
+  float scale = 1.0f;
+  glm::vec3 shift{0.0f};  // world_offset - the frame's origin: small, so float keeps its precision
+  std::array<double, 3> origin{};
+  glm::vec3 point(glm::vec3 p) const { return shift + scale * p; }
+  glm::mat4 matrix(const glm::mat4& scene) const {
+    return glm::translate(glm::mat4(1.0f), shift) * glm::scale(glm::mat4(1.0f), glm::vec3(scale)) * scene;
+  }
+};
+Placement placement_at(const Options& o, uint32_t frame) {
+  Placement p;
+  p.scale = o.world_scale;
+  for (int i = 0; i < 3; ++i) {
+    p.origin[i] = o.world_offset[i] + double(frame) * o.origin_step[i];
+    p.shift[i] = float(o.world_offset[i] - p.origin[i]);
+  }
+  return p;
+}
+
 struct CameraSetup {
   glm::mat4 view, projection;
 };
-CameraSetup camera_for(uint32_t index, float aspect, bool reversed_z) {
-  const glm::vec3 eye = index == 0 ? glm::vec3(5.0f, 5.0f, 6.0f) : glm::vec3(-6.0f, 3.5f, 3.0f);
-  const glm::vec3 target = index == 0 ? glm::vec3(0.0f, 0.5f, 0.0f) : glm::vec3(0.5f, 0.8f, -0.5f);
+constexpr float kNear = 0.1f, kFar = 100.0f;  // metres, times the placement's scale
+CameraSetup camera_for(uint32_t index, float aspect, bool reversed_z, const Placement& at) {
+  const glm::vec3 eye = at.point(index == 0 ? glm::vec3(5.0f, 5.0f, 6.0f) : glm::vec3(-6.0f, 3.5f, 3.0f));
+  const glm::vec3 target = at.point(index == 0 ? glm::vec3(0.0f, 0.5f, 0.0f) : glm::vec3(0.5f, 0.8f, -0.5f));
   // Right-handed perspective into Vulkan clip space: y down, standard depth (0 near, 1 far).
-  const float n = 0.1f, f = 100.0f, t = 1.0f / std::tan(glm::radians(55.0f) * 0.5f);
+  const float n = kNear * at.scale, f = kFar * at.scale, t = 1.0f / std::tan(glm::radians(55.0f) * 0.5f);
   glm::mat4 p(0.0f);
   p[0][0] = t / aspect;
   p[1][1] = -t;
@@ -102,7 +125,6 @@ CameraSetup camera_for(uint32_t index, float aspect, bool reversed_z) {
   p[3][2] = reversed_z ? n * f / (f - n) : n * f / (n - f);
   return {glm::lookAt(eye, target, glm::vec3(0, 1, 0)), p};
 }
-constexpr float kNear = 0.1f, kFar = 100.0f;
 
 // The sun of frame `frame`: (0.45, -1, 0.3) normalized, turning about the vertical when it moves.
 glm::vec3 sun_direction(uint32_t frame, bool moving) {
@@ -117,7 +139,7 @@ struct FrameLights {
   std::vector<HostLight> host;
 };
 FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, bool moving_sun, float range_scale,
-                      float sun_size_degrees, float local_radius) {
+                      float sun_size_degrees, float local_radius, const Placement& at) {
   FrameLights out;
   for (const std::string& kind : kinds) {
     shadows::Light l;
@@ -144,7 +166,13 @@ FrameLights lights_at(const std::vector<std::string>& kinds, uint32_t frame, boo
     } else {
       throw std::runtime_error("unknown light '" + kind + "' (sun, spot or point)");
     }
-    if (kind != "sun") l.radius = h.radius = local_radius;
+    if (kind != "sun") {
+      const glm::vec3 placed = at.point(glm::make_vec3(l.position));
+      std::memcpy(l.position, &placed, 12);
+      l.range *= at.scale;
+      l.radius = local_radius * at.scale;
+    }
+    h.radius = l.radius;
     std::memcpy(h.direction.data(), l.direction, 12);
     std::memcpy(h.position.data(), l.position, 12);
     h.range = l.range;
@@ -492,8 +520,6 @@ Result run(const Options& o) {
     teardown.add([dev, f] { vkDestroyFence(dev, f, nullptr); });
   }
 
-  const CameraSetup camera = camera_for(o.view, float(o.width) / float(o.height), o.reversed_z);
-  const glm::mat4 view_projection = camera.projection * camera.view;
   const auto C = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
   // What reads a target before the next frame writes it: the module's and the lighting's compute
   // passes, and a captured frame's copies.
@@ -564,7 +590,11 @@ Result run(const Options& o) {
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-    const FrameLights lights = lights_at(o.lights, frame, o.moving_sun, o.local_range_scale, o.sun_size_degrees, o.local_radius);
+    const Placement placement = placement_at(o, frame);
+    const CameraSetup camera = camera_for(o.view, float(o.width) / float(o.height), o.reversed_z, placement);
+    const glm::mat4 view_projection = camera.projection * camera.view;
+    const FrameLights lights =
+        lights_at(o.lights, frame, o.moving_sun, o.local_range_scale, o.sun_size_degrees, o.local_radius, placement);
     const bool capture = o.capture_every_frame || frame + 1 == o.frames;
 
     // G-buffer. Earlier frames read it (module, lighting, capture copies); their contents are discarded.
@@ -610,7 +640,8 @@ Result run(const Options& o) {
     const VkWriteDescriptorSet frame_write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, VK_NULL_HANDLE, 0, 0, 1,
                                            VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, nullptr, &frame_buffer, nullptr};
     push_descriptors(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, draw_layout, 0, 1, &frame_write);
-    const std::vector<Object> objects = scene_at(o.still ? 0 : frame);
+    std::vector<Object> objects = scene_at(o.still ? 0 : frame);
+    for (Object& obj : objects) obj.world = placement.matrix(obj.world);
     std::vector<shadows::Instance> instances(objects.size());
     const uint32_t shape = shape_of(frame);
     for (size_t i = 0; i < objects.size(); ++i) {
@@ -677,8 +708,9 @@ Result run(const Options& o) {
     std::memcpy(fd.camera.view, glm::value_ptr(camera.view), 64);
     std::memcpy(fd.camera.projection, glm::value_ptr(camera.projection), 64);
     fd.camera.reversed_z = o.reversed_z;
-    fd.camera.near_plane = kNear;
-    fd.camera.far_plane = kFar;
+    fd.camera.near_plane = kNear * placement.scale;
+    fd.camera.far_plane = kFar * placement.scale;
+    std::memcpy(fd.origin, placement.origin.data(), sizeof(fd.origin));
     fd.lights = lights.module.data();
     fd.light_count = light_count;
     fd.instances = instances.data();

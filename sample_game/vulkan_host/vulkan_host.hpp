@@ -30,6 +30,12 @@ struct Options {
   float local_range_scale = 1.0f;  // scales the spot and point lights' ranges (below 1: ground they no longer reach)
   float sun_size_degrees = 0.53f;  // the sun's Light::angular_diameter_degrees (0: hard shadows)
   float local_radius = 0.0f;       // the spot and point lights' Light::radius, world units (0: hard shadows)
+  // Where the scene stands: every length times world_scale (1: metres; 100: centimetres), its origin at
+  // world_offset. Frame k's floating origin (FrameDesc::origin) is world_offset + k * origin_step, and
+  // all the host draws and hands over is relative to it in float, as a large world's host does.
+  float world_scale = 1.0f;
+  std::array<double, 3> world_offset{};
+  std::array<double, 3> origin_step{};
   bool capture_every_frame = false;  // Result::frames holds every frame, not only the last
   // Calls Context::frame_completed() for each frame whose fence it has waited for, as a host that
   // knows its frames' completion does (statistics and the automatic choices' measures come back then).

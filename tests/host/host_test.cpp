@@ -359,6 +359,55 @@ INSTANTIATE_TEST_SUITE_P(Modes, HostLights,
                                   std::to_string(info.param.spp) + "spp";
                          });
 
+// Where hosts keep their worlds: the scene in centimetres and at a hundredth of its size, and far from
+// the origin (a million units out, ten million in centimetres) with a floating origin that moves every
+// frame (FrameDesc::origin; everything the host hands over relative to it, in float). Every light of
+// every frame (a moving sun, a spot and a point light) against Embree within the sun suite's 1 spp
+// bound. Far out, frame 0 (whose origin is the scene's own: the host hands over the very floats of the
+// scene at the origin, only FrameDesc::origin differs) gives the pixels of the scene at the origin bit
+// for bit; later frames' origins have moved, so the host draws its scene shifted (other roundings in
+// its own depth) and Embree is their judge.
+struct PlacementCase {
+  std::string name;
+  float scale;
+  std::array<double, 3> offset, step;
+};
+void PrintTo(const PlacementCase& c, std::ostream* os) { *os << c.name; }
+class HostWorldPlacement : public ::testing::TestWithParam<PlacementCase> {};
+
+TEST_P(HostWorldPlacement, EveryLightOfEveryFrameMatchesTheReference) {
+  const PlacementCase& c = GetParam();
+  vulkan_host::Options o = options("izb+csm", 0, 1);
+  o.width = o.height = 192;
+  o.lights = {"sun", "spot", "point"};
+  o.moving_sun = true;
+  o.frames = 3;
+  o.frames_in_flight = 2;
+  o.capture_every_frame = true;
+  o.world_scale = c.scale;
+  o.world_offset = c.offset;
+  o.origin_step = c.step;
+  const Result r = vulkan_host::run(o);
+  EXPECT_EQ(r.validation_messages, 0u);
+  expect_every_frame_matches(r, 1, o.frames);
+  if (c.offset[0] == 0.0 && c.step[0] == 0.0) return;
+  // The same scene at the origin: frame 0's pixels, light by light.
+  o.world_offset = {};
+  o.origin_step = {};
+  const Result home = vulkan_host::run(o);
+  ASSERT_EQ(home.frames.size(), r.frames.size());
+  ASSERT_EQ(r.frames[0].depth, home.frames[0].depth) << "the host drew another frame 0";
+  for (size_t l = 0; l < r.frames[0].visibility.size(); ++l)
+    EXPECT_EQ(r.frames[0].visibility[l], home.frames[0].visibility[l]) << "light " << l;
+}
+INSTANTIATE_TEST_SUITE_P(
+    Placements, HostWorldPlacement,
+    ::testing::Values(PlacementCase{"centimetres", 100.0f, {0, 0, 0}, {0, 0, 0}},
+                      PlacementCase{"hundredth", 0.01f, {0, 0, 0}, {0, 0, 0}},
+                      PlacementCase{"far_moving_origin", 1.0f, {1.0e6, 0, -1.0e6}, {37.5, 0, -12.25}},
+                      PlacementCase{"far_centimetres", 100.0f, {1.0e7, 2.0e4, 1.0e7}, {3750.0, 0, 1225.0}}),
+    [](const auto& info) { return info.param.name; });
+
 // ----- What the output holds: OutputTerm::Occlusion (the default) and OutputTerm::Combined.
 
 // Where a captured point lies against a light: lit (reached and facing), or why not. Margins keep
