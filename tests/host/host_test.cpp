@@ -88,6 +88,17 @@ engine::Registry caster_registry(const vulkan_host::FrameCapture& f) {
   return registry;
 }
 
+// A spot or point light as the host recorded it, for Embree.
+reference::LocalLight reference_light(const vulkan_host::HostLight& light) {
+  reference::LocalLight local;
+  local.position = glm::make_vec3(light.position.data());
+  local.range = light.range;
+  local.spot = light.kind == "spot";
+  local.spot_direction = glm::make_vec3(light.direction.data());
+  local.cos_outer = local.spot ? std::cos(light.outer_cone) : -1.0f;
+  return local;
+}
+
 // Light `l` of a captured frame against Embree tracing the host's casters of that frame.
 reference::Comparison compare_with_embree(const vulkan_host::FrameCapture& f, uint32_t width, uint32_t height,
                                           size_t l, uint32_t spp) {
@@ -100,12 +111,7 @@ reference::Comparison compare_with_embree(const vulkan_host::FrameCapture& f, ui
     const glm::vec3 direction = glm::make_vec3(light.direction.data());
     expected = spp == 1 ? tracer.visibility_1spp(sp, direction) : tracer.visibility_32spp(sp, direction);
   } else {
-    reference::LocalLight local;
-    local.position = glm::make_vec3(light.position.data());
-    local.range = light.range;
-    local.spot = light.kind == "spot";
-    local.spot_direction = glm::make_vec3(light.direction.data());
-    local.cos_outer = local.spot ? std::cos(light.outer_cone) : -1.0f;
+    const reference::LocalLight local = reference_light(light);
     expected = spp == 1 ? tracer.visibility_1spp(sp, local) : tracer.visibility_32spp(sp, local);
   }
   // Points the receiver mask leaves out stay lit where they face the sun (facing away they are 0, as
@@ -519,13 +525,7 @@ TEST(HostSoftShadows, LocalLightsWithARadiusSoftenTowardTheirDisc) {
     engine::Registry registry = caster_registry(f);
     const reference::EmbreeTracer tracer(registry);
     const reference::ShadingPoints sp = shading_points(f, runs.at("izb").width, runs.at("izb").height, light);
-    reference::LocalLight local;
-    local.position = glm::make_vec3(light.position.data());
-    local.range = light.range;
-    local.spot = light.kind == "spot";
-    local.spot_direction = glm::make_vec3(light.direction.data());
-    local.cos_outer = local.spot ? std::cos(light.outer_cone) : -1.0f;
-    const std::vector<float> area = tracer.area_visibility(sp, local, kRadius, 256);
+    const std::vector<float> area = tracer.area_visibility(sp, reference_light(light), kRadius, 256);
     std::map<std::string, reference::SoftComparison> soft;
     for (const auto& [mode, r] : runs) {
       ASSERT_EQ(r.frames.back().depth, f.depth) << "not the same frame";
