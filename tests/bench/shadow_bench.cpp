@@ -717,7 +717,8 @@ struct Bench {
       const auto ran = [](const shadows::Stats::BackendChoice& c, const std::string& asked) {
         return asked == "none" || c.backend.empty() ? asked : c.backend;
       };
-      if (!o.lit_culling.empty())
+      // Asked for, or chosen by its probe (the default Auto): which way ran and why.
+      if (!o.lit_culling.empty() || !st.lit_choice.backend.empty())
         std::printf("lit culling %s%s: %llu of %llu candidates culled, %llu nodes\n",
                     shadows::lit_culling_name(run.settings.izb.lit_culling).c_str(),
                     run.settings.izb.lit_culling == shadows::LitCulling::Auto
