@@ -241,19 +241,32 @@ float output_texel(const void* data, size_t i, VkFormat format) {
 // is idle first, and the module goes before the host's objects it was handed.
 class Teardown {
  public:
-  Teardown(VkDevice device, std::unique_ptr<shadows::Context>& module) : device_(device), module_(module) {}
+  Teardown(const Device& device, std::unique_ptr<shadows::Context>& module) : device_(device), module_(module) {}
   ~Teardown() { run(); }
   Teardown(const Teardown&) = delete;
   Teardown& operator=(const Teardown&) = delete;
-  void add(std::function<void()> step) { steps_.push_back(std::move(step)); }
+  // Each returns what it was handed, now destroyed with the rest.
+  Buffer kept(Buffer b) {
+    steps_.push_back([this, b]() mutable { destroy(device_, b); });
+    return b;
+  }
+  Image kept(Image i) {
+    steps_.push_back([this, i]() mutable { destroy(device_, i); });
+    return i;
+  }
+  template <class Handle>
+  Handle kept(Handle handle, void (*destroy_handle)(VkDevice, Handle, const VkAllocationCallbacks*)) {
+    steps_.push_back([this, handle, destroy_handle] { destroy_handle(device_.device, handle, nullptr); });
+    return handle;
+  }
   void run() {
-    vkDeviceWaitIdle(device_);
+    vkDeviceWaitIdle(device_.device);
     module_.reset();
     for (; !steps_.empty(); steps_.pop_back()) steps_.back()();
   }
 
  private:
-  VkDevice device_;
+  const Device& device_;
   std::unique_ptr<shadows::Context>& module_;
   std::vector<std::function<void()>> steps_;
 };
@@ -276,15 +289,7 @@ Result run(const Options& o) {
   shadows::ContextDesc desc = d.context_desc(F, *settings);
   desc.masked_features = o.masked_features;
   auto module = shadows::Context::create(desc);
-  Teardown teardown(dev, module);
-  const auto kept_buffer = [&](Buffer b) {
-    teardown.add([&d, b]() mutable { destroy(d, b); });
-    return b;
-  };
-  const auto kept_image = [&](Image i) {
-    teardown.add([&d, i]() mutable { destroy(d, i); });
-    return i;
-  };
+  Teardown teardown(d, module);
   if (o.output_term != "occlusion" && o.output_term != "combined")
     throw std::runtime_error("unknown output term '" + o.output_term + "' (occlusion or combined)");
   const shadows::OutputTerm output_term =
@@ -306,7 +311,7 @@ Result run(const Options& o) {
   Buffer shape_buffers[3];
   for (uint32_t k = 0; k < 3; ++k) {
     const VkDeviceSize vertex_bytes = shapes[k].vertices.size() * sizeof(Vertex);
-    shape_buffers[k] = kept_buffer(make_buffer(d, vertex_bytes + shapes[k].indices.size() * 4, mesh_usage));
+    shape_buffers[k] = teardown.kept(make_buffer(d, vertex_bytes + shapes[k].indices.size() * 4, mesh_usage));
     auto* bytes = static_cast<uint8_t*>(shape_buffers[k].mapped);
     std::memcpy(bytes, shapes[k].vertices.data(), vertex_bytes);
     std::memcpy(bytes + vertex_bytes, shapes[k].indices.data(), shapes[k].indices.size() * 4);
@@ -320,7 +325,7 @@ Result run(const Options& o) {
     const VkDeviceSize vertex_bytes = mesh.vertices.size() * sizeof(Vertex);
     const uint32_t index_size = index_types[m] == VK_INDEX_TYPE_UINT16 ? 2 : 4;
     index_offsets[m] = vertex_bytes;
-    mesh_buffers[m] = kept_buffer(make_buffer(d, vertex_bytes + mesh.indices.size() * index_size, mesh_usage));
+    mesh_buffers[m] = teardown.kept(make_buffer(d, vertex_bytes + mesh.indices.size() * index_size, mesh_usage));
     auto* bytes = static_cast<uint8_t*>(mesh_buffers[m].mapped);
     std::memcpy(bytes, mesh.vertices.data(), vertex_bytes);
     for (size_t i = 0; i < mesh.indices.size(); ++i) {
@@ -346,25 +351,25 @@ Result run(const Options& o) {
   // ----- Targets: the host's G-buffer in its own formats, the module's output, the lit frame.
   const VkExtent2D extent{o.width, o.height};
   const VkImageUsageFlags read = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-  Image depth = kept_image(make_image(d, extent, depth_format, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | read));
-  Image albedo = kept_image(make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
-  Image normals = kept_image(make_image(d, extent, VK_FORMAT_R16G16_SNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
+  Image depth = teardown.kept(make_image(d, extent, depth_format, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | read));
+  Image albedo = teardown.kept(make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
+  Image normals = teardown.kept(make_image(d, extent, VK_FORMAT_R16G16_SNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
   // What the module reads as normals (octahedral world: the lighting's own image), and the geometric
   // normals; both always drawn, handed over as the options say.
   const bool own_normals = o.normals != "oct" || o.view_space_normals;
-  Image module_normals = kept_image(make_image(d, extent, o.normals == "xyz" ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R16G16_SNORM,
+  Image module_normals = teardown.kept(make_image(d, extent, o.normals == "xyz" ? VK_FORMAT_R16G16B16A16_SFLOAT : VK_FORMAT_R16G16_SNORM,
                                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
-  Image geometric_normals = kept_image(make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
-  Image terminator = kept_image(make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
+  Image geometric_normals = teardown.kept(make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
+  Image terminator = teardown.kept(make_image(d, extent, VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | read));
   // The module's outputs, one per light (the first lights the frame; the others are light_outputs).
   const uint32_t light_count = uint32_t(o.lights.size());
   std::vector<Image> visibility;
   std::vector<shadows::ImageInput> light_outputs;
   for (uint32_t l = 0; l < light_count; ++l) {
-    visibility.push_back(kept_image(make_image(d, extent, output_format, VK_IMAGE_USAGE_STORAGE_BIT | read)));
+    visibility.push_back(teardown.kept(make_image(d, extent, output_format, VK_IMAGE_USAGE_STORAGE_BIT | read)));
     if (l > 0) light_outputs.push_back(visibility.back().input(VK_IMAGE_LAYOUT_GENERAL));
   }
-  Image lit = kept_image(make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read));
+  Image lit = teardown.kept(make_image(d, extent, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_STORAGE_BIT | read));
   const size_t pixels = size_t(o.width) * o.height;
   // Read-backs per frame slot, read when the host waits for that slot's fence (so frames stay in
   // flight while every one of them is captured).
@@ -380,11 +385,11 @@ Result run(const Options& o) {
   std::vector<SlotCapture> captures(F);
   auto readbacks_of = [&](SlotCapture& c) -> SlotCapture& {
     if (!c.depth.buffer) {
-      c.depth = kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
-      c.normals = kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
-      c.lit = kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
-      c.albedo = kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
-      for (uint32_t l = 0; l < light_count; ++l) c.visibility.push_back(kept_buffer(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT)));
+      c.depth = teardown.kept(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      c.normals = teardown.kept(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      c.lit = teardown.kept(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      c.albedo = teardown.kept(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+      for (uint32_t l = 0; l < light_count; ++l) c.visibility.push_back(teardown.kept(make_buffer(d, pixels * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT)));
     }
     return c;
   };
@@ -393,7 +398,7 @@ Result run(const Options& o) {
   VkSampler sampler;
   VkSamplerCreateInfo sampler_info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
   check(vkCreateSampler(dev, &sampler_info, nullptr, &sampler), "vkCreateSampler");
-  teardown.add([dev, sampler] { vkDestroySampler(dev, sampler, nullptr); });
+  teardown.kept(sampler, vkDestroySampler);
   VkPushConstantRange draw_push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(DrawPush)};
   // gbuffer.frag: the frame's uniform buffer (DrawFrame), a push descriptor.
   const VkDescriptorSetLayoutBinding frame_binding{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
@@ -403,7 +408,7 @@ Result run(const Options& o) {
   frame_set_info.pBindings = &frame_binding;
   VkDescriptorSetLayout draw_set;
   check(vkCreateDescriptorSetLayout(dev, &frame_set_info, nullptr, &draw_set), "vkCreateDescriptorSetLayout");
-  teardown.add([dev, draw_set] { vkDestroyDescriptorSetLayout(dev, draw_set, nullptr); });
+  teardown.kept(draw_set, vkDestroyDescriptorSetLayout);
   VkPipelineLayoutCreateInfo layout_info{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   layout_info.setLayoutCount = 1;
   layout_info.pSetLayouts = &draw_set;
@@ -411,7 +416,7 @@ Result run(const Options& o) {
   layout_info.pPushConstantRanges = &draw_push;
   VkPipelineLayout draw_layout, light_layout;
   check(vkCreatePipelineLayout(dev, &layout_info, nullptr, &draw_layout), "vkCreatePipelineLayout");
-  teardown.add([dev, draw_layout] { vkDestroyPipelineLayout(dev, draw_layout, nullptr); });
+  teardown.kept(draw_layout, vkDestroyPipelineLayout);
   // light.comp: albedo, normals, visibility (sampled), the lit frame (storage).
   VkDescriptorSetLayoutBinding bindings[4];
   for (uint32_t b = 0; b < 4; ++b)
@@ -423,21 +428,18 @@ Result run(const Options& o) {
   set_info.pBindings = bindings;
   VkDescriptorSetLayout light_set;
   check(vkCreateDescriptorSetLayout(dev, &set_info, nullptr, &light_set), "vkCreateDescriptorSetLayout");
-  teardown.add([dev, light_set] { vkDestroyDescriptorSetLayout(dev, light_set, nullptr); });
+  teardown.kept(light_set, vkDestroyDescriptorSetLayout);
   VkPushConstantRange light_push{VK_SHADER_STAGE_COMPUTE_BIT, 0, 16};
   layout_info.setLayoutCount = 1;
   layout_info.pSetLayouts = &light_set;
   layout_info.pPushConstantRanges = &light_push;
   check(vkCreatePipelineLayout(dev, &layout_info, nullptr, &light_layout), "vkCreatePipelineLayout");
-  teardown.add([dev, light_layout] { vkDestroyPipelineLayout(dev, light_layout, nullptr); });
+  teardown.kept(light_layout, vkDestroyPipelineLayout);
 
   // (The modules live until the teardown: a later one's missing file must not leave the first.)
-  VkShaderModule vs = load_shader(dev, o.shader_directory, "gbuffer.vert.spv");
-  teardown.add([dev, vs] { vkDestroyShaderModule(dev, vs, nullptr); });
-  VkShaderModule fs = load_shader(dev, o.shader_directory, "gbuffer.frag.spv");
-  teardown.add([dev, fs] { vkDestroyShaderModule(dev, fs, nullptr); });
-  VkShaderModule cs = load_shader(dev, o.shader_directory, "light.comp.spv");
-  teardown.add([dev, cs] { vkDestroyShaderModule(dev, cs, nullptr); });
+  const VkShaderModule vs = teardown.kept(load_shader(dev, o.shader_directory, "gbuffer.vert.spv"), vkDestroyShaderModule);
+  const VkShaderModule fs = teardown.kept(load_shader(dev, o.shader_directory, "gbuffer.frag.spv"), vkDestroyShaderModule);
+  const VkShaderModule cs = teardown.kept(load_shader(dev, o.shader_directory, "light.comp.spv"), vkDestroyShaderModule);
   VkPipelineShaderStageCreateInfo stages[2] = {
       {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_VERTEX_BIT, vs, "main"},
       {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_FRAGMENT_BIT, fs, "main"}};
@@ -492,12 +494,12 @@ Result run(const Options& o) {
   gp.layout = draw_layout;
   VkPipeline draw_pipeline, light_pipeline;
   check(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &gp, nullptr, &draw_pipeline), "vkCreateGraphicsPipelines");
-  teardown.add([dev, draw_pipeline] { vkDestroyPipeline(dev, draw_pipeline, nullptr); });
+  teardown.kept(draw_pipeline, vkDestroyPipeline);
   VkComputePipelineCreateInfo cp{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   cp.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_COMPUTE_BIT, cs, "main"};
   cp.layout = light_layout;
   check(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cp, nullptr, &light_pipeline), "vkCreateComputePipelines");
-  teardown.add([dev, light_pipeline] { vkDestroyPipeline(dev, light_pipeline, nullptr); });
+  teardown.kept(light_pipeline, vkDestroyPipeline);
   auto push_descriptors = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(dev, "vkCmdPushDescriptorSetKHR"));
 
   // ----- Frames in flight: a command buffer and a fence per slot.
@@ -506,18 +508,18 @@ Result run(const Options& o) {
   pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pool_info.queueFamilyIndex = d.family;
   check(vkCreateCommandPool(dev, &pool_info, nullptr, &pool), "vkCreateCommandPool");
-  teardown.add([dev, pool] { vkDestroyCommandPool(dev, pool, nullptr); });
+  teardown.kept(pool, vkDestroyCommandPool);
   std::vector<VkCommandBuffer> cmds(F);
   VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO, nullptr, pool,
                                     VK_COMMAND_BUFFER_LEVEL_PRIMARY, F};
   check(vkAllocateCommandBuffers(dev, &alloc, cmds.data()), "vkAllocateCommandBuffers");
   std::vector<VkFence> fences(F);
   std::vector<Buffer> draw_frames;
-  for (uint32_t k = 0; k < F; ++k) draw_frames.push_back(kept_buffer(make_buffer(d, sizeof(DrawFrame), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT)));
+  for (uint32_t k = 0; k < F; ++k) draw_frames.push_back(teardown.kept(make_buffer(d, sizeof(DrawFrame), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT)));
   VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, nullptr, VK_FENCE_CREATE_SIGNALED_BIT};
   for (VkFence& f : fences) {
     check(vkCreateFence(dev, &fence_info, nullptr, &f), "vkCreateFence");
-    teardown.add([dev, f] { vkDestroyFence(dev, f, nullptr); });
+    teardown.kept(f, vkDestroyFence);
   }
 
   const auto C = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;

@@ -439,6 +439,35 @@ Reach classify(const reference::ShadingPoints& sp, size_t i, const vulkan_host::
   return faces;
 }
 
+// The same frame with each of `modes` (`o`'s mode replaced), each checked for validation messages.
+std::map<std::string, Result> run_modes(vulkan_host::Options o, std::initializer_list<const char*> modes) {
+  std::map<std::string, Result> runs;
+  for (const char* mode : modes) {
+    o.mode = mode;
+    const Result& r = runs.emplace(mode, vulkan_host::run(o)).first->second;
+    EXPECT_EQ(r.validation_messages, 0u) << mode;
+  }
+  return runs;
+}
+
+// Each run's first light against an area-light reference of the same points (uncovered pixels left
+// out), printed under `label`.
+std::map<std::string, reference::SoftComparison> soft_comparisons(const std::map<std::string, Result>& runs,
+                                                                  const reference::ShadingPoints& sp,
+                                                                  const std::vector<float>& area, const std::string& label) {
+  std::map<std::string, reference::SoftComparison> soft;
+  for (const auto& [mode, r] : runs) {
+    std::vector<float> actual = r.frames.back().visibility.at(0);
+    for (size_t i = 0; i < actual.size(); ++i)
+      if (!sp.covered(i)) actual[i] = -1.0f;
+    const reference::SoftComparison& c = soft[mode] = reference::compare_soft(actual, area);
+    std::printf("[ measure ] host %s, %s: soft_mae %.5f, penumbra_mae %.4f (%llu of %llu pixels)\n", label.c_str(),
+                mode.c_str(), c.soft_mae, c.penumbra_mae, (unsigned long long)c.penumbra_pixels,
+                (unsigned long long)c.pixels);
+  }
+  return soft;
+}
+
 // The sun's size through the host's own inputs (its D24S8 depth and octahedral normals, the module's
 // input pass rebuilding the points): against Embree's area light (256 stratified rays a pixel over a
 // 2-degree sun, from the host's shading points), the hybrid's soft term is nearer than the hard IZB's
@@ -449,16 +478,12 @@ TEST(HostSoftShadows, HybridSoftensTowardTheAreaLightAndKeepsTheExactTermUnderSu
   constexpr float kSunDegrees = 2.0f;
   for (uint32_t view : {0u, 1u}) {
     SCOPED_TRACE(testing::Message() << "view " << view);
-    std::map<std::string, Result> runs;
-    for (const char* mode : {"hybrid", "izb", "cascades", "sm"}) {
-      vulkan_host::Options o = options(mode, view, 1);
-      o.frames = 1;
-      o.frames_in_flight = 1;
-      o.output_format = "r32f";
-      o.sun_size_degrees = kSunDegrees;
-      runs.emplace(mode, vulkan_host::run(o));
-      EXPECT_EQ(runs.at(mode).validation_messages, 0u) << mode;
-    }
+    vulkan_host::Options o = options("hybrid", view, 1);
+    o.frames = 1;
+    o.frames_in_flight = 1;
+    o.output_format = "r32f";
+    o.sun_size_degrees = kSunDegrees;
+    const std::map<std::string, Result> runs = run_modes(o, {"hybrid", "izb", "cascades", "sm"});
     const vulkan_host::FrameCapture& f = runs.at("hybrid").frames.back();
     ASSERT_EQ(f.depth, runs.at("sm").frames.back().depth) << "not the same frame";
     ASSERT_EQ(f.lights.at(0).angular_diameter_degrees, kSunDegrees);
@@ -468,16 +493,7 @@ TEST(HostSoftShadows, HybridSoftensTowardTheAreaLightAndKeepsTheExactTermUnderSu
     const reference::ShadingPoints sp = shading_points(f, w, h, f.lights[0]);
     const glm::vec3 direction = glm::make_vec3(f.lights[0].direction.data());
     const std::vector<float> area = tracer.area_visibility(sp, direction, kSunDegrees, 256);
-    std::map<std::string, reference::SoftComparison> soft;
-    for (const auto& [mode, r] : runs) {
-      std::vector<float> actual = r.frames.back().visibility.at(0);
-      for (size_t i = 0; i < actual.size(); ++i)
-        if (!sp.covered(i)) actual[i] = -1.0f;
-      soft[mode] = reference::compare_soft(actual, area);
-      std::printf("[ measure ] host view %u %s: soft_mae %.5f, penumbra_mae %.4f (%llu of %llu pixels)\n", view,
-                  mode.c_str(), soft[mode].soft_mae, soft[mode].penumbra_mae,
-                  (unsigned long long)soft[mode].penumbra_pixels, (unsigned long long)soft[mode].pixels);
-    }
+    std::map<std::string, reference::SoftComparison> soft = soft_comparisons(runs, sp, area, "view " + std::to_string(view));
     EXPECT_GT(soft["hybrid"].penumbra_pixels, 100u) << "no penumbra to compare";
     for (const char* other : {"izb", "cascades"}) EXPECT_LT(soft["hybrid"].soft_mae, soft[other].soft_mae) << other;
     // The pixels no penumbra of 0.4 of a pixel reaches: the IZB's term, bit for bit.
@@ -508,17 +524,13 @@ TEST(HostSoftShadows, LocalLightsWithARadiusSoftenTowardTheirDisc) {
   constexpr float kRadius = 0.25f;
   for (const char* kind : {"spot", "point"}) {
     SCOPED_TRACE(kind);
-    std::map<std::string, Result> runs;
-    for (const char* mode : {"izb", "sm", "cascades", "hybrid"}) {
-      vulkan_host::Options o = options(mode, 1, 1);
-      o.frames = 1;
-      o.frames_in_flight = 1;
-      o.output_format = "r32f";
-      o.lights = {kind};
-      o.local_radius = kRadius;
-      runs.emplace(mode, vulkan_host::run(o));
-      EXPECT_EQ(runs.at(mode).validation_messages, 0u) << mode;
-    }
+    vulkan_host::Options o = options("izb", 1, 1);
+    o.frames = 1;
+    o.frames_in_flight = 1;
+    o.output_format = "r32f";
+    o.lights = {kind};
+    o.local_radius = kRadius;
+    const std::map<std::string, Result> runs = run_modes(o, {"izb", "sm", "cascades", "hybrid"});
     const vulkan_host::FrameCapture& f = runs.at("izb").frames.back();
     const vulkan_host::HostLight& light = f.lights.at(0);
     ASSERT_EQ(light.radius, kRadius);
@@ -526,17 +538,9 @@ TEST(HostSoftShadows, LocalLightsWithARadiusSoftenTowardTheirDisc) {
     const reference::EmbreeTracer tracer(registry);
     const reference::ShadingPoints sp = shading_points(f, runs.at("izb").width, runs.at("izb").height, light);
     const std::vector<float> area = tracer.area_visibility(sp, reference_light(light), kRadius, 256);
-    std::map<std::string, reference::SoftComparison> soft;
-    for (const auto& [mode, r] : runs) {
-      ASSERT_EQ(r.frames.back().depth, f.depth) << "not the same frame";
-      std::vector<float> actual = r.frames.back().visibility.at(0);
-      for (size_t i = 0; i < actual.size(); ++i)
-        if (!sp.covered(i)) actual[i] = -1.0f;
-      soft[mode] = reference::compare_soft(actual, area);
-      std::printf("[ measure ] host %s light, radius %.2f, %s: soft_mae %.5f, penumbra_mae %.4f (%llu of %llu pixels)\n",
-                  kind, kRadius, mode.c_str(), soft[mode].soft_mae, soft[mode].penumbra_mae,
-                  (unsigned long long)soft[mode].penumbra_pixels, (unsigned long long)soft[mode].pixels);
-    }
+    for (const auto& [mode, r] : runs) ASSERT_EQ(r.frames.back().depth, f.depth) << mode << ": not the same frame";
+    std::map<std::string, reference::SoftComparison> soft =
+        soft_comparisons(runs, sp, area, std::string(kind) + " light, radius " + std::to_string(kRadius));
     EXPECT_GT(soft["izb"].penumbra_pixels, 100u) << "no penumbra to compare";
     for (const char* filtered : {"sm", "cascades"}) EXPECT_LT(soft[filtered].soft_mae, soft["izb"].soft_mae) << filtered;
     EXPECT_EQ(runs.at("hybrid").frames.back().visibility[0], f.visibility[0]) << "the hybrid's local light is not the IZB's";
