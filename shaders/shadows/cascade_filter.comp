@@ -288,7 +288,10 @@ uvec2 classify_pixel(ivec2 pixel) {
   bool band = evaluated && ch.two;
   bool filtered_here = kKernelInClassify && evaluated && !band;
   bool deferred = evaluated && (band || (pr.expensive && !kKernelInClassify));
-  if (covered && !deferred) imageStore(shadow_term, pixel, vec4(visibility));
+  // Over the whole frame an uncovered pixel is stored lit too, so that the term needs no fill before
+  // (ContextImpl::writes_every_pixel).
+  bool stored = (covered || (inside && kStage == CASCADE_STAGE_CLASSIFY)) && !deferred;
+  if (stored) imageStore(shadow_term, pixel, vec4(covered ? visibility : 1.0));
   if (kDebug != CASCADE_DEBUG_NONE && covered && !deferred) write_overlay(pixel, evaluated ? ch.cascade : -1, filtered_here);
   bool kernel_only = deferred && !band;
   bool blur = filtered_here && mixed && params.mode.y != 0u;

@@ -174,7 +174,12 @@ void main() {
   ivec2 pixel;
   if (!stage_pixel(pixel) || any(greaterThanEqual(uvec2(pixel), params.extent.xy))) return;
   vec4 p = imageLoad(world_position, pixel);
-  if (p.w == 0.0) return;
+  // An uncovered pixel is lit, stored here so that the sun's map writes every pixel and the term needs
+  // no fill before it (ContextImpl::writes_every_pixel; a listed pass reads covered pixels only).
+  if (p.w == 0.0) {
+    if (kStage != SM_STAGE_LISTED) imageStore(shadow_term, pixel, vec4(1.0));
+    return;
+  }
   // One of a point light's cube-face cones: the points outside it belong to another face's map.
   if (kLocalLight && point_light_face_pass() && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
                                        params.light_cone.x * length(p.xyz - params.light_position.xyz))

@@ -1174,6 +1174,49 @@ TEST_F(IzbTest, OffRecordsNothingAndLeavesEveryPixelLit) {
   for (const auto& [name, ms] : r.profiler().last_frame()) EXPECT_NE(name, "shadows") << "the module recorded";
 }
 
+// The sun's term gets no lit fill before a technique whose passes write every one of its pixels
+// (ContextImpl::writes_every_pixel: sm and the cascades everywhere, the IZB's direct term on a GPU):
+// with the image holding another value before the frame, every technique leaves the same term, bit
+// for bit, and the pixels the G-buffer does not cover lit.
+TEST_F(IzbTest, EveryTechniqueWritesTheWholeTermWhateverTheImageHeld) {
+  auto& r = make_renderer("atrium", 1, 96, 96);
+  module_ = shadows::install(r, izb(1));
+  r.render_frame(0.0f);
+  const auto positions = r.read_world_positions();
+  const auto uncovered = std::count_if(positions.begin(), positions.end(), [](const glm::vec4& p) { return p.w == 0.0f; });
+  ASSERT_GT(uncovered, 0) << "the view shows no sky, so no pixel tests the uncovered ones";
+  const auto fill_term = [&r](float value) {
+    r.context().immediate_submit([&](VkCommandBuffer cmd) {
+      const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+      const VkClearColorValue color{{value, value, value, value}};
+      // The last frame's lighting read the term; the next frame's passes read and write it.
+      engine::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT,
+                                  VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+      vkCmdClearColorImage(cmd, r.shadow_term().handle(), VK_IMAGE_LAYOUT_GENERAL, &color, 1, &range);
+      engine::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                  VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                  VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+    });
+  };
+  using T = shadows::Technique;
+  for (T technique : {T::ShadowMap, T::Cascades, T::Izb, T::Hybrid}) {
+    module_->settings().technique = technique;
+    r.render_frame(0.0f);
+    const auto expected = r.read_shadow_term();
+    fill_term(0.25f);
+    r.render_frame(0.0f);
+    const auto term = r.read_shadow_term();
+    ASSERT_EQ(term.size(), positions.size());
+    size_t differing = 0, uncovered_not_lit = 0;
+    for (size_t i = 0; i < term.size(); ++i) {
+      differing += std::memcmp(&term[i], &expected[i], sizeof(float)) != 0;
+      uncovered_not_lit += positions[i].w == 0.0f && term[i] != 1.0f;
+    }
+    EXPECT_EQ(differing, 0u) << shadows::mode_name(module_->settings());
+    EXPECT_EQ(uncovered_not_lit, 0u) << shadows::mode_name(module_->settings());
+  }
+}
+
 }  // namespace
 
 namespace {

@@ -726,6 +726,9 @@ bool ContextImpl::writes_every_pixel(const Light& light) {
     return izb().writes_every_pixel(settings_.izb, settings_.izb.max_distance, settings_.debug, false);
   if (settings_.technique == Technique::Hybrid)
     return izb().writes_every_pixel(settings_.izb, settings_.hybrid_izb_distance, settings_.debug, true);
+  // The sun's map and cascades resolve every pixel of the frame (shadow_map_resolve.glsl,
+  // cascade_filter.comp); a local light's maps reach only their cones' pixels.
+  if (settings_.technique == Technique::ShadowMap || settings_.technique == Technique::Cascades) return !local;
   return false;
 }
 
