@@ -278,6 +278,9 @@ Result run(const Options& o) {
   if (!settings) throw std::runtime_error("unknown mode '" + o.mode + "'");
   if (o.spp != 1 && o.spp != 32) throw std::runtime_error("--spp must be 1 or 32");
   settings->izb.samples_per_pixel = o.spp;
+  // The scene's metres are world_scale world units: the module's distances in metres (the cascades'
+  // narrowest filter, the ranges) follow them.
+  settings->units_per_metre = o.world_scale;
   const VkFormat depth_format = depth_format_of(o.depth_format), output_format = output_format_of(o.output_format);
   if (o.normals != "oct" && o.normals != "xyz") throw std::runtime_error("unknown normals '" + o.normals + "' (oct or xyz)");
   if (o.facing_in_alpha && !o.geometric_normals) throw std::runtime_error("facing in alpha needs the geometric normals");

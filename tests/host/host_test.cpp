@@ -414,6 +414,36 @@ INSTANTIATE_TEST_SUITE_P(
                       PlacementCase{"far_centimetres", 100.0f, {1.0e7, 2.0e4, 1.0e7}, {3750.0, 0, 1225.0}}),
     [](const auto& info) { return info.param.name; });
 
+// The host hands the module its world's unit (Settings::units_per_metre = world_scale): the cascades'
+// filter, whose narrowest radius is a distance in metres (CascadeSettings::kernel_radius), is then the
+// same part of the scene in centimetres and at a hundredth of its size as in metres, and so are their
+// terms, to within the maps' roundings.
+TEST(HostWorldUnits, TheCascadesFilterTheSameSceneAlikeAtEveryScale) {
+  vulkan_host::Options o = options("cascades", 1, 1);
+  o.width = o.height = 192;
+  const Result metres = vulkan_host::run(o);
+  EXPECT_EQ(metres.validation_messages, 0u);
+  const std::vector<float>& expected = metres.frames.back().visibility.at(0);
+  for (float scale : {100.0f, 0.01f}) {
+    o.world_scale = scale;
+    const Result r = vulkan_host::run(o);
+    EXPECT_EQ(r.validation_messages, 0u) << scale;
+    const std::vector<float>& term = r.frames.back().visibility.at(0);
+    ASSERT_EQ(term.size(), expected.size());
+    size_t covered = 0, apart = 0;
+    double difference = 0.0;
+    for (size_t i = 0; i < term.size(); ++i) {
+      if (expected[i] < 0.0f || term[i] < 0.0f) continue;  // uncovered
+      ++covered;
+      difference += std::abs(term[i] - expected[i]);
+      apart += std::abs(term[i] - expected[i]) > 0.25f;
+    }
+    std::printf("world scale %g: cascades' mean difference from metres %.6f, %zu of %zu pixels apart by > 0.25\n",
+                scale, difference / double(covered), apart, covered);
+    EXPECT_LT(difference / double(covered), 0.002) << scale;
+  }
+}
+
 // ----- What the output holds: OutputTerm::Occlusion (the default) and OutputTerm::Combined.
 
 // Where a captured point lies against a light: lit (reached and facing), or why not. Margins keep
