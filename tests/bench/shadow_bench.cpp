@@ -609,7 +609,7 @@ struct Bench {
       lights.push_back({{"kind", l.kind}, {"lit_candidates", l.lit_candidates}, {"nodes_inserted", l.nodes_inserted},
                         {"csm_culled", l.csm_culled}, {"node_overflow", l.node_overflow},
                         {"list_length_max", l.list_length_max}, {"rays_traced", l.rays_traced},
-                        {"rays_occluded", l.rays_occluded}, {"gpu_ms", l.gpu_ms}});
+                        {"rays_occluded", l.rays_occluded}, {"gpu_ms", l.gpu_ms}, {"faces_recorded", l.faces_recorded}});
     entry["lights"] = lights;
     entry["lists"] = shadows::list_layout_name(run.settings.izb.lists);
     entry["anchored_nodes"] = run.settings.izb.anchored_nodes;
@@ -734,6 +734,10 @@ struct Bench {
       if (st.caster_triangles > 0)
         std::printf("light frustum: %llu of %llu caster triangles listed\n",
                     (unsigned long long)st.caster_triangles_listed, (unsigned long long)st.caster_triangles);
+      for (size_t i = 0; i < st.lights.size(); ++i)
+        if (st.lights[i].faces_recorded > 0)
+          std::printf("light %zu (point): %u of its 6 cube-face cones recorded (the others reach no point of the view)\n",
+                      i, st.lights[i].faces_recorded);
       std::printf("%-12s %-9s %-8s %-8s %4u %10.3f %10.3f %12.6f %12llu %10.5f %9.1f\n", run.mode.c_str(),
                   run.csm_test.c_str(), ran(st.trace_choice, run.trace).c_str(),
                   ran(st.csm_choice, run.csm_backend).c_str(), spp, gpu_ms["total"].get<double>(), frame_ms,

@@ -5,6 +5,7 @@
 // on a ray tracing GPU for the comparisons. The validation layer is on either way.
 #include <unistd.h>
 #include <cmath>
+#include <random>
 #include <nlohmann/json.hpp>
 #include <fstream>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include "engine/core/animation.hpp"
 #include "frame_capture.hpp"
 #include "gpu_fixture.hpp"
+#include "../../modules/shadows/src/light_space.hpp"
 #include "shadows_engine/shadows_engine.hpp"
 
 namespace {
@@ -225,6 +227,89 @@ TEST_P(LocalLightTest, IzbMatchesReference) {
   // (A point light's statistics are its last face's, which here culls nothing.)
   if (GetParam().light.type == shadows::LightType::Spot) {
     EXPECT_GT(stats.csm_culled, 0u);
+  }
+}
+
+// cone_may_reach_view (a point light's faces) never skips a cone that holds a point of the view:
+// random cameras (standard and reversed depth, finite and infinite far planes) and cones, each checked
+// against random points of the cone within its range that the camera sees.
+TEST(PointLightFaces, AConeHoldingAVisiblePointIsNeverSkipped) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const auto in_box = [&](float half) { return glm::vec3(unit(rng), unit(rng), unit(rng)) * (2.0f * half) - half; };
+  const float cos_face = std::cos(std::acos(1.0f / std::sqrt(3.0f)) + glm::radians(0.5f));
+  const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  size_t skipped = 0, seen_points = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const glm::vec3 eye = in_box(10.0f), target = eye + in_box(1.0f) + glm::vec3(0.01f);
+    const float fov = glm::radians(30.0f + 80.0f * unit(rng)), aspect = 0.5f + 1.5f * unit(rng);
+    const float near = 0.05f + unit(rng), far = near + 20.0f + 200.0f * unit(rng);
+    glm::mat4 projection = trial % 3 == 0 ? glm::perspectiveRH_ZO(fov, aspect, near, far)
+                                          : glm::perspectiveRH_ZO(fov, aspect, far, near);  // reversed depth
+    if (trial % 3 == 2) {  // reversed depth with no far plane: z = near, w = the view depth
+      projection[2][2] = 0.0f;
+      projection[3][2] = near;
+    }
+    projection[1][1] *= -1.0f;
+    const glm::mat4 view_projection = projection * glm::lookAt(eye, target, glm::vec3(0, 1, 0));
+    const glm::vec3 apex = eye + in_box(12.0f);
+    const float range = 0.5f + 15.0f * unit(rng);
+    for (const glm::vec3& axis : axes) {
+      const bool may = shadows::detail::cone_may_reach_view(view_projection, apex, axis, cos_face, range);
+      skipped += !may;
+      for (int k = 0; k < 200; ++k) {
+        const glm::vec3 direction = glm::normalize(in_box(1.0f) + glm::vec3(1.0e-6f));
+        if (glm::dot(direction, axis) < cos_face) continue;
+        const glm::vec3 point = apex + direction * range * std::cbrt(unit(rng));
+        const glm::vec4 clip = view_projection * glm::vec4(point, 1.0f);
+        const bool seen = clip.w > 0.0f && std::abs(clip.x) <= clip.w && std::abs(clip.y) <= clip.w && clip.z >= 0.0f &&
+                          clip.z <= clip.w;
+        seen_points += seen;
+        if (seen) ASSERT_TRUE(may) << "trial " << trial << ": a cone holding a seen point was skipped";
+      }
+    }
+  }
+  std::printf("cones skipped: %zu of %d; seen points checked: %zu\n", skipped, 400 * 6, seen_points);
+  EXPECT_GT(skipped, 200u) << "the test never skips a cone: it shows nothing";
+  EXPECT_GT(seen_points, 10000u);
+}
+
+// A point light behind and beside the view (content/test_levels/point_beside.json): its faces whose
+// cones no point of the view lies in are not recorded (Stats::LightStats::faces_recorded), and the
+// terms still match Embree's from the same points, the IZB's within the sun suite's bound and the
+// shadow maps' within their aliasing.
+TEST_F(RayTracedTest, APointLightSkipsTheFacesItsViewMisses) {
+  auto& r = make_renderer(std::string(ENGINE_SOURCE_DIR) + "/content/test_levels/point_beside.json", 0, kSize, kSize);
+  shadows::Settings settings;
+  settings.technique = shadows::Technique::Izb;
+  module_ = shadows::install(r, settings);
+  shadows::Light point{.type = shadows::LightType::Point};
+  scene_->registry.each<engine::PointLight, engine::Transform>([&](engine::Entity, engine::PointLight& l, engine::Transform& t) {
+    const glm::vec3 position(t.world[3]);
+    std::memcpy(point.position, &position, sizeof(point.position));
+    point.range = l.range;
+  });
+  ASSERT_GT(point.range, 0.0f) << "the level has no point light";
+  module_->set_light(point);
+  reference::EmbreeTracer tracer(scene_->registry);
+  const reference::LocalLight light{.position = glm::make_vec3(point.position), .range = point.range};
+  for (shadows::Technique technique : {shadows::Technique::Izb, shadows::Technique::ShadowMap}) {
+    module_->settings().technique = technique;
+    r.render_frame(0.0f);
+    r.render_frame(0.0f);  // the statistics of a frame that has completed
+    const auto truth = tracer.visibility_1spp(support::capture_shading_points(r), light);
+    const auto cmp = reference::compare_visibility(module_->read_visibility(), truth);
+    const shadows::Stats stats = module_->stats();
+    ASSERT_EQ(stats.lights.size(), 1u);
+    const uint32_t faces = stats.lights[0].faces_recorded;
+    const size_t unlit = size_t(std::count(truth.begin(), truth.end(), 0.0f));
+    std::printf("%s, point_beside: %u of 6 faces recorded, mismatch %.6f (%llu of %llu), %zu pixels unlit\n",
+                shadows::mode_name(module_->settings()).c_str(), faces, cmp.mismatch_rate,
+                (unsigned long long)cmp.mismatched, (unsigned long long)cmp.pixels, unlit);
+    EXPECT_GT(faces, 0u);
+    EXPECT_LT(faces, 6u) << "no face skipped: the test shows nothing";
+    EXPECT_GT(unlit, size_t(kSize) * kSize / 100);
+    EXPECT_LE(cmp.mismatch_rate, technique == shadows::Technique::Izb ? 0.0002 : 0.01);
   }
 }
 

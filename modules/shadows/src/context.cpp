@@ -875,6 +875,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     Frame frame{*gpu_, cmd, profiler, view, inputs, term, overlay_, geometry_.geometry(), draws_,
                 slot_index, frames_in_flight_};
     record_technique(frame);
+    records.faces = point_light_faces_recorded_;
     // Written in place (the term's writes were compute shaders', which the host's barrier after
     // record() orders), the output needs no pass.
     if (term.handle() == shadow_term_.handle()) {
@@ -895,16 +896,29 @@ constexpr float kSpotFilterTexels = 2.5f;
 
 // A point light's six cones around the axes, each just wider than a cube face's (half angle
 // acos(1/sqrt 3) = 54.7 degrees, plus half a degree) so that together they cover every direction, shadowed as a spot light by
-// `record_face`; a face's resolve writes only the points in its own cone.
+// `record_face`; a face's resolve writes only the points in its own cone. A cone in which no point
+// of the view can lie within the light's range (cone_may_reach_view) is skipped: none of its points
+// is seen. The first face recorded also lists every cone's tiles and writes the term of the points no
+// cone reaches, so one runs even when no cone reaches the view.
 template <typename RecordFace>
 void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_face) {
   View face_view = frame.view;
   face_view.light_face = true;
   face_view.light_cos_outer = std::cos(std::acos(1.0f / std::sqrt(3.0f)) + glm::radians(0.5f));
   const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (uint32_t face = 0; face < 6; ++face) {
+  std::vector<uint32_t> faces;
+  for (uint32_t face = 0; face < 6; ++face)
+    if (cone_may_reach_view(frame.view.view_projection, frame.view.light_position, axes[face],
+                            face_view.light_cos_outer, frame.view.light_range))
+      faces.push_back(face);
+  if (faces.empty()) faces.push_back(0);
+  point_light_faces_recorded_ = uint32_t(faces.size());
+  for (size_t k = 0; k < faces.size(); ++k) {
+    const uint32_t face = faces[k];
     face_view.light_direction = axes[face];
     face_view.light_face_index = face;
+    face_view.first_light_face = k == 0;
+    face_view.last_light_face = k + 1 == faces.size();
     Frame f{frame.ctx, frame.cmd, frame.profiler, face_view, frame.gbuffer, frame.shadow_term, frame.overlay,
             frame.geometry, frame.draws, frame.slot, frame.slots};
     record_face(f);
@@ -945,6 +959,7 @@ void ContextImpl::record_local_light(Frame& frame, const Settings& settings) {
 }
 
 void ContextImpl::record_technique(Frame& frame) {
+  point_light_faces_recorded_ = 0;
   const Settings settings = in_world_units(settings_);
   if (frame.view.local_light && settings.technique != Technique::Off && settings.technique != Technique::RayTraced) {
     record_local_light(frame, settings);
@@ -1035,6 +1050,7 @@ void ContextImpl::complete_slot(Slot& slot) {
       const Slot::LightRecords& r = slot.lights[i];
       Stats::LightStats& l = fresh.lights.emplace_back();
       l.kind = r.kind;
+      l.faces_recorded = r.faces;
       for (uint32_t k = r.izb_first; k < r.izb_first + r.izb_count && k < izb_records.size(); ++k) {
         const Stats& s = izb_records[k];
         l.lit_candidates += s.lit_candidates;

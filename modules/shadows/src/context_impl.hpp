@@ -52,6 +52,7 @@ class ContextImpl final : public Context {
     struct LightRecords {
       std::string kind;
       uint32_t izb_first = 0, izb_count = 0, rt_first = 0, rt_count = 0;
+      uint32_t faces = 0;  // a point light's cones recorded (Stats::LightStats::faces_recorded)
     };
     std::vector<LightRecords> lights;
   };
@@ -95,6 +96,7 @@ class ContextImpl final : public Context {
   Settings settings_;
   Stats stats_;
   bool collect_stats_ = true;
+  uint32_t point_light_faces_recorded_ = 0;  // by the last record_point_light_faces (0: none ran)
   std::vector<Slot> slots_;
   engine::gpu::GpuProfiler* external_profiler_ = nullptr;
   std::vector<PassTime> last_pass_times_;

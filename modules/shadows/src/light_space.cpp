@@ -138,4 +138,27 @@ void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, co
       CasterSet::AlphaTested, [&](const DrawItem& d) { return cull && cull(d); });
 }
 
+bool cone_may_reach_view(const glm::mat4& view_projection, glm::vec3 apex, glm::vec3 axis, float cos_half_angle,
+                         float range) {
+  const glm::dmat4 m(view_projection);
+  const auto row = [&](int i) { return glm::dvec4(m[0][i], m[1][i], m[2][i], m[3][i]); };
+  // Inside: each plane's value (its xyz dot a point, plus w) >= 0.
+  const glm::dvec4 planes[6] = {row(3) + row(0), row(3) - row(0), row(3) + row(1),
+                                row(3) - row(1), row(2),          row(3) - row(2)};
+  const glm::dvec3 a = glm::normalize(glm::dvec3(axis)), p(apex);
+  const double half_angle = std::acos(std::clamp(double(cos_half_angle), -1.0, 1.0));
+  for (const glm::dvec4& plane : planes) {
+    const double length = glm::length(glm::dvec3(plane));
+    if (!(length > 0.0)) continue;  // no bound (a reversed-Z infinite far plane)
+    const glm::dvec3 n = glm::dvec3(plane) / length;
+    const double offset = plane.w / length;
+    // The largest value of n . u over the cone's unit directions u.
+    const double to_axis = std::acos(std::clamp(glm::dot(n, a), -1.0, 1.0));
+    const double reach = std::cos(std::max(to_axis - half_angle, 0.0));
+    const double highest = glm::dot(n, p) + offset + double(range) * std::max(reach, 0.0);
+    if (highest < -1.0e-4 * (std::abs(glm::dot(n, p)) + std::abs(offset) + double(range))) return false;
+  }
+  return true;
+}
+
 }  // namespace shadows::detail

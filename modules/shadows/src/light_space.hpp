@@ -35,6 +35,13 @@ void view_slice_corners(const View& view, float d0, float d1, glm::vec3 corners[
 // makes with that axis. 0 where the projection is not a perspective one.
 float nearest_view_depth_at(const View& view, float distance);
 
+// Whether a point within `range` of `apex` and inside the cone about `axis` (unit) whose half angle has
+// the cosine `cos_half_angle` can lie in the view frustum of `view_projection` (Vulkan clip space:
+// |x|, |y| <= w, 0 <= z <= w). False only where one of the frustum's planes has that whole part of the
+// ball on its outer side, by more than the points' rounding: a cone no visible point lies in.
+bool cone_may_reach_view(const glm::mat4& view_projection, glm::vec3 apex, glm::vec3 axis, float cos_half_angle,
+                         float range);
+
 // Which shadow-casting draws draw_casters issues.
 enum class CasterSet { All, Opaque, AlphaTested };
 

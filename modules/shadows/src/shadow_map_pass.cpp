@@ -146,9 +146,9 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     const Aabb bounds = caster_bounds(frame);
     return fit_orthographic(light_view, bounds, 0.01f * glm::length(bounds.extent())) * light_view;
   }();
-  // A point light's six faces count into one total: zeroed before the first, read after the last.
-  const bool first_map = !frame.view.light_face || frame.view.light_face_index == 0;
-  const bool last_map = !frame.view.light_face || frame.view.light_face_index == 5;
+  // A point light's faces count into one total: zeroed before the first, read after the last.
+  const bool first_map = !frame.view.light_face || frame.view.first_light_face;
+  const bool last_map = !frame.view.light_face || frame.view.last_light_face;
   if (count && first_map) vkCmdFillBuffer(cmd, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
 
   {

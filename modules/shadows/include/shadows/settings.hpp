@@ -289,6 +289,11 @@ struct Stats {
     uint64_t rays_traced = 0;        // rt
     uint64_t rays_occluded = 0;      // rt
     double gpu_ms = 0.0;             // the light's passes: its "light i" region, or "shadows" for one light
+    // A point light under sm, cascades, izb or hybrid: how many of its six cube-face cones were
+    // recorded (a cone in which no point of the view can lie within the light's range is skipped;
+    // with none left, one still runs to write the term of the points out of the light's reach).
+    // 0 for other lights and techniques.
+    uint32_t faces_recorded = 0;
     // IZB: the trace's and the CSM prepass's backends for this light (a spot or point light's
     // perspective grid always takes the compute passes, and says so); empty for other techniques.
     BackendChoice trace_choice;
