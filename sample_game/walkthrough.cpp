@@ -392,6 +392,11 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
       ImGui::Text("light %zu %-11s %6.2f ms  points %llu  nodes %llu  rays %llu", i, l.kind.c_str(), l.gpu_ms,
                   (unsigned long long)l.lit_candidates, (unsigned long long)l.nodes_inserted,
                   (unsigned long long)l.rays_traced);
+      // A point light's cube-face cones that can hold a point of the view (the others are skipped).
+      if (l.faces_recorded > 0) {
+        ImGui::SameLine();
+        ImGui::Text(" cones %u of 6", l.faces_recorded);
+      }
     }
     // GPU memory the technique holds, largest resources first.
     ImGui::Text("GPU memory %.1f MiB", double(st.memory_total_bytes) / (1024.0 * 1024.0));
