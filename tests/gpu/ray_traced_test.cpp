@@ -237,8 +237,7 @@ TEST(PointLightFaces, AConeHoldingAVisiblePointIsNeverSkipped) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   const auto in_box = [&](float half) { return glm::vec3(unit(rng), unit(rng), unit(rng)) * (2.0f * half) - half; };
-  const float cos_face = std::cos(std::acos(1.0f / std::sqrt(3.0f)) + glm::radians(0.5f));
-  const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const float cos_face = shadows::detail::point_light_face_cos_outer();
   size_t skipped = 0, seen_points = 0;
   for (int trial = 0; trial < 400; ++trial) {
     const glm::vec3 eye = in_box(10.0f), target = eye + in_box(1.0f) + glm::vec3(0.01f);
@@ -254,7 +253,7 @@ TEST(PointLightFaces, AConeHoldingAVisiblePointIsNeverSkipped) {
     const glm::mat4 view_projection = projection * glm::lookAt(eye, target, glm::vec3(0, 1, 0));
     const glm::vec3 apex = eye + in_box(12.0f);
     const float range = 0.5f + 15.0f * unit(rng);
-    for (const glm::vec3& axis : axes) {
+    for (const glm::vec3& axis : shadows::detail::kPointLightFaceAxes) {
       const bool may = shadows::detail::cone_may_reach_view(view_projection, apex, axis, cos_face, range);
       skipped += !may;
       for (int k = 0; k < 200; ++k) {
@@ -265,7 +264,9 @@ TEST(PointLightFaces, AConeHoldingAVisiblePointIsNeverSkipped) {
         const bool seen = clip.w > 0.0f && std::abs(clip.x) <= clip.w && std::abs(clip.y) <= clip.w && clip.z >= 0.0f &&
                           clip.z <= clip.w;
         seen_points += seen;
-        if (seen) ASSERT_TRUE(may) << "trial " << trial << ": a cone holding a seen point was skipped";
+        if (seen) {
+          ASSERT_TRUE(may) << "trial " << trial << ": a cone holding a seen point was skipped";
+        }
       }
     }
   }

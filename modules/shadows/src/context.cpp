@@ -894,9 +894,8 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
 // The PCF radius of a spot light's filtered map (Technique::Cascades), in map texels.
 constexpr float kSpotFilterTexels = 2.5f;
 
-// A point light's six cones around the axes, each just wider than a cube face's (half angle
-// acos(1/sqrt 3) = 54.7 degrees, plus half a degree) so that together they cover every direction, shadowed as a spot light by
-// `record_face`; a face's resolve writes only the points in its own cone. A cone in which no point
+// A point light's six cones (kPointLightFaceAxes), each shadowed as a spot light by `record_face`; a
+// face's resolve writes only the points in its own cone. A cone in which no point
 // of the view can lie within the light's range (cone_may_reach_view) is skipped: none of its points
 // is seen. The first face recorded also lists every cone's tiles and writes the term of the points no
 // cone reaches, so one runs even when no cone reaches the view.
@@ -904,18 +903,17 @@ template <typename RecordFace>
 void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_face) {
   View face_view = frame.view;
   face_view.light_face = true;
-  face_view.light_cos_outer = std::cos(std::acos(1.0f / std::sqrt(3.0f)) + glm::radians(0.5f));
-  const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  face_view.light_cos_outer = point_light_face_cos_outer();
   std::vector<uint32_t> faces;
   for (uint32_t face = 0; face < 6; ++face)
-    if (cone_may_reach_view(frame.view.view_projection, frame.view.light_position, axes[face],
+    if (cone_may_reach_view(frame.view.view_projection, frame.view.light_position, kPointLightFaceAxes[face],
                             face_view.light_cos_outer, frame.view.light_range))
       faces.push_back(face);
   if (faces.empty()) faces.push_back(0);
   point_light_faces_recorded_ = uint32_t(faces.size());
   for (size_t k = 0; k < faces.size(); ++k) {
     const uint32_t face = faces[k];
-    face_view.light_direction = axes[face];
+    face_view.light_direction = kPointLightFaceAxes[face];
     face_view.light_face_index = face;
     face_view.first_light_face = k == 0;
     face_view.last_light_face = k + 1 == faces.size();

@@ -138,6 +138,8 @@ void draw_alpha_casters(const engine::gpu::Context& ctx, VkCommandBuffer cmd, co
       CasterSet::AlphaTested, [&](const DrawItem& d) { return cull && cull(d); });
 }
 
+float point_light_face_cos_outer() { return std::cos(std::acos(1.0f / std::sqrt(3.0f)) + glm::radians(0.5f)); }
+
 bool cone_may_reach_view(const glm::mat4& view_projection, glm::vec3 apex, glm::vec3 axis, float cos_half_angle,
                          float range) {
   const glm::dmat4 m(view_projection);

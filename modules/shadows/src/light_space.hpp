@@ -35,6 +35,12 @@ void view_slice_corners(const View& view, float d0, float d1, glm::vec3 corners[
 // makes with that axis. 0 where the projection is not a perspective one.
 float nearest_view_depth_at(const View& view, float distance);
 
+// A point light's six cones around the axes, in the order they are recorded (+x, -x, +y, -y, +z, -z;
+// light_tiles.glsl's kLightFaceAxes), each just wider than a cube face's (half angle acos(1/sqrt 3) =
+// 54.7 degrees, plus half a degree) so that together they cover every direction.
+inline constexpr glm::vec3 kPointLightFaceAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+float point_light_face_cos_outer();
+
 // Whether a point within `range` of `apex` and inside the cone about `axis` (unit) whose half angle has
 // the cosine `cos_half_angle` can lie in the view frustum of `view_projection` (Vulkan clip space:
 // |x|, |y| <= w, 0 <= z <= w). False only where one of the frustum's planes has that whole part of the
