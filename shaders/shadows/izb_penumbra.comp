@@ -20,7 +20,8 @@ layout(local_size_x = 8, local_size_y = 8) in;  // kPenumbraTile²: the filter a
 //  kStepTiles:  a thread a row of a tile: the range of the hard term and the widest penumbra its shadowed
 //               pixels cast (in pixels);
 //  kStepDilate: a thread a tile: whether any tile within kPenumbraMaxRadius casts a penumbra that
-//               reaches it over a term that varies; if so it is listed, with that reach;
+//               reaches it over a term that varies; if so it is listed, with that reach and
+//               whether its 3x3 tiles hold both lit and shadowed terms (else no edge fit can be made);
 //  kStepFilter: a workgroup a listed tile (an indirect dispatch): its pixels' filtered terms, stored
 //               beside the list (the term itself is read by the neighbours' taps);
 //  kStepApply:  the same workgroups: the filtered terms into the term.
@@ -183,13 +184,14 @@ uvec3 block_tile(ivec2 tile, ivec2 block_origin) {
   return block_summary[(tile.y - block_origin.y) * kDilateBlock + (tile.x - block_origin.x)];
 }
 
-// A tile's reach (the widest penumbra in pixels that some tile within WINDOW tiles casts over it)
-// and whether the term varies within that reach. The window's tiles fall in rings (tile_ring): one
+// A tile's reach (the widest penumbra in pixels that some tile within WINDOW tiles casts over it),
+// whether the term varies within that reach, and whether ring 0 (the tile and its neighbours) holds
+// terms on both sides of 0.5 (mixed_around). The window's tiles fall in rings (tile_ring): one
 // pass over the window keeps each ring's range of the term beside the reach, and the rings within
 // the reach then give the range (the window read once, not twice, at offsets known when the shader is
 // compiled: H200, 4K, the step 0.017 -> 0.014 ms on contact, atrium and canopy, the same pixels).
 #define DILATE_WITHIN(NAME, WINDOW)                                                                 \
-  bool NAME(ivec2 tile, ivec2 block_origin, out float reach) {                                      \
+  bool NAME(ivec2 tile, ivec2 block_origin, out float reach, out bool mixed_around) {               \
     uint ring_low[WINDOW * WINDOW], ring_high[WINDOW * WINDOW];                                     \
     for (int r = 0; r < WINDOW * WINDOW; ++r) {                                                     \
       ring_low[r] = floatBitsToUint(1.0);                                                           \
@@ -207,6 +209,7 @@ uvec3 block_tile(ivec2 tile, ivec2 block_origin) {
         ring_low[r] = min(ring_low[r], summary.x);                                                  \
         ring_high[r] = max(ring_high[r], summary.y);                                                \
       }                                                                                             \
+    mixed_around = ring_low[0] < floatBitsToUint(0.5) && ring_high[0] >= floatBitsToUint(0.5);       \
     uint low = floatBitsToUint(1.0), high = 0u;                                                     \
     if (reach > 0.0)                                                                                \
       for (int r = 0; r < WINDOW * WINDOW; ++r) {                                                   \
@@ -243,11 +246,12 @@ void dilate_tile() {
   widest = subgroupMax(widest);
   if (subgroupElect()) atomicMax(block_widest, widest);
   barrier();
-  bool needed = false;
+  bool needed = false, mixed_around = false;
   float reach = 0.0;
   if (all(lessThan(tile, tiles))) {
     bool narrow = uintBitsToFloat(block_widest) < float(kNarrowWindow * int(kPenumbraTile));
-    needed = narrow ? varies_within_narrow(tile, block_origin, reach) : varies_within_full(tile, block_origin, reach);
+    needed = narrow ? varies_within_narrow(tile, block_origin, reach, mixed_around)
+                    : varies_within_full(tile, block_origin, reach, mixed_around);
   }
   // One atomic per subgroup; the filter and apply steps' dispatch in rows of kIzbDispatchRow.
   uint count = subgroupAdd(needed ? 1u : 0u);
@@ -265,7 +269,7 @@ void dilate_tile() {
   uint slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(needed ? 1u : 0u);
   if (needed)
     entries[listed_at() + slot] =
-        uvec4(uint(tile.y) * tiles_x() + uint(tile.x), floatBitsToUint(reach), 0u, 0u);
+        uvec4(uint(tile.y) * tiles_x() + uint(tile.x), floatBitsToUint(reach), mixed_around ? 1u : 0u, 0u);
 }
 
 // ---- kStepFilter ---------------------------------------------------------------------------------
@@ -434,7 +438,7 @@ bool fitted_edge(ivec2 pixel, Receiver r, Across f, float pixel_width, float rad
 
 // The filtered term of `r` (at `pixel`; `reach`: the widest penumbra in reach, in pixels), or
 // kNoValue where the IZB's term stays.
-uint filtered_term(ivec2 pixel, Receiver r, float reach) {
+uint filtered_term(ivec2 pixel, Receiver r, float reach, bool fit_possible) {
   if (!r.valid) return kNoValue;
   Across f = across_light();
   float pixel_width = footprint(r.position);
@@ -490,7 +494,7 @@ uint filtered_term(ivec2 pixel, Receiver r, float reach) {
   // radius or less falls between the pixels' centres, where its taps may all miss an edge within it.)
   float average = sum / weight, fitted;
   bool edge_within = (average > 0.0 && average < 1.0) || radius <= 2.0 * pixel_width;
-  if (params.extent.w == 1u && edge_within && fitted_edge(pixel, r, f, pixel_width, radius, fitted))
+  if (params.extent.w == 1u && fit_possible && edge_within && fitted_edge(pixel, r, f, pixel_width, radius, fitted))
     return floatBitsToUint(fitted);
   return floatBitsToUint(average);
 }
@@ -518,9 +522,12 @@ void filter_tile() {
   uvec4 entry;
   if (!listed_tile(slot, entry)) return;
   ivec2 pixel = tile_pixel(entry.x);
-  if (params.extent.w == 1u) load_fit_window(pixel - ivec2(gl_LocalInvocationID.xy));
+  // Where the tile and its neighbours hold only lit or only shadowed terms, no fit window (within
+  // kFitBorder of the tile) holds both sides, and no fit is made: the window is not loaded either.
+  bool fit_possible = params.extent.w == 1u && entry.z != 0u;
+  if (fit_possible) load_fit_window(pixel - ivec2(gl_LocalInvocationID.xy));
   entries[value_entry(slot)][gl_LocalInvocationIndex % 4u] =
-      filtered_term(pixel, load_receiver(pixel), uintBitsToFloat(entry.y));
+      filtered_term(pixel, load_receiver(pixel), uintBitsToFloat(entry.y), fit_possible);
 }
 
 // ---- kStepApply ----------------------------------------------------------------------------------
