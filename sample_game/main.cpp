@@ -359,6 +359,7 @@ int run_windowed(const Options& o, std::unique_ptr<engine::Scene> scene_in) {
   for (size_t i = 0; i < panel.scenes.size(); ++i)
     if (panel.scenes[i].source == o.scene) panel.scene_index = int(i);
   panel.dynamic_resolution = &dynres;
+  panel.objects_start_collapsed = cpu;
   panel.detail_line = std::string("generated detail: ") + (detail == engine::Detail::Low ? "low" : "full") +
                       (o.detail == "auto" ? " (auto)" : "");
   if (!o.settings.empty()) {

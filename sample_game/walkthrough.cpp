@@ -430,6 +430,7 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   ImGui::SetNextWindowPos(ImVec2(vp->Size.x - 8, 8), ImGuiCond_FirstUseEver, ImVec2(1.0f, 0.0f));
   ImGui::SetNextWindowSize(ImVec2(std::min(560.0f, vp->Size.x * 0.45f), 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowCollapsed(panel.objects_start_collapsed, ImGuiCond_FirstUseEver);
   ImGui::Begin("Objects: shadow flags and the CSM decision");
   object_table(renderer, module);
   if (renderer.scene()) {
