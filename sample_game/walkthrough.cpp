@@ -397,6 +397,11 @@ void draw_panel(engine::Renderer& renderer, shadows::ShadowModule& module, Game&
         ImGui::SameLine();
         ImGui::Text(" cones %u of 6", l.faces_recorded);
       }
+      // A lamp that reaches no point of the view runs no pass (its term is written as unlit).
+      if (!l.reaches_view) {
+        ImGui::SameLine();
+        ImGui::TextUnformatted(" out of view: no pass");
+      }
     }
     // GPU memory the technique holds, largest resources first.
     ImGui::Text("GPU memory %.1f MiB", double(st.memory_total_bytes) / (1024.0 * 1024.0));

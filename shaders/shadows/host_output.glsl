@@ -35,7 +35,11 @@ bool lit_by_light(ivec2 pixel) {
 void write_pixel(ivec2 pixel) {
   if (any(greaterThanEqual(uvec2(pixel), push.extent.xy))) return;
   vec4 value = vec4(1.0);
-  if ((kWhat & HOST_OUTPUT_ALL_LIT) == 0u) {
+  if ((kWhat & HOST_OUTPUT_UNREACHED) != 0u) {
+    // Every covered point lies out of the light's reach (ContextImpl::reaches_view): 0, as every
+    // technique's passes would have written; the background lit.
+    value = vec4(imageLoad(world_position, pixel).w > 0.5 ? 0.0 : 1.0);
+  } else if ((kWhat & HOST_OUTPUT_ALL_LIT) == 0u) {
     // Occlusion: a point the light does not reach or face is not occluded: 1.
     bool unlit = (kWhat & HOST_OUTPUT_OCCLUSION) != 0u && !lit_by_light(pixel);
     value = unlit ? vec4(1.0) : imageLoad(term, pixel);

@@ -51,6 +51,7 @@ SHARED_CONST uint HOST_OUTPUT_COPY_OVERLAY = 1u;   // the host's overlay from th
 SHARED_CONST uint HOST_OUTPUT_ZERO_OVERLAY = 2u;   // the host's overlay as 0 (no debug view drew)
 SHARED_CONST uint HOST_OUTPUT_ALL_LIT = 4u;        // the host's output as 1 (no technique ran)
 SHARED_CONST uint HOST_OUTPUT_OCCLUSION = 8u;      // OutputTerm::Occlusion: 1 where the light does not reach or face
+SHARED_CONST uint HOST_OUTPUT_UNREACHED = 16u;     // the term of a light that reaches no point of the view: 0 covered, else 1
 SHARED_CONST uint HOST_OUTPUT_BINDING_WORLD_POSITION = 4u;    // the shading points the passes read
 SHARED_CONST uint HOST_OUTPUT_BINDING_GEOMETRIC_NORMAL = 5u;
 // The output pass's workgroup: HOST_OUTPUT_GROUP_X x HOST_OUTPUT_GROUP_Y threads over a square block of

@@ -609,7 +609,7 @@ struct Bench {
       lights.push_back({{"kind", l.kind}, {"lit_candidates", l.lit_candidates}, {"nodes_inserted", l.nodes_inserted},
                         {"csm_culled", l.csm_culled}, {"node_overflow", l.node_overflow},
                         {"list_length_max", l.list_length_max}, {"rays_traced", l.rays_traced},
-                        {"rays_occluded", l.rays_occluded}, {"gpu_ms", l.gpu_ms}, {"faces_recorded", l.faces_recorded}});
+                        {"rays_occluded", l.rays_occluded}, {"gpu_ms", l.gpu_ms}, {"faces_recorded", l.faces_recorded}, {"reaches_view", l.reaches_view}});
     entry["lights"] = lights;
     entry["lists"] = shadows::list_layout_name(run.settings.izb.lists);
     entry["anchored_nodes"] = run.settings.izb.anchored_nodes;
@@ -734,6 +734,10 @@ struct Bench {
       if (st.caster_triangles > 0)
         std::printf("light frustum: %llu of %llu caster triangles listed\n",
                     (unsigned long long)st.caster_triangles_listed, (unsigned long long)st.caster_triangles);
+      for (size_t i = 0; i < st.lights.size(); ++i)
+        if (!st.lights[i].reaches_view)
+          std::printf("light %zu (%s): reaches no point of the view; its term written in one pass, no technique pass ran\n",
+                      i, st.lights[i].kind.c_str());
       for (size_t i = 0; i < st.lights.size(); ++i)
         if (st.lights[i].faces_recorded > 0)
           std::printf("light %zu (point): %u of its 6 cube-face cones recorded (the others reach no point of the view)\n",

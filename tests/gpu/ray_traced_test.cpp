@@ -314,6 +314,86 @@ TEST_F(RayTracedTest, APointLightSkipsTheFacesItsViewMisses) {
   }
 }
 
+// A spot light behind the camera pointing away, and a point light whose range ends behind it
+// (content/test_levels/point_beside.json's view): neither reaches a point of the view, so no
+// technique pass runs for them (Stats::LightStats::reaches_view false, no technique's profiler
+// region) and the term, written in one pass, is Embree's: 0 on every covered point. The same spot
+// light turned towards the scene reaches the view and runs its passes, within the suite's bounds.
+TEST_F(RayTracedTest, ALightThatReachesNoPointOfTheViewRunsNoPass) {
+  auto& r = make_renderer(std::string(ENGINE_SOURCE_DIR) + "/content/test_levels/point_beside.json", 0, kSize, kSize);
+  module_ = shadows::install(r, shadows::Settings{});
+  reference::EmbreeTracer tracer(scene_->registry);
+  struct Case {
+    const char* name;
+    shadows::Light light;
+    bool reaches;
+  };
+  const glm::vec3 away = glm::normalize(glm::vec3(1.0f, 0.0f, 1.0f)), towards = glm::normalize(glm::vec3(-1.0f, -0.4f, -1.0f));
+  const auto spot = [](glm::vec3 direction) {
+    shadows::Light l{.type = shadows::LightType::Spot, .position = {10.0f, 4.0f, 9.0f}, .range = 24.0f, .outer_cone = 0.7f};
+    std::memcpy(l.direction, &direction, sizeof(l.direction));
+    return l;
+  };
+  const Case cases[] = {
+      {"spot, pointing away", spot(away), false},
+      {"point, its range behind the camera",
+       shadows::Light{.type = shadows::LightType::Point, .position = {40.0f, 4.0f, 40.0f}, .range = 5.0f}, false},
+      {"spot, turned towards the scene", spot(towards), true},
+  };
+  std::vector<shadows::Technique> techniques = {shadows::Technique::Izb, shadows::Technique::Hybrid,
+                                                shadows::Technique::ShadowMap, shadows::Technique::Cascades};
+  if (module_->supported(shadows::Technique::RayTraced)) techniques.push_back(shadows::Technique::RayTraced);
+  for (const Case& c : cases) {
+    module_->set_light(c.light);
+    const reference::LocalLight light{.position = glm::make_vec3(c.light.position),
+                                      .range = c.light.range,
+                                      .spot = c.light.type == shadows::LightType::Spot,
+                                      .spot_direction = glm::make_vec3(c.light.direction),
+                                      .cos_outer = c.light.type == shadows::LightType::Spot ? std::cos(c.light.outer_cone) : -1.0f};
+    for (shadows::Technique technique : techniques) {
+      module_->settings().technique = technique;
+      r.render_frame(0.0f);
+      r.render_frame(0.0f);  // the statistics of a frame that has completed
+      const auto points = support::capture_shading_points(r);
+      const auto truth = tracer.visibility_1spp(points, light);
+      const auto visibility = module_->read_visibility();
+      const auto cmp = reference::compare_visibility(visibility, truth);
+      const shadows::Stats stats = module_->stats();
+      ASSERT_EQ(stats.lights.size(), 1u);
+      size_t covered = 0, lit = 0;
+      for (float t : truth) {
+        covered += t >= 0.0f ? 1 : 0;
+        lit += t > 0.0f ? 1 : 0;
+      }
+      bool technique_pass = false;
+      for (const auto& pass : module_->context().pass_times())
+        for (const char* name : {"izb_build", "sm_depth", "sm_resolve", "cascade_depth", "rt_trace", "hybrid_penumbra"})
+          technique_pass = technique_pass || pass.name == name;
+      std::printf("%s, %s: reaches the view %d, technique passes %d, mismatch %.6f (%llu of %llu), %zu of %zu covered lit\n",
+                  c.name, shadows::mode_name(module_->settings()).c_str(), int(stats.lights[0].reaches_view),
+                  int(technique_pass), cmp.mismatch_rate, (unsigned long long)cmp.mismatched,
+                  (unsigned long long)cmp.pixels, lit, covered);
+      EXPECT_EQ(stats.lights[0].reaches_view, c.reaches) << c.name;
+      EXPECT_EQ(technique_pass, c.reaches) << c.name;
+      EXPECT_GT(covered, size_t(kSize) * kSize / 2);
+      if (c.reaches) {
+        EXPECT_GT(lit, covered / 10) << "the light turned towards the scene lights part of it";
+      } else {
+        EXPECT_EQ(lit, 0u);
+        EXPECT_EQ(cmp.mismatched, 0u) << c.name;
+      }
+      // Every technique within its bound of the reference (the IZB's and rt's exact; the maps' aliasing).
+      const bool exact = technique == shadows::Technique::Izb || technique == shadows::Technique::RayTraced;
+      EXPECT_LE(cmp.mismatch_rate, exact ? 0.0002 : 0.02) << c.name;
+      for (size_t i = 0; i < visibility.size(); ++i) {
+        if (truth[i] < 0.0f) {
+          ASSERT_LT(visibility[i], 0.0f) << "a background pixel at " << i;
+        }
+      }
+    }
+  }
+}
+
 // A board beside a spot light reaches behind its near plane: those triangles leave the perspective
 // grid and the resolve ray-tests them (izb_triangles.comp); the board's shadow still matches Embree.
 TEST_F(RayTracedTest, IzbSpotLightTracesTrianglesAcrossTheNearPlane) {

@@ -707,6 +707,39 @@ void ContextImpl::set_light(View& view, const Light& light) {
   view.light_radius = light.type == LightType::Directional ? 0.0f : light.radius;
 }
 
+// Whether a spot or point light can reach a point of the view: its cone (a point light's ball) within
+// its range meets the camera's frustum (cone_may_reach_view, which errs towards yes). A light that
+// cannot lights no pixel of the frame and shadows none: every technique would write 0 on every
+// covered point, which record_unreached_term does in one pass instead of the technique's.
+bool ContextImpl::reaches_view(const Light& light) const {
+  if (light.type == LightType::Directional) return true;
+  View lit = view_;
+  set_light(lit, light);
+  // (A point light's cosine of -1 makes its cone the whole ball, whatever the axis.)
+  const glm::vec3 axis = light.type == LightType::Spot ? lit.light_direction : glm::vec3(0.0f, 1.0f, 0.0f);
+  return cone_may_reach_view(lit.view_projection, lit.light_position, axis, lit.light_cos_outer, lit.light_range);
+}
+
+// The light's passes into the frame's term: the technique's, or for a light that reaches no point of
+// the view the one pass that writes its term (record_unreached_term).
+void ContextImpl::record_light(Frame& frame, const Light& light, Slot::LightRecords& records) {
+  records.reaches_view = settings_.technique == Technique::Off || reaches_view(light);
+  if (records.reaches_view) record_technique(frame);
+  else record_unreached_term(frame.cmd, frame.shadow_term, frame.gbuffer);
+  records.faces = records.reaches_view ? point_light_faces_recorded_ : 0u;
+}
+
+// The term of a light that reaches no point of the view (reaches_view): 0 on every covered point,
+// 1 on the background, what the technique's passes would have left.
+void ContextImpl::record_unreached_term(VkCommandBuffer cmd, const TermImage& term, const ShadingInputs& inputs) {
+  // The previous light's or the input pass's accesses of the term are ordered by restart_term's and
+  // the input pass's barriers; the output pass's stores, before the host's output pass reads them.
+  record_output_pass(cmd, output_pipeline(2, gpu_shared::HOST_OUTPUT_UNREACHED), term.view(), overlay_.view(), inputs,
+                     view_);
+  memory_barrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                 pass_shader_stages(*gpu_), kStorageReadWrite);
+}
+
 // Between two lights of one record: every access of the previous light's passes (their statistics
 // copies, the output pass's reads of the term) finishes before the next light's rewrite the same
 // resources; the term starts lit again and each light's debug view marks a clean overlay
@@ -720,6 +753,7 @@ void ContextImpl::restart_term(VkCommandBuffer cmd, bool lit_start, const TermIm
 // lit (with a debug view the overlay starts empty by the same pass, so it always runs).
 bool ContextImpl::writes_every_pixel(const Light& light) {
   if (settings_.debug != DebugView::None) return false;
+  if (settings_.technique != Technique::Off && !reaches_view(light)) return true;  // record_unreached_term
   // Both take a local light with the IZB alone (record_local_light).
   const bool local = light.type != LightType::Directional;
   if (settings_.technique == Technique::Izb || (settings_.technique == Technique::Hybrid && local))
@@ -874,8 +908,7 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
     }
     Frame frame{*gpu_, cmd, profiler, view, inputs, term, overlay_, geometry_.geometry(), draws_,
                 slot_index, frames_in_flight_};
-    record_technique(frame);
-    records.faces = point_light_faces_recorded_;
+    record_light(frame, f.lights[i], records);
     // Written in place (the term's writes were compute shaders', which the host's barrier after
     // record() orders), the output needs no pass.
     if (term.handle() == shadow_term_.handle()) {
@@ -1049,6 +1082,7 @@ void ContextImpl::complete_slot(Slot& slot) {
       Stats::LightStats& l = fresh.lights.emplace_back();
       l.kind = r.kind;
       l.faces_recorded = r.faces;
+      l.reaches_view = r.reaches_view;
       for (uint32_t k = r.izb_first; k < r.izb_first + r.izb_count && k < izb_records.size(); ++k) {
         const Stats& s = izb_records[k];
         l.lit_candidates += s.lit_candidates;

@@ -53,6 +53,7 @@ class ContextImpl final : public Context {
       std::string kind;
       uint32_t izb_first = 0, izb_count = 0, rt_first = 0, rt_count = 0;
       uint32_t faces = 0;  // a point light's cones recorded (Stats::LightStats::faces_recorded)
+      bool reaches_view = true;  // Stats::LightStats::reaches_view
     };
     std::vector<LightRecords> lights;
   };
@@ -66,10 +67,13 @@ class ContextImpl final : public Context {
   template <typename RecordFace>
   void record_point_light_faces(Frame& frame, RecordFace&& record_face);
   void record_local_light(Frame& frame, const Settings& settings);  // settings in world units
-  void set_light(View& view, const Light& light);
+  static void set_light(View& view, const Light& light);
   // Between two lights: the previous light's accesses done; with `lit_start` `term` lit again.
   void restart_term(VkCommandBuffer cmd, bool lit_start, const TermImage& term);
   bool writes_every_pixel(const Light& light);
+  bool reaches_view(const Light& light) const;
+  void record_unreached_term(VkCommandBuffer cmd, const TermImage& term, const ShadingInputs& inputs);
+  void record_light(Frame& frame, const Light& light, Slot::LightRecords& records);
   void clear_term_and_overlay(VkCommandBuffer cmd, const TermImage& term);
   // The HOST_OUTPUT_* bits of the output pass for an output (`with_overlay`: the overlay's light).
   uint32_t output_bits(const FrameDesc& frame, bool with_overlay) const;
@@ -113,9 +117,9 @@ class ContextImpl final : public Context {
   engine::gpu::Buffer input_params_;  // HostInputs, written in the command buffer each frame
   engine::gpu::Sampler nearest_;
   engine::gpu::Pipeline inputs_pipeline_;
-  // [R8, R16F, R32F][HOST_OUTPUT_* bits, at most 7], made on first use (output_pipeline).
+  // [R8, R16F, R32F][HOST_OUTPUT_* bits, at most 31], made on first use (output_pipeline).
   mutable std::optional<Capabilities> capabilities_;  // capabilities(), made once
-  engine::gpu::Pipeline output_pipelines_[3][16];  // by format, HOST_OUTPUT_* bits
+  engine::gpu::Pipeline output_pipelines_[3][32];  // by format, HOST_OUTPUT_* bits
   const engine::gpu::Pipeline& output_pipeline(int format, uint32_t what);
   void record_output_pass(VkCommandBuffer cmd, const engine::gpu::Pipeline& p, VkImageView out, VkImageView overlay_out,
                           const ShadingInputs& inputs, const View& view);

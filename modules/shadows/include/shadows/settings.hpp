@@ -294,6 +294,10 @@ struct Stats {
     // with none left, one still runs to write the term of the points out of the light's reach).
     // 0 for other lights and techniques.
     uint32_t faces_recorded = 0;
+    // False for a spot or point light whose cone (a point light's ball) within its range meets no
+    // point of the camera's frustum: no technique pass ran for it; its term is 0 on every covered
+    // pixel and 1 on the background, what the passes would have written (one pass over the frame).
+    bool reaches_view = true;
     // IZB: the trace's and the CSM prepass's backends for this light (a spot or point light's
     // perspective grid always takes the compute passes, and says so); empty for other techniques.
     BackendChoice trace_choice;
