@@ -422,7 +422,10 @@ struct FrameDesc {
   Camera camera;
   // The lights to shadow, 1..kMaxLightsPerRecord, each into its own image: lights[0] into `output`,
   // lights[i] into light_outputs[i - 1]. They run one after another through the same passes, with a
-  // profiler region "light i" each when there are several; Stats::lights has an entry per light.
+  // profiler region "light i" each when there are several; Stats::lights has an entry per light. A
+  // spot or point light whose cone (a point light's ball) within its range meets none of the camera's
+  // frustum runs no technique pass: one pass writes its term, 0 where a point is covered and 1 on the
+  // background, as the passes would have (Stats::LightStats::reaches_view false).
   const Light* lights = nullptr;
   uint32_t light_count = 0;
   const Instance* instances = nullptr;  // every caster this frame
