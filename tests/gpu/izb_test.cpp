@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <optional>
@@ -1174,6 +1175,21 @@ TEST_F(IzbTest, OffRecordsNothingAndLeavesEveryPixelLit) {
   for (const auto& [name, ms] : r.profiler().last_frame()) EXPECT_NE(name, "shadows") << "the module recorded";
 }
 
+// The renderer's sun term filled with `value` between two frames (what the next frame's passes find).
+void fill_shadow_term(engine::Renderer& r, float value) {
+  r.context().immediate_submit([&](VkCommandBuffer cmd) {
+    const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    const VkClearColorValue color{{value, value, value, value}};
+    // The last frame's lighting read the term; the next frame's passes read and write it.
+    engine::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT,
+                                VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    vkCmdClearColorImage(cmd, r.shadow_term().handle(), VK_IMAGE_LAYOUT_GENERAL, &color, 1, &range);
+    engine::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+  });
+}
+
 // The sun's term gets no lit fill before a technique whose passes write every one of its pixels
 // (ContextImpl::writes_every_pixel: sm and the cascades everywhere, the IZB's direct term on a GPU):
 // with the image holding another value before the frame, every technique leaves the same term, bit
@@ -1185,25 +1201,12 @@ TEST_F(IzbTest, EveryTechniqueWritesTheWholeTermWhateverTheImageHeld) {
   const auto positions = r.read_world_positions();
   const auto uncovered = std::count_if(positions.begin(), positions.end(), [](const glm::vec4& p) { return p.w == 0.0f; });
   ASSERT_GT(uncovered, 0) << "the view shows no sky, so no pixel tests the uncovered ones";
-  const auto fill_term = [&r](float value) {
-    r.context().immediate_submit([&](VkCommandBuffer cmd) {
-      const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-      const VkClearColorValue color{{value, value, value, value}};
-      // The last frame's lighting read the term; the next frame's passes read and write it.
-      engine::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT,
-                                  VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-      vkCmdClearColorImage(cmd, r.shadow_term().handle(), VK_IMAGE_LAYOUT_GENERAL, &color, 1, &range);
-      engine::gpu::memory_barrier(cmd, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                                  VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                                  VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
-    });
-  };
   using T = shadows::Technique;
   for (T technique : {T::ShadowMap, T::Cascades, T::Izb, T::Hybrid}) {
     module_->settings().technique = technique;
     r.render_frame(0.0f);
     const auto expected = r.read_shadow_term();
-    fill_term(0.25f);
+    fill_shadow_term(r, 0.25f);
     r.render_frame(0.0f);
     const auto term = r.read_shadow_term();
     ASSERT_EQ(term.size(), positions.size());
@@ -1212,6 +1215,56 @@ TEST_F(IzbTest, EveryTechniqueWritesTheWholeTermWhateverTheImageHeld) {
       differing += std::memcmp(&term[i], &expected[i], sizeof(float)) != 0;
       uncovered_not_lit += positions[i].w == 0.0f && term[i] != 1.0f;
     }
+    EXPECT_EQ(differing, 0u) << shadows::mode_name(module_->settings());
+    EXPECT_EQ(uncovered_not_lit, 0u) << shadows::mode_name(module_->settings());
+  }
+}
+
+// On a GPU's paths (SHADOWS_GPU_PATHS=1) a spot light's map is resolved over the whole frame, which
+// writes every pixel (ContextImpl::writes_every_pixel), so its term gets no lit fill either: with the
+// image holding another value before the frame, `sm`, `cascades` and the IZB leave the same term bit
+// for bit, the uncovered pixels lit.
+TEST_F(IzbTest, ASpotLightsTermIsWrittenWholeOnAGpusPaths) {
+  setenv("SHADOWS_GPU_PATHS", "1", 1);
+  auto& r = make_renderer("atrium", 1, 96, 96);
+  module_ = shadows::install(r, izb(1));
+  unsetenv("SHADOWS_GPU_PATHS");  // read when the module was created
+  r.render_frame(0.0f);
+  const auto positions = r.read_world_positions();
+  glm::dvec3 centre(0.0);
+  size_t covered = 0;
+  for (const glm::vec4& p : positions)
+    if (p.w != 0.0f) centre += glm::dvec3(p), ++covered;
+  ASSERT_GT(covered, 0u);
+  ASSERT_LT(covered, positions.size()) << "the view shows no sky, so no pixel tests the uncovered ones";
+  centre /= double(covered);
+  // Above the middle of the view, pointing down: it reaches part of the view (not every pixel).
+  shadows::Light spot{.type = shadows::LightType::Spot, .range = 30.0f, .outer_cone = 0.5f};
+  const glm::vec3 position = glm::vec3(centre) + glm::vec3(0.0f, 6.0f, 0.0f);
+  std::memcpy(spot.position, &position, sizeof(spot.position));
+  module_->set_light(spot);
+  using T = shadows::Technique;
+  for (T technique : {T::ShadowMap, T::Cascades, T::Izb}) {
+    module_->settings().technique = technique;
+    r.render_frame(0.0f);
+    r.render_frame(0.0f);  // the statistics of a frame that has completed
+    ASSERT_EQ(module_->stats().lights.size(), 1u);
+    EXPECT_TRUE(module_->stats().lights[0].reaches_view) << "the light reaches no point: its passes would not run";
+    const auto expected = r.read_shadow_term();
+    fill_shadow_term(r, 0.25f);
+    r.render_frame(0.0f);
+    const auto term = r.read_shadow_term();
+    ASSERT_EQ(term.size(), positions.size());
+    size_t differing = 0, uncovered_not_lit = 0, lit = 0;
+    for (size_t i = 0; i < term.size(); ++i) {
+      differing += std::memcmp(&term[i], &expected[i], sizeof(float)) != 0;
+      uncovered_not_lit += positions[i].w == 0.0f && term[i] != 1.0f;
+      lit += positions[i].w != 0.0f && term[i] > 0.0f;
+    }
+    std::printf("%s, a spot light on a GPU's paths: %zu of %zu covered pixels lit, %zu differ after the poison\n",
+                shadows::mode_name(module_->settings()).c_str(), lit, covered, differing);
+    EXPECT_GT(lit, 0u) << "the light lights no covered pixel";
+    EXPECT_LT(lit, covered) << "the light reaches every covered pixel: the cone's edge is not tested";
     EXPECT_EQ(differing, 0u) << shadows::mode_name(module_->settings());
     EXPECT_EQ(uncovered_not_lit, 0u) << shadows::mode_name(module_->settings());
   }

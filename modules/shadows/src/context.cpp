@@ -761,8 +761,10 @@ bool ContextImpl::writes_every_pixel(const Light& light) {
   if (settings_.technique == Technique::Hybrid)
     return izb().writes_every_pixel(settings_.izb, settings_.hybrid_izb_distance, settings_.debug, true);
   // The sun's map and cascades resolve every pixel of the frame (shadow_map_resolve.glsl,
-  // cascade_filter.comp); a local light's maps reach only their cones' pixels.
-  if (settings_.technique == Technique::ShadowMap || settings_.technique == Technique::Cascades) return !local;
+  // cascade_filter.comp), and so does a spot light's map on a GPU; a point light's cone maps (and on a
+  // CPU device a spot light's map) resolve only the tiles their cones reach.
+  if (settings_.technique == Technique::ShadowMap || settings_.technique == Technique::Cascades)
+    return !local || (light.type == LightType::Spot && !cpu_paths_);
   return false;
 }
 
@@ -968,7 +970,7 @@ void ContextImpl::record_local_light(Frame& frame, const Settings& settings) {
     case Technique::Cascades: {
       // One perspective map per spot light (per cube-face cone of a point light), unfiltered for sm and
       // PCF-filtered for cascades.
-      if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
+      if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_, cpu_paths_);
       const float filter = settings.technique == Technique::Cascades ? kSpotFilterTexels : 0.0f;
       // (The counts are sm's: the cascades report their own filter's.)
       const bool count = collect_stats_ && settings.technique == Technique::ShadowMap;
@@ -1000,7 +1002,7 @@ void ContextImpl::record_technique(Frame& frame) {
     case Technique::Off:
       break;
     case Technique::ShadowMap:
-      if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_);
+      if (!shadow_map_) shadow_map_ = std::make_unique<ShadowMapPass>(*gpu_, cpu_paths_);
       shadow_map_->record(frame, settings.shadow_map, 0.0f, collect_stats_);
       break;
     case Technique::Cascades:

@@ -29,7 +29,7 @@ void set_pcss_params(gpu_shared::ShadowMapResolveParams& p, const View& view, co
 }
 }  // namespace
 
-ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
+ShadowMapPass::ShadowMapPass(Context& ctx, bool cpu_paths) : ctx_(ctx), cpu_paths_(cpu_paths) {
   params_ = Buffer(ctx, sizeof(gpu_shared::ShadowMapResolveParams),
                    VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "sm resolve params");
   sampler_ = Sampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, "sm sampler");
@@ -45,7 +45,6 @@ ShadowMapPass::ShadowMapPass(Context& ctx) : ctx_(ctx) {
   d.depth_bias = true;
   depth_pipeline_ = factory.graphics(d);
   alpha_depth_pipeline_ = alpha_depth_pipeline(ctx, d);
-  cpu_paths_ = takes_cpu_paths(ctx);
   counters_ = Buffer(ctx, gpu_shared::SM_COUNTER_WORDS * 4,
                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                      false, "sm counters");

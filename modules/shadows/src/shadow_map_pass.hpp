@@ -12,7 +12,9 @@ namespace shadows::detail {
 // penumbra is at least half a texel wide (and wider than `filter_texels`), with one tap elsewhere.
 class ShadowMapPass {
  public:
-  explicit ShadowMapPass(engine::gpu::Context& ctx);
+  // `cpu_paths`: the module's takes_cpu_paths (barriers.hpp), decided when the module was created (this
+  // pass is made on first use, when the environment may say otherwise).
+  ShadowMapPass(engine::gpu::Context& ctx, bool cpu_paths);
   // `filter_texels` > 0: percentage-closer filtering over a disk of that radius in map texels (a spot
   // light's counterpart of the cascades' filtered term; with a light size, the narrowest PCSS filter);
   // 0: one tap.
