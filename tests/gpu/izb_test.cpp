@@ -1190,6 +1190,26 @@ void fill_shadow_term(engine::Renderer& r, float value) {
   });
 }
 
+// The frame after the last one rendered over a term poisoned with 0.25: its term, how many pixels
+// differ bit for bit from the last frame's, and how many uncovered pixels (per `positions`) it left
+// other than lit.
+struct PoisonedFrame {
+  std::vector<float> term;
+  size_t differing = 0, uncovered_not_lit = 0;
+};
+PoisonedFrame render_over_poison(engine::Renderer& r, const std::vector<glm::vec4>& positions) {
+  const auto expected = r.read_shadow_term();
+  fill_shadow_term(r, 0.25f);
+  r.render_frame(0.0f);
+  PoisonedFrame frame{r.read_shadow_term()};
+  EXPECT_EQ(frame.term.size(), positions.size());
+  for (size_t i = 0; i < frame.term.size() && i < positions.size(); ++i) {
+    frame.differing += std::memcmp(&frame.term[i], &expected[i], sizeof(float)) != 0;
+    frame.uncovered_not_lit += positions[i].w == 0.0f && frame.term[i] != 1.0f;
+  }
+  return frame;
+}
+
 // The sun's term gets no lit fill before a technique whose passes write every one of its pixels
 // (ContextImpl::writes_every_pixel: sm and the cascades everywhere, the IZB's direct term on a GPU):
 // with the image holding another value before the frame, every technique leaves the same term, bit
@@ -1205,18 +1225,9 @@ TEST_F(IzbTest, EveryTechniqueWritesTheWholeTermWhateverTheImageHeld) {
   for (T technique : {T::ShadowMap, T::Cascades, T::Izb, T::Hybrid}) {
     module_->settings().technique = technique;
     r.render_frame(0.0f);
-    const auto expected = r.read_shadow_term();
-    fill_shadow_term(r, 0.25f);
-    r.render_frame(0.0f);
-    const auto term = r.read_shadow_term();
-    ASSERT_EQ(term.size(), positions.size());
-    size_t differing = 0, uncovered_not_lit = 0;
-    for (size_t i = 0; i < term.size(); ++i) {
-      differing += std::memcmp(&term[i], &expected[i], sizeof(float)) != 0;
-      uncovered_not_lit += positions[i].w == 0.0f && term[i] != 1.0f;
-    }
-    EXPECT_EQ(differing, 0u) << shadows::mode_name(module_->settings());
-    EXPECT_EQ(uncovered_not_lit, 0u) << shadows::mode_name(module_->settings());
+    const PoisonedFrame poisoned = render_over_poison(r, positions);
+    EXPECT_EQ(poisoned.differing, 0u) << shadows::mode_name(module_->settings());
+    EXPECT_EQ(poisoned.uncovered_not_lit, 0u) << shadows::mode_name(module_->settings());
   }
 }
 
@@ -1250,23 +1261,16 @@ TEST_F(IzbTest, ASpotLightsTermIsWrittenWholeOnAGpusPaths) {
     r.render_frame(0.0f);  // the statistics of a frame that has completed
     ASSERT_EQ(module_->stats().lights.size(), 1u);
     EXPECT_TRUE(module_->stats().lights[0].reaches_view) << "the light reaches no point: its passes would not run";
-    const auto expected = r.read_shadow_term();
-    fill_shadow_term(r, 0.25f);
-    r.render_frame(0.0f);
-    const auto term = r.read_shadow_term();
-    ASSERT_EQ(term.size(), positions.size());
-    size_t differing = 0, uncovered_not_lit = 0, lit = 0;
-    for (size_t i = 0; i < term.size(); ++i) {
-      differing += std::memcmp(&term[i], &expected[i], sizeof(float)) != 0;
-      uncovered_not_lit += positions[i].w == 0.0f && term[i] != 1.0f;
-      lit += positions[i].w != 0.0f && term[i] > 0.0f;
-    }
+    const PoisonedFrame poisoned = render_over_poison(r, positions);
+    size_t lit = 0;
+    for (size_t i = 0; i < poisoned.term.size() && i < positions.size(); ++i)
+      lit += positions[i].w != 0.0f && poisoned.term[i] > 0.0f;
     std::printf("%s, a spot light on a GPU's paths: %zu of %zu covered pixels lit, %zu differ after the poison\n",
-                shadows::mode_name(module_->settings()).c_str(), lit, covered, differing);
+                shadows::mode_name(module_->settings()).c_str(), lit, covered, poisoned.differing);
     EXPECT_GT(lit, 0u) << "the light lights no covered pixel";
     EXPECT_LT(lit, covered) << "the light reaches every covered pixel: the cone's edge is not tested";
-    EXPECT_EQ(differing, 0u) << shadows::mode_name(module_->settings());
-    EXPECT_EQ(uncovered_not_lit, 0u) << shadows::mode_name(module_->settings());
+    EXPECT_EQ(poisoned.differing, 0u) << shadows::mode_name(module_->settings());
+    EXPECT_EQ(poisoned.uncovered_not_lit, 0u) << shadows::mode_name(module_->settings());
   }
 }
 
