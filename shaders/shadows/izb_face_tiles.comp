@@ -7,9 +7,9 @@ layout(local_size_x = 16, local_size_y = 16) in;
 layout(push_constant) uniform Push { IzbComputePush push; };
 
 // IZB_FLAG_FACE_TILES, run once before a point light's first face (and, on a CPU device, before a
-// spot light's build, whose one list holds the tiles its cone reaches), with a face's parameters (its cone,
-// params.light_cone.x, is every face's): lists the 8x8 tiles of pixels holding a covered point each
-// face's cone reaches (local_light_faces, as the build's load_local_light_pixel asks it), and
+// spot light's build, whose one list holds the tiles its cone reaches), with a face's parameters: lists
+// the 8x8 tiles of pixels holding a covered point of each face (local_light_faces: within the range
+// and the face's pyramid, point_light_face_of, as the build's outside_light_face asks it), and
 // writes the term of every point no face reaches, as each face's build would have: lit where nothing
 // is covered, unlit where a covered point lies beyond the light's range. Each face's build then runs
 // over its tiles alone, and writes every other pixel of them as before.

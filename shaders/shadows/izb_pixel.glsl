@@ -11,10 +11,30 @@ struct PixelPoint {
   bool facing;     // faces_light (shadow_common.h)
 };
 
-// Whether a spot light (or a point-light face's cone) reaches `position`: in its range and cone.
+// IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the build lists; with
+// IZB_FLAG_FACE_TILES, a point light's six lists of tiles (light_tiles.h).
+layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
+#define LIGHT_TILES_LIST resolve_list
+#include "shadows/light_tiles.glsl"
+// Whether this pass is one face of a point light (six cones about the axes that cover every direction,
+// params.light_cone.z), not a spot light or the sun.
+bool point_light_face_pass() { return params.light_cone.z > 0.0; }
+// A point light's face from its axis (params.light_direction): izb_face_tiles.comp's order, +x, -x,
+// +y, -y, +z, -z.
+uint point_light_face() { return point_light_face_of(params.light_direction.xyz); }
+// A point light's face: whether `position` belongs to another face (point_light_face_of), whose pass
+// writes its term.
+bool outside_light_face(vec3 position) {
+  precise vec3 from_light = position - params.light_position.xyz;
+  return spot_light() && point_light_face_pass() && point_light_face_of(from_light) != point_light_face();
+}
+
+// Whether a spot light (or a point-light face) reaches `position`: in its range and cone, and a face's
+// point besides (not outside_light_face: the rest of its cone is other faces' to shadow).
 bool local_light_reaches_point(vec3 position) {
   return local_light_reaches(params.light_position.xyz, params.light_position.w, params.light_direction.xyz,
-                             params.light_cone.x, true, position);
+                             params.light_cone.x, true, position) &&
+         !outside_light_face(position);
 }
 
 // The surface only (`candidate` false): for passes that read the candidates from the build's state.
@@ -31,26 +51,6 @@ PixelPoint load_surface(ivec2 pixel) {
                           : faces_light(normal);
   p.candidate = false;
   return p;
-}
-
-// Whether this pass is one face of a point light (six overlapping cones that cover every direction,
-// params.light_cone.z), not a spot light or the sun.
-bool point_light_face_pass() { return params.light_cone.z > 0.0; }
-// A point light's face: whether `position` lies outside this face's cone, so that another face's pass
-// writes its term.
-bool outside_light_face(vec3 position) {
-  vec3 from_light = position - params.light_position.xyz;
-  return spot_light() && point_light_face_pass() &&
-         dot(from_light, params.light_direction.xyz) < params.light_cone.x * length(from_light);
-}
-
-// A point light's face from its axis (params.light_direction): izb_face_tiles.comp's order, +x, -x,
-// +y, -y, +z, -z.
-uint point_light_face() {
-  vec3 d = params.light_direction.xyz;
-  vec3 a = abs(d);
-  uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
-  return 2u * axis + (d[axis] < 0.0 ? 1u : 0u);
 }
 
 // The shadow-ray offset of a shading point at `position` (shadow_common.h).
@@ -205,11 +205,6 @@ void block_micro_quad_corners(ivec2 pixel, ivec2 block_origin, PixelPoint p, out
 }
 #endif
 
-// IZB_FLAG_LISTED_RESOLVE: the pixels with nodes (row-major indices), which the build lists; with
-// IZB_FLAG_FACE_TILES, a point light's six lists of tiles (light_tiles.h).
-layout(set = 0, binding = IZB_BINDING_RESOLVE_LIST) buffer ResolveList { uint resolve_list[]; };
-#define LIGHT_TILES_LIST resolve_list
-#include "shadows/light_tiles.glsl"
 // A point light's face, or a spot light on a CPU device (IZB_FLAG_FACE_TILES): this invocation's pixel
 // in the face's (the spot's) list of 8x8 tiles (izb_face_tiles.comp), a workgroup of 8x8 a tile;
 // false for a workgroup past the list's end, which then leaves whole, before any barrier.

@@ -11,24 +11,28 @@
 #ifndef LIGHT_TILES_GLSL
 #define LIGHT_TILES_GLSL
 
+// The face of a point light whose cube-face pyramid holds a point at `from_light` from the light: the
+// axis of its largest component by magnitude (ties to the earlier axis), on the side of its sign (a
+// zero to +). Exact comparisons, so every pass that asks gets the same face, and every point has one:
+// each face's pass writes only its own points (its cone, point_light_face_cos_outer, holds its
+// pyramid with half a degree to spare), where the cones' overlaps once had up to three faces each
+// find the same point's term.
+uint point_light_face_of(vec3 from_light) {
+  vec3 a = abs(from_light);
+  uint axis = a.x >= a.y && a.x >= a.z ? 0u : (a.y >= a.z ? 1u : 2u);
+  return 2u * axis + (from_light[axis] < 0.0 ? 1u : 0u);
+}
+
 // The lists a covered point at `position` needs, as bits: a spot light's (`point_faces` false, its
 // cone along the unit `spot_direction` with outer cosine `cos_outer`) bit 0 where the light reaches the
-// point; a point light's (`point_faces`: every face's cone has the cosine `cos_outer`) bit f for each
-// face f whose cone holds a point within the range. A face's pass tests its cone as
-// dot(from_light, axis) < cos_outer * length(from_light); along a unit axis the dot product is the
-// component itself, exactly, so each face's verdict is that pass's.
-const vec3 kLightFaceAxes[6] = vec3[6](vec3(1.0, 0.0, 0.0), vec3(-1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0),
-                                       vec3(0.0, -1.0, 0.0), vec3(0.0, 0.0, 1.0), vec3(0.0, 0.0, -1.0));
+// point; a point light's (`point_faces`) the bit of its face (point_light_face_of) where the point lies
+// within the range.
 uint local_light_faces(vec3 light_position, float range, vec3 spot_direction, float cos_outer, bool point_faces,
                        vec3 position) {
   if (!point_faces) return local_light_reaches(light_position, range, spot_direction, cos_outer, true, position) ? 1u : 0u;
   if (!local_light_reaches(light_position, range, vec3(0.0), -1.0, false, position)) return 0u;
   precise vec3 from_light = position - light_position;
-  precise float reach = cos_outer * sqrt(shared_dot(from_light, from_light));
-  uint faces = 0u;
-  for (uint f = 0u; f < 6u; ++f)
-    if (shared_dot(from_light, kLightFaceAxes[f]) >= reach) faces |= 1u << f;
-  return faces;
+  return 1u << point_light_face_of(from_light);
 }
 
 // This invocation's pixel in list `list` of a render of `extent` pixels, a workgroup of 8x8 a tile

@@ -180,10 +180,9 @@ void main() {
     if (kStage != SM_STAGE_LISTED) imageStore(shadow_term, pixel, vec4(1.0));
     return;
   }
-  // One of a point light's cube-face cones: the points outside it belong to another face's map.
-  if (kLocalLight && point_light_face_pass() && dot(p.xyz - params.light_position.xyz, params.light_direction.xyz) <
-                                       params.light_cone.x * length(p.xyz - params.light_position.xyz))
-    return;
+  // One of a point light's cube-face cones: the points of another face (point_light_face_of) are its map's.
+  precise vec3 from_light = p.xyz - params.light_position.xyz;
+  if (kLocalLight && point_light_face_pass() && point_light_face_of(from_light) != uint(params.light_cone.w)) return;
   vec4 normal = imageLoad(geometric_normal, pixel);
   vec3 n = normal.xyz;
   float visibility = 0.0;

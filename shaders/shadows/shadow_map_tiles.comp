@@ -6,8 +6,8 @@
 layout(local_size_x = 16, local_size_y = 16) in;
 
 // Before a point light's first face map is resolved (on a CPU device, a spot light's map too), with
-// that map's parameters (a face's cone, params.light_cone.x, is every face's): lists the 8x8 tiles
-// holding a covered point each face's cone reaches (light_tiles.glsl) and writes 0 where a covered
+// that map's parameters: lists the 8x8 tiles holding a covered point of each face (light_tiles.glsl's
+// local_light_faces: within the range and the face's pyramid) and writes 0 where a covered
 // point lies beyond the light's range (a spot light's: outside its cone too), as each face's resolve
 // would have. Each face's resolve then runs over its tiles alone (shadow_map_resolve.glsl's kTiles),
 // six times a frame's pixels no longer.

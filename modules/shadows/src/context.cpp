@@ -930,10 +930,11 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
 constexpr float kSpotFilterTexels = 2.5f;
 
 // A point light's six cones (kPointLightFaceAxes), each shadowed as a spot light by `record_face`; a
-// face's resolve writes only the points in its own cone. A cone in which no point
+// face's passes write only its own points, those in its cube face's pyramid (point_light_face_of in
+// light_tiles.glsl), which its cone holds. A cone in which no point
 // of the view can lie within the light's range (cone_may_reach_view) is skipped: none of its points
-// is seen. The first face recorded also lists every cone's tiles and writes the term of the points no
-// cone reaches, so one runs even when no cone reaches the view.
+// is seen. The first face recorded also lists every face's tiles and writes the term of the points
+// beyond the range, so one runs even when no cone reaches the view.
 template <typename RecordFace>
 void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_face) {
   View face_view = frame.view;

@@ -31,7 +31,10 @@ void fit_spot_light(const Frame& frame, IzbLightView& light) {
   light.near_depth = std::max(gpu_shared::local_light_bulb(frame.view.light_range) * cos_outer,
                               frame.view.light_range * gpu_shared::kLocalLightNearPerRange);
   light.far_depth = frame.view.light_range;
-  light.tan_half_angle = std::tan(std::acos(cos_outer)) * 1.02f;  // the cone's rim inside the grid
+  // The cone's rim inside the grid; a point light's face shadows only its cube face's pyramid (its
+  // points, light_tiles.glsl's point_light_face_of), whose sides lie at tangent 1 along the grid's
+  // axes (light_view_matrix keeps an axis's right and up on the other axes): a grid half as wide.
+  light.tan_half_angle = (frame.view.light_face ? 1.0f : std::tan(std::acos(cos_outer))) * 1.02f;
 }
 
 // The sun: the depth range of the scene's box (casters and receivers) along the light.

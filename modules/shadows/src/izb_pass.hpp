@@ -29,7 +29,7 @@ class IzbPass {
               bool collect_stats);
   // Whether record() with these settings (`max_distance`: the range it is given) writes every pixel of
   // the term, so that it need not start lit: on a GPU, where the build stores each pixel's 1 or 0.
-  // (A point light's faces together: each writes its own cone's points.)
+  // (A point light's faces together: each writes its own points, light_tiles.glsl's point_light_face_of.)
   bool writes_every_pixel(const IzbSettings& settings, float max_distance, DebugView debug, bool hybrid) const;
   engine::gpu::Image& soft_term();
   PixelList hybrid_list() const;

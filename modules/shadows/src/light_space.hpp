@@ -37,7 +37,8 @@ float nearest_view_depth_at(const View& view, float distance);
 
 // A point light's six cones around the axes, in the order they are recorded (+x, -x, +y, -y, +z, -z;
 // light_tiles.glsl's kLightFaceAxes), each just wider than a cube face's (half angle acos(1/sqrt 3) =
-// 54.7 degrees, plus half a degree) so that together they cover every direction.
+// 54.7 degrees, plus half a degree): each holds its cube face's pyramid, whose points alone its passes
+// shadow (light_tiles.glsl's point_light_face_of), with half a degree to spare.
 inline constexpr glm::vec3 kPointLightFaceAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 float point_light_face_cos_outer();
 

@@ -47,7 +47,7 @@ class ShadowMapPass {
   // PCSS's masking: the depth map's block planes (shadow_map_blocks.comp), before the resolve.
   void record_blocks(Frame& frame, uint32_t size);
   // Before a point light's first face is resolved (on a CPU device, a spot light's map too): the tiles
-  // each face's cone reaches (shadow_map_tiles.comp), and the term of the points none does.
+  // holding each face's points (shadow_map_tiles.comp), and the term of the points beyond the range.
   void record_light_tiles(Frame& frame);
   engine::gpu::Context& ctx_;
   engine::gpu::Image map_;
