@@ -314,6 +314,50 @@ TEST_F(RayTracedTest, APointLightSkipsTheFacesItsViewMisses) {
   }
 }
 
+// A point light's six faces shadow each point once: the point's face is its cube face's pyramid
+// (light_tiles.glsl's point_light_face_of), so the IZB's candidates over the faces together are the
+// points the light reaches and that face it, counted here from the captured shading points with the
+// shaders' own tests (local_light.h). Cones wide enough to cover every direction overlap: with each
+// face taking its whole cone, a point near a cube edge was a candidate of two or three faces (lamps
+// view 1: a quarter more candidates than points). On both of lamps' views, with lit culling and the
+// CSM off (each candidate one node), and within the suite's mismatch bound against Embree.
+TEST_F(RayTracedTest, APointLightsFacesShadowEachPointOnce) {
+  for (size_t view : {0u, 1u}) {
+    SCOPED_TRACE("lamps view " + std::to_string(view));
+    auto& r = make_renderer("lamps", view, kSize, kSize);
+    shadows::Settings settings;
+    settings.technique = shadows::Technique::Izb;
+    settings.izb.lit_culling = shadows::LitCulling::Off;
+    module_ = shadows::install(r, settings);
+    module_->set_collect_stats(true);
+    const support::SceneLight light = support::scene_local_light(scene_->registry, shadows::LightType::Point);
+    module_->set_light(light.module);
+    r.render_frame(0.0f);
+    const auto points = support::capture_shading_points(r);
+    const glm::vec3 position = glm::make_vec3(light.module.position);
+    uint64_t reached = 0;
+    for (size_t i = 0; i < points.position.size(); ++i) {
+      const glm::vec3 p(points.position[i]), n(points.normal[i]);
+      reached += points.position[i].w > 0.5f &&
+                 gpu_shared::local_light_reaches(position, light.module.range, glm::vec3(0.0f), -1.0f, false, p) &&
+                 gpu_shared::faces_local_light(n, p, position);
+    }
+    const shadows::Stats stats = module_->stats();
+    ASSERT_EQ(stats.lights.size(), 1u);
+    const shadows::Stats::LightStats& l = stats.lights[0];
+    std::printf("lamps view %zu, point light: %u faces, %llu candidates, %llu nodes, %llu points reached and facing it\n",
+                view, l.faces_recorded, (unsigned long long)l.lit_candidates, (unsigned long long)l.nodes_inserted,
+                (unsigned long long)reached);
+    EXPECT_GT(l.faces_recorded, 1u) << "one face: nothing to overlap";
+    EXPECT_GT(reached, uint64_t(kSize) * kSize / 4);
+    EXPECT_EQ(l.lit_candidates, reached) << "a point counted by no face, or by several";
+    EXPECT_EQ(l.nodes_inserted, l.lit_candidates);
+    reference::EmbreeTracer tracer(scene_->registry);
+    const auto cmp = reference::compare_visibility(module_->read_visibility(), tracer.visibility_1spp(points, light.reference));
+    EXPECT_LE(cmp.mismatch_rate, 0.0002) << cmp.mismatched << " of " << cmp.pixels << " pixels differ";
+  }
+}
+
 // A spot light behind the camera pointing away, and a point light whose range ends behind it
 // (content/test_levels/point_beside.json's view): neither reaches a point of the view, so no
 // technique pass runs for them (Stats::LightStats::reaches_view false, no technique's profiler
