@@ -22,7 +22,7 @@ struct View {
   glm::vec3 light_position{0.0f};  // spot and point
   float light_range = 0.0f;        // spot and point
   float light_cos_outer = -1.0f;   // spot: cosine of the outer cone; point: -1 (every direction)
-  bool light_face = false;         // one of a point light's six cones, shadowed as a spot light (IZB)
+  bool light_face = false;         // one of a point light's six faces, shadowed as a spot light (IZB)
   uint32_t light_face_index = 0;   // which: +x, -x, +y, -y, +z, -z (the order they are recorded in)
   // Whether this face is the first or the last of the light's faces recorded this frame (a face whose
   // cone no visible point lies in is skipped: cone_may_reach_view).

@@ -277,8 +277,8 @@ struct Stats {
   std::vector<CsmDecision> csm_decisions;
   std::string csm_status = "off";
   // One entry per light of the frame, in FrameDesc::lights order (the fields above describe the last
-  // IZB or ray-traced pass of the frame). A point light's IZB figures sum its six cones, which overlap:
-  // a point in two cones counts twice.
+  // IZB or ray-traced pass of the frame). A point light's IZB figures sum its six faces, each of which
+  // takes only its own points (a point counts once).
   struct LightStats {
     std::string kind;                // "directional", "spot" or "point"
     uint64_t lit_candidates = 0;     // IZB or rt: points the light reaches and that face it
