@@ -291,6 +291,27 @@ void Renderer::build_draw_list() {
   });
 }
 
+namespace {
+
+struct ReachSphere {
+  glm::vec3 centre;
+  float radius;
+};
+
+// A sphere holding every point a light reaches: a point light's ball of its range; a spot light's
+// part of that ball within its outer cone (half angle a, range r), held by the sphere through its apex
+// and its rim, centred r / (2 cos a) along its axis (which holds its cap too), where that is smaller
+// than the ball (a < 60 degrees).
+ReachSphere reach_sphere(const FrameLight& l) {
+  const float cos_outer = std::cos(l.outer_cone);
+  if (l.kind != LocalLightKind::Spot || cos_outer <= 0.5f) return {l.position, l.range};
+  const float radius = l.range / (2.0f * cos_outer);
+  // (A rounding step wider: the sphere must hold the whole part, not nearly.)
+  return {l.position + l.direction * radius, radius * (1.0f + 1.0e-5f) + 1.0e-6f * l.range};
+}
+
+}  // namespace
+
 void Renderer::gather_local_lights() {
   view_.local_lights.clear();
   Registry& r = scene_->registry;
@@ -308,11 +329,13 @@ void Renderer::gather_local_lights() {
     l.inner_cone = inner_cone;
     l.outer_cone = outer_cone;
     l.radius = radius;
-    // A light whose sphere of reach lies outside the view lights no pixel: no pass runs for it.
+    // A light whose reach lies outside the view (beside it, or wholly behind the camera: every point
+    // seen has a positive w) lights no pixel: no pass runs for it, and it takes no slot from one that does.
+    const ReachSphere sphere = reach_sphere(l);
     Aabb reach;
-    reach.extend(l.position - glm::vec3(range));
-    reach.extend(l.position + glm::vec3(range));
-    if (reach.outside_clip(view_.view_projection)) return;
+    reach.extend(sphere.centre - glm::vec3(sphere.radius));
+    reach.extend(sphere.centre + glm::vec3(sphere.radius));
+    if (reach.outside_clip(view_.view_projection, glm::vec4(-1.0f, -1.0f, 1.0f, 1.0f), 0.0f)) return;
     view_.local_lights.push_back(l);
   };
   r.each<SpotLight>([&](Entity e, SpotLight& s) {

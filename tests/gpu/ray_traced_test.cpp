@@ -314,6 +314,33 @@ TEST_F(RayTracedTest, APointLightSkipsTheFacesItsViewMisses) {
   }
 }
 
+// The renderer lights and shadows the lights that reach the view, up to three: a spot light behind
+// the camera, pointing away, reaches no point of it though the ball of its range does, so it takes no
+// slot (it once did, and with more lamps took the place of one in view); lamps' two lights keep theirs.
+TEST_F(RayTracedTest, ASpotLightPointingAwayFromTheViewTakesNoLightSlot) {
+  auto& r = make_renderer("lamps", 1, kSize, kSize);
+  module_ = shadows::install(r, shadows::Settings{});
+  r.render_frame(0.0f);
+  const engine::FrameView before = r.frame_view();
+  ASSERT_EQ(before.local_lights.size(), 2u) << "both lamps reach the view";
+  const glm::vec3 forward = -glm::vec3(before.view[0][2], before.view[1][2], before.view[2][2]);
+  const engine::Entity away = scene_->registry.create();
+  engine::Transform t;
+  // Two units behind the camera, shining away from it (a spot light shines down its -Z) in a cone of
+  // 0.3 rad, with a range of 5 that reaches 3 units in front of the camera.
+  t.translation = glm::vec3(glm::dvec3(before.camera_position - 2.0f * glm::normalize(forward)) + before.origin);
+  t.rotation = glm::quat(glm::vec3(0.0f, 0.0f, -1.0f), -glm::normalize(forward));
+  scene_->registry.emplace<engine::Transform>(away, t);
+  scene_->registry.emplace<engine::SpotLight>(away, engine::SpotLight{.range = 5.0f, .inner_cone = 0.2f, .outer_cone = 0.3f});
+  r.render_frame(0.0f);
+  const engine::FrameView after = r.frame_view();
+  EXPECT_EQ(after.local_lights.size(), 2u);
+  for (const engine::FrameLight& l : after.local_lights) EXPECT_NE(l.entity, away) << "the spot light pointing away took a slot";
+  const glm::vec3 position(scene_->registry.get<engine::Transform>(away).world[3]);
+  EXPECT_LT(glm::dot(position - glm::vec3(glm::dvec3(before.camera_position) + before.origin), forward), -1.9f)
+      << "the spot light is not behind the camera";
+}
+
 // A point light's six faces shadow each point once: the point's face is its cube face's pyramid
 // (light_tiles.glsl's point_light_face_of), so the IZB's candidates over the faces together are the
 // points the light reaches and that face it, counted here from the captured shading points with the

@@ -118,8 +118,8 @@ struct FrameView {
   glm::vec3 light_direction{0.0f, -1.0f, 0.0f};  // travel direction, unit
   glm::vec3 light_radiance{1.0f};
   float light_angular_diameter_degrees = 0.53f;  // the sun's (DirectionalLight::angular_diameter_degrees)
-  // Enabled spot and point lights whose range reaches the view, nearest first, at most
-  // Renderer::kMaxLocalLights.
+  // Enabled spot and point lights whose reach (a point light's ball of its range, a spot light's cone
+  // within it) may meet the view, nearest first (by the ball), at most Renderer::kMaxLocalLights.
   std::vector<FrameLight> local_lights;
   float near_plane = 0.05f;
   float far_plane = 200.0f;
