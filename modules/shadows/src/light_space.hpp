@@ -36,7 +36,7 @@ void view_slice_corners(const View& view, float d0, float d1, glm::vec3 corners[
 float nearest_view_depth_at(const View& view, float distance);
 
 // A point light's six cones around the axes, in the order they are recorded (+x, -x, +y, -y, +z, -z;
-// light_tiles.glsl's kLightFaceAxes), each just wider than a cube face's (half angle acos(1/sqrt 3) =
+// the face numbers of light_tiles.glsl's point_light_face_of), each just wider than a cube face's (half angle acos(1/sqrt 3) =
 // 54.7 degrees, plus half a degree): each holds its cube face's pyramid, whose points alone its passes
 // shadow (light_tiles.glsl's point_light_face_of), with half a degree to spare.
 inline constexpr glm::vec3 kPointLightFaceAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
