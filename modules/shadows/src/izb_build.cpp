@@ -48,9 +48,9 @@ void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan) {
   vkCmdFillBuffer(cmd, s.res.counters.handle(), 0, VK_WHOLE_SIZE, 0);
   // (With IZB_FLAG_FIT_CLEARS_GRID the fit empties the grid: izb_fit.comp.)
   if (!plan.fit_clears_grid) {
-    if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, VK_WHOLE_SIZE, 0);
-    else vkCmdFillBuffer(cmd, s.res.heads.handle(), 0, VK_WHOLE_SIZE, gpu_shared::kIzbEndOfList);
-    vkCmdFillBuffer(cmd, s.res.farthest.handle(), 0, VK_WHOLE_SIZE, 0);
+    if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, s.res.list_bytes(), 0);
+    else vkCmdFillBuffer(cmd, s.res.heads.handle(), 0, s.res.list_bytes(), gpu_shared::kIzbEndOfList);
+    vkCmdFillBuffer(cmd, s.res.farthest.handle(), 0, s.res.farthest_bytes(), 0);
   }
   // Transfer writes before the fit's shader reads and writes; the previous light's shader reads of
   // the grid before the fit's stores into it.

@@ -72,7 +72,7 @@ void write_izb_params(IzbState& s, const Frame& frame, const IzbSettings& settin
   p.light_direction = glm::vec4(frame.view.light_direction, 0.0f);
   p.camera_position = glm::vec4(frame.view.camera_position, settings.max_distance);
   p.depth_range = glm::vec4(light.near_depth, light.far_depth, 0.0f, 0.0f);
-  p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, settings.resolution, r.samples);
+  p.extent = glm::uvec4(frame.view.extent.width, frame.view.extent.height, r.resolution, r.samples);
   p.limits = glm::uvec4(uint32_t(std::min<uint64_t>(r.pool_size, UINT32_MAX)), plan.flags,
                         uint32_t(std::min<uint64_t>(r.records.capacity, UINT32_MAX)),
                         uint32_t(std::min<uint64_t>(r.pairs.capacity, UINT32_MAX)));

@@ -1,6 +1,7 @@
 #include "barriers.hpp"
 #include "izb_pass.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "izb_build.hpp"
@@ -18,6 +19,17 @@ namespace shadows::detail {
 
 using namespace engine::gpu;
 
+uint32_t izb_grid_resolution(const View& view, const IzbSettings& settings) {
+  if (!view.light_face) return settings.resolution;
+  // Each face holds about a sixth of the light's points, and every face pays its grid's fills (list
+  // heads and farthest depths) again: at three quarters a side the fills take 56 % of the whole grid's
+  // while the lists stay short (BENCHMARKS.md, local lights: a quarter, five eighths and the whole
+  // grid measured).
+  const uint32_t tile = gpu_shared::kIzbTile;
+  const uint32_t scaled = (settings.resolution * kPointFaceGridEighths / 8 + tile - 1) / tile * tile;
+  return std::clamp(scaled, std::min(settings.resolution, tile), settings.resolution);
+}
+
 IzbPass::IzbPass(Context& ctx, bool cpu_paths) : state_(std::make_unique<IzbState>(ctx, cpu_paths)) {}
 IzbPass::~IzbPass() = default;
 
@@ -29,7 +41,7 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   IzbState& s = *state_;
   if (settings.resolution == 0 || settings.resolution > 16384)
     throw std::invalid_argument("IZB resolution must be in 1..16384");
-  s.res.ensure_buffers(frame, settings);
+  s.res.ensure_buffers(frame, settings, izb_grid_resolution(frame.view, settings));
   s.res.ensure_hybrid(frame.cmd, frame.view.extent, hybrid, settings.max_distance > 0.0f);
   s.casters.update(frame, s.pipelines);
   IzbPlan plan;

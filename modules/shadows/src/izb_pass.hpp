@@ -10,6 +10,12 @@ namespace shadows::detail {
 
 struct IzbState;
 
+// A point light's face takes this many eighths of IzbSettings::resolution a side.
+constexpr uint32_t kPointFaceGridEighths = 6;
+// The grid a record of `view`'s light takes: IzbSettings::resolution, or for one of a point light's
+// faces kPointFaceGridEighths of it (rounded up to whole kIzbTile tiles).
+uint32_t izb_grid_resolution(const View& view, const IzbSettings& settings);
+
 // The frustum-traced irregular z-buffer: light frustum fit, (lit map and CSM culling), IZB build,
 // conservative frustum trace, overflow fallback and resolve into the shadow term. Each step lives in
 // its own shaders (izb_*) and its own source file (izb_frustum, izb_lit_map, izb_csm_prepass,

@@ -29,12 +29,17 @@ void IzbResources::make_frame_data(VkDeviceSize fit_groups) {
                       false, "izb frame and fit bounds per workgroup");
 }
 
-void IzbResources::ensure_buffers(const Frame& frame, const IzbSettings& s) {
+void IzbResources::ensure_buffers(const Frame& frame, const IzbSettings& s, uint32_t grid_resolution) {
   const uint32_t spp = izb_sample_count(s);
-  if (resolution != s.resolution) ensure_grid(frame.cmd, s.resolution);
+  if (resolution != grid_resolution) ensure_grid(frame.cmd, grid_resolution);
   const VkExtent2D e = frame.view.extent;
   if (e.width != extent.width || e.height != extent.height || spp != samples) ensure_view(e, spp);
   ensure_node_pool(s, VkDeviceSize(e.width) * e.height, spp);
+}
+
+VkDeviceSize IzbResources::csm_texel_bytes() const {
+  const VkDeviceSize tile_words = 8 * VkDeviceSize(tiles_per_side) * tiles_per_side;
+  return (gpu_shared::izb_lit_tile_records_at(resolution) + tile_words) * 4;
 }
 
 // Per texel of the grid: list heads or counts, farthest node depths, the compute CSM and lit map.
@@ -42,15 +47,17 @@ void IzbResources::ensure_grid(VkCommandBuffer cmd, uint32_t grid_resolution) {
   const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
   resolution = grid_resolution;
   const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
+  scan_blocks = uint32_t((texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock);
+  tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
+  // Every size below grows with the resolution, so a smaller grid fits in a larger one's buffers.
+  if (resolution <= allocated_resolution) return;
+  allocated_resolution = resolution;
   heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
   list_counts = Buffer(ctx, texels * 4, usage, false, "izb sorted list counts");
-  scan_blocks = uint32_t((texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock);
   list_cursor = Buffer(ctx, (texels + scan_blocks) * 4, usage, false, "izb sorted list fill cursors and block sums");
-  tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
   // The compute CSM's depths, then the lit map's texels, texel corners and tile records (izb.h;
   // one binding for all).
-  const VkDeviceSize tile_words = 8 * VkDeviceSize(tiles_per_side) * tiles_per_side;
-  const VkDeviceSize lit_words = gpu_shared::izb_lit_tile_records_at(resolution) + tile_words;
+  const VkDeviceSize lit_words = csm_texel_bytes() / 4;
   csm_texels = Buffer(ctx, lit_words * 4,
                       usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, false,
                       "csm compute depths and lit map");

@@ -21,8 +21,17 @@ inline uint32_t izb_sample_count(const IzbSettings& s) { return s.samples_per_pi
 struct IzbResources {
   explicit IzbResources(engine::gpu::Context& c);
 
-  // Sizes everything for this frame's grid, view and sample count, and the node pool for `s`.
-  void ensure_buffers(const Frame& frame, const IzbSettings& s);
+  // Sizes everything for this record's grid (`grid_resolution` texels a side), view and sample count,
+  // and the node pool for `s`. The grid's buffers keep the largest resolution asked for so far: a
+  // smaller grid (a point light's face beside the sun's) uses their first texels, not new buffers.
+  void ensure_buffers(const Frame& frame, const IzbSettings& s, uint32_t grid_resolution);
+  // The bytes of this grid's lists (heads, or counts) and of its farthest depths (texels, then tiles).
+  VkDeviceSize list_bytes() const { return VkDeviceSize(resolution) * resolution * 4; }
+  VkDeviceSize farthest_bytes() const {
+    return (VkDeviceSize(resolution) * resolution + VkDeviceSize(tiles_per_side) * tiles_per_side) * 4;
+  }
+  // The bytes of csm_texels this grid uses: the compute CSM's depths, then the lit map's words.
+  VkDeviceSize csm_texel_bytes() const;
   // The compute passes' work lists: first sized from the scene and grid, then grown to the demand a
   // frame measured (a frame that overflows still finishes exactly, only slower). Unused (raster
   // passes only): small placeholders keep every binding valid.
@@ -34,7 +43,7 @@ struct IzbResources {
   // too); otherwise 1x1 placeholders keep the bindings valid (izb_hybrid.cpp).
   void ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid, bool limited_range);
   // Whether csm_texels' texel view reaches all of its words (IZB_FLAG_LIT_FETCH).
-  bool lit_view_whole() const { return csm_texels.size() / 4 <= ctx.properties().limits.maxTexelBufferElements; }
+  bool lit_view_whole() const { return csm_texel_bytes() / 4 <= ctx.properties().limits.maxTexelBufferElements; }
 
   engine::gpu::Context& ctx;
   engine::gpu::Buffer list_counts, list_cursor;  // the cursors' buffer also holds the prefix sum's block sums
@@ -59,7 +68,8 @@ struct IzbResources {
   IzbWorkList records, tile_pairs, pairs;
   uint32_t tiles_per_side = 0;
   engine::gpu::Sampler nearest;
-  uint32_t resolution = 0;
+  uint32_t resolution = 0;           // this record's grid, texels a side
+  uint32_t allocated_resolution = 0;  // the grid the buffers hold (at least `resolution`)
   uint32_t samples = 0;
   VkExtent2D extent{};
   uint64_t pool_size = 0;

@@ -105,7 +105,9 @@ struct CascadeSettings {
 };
 
 struct IzbSettings {
-  uint32_t resolution = 1024;         // light-space grid, square
+  // Light-space grid, square, texels a side; each of a point light's six faces takes three quarters
+  // of it (rounded up to whole 16-texel tiles): a face holds about a sixth of the light's points.
+  uint32_t resolution = 1024;
   uint32_t samples_per_pixel = 1;     // 1 (ray per pixel) or 32 (frustum per pixel footprint)
   float max_distance = 0.0f;          // 0: every visible point; else only points nearer the camera
   bool csm = false;                   // conservative shadow map z-prepass culls certainly shadowed points
