@@ -1,6 +1,7 @@
 // The raster/compute probe: both backends timed on the first frames of a configuration, the faster
 // kept, and a configuration seen before decided at once (no second round of probe frames).
 #include <cstdlib>
+#include <optional>
 #include <string>
 
 #include "backend_probe.hpp"
@@ -55,6 +56,41 @@ TEST_F(GpuTest, BackendProbeTimesBothThenRemembersEachConfiguration) {
 
   EXPECT_EQ(probe.pick(PassBackend::Compute, true, true, first, profiler), PassBackend::Compute);
   EXPECT_EQ(probe.choice().reason, "forced");
+}
+
+// The records of one frame under two configurations (the sun's and a local light's keys), the second
+// picked twice (a point light's faces): each key keeps its own probe frames and decides, and every
+// pick of a key within a frame gets that frame's choice.
+TEST_F(GpuTest, BackendProbeDecidesForEachConfigurationOfAFrame) {
+  engine::gpu::GpuProfiler profiler(*ctx_);
+  BackendProbe probe("probed_pass");
+  const uint64_t sun = 1, faces = 2;
+  auto pick = [&](uint64_t key, uint64_t frame) {
+    return probe.pick(PassBackend::Auto, true, true, key, profiler, 0, frame, 1);
+  };
+  std::optional<PassBackend> sun_kept, faces_kept;
+  int frames = 0;
+  for (uint64_t frame = 0; frame < 4 * BackendProbe::kMaxFramesEach && !(sun_kept && faces_kept); ++frame, ++frames) {
+    const PassBackend s = pick(sun, frame);
+    const bool sun_probing = probe.probing();
+    const PassBackend first_face = pick(faces, frame);
+    const bool faces_probing = probe.probing();
+    EXPECT_EQ(pick(faces, frame), first_face) << "frame " << frame;
+    EXPECT_EQ(probe.probing(), faces_probing);
+    ctx_->immediate_submit([&](VkCommandBuffer cmd) {
+      profiler.begin_frame(cmd);
+      for (int record = 0; record < 3; ++record) {
+        profiler.begin(cmd, "probed_pass");
+        profiler.end(cmd, "probed_pass");
+      }
+    });
+    profiler.collect();
+    if (!sun_probing) sun_kept = s;
+    if (!faces_probing) faces_kept = first_face;
+  }
+  EXPECT_TRUE(sun_kept.has_value()) << "the sun's key still probing after " << frames << " frames";
+  EXPECT_TRUE(faces_kept.has_value()) << "the faces' key still probing after " << frames << " frames";
+  EXPECT_LE(frames, int(2 * BackendProbe::kMaxFramesEach + 1));
 }
 
 // A GPU raising its clocks makes each probe frame faster than the last: the probe waits until each

@@ -23,21 +23,39 @@ size_t slot(PassBackend b) { return b == PassBackend::Compute ? 1 : 0; }
 }  // namespace
 
 PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
-                               const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot) {
+                               const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot,
+                               std::optional<uint64_t> frame_index, uint32_t frame_slots) {
+  const uint64_t frame = frame_index ? *frame_index : ++calls_;
   if (key != key_ || !probe_) {
     key_ = key;
     if (probes_.size() >= kRememberedKeys && !probes_.count(key)) probes_.clear();
     probe_ = &probes_[key];
-    pending_.clear();  // timed under the previous configuration
   }
-  if (pending_.size() <= frame_slot) pending_.resize(frame_slot + 1);
-  std::optional<PassBackend>& pending = pending_[frame_slot];
+  Probe& p = *probe_;
+  if (p.last_frame == frame) {
+    choice_ = p.last_choice;
+    probing_ = p.last_probing;
+    return p.last_backend;
+  }
+  p.last_backend = decide(requested, raster_available, compute_available, profiler, frame_slot, frame,
+                          frame_index ? frame_slots : 1u);
+  p.last_frame = frame;
+  p.last_choice = choice_;
+  p.last_probing = probing_;
+  return p.last_backend;
+}
+
+PassBackend BackendProbe::decide(PassBackend requested, bool raster_available, bool compute_available,
+                                 const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot, uint64_t frame_index,
+                                 uint32_t frame_slots) {
+  if (probe_->pending.size() <= frame_slot) probe_->pending.resize(frame_slot + 1);
+  std::optional<PendingFrame>& pending = probe_->pending[frame_slot];
   auto& samples = probe_->samples;
   auto& decided = probe_->decided;
-  if (pending) {
-    // Only whole frames count: the region of the frame that last used this slot (collected in the
-    // profiler's segment of the same index: the host's frame N uses slot and segment N % F), if this
-    // pass recorded it.
+  // Only whole frames count: the regions of the frame that last used this slot (collected in the
+  // profiler's segment of the same index: the host's frame N uses slot and segment N % F), if that was
+  // the probe frame (a key not picked since, or another configuration in between, left it stale).
+  if (pending && pending->frame + frame_slots == frame_index) {
     double total = 0.0;
     bool seen = false;
     for (const auto& [name, ms] : profiler.last_frame_of_slot(frame_slot))
@@ -45,9 +63,9 @@ PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, boo
         total += ms;
         seen = true;
       }
-    if (seen) samples[slot(*pending)].push_back(total);
-    pending.reset();
+    if (seen) samples[slot(pending->backend)].push_back(total);
   }
+  pending.reset();
   choice_.raster_ms = best(samples[0]);
   choice_.compute_ms = best(samples[1]);
   probing_ = false;
@@ -77,7 +95,7 @@ PassBackend BackendProbe::pick(PassBackend requested, bool raster_available, boo
     return use(*decided, why.str());
   }
   const PassBackend next = samples[0].size() <= samples[1].size() ? PassBackend::Raster : PassBackend::Compute;
-  pending = next;
+  pending = PendingFrame{next, frame_index};
   probing_ = true;
   return use(next, "probing");
 }

@@ -36,15 +36,22 @@ class BackendProbe {
   BackendProbe(const BackendProbe&) = delete;  // probe_ points into probes_
   BackendProbe& operator=(const BackendProbe&) = delete;
   // This frame's backend. `key` identifies what the timing depends on (sizes, scene, mode).
+  // `frame_index` (View::frame_index) and `frame_slots` (frames in flight) tell the records of one
+  // frame apart: every pick of a key within a frame gets that frame's choice (a point light's six
+  // faces), keys picked in the same frame each keep their own probe frames (the sun and a local
+  // light), and a probe frame's time is read only from the frame that ran it. Without them each
+  // call is a frame of its own.
   PassBackend pick(PassBackend requested, bool raster_available, bool compute_available, uint64_t key,
-                   const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot = 0);
+                   const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot = 0,
+                   std::optional<uint64_t> frame_index = std::nullopt, uint32_t frame_slots = 1);
   const Stats::BackendChoice& choice() const { return choice_; }
   // Whether the last pick was a probe frame (no decision yet for its key).
   bool probing() const { return probing_; }
   // The frame just recorded is not representative (e.g. its work lists overflowed and grow for the
   // next frame): its time is not taken, and the probe runs that backend again.
   void discard_pending(uint32_t frame_slot) {
-    if (frame_slot < pending_.size()) pending_[frame_slot].reset();
+    for (auto& [key, probe] : probes_)
+      if (frame_slot < probe.pending.size()) probe.pending[frame_slot].reset();
   }
 
  private:
@@ -52,13 +59,27 @@ class BackendProbe {
   std::array<std::string, 2> names_ = {"raster", "compute"};
   bool probing_ = false;
   uint64_t key_ = ~uint64_t(0);
-  // Per frame-in-flight slot: the backend the frame in that slot ran, its time not yet read. The
-  // profiler passed to pick() holds the times of the frame that last used the slot.
-  std::vector<std::optional<PassBackend>> pending_;
+  uint64_t calls_ = 0;  // a frame index for picks given none
+  // A probe frame's backend and frame index, its time not yet read.
+  struct PendingFrame {
+    PassBackend backend;
+    uint64_t frame;
+  };
   struct Probe {
     std::vector<double> samples[2];  // raster, compute
     std::optional<PassBackend> decided;
+    // Per frame-in-flight slot: the probe frame that slot last ran with this key. The profiler passed
+    // to pick() holds the times of the frame that last used the slot.
+    std::vector<std::optional<PendingFrame>> pending;
+    // This key's last pick, given again to the frame's other records.
+    std::optional<uint64_t> last_frame;
+    PassBackend last_backend = PassBackend::Compute;
+    Stats::BackendChoice last_choice;
+    bool last_probing = false;
   };
+  PassBackend decide(PassBackend requested, bool raster_available, bool compute_available,
+                     const engine::gpu::GpuProfiler& profiler, uint32_t frame_slot, uint64_t frame_index,
+                     uint32_t frame_slots);
   std::map<uint64_t, Probe> probes_;
   Probe* probe_ = nullptr;  // the current key's
   Stats::BackendChoice choice_;

@@ -26,10 +26,12 @@ namespace {
 // Raster or compute, per pass. The timing of either depends on the sizes, the scene and the mode.
 // The render size counts in half-octaves of pixels, so dynamic resolution's small steps do not
 // restart the probe every few frames; the CSM setting counts, not whether the adaptive CSM ran
-// this frame (that alternates).
+// this frame (that alternates). The grid counts as IzbSettings::resolution, not the record's own grid:
+// a point light's faces take a smaller one (izb_grid_resolution), and a probe whose key changed
+// between the records of one frame would start afresh at each and never decide.
 uint64_t probe_key(const IzbState& s, const Frame& frame, const IzbSettings& settings, bool hybrid) {
   const double pixels = double(frame.view.extent.width) * frame.view.extent.height;
-  uint64_t key = mix_key(0, s.res.resolution);
+  uint64_t key = mix_key(0, settings.resolution);
   for (uint64_t v : {uint64_t(std::lround(2.0 * std::log2(std::max(pixels, 1.0)))), uint64_t(s.res.samples),
                      uint64_t(s.casters.triangle_count), uint64_t(settings.csm), uint64_t(settings.csm_test),
                      uint64_t(settings.depth_cull), uint64_t(settings.progressive_removal), uint64_t(hybrid),
@@ -50,8 +52,8 @@ void choose_trace_backend(IzbState& s, const Frame& frame, const IzbSettings& se
     throw std::runtime_error("spot lights take the compute CSM, which CSM test " + csm_test_name(settings.csm_test) +
                              " does not have");
   plan.compute_trace =
-      plan.spot || s.probes.trace.pick(settings.trace, raster_trace_available, true, key, frame.profiler,
-                                       frame.slot) == PassBackend::Compute;
+      plan.spot || s.probes.trace.pick(settings.trace, raster_trace_available, true, key, frame.profiler, frame.slot,
+                                       frame.view.frame_index, frame.slots) == PassBackend::Compute;
   if (!plan.compute_trace && !raster_trace_available)
     throw std::runtime_error("the raster IZB trace needs geometry shaders, which " + s.ctx.device_name() +
                              " lacks (use the compute trace)");
@@ -67,7 +69,8 @@ void choose_csm_backend(IzbState& s, const Frame& frame, const IzbSettings& sett
     throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " has no raster pass on " +
                              s.ctx.device_name() + " (it needs geometry shaders)");
   plan.compute_csm = plan.spot || s.probes.csm.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler,
-                                                    frame.slot) == PassBackend::Compute;
+                                                    frame.slot, frame.view.frame_index,
+                                                    frame.slots) == PassBackend::Compute;
 }
 
 // Step 1's shape (izb.h, kIzbStepOne*): on a GPU timed both ways once the backends are chosen, where
@@ -80,8 +83,8 @@ void choose_step_one_shape(IzbState& s, const Frame& frame, const IzbSettings& s
   } else if (s.pipelines.cpu_device()) {
     plan.step_one_shape = gpu_shared::kIzbStepOneCpu;
   } else if (backends_chosen && (plan.compute_trace || plan.compute_csm) &&
-             s.probes.shape.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) ==
-                 PassBackend::Compute) {
+             s.probes.shape.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot,
+                                 frame.view.frame_index, frame.slots) == PassBackend::Compute) {
     plan.step_one_shape = gpu_shared::kIzbStepOneNarrow;
   }
 }
@@ -90,7 +93,8 @@ void choose_step_one_shape(IzbState& s, const Frame& frame, const IzbSettings& s
 void time_csm_prepass(IzbState& s, const Frame& frame, const IzbSettings& settings, uint64_t key,
                       bool backends_chosen, IzbPlan& plan) {
   if (plan.run_csm && settings.csm_timed && s.csm->automatic_only() && backends_chosen && !s.probes.shape.probing() &&
-      s.probes.csm_run.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Compute) {
+      s.probes.csm_run.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot, frame.view.frame_index,
+                            frame.slots) == PassBackend::Compute) {
     s.csm->skip("skipped: the IZB's passes timed faster without it (IzbSettings::csm_timed)");
     plan.run_csm = false;
     plan.compute_csm = false;
@@ -124,7 +128,8 @@ void choose_lit_culling(IzbState& s, const Frame& frame, const IzbSettings& sett
     plan.lit = true;
   } else if (settings.lit_culling == LitCulling::Auto && backends_chosen && !s.probes.shape.probing() &&
              !s.probes.csm_run.probing()) {
-    plan.lit = s.probes.lit.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot) == PassBackend::Raster;
+    plan.lit = s.probes.lit.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot, frame.view.frame_index,
+                                 frame.slots) == PassBackend::Raster;
   }
 }
 
