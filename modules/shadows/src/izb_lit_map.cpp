@@ -14,7 +14,8 @@ void record_lit_map(IzbState& s, Frame& frame, const IzbSettings& settings, cons
   VkCommandBuffer cmd = frame.cmd;
   const VkDeviceSize grid_bytes = VkDeviceSize(s.res.resolution) * s.res.resolution * 4;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "lit_map");
-  vkCmdFillBuffer(cmd, s.res.csm_texels.handle(), grid_bytes, s.res.csm_texel_bytes() - grid_bytes, gpu_shared::kIzbLitEmpty);
+  vkCmdFillBuffer(cmd, s.res.csm_texels.handle(), grid_bytes, s.res.csm_texel_bytes() - grid_bytes,
+                  gpu_shared::kIzbLitEmpty);
   pass_barrier(frame.ctx, cmd);
   s.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_LIT, "lit", settings.step_timings);
   pass_barrier(frame.ctx, cmd);

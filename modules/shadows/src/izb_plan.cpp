@@ -26,9 +26,9 @@ namespace {
 // Raster or compute, per pass. The timing of either depends on the sizes, the scene and the mode.
 // The render size counts in half-octaves of pixels, so dynamic resolution's small steps do not
 // restart the probe every few frames; the CSM setting counts, not whether the adaptive CSM ran
-// this frame (that alternates). The grid counts as IzbSettings::resolution, not the record's own grid:
-// a point light's faces take a smaller one (izb_grid_resolution), and a probe whose key changed
-// between the records of one frame would start afresh at each and never decide.
+// this frame (that alternates). The grid counts as IzbSettings::resolution, not a record's own (a
+// point light's faces take a smaller one, izb_grid_resolution): the probes time whole frames, the
+// faces' regions with the other lights' of the frame.
 uint64_t probe_key(const IzbState& s, const Frame& frame, const IzbSettings& settings, bool hybrid) {
   const double pixels = double(frame.view.extent.width) * frame.view.extent.height;
   uint64_t key = mix_key(0, settings.resolution);

@@ -31,7 +31,8 @@ void IzbResources::make_frame_data(VkDeviceSize fit_groups) {
 
 void IzbResources::ensure_buffers(const Frame& frame, const IzbSettings& s, uint32_t grid_resolution) {
   const uint32_t spp = izb_sample_count(s);
-  if (resolution != grid_resolution) ensure_grid(frame.cmd, grid_resolution);
+  if (allocated_resolution != s.resolution) allocate_grid(frame.cmd, s.resolution);
+  use_grid(grid_resolution);
   const VkExtent2D e = frame.view.extent;
   if (e.width != extent.width || e.height != extent.height || spp != samples) ensure_view(e, spp);
   ensure_node_pool(s, VkDeviceSize(e.width) * e.height, spp);
@@ -42,16 +43,20 @@ VkDeviceSize IzbResources::csm_texel_bytes() const {
   return (gpu_shared::izb_lit_tile_records_at(resolution) + tile_words) * 4;
 }
 
-// Per texel of the grid: list heads or counts, farthest node depths, the compute CSM and lit map.
-void IzbResources::ensure_grid(VkCommandBuffer cmd, uint32_t grid_resolution) {
-  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+void IzbResources::use_grid(uint32_t grid_resolution) {
   resolution = grid_resolution;
   const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
   scan_blocks = uint32_t((texels + gpu_shared::kIzbScanBlock - 1) / gpu_shared::kIzbScanBlock);
   tiles_per_side = (resolution + gpu_shared::kIzbTile - 1) / gpu_shared::kIzbTile;
-  // Every size below grows with the resolution, so a smaller grid fits in a larger one's buffers.
-  if (resolution <= allocated_resolution) return;
-  allocated_resolution = resolution;
+}
+
+// Per texel of the grid: list heads or counts, farthest node depths, the compute CSM and lit map.
+// Every size grows with the resolution, so a smaller grid fits in these buffers.
+void IzbResources::allocate_grid(VkCommandBuffer cmd, uint32_t grid_resolution) {
+  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  use_grid(grid_resolution);
+  allocated_resolution = grid_resolution;
+  const VkDeviceSize texels = VkDeviceSize(resolution) * resolution;
   heads = Buffer(ctx, texels * 4, usage, false, "izb heads");
   list_counts = Buffer(ctx, texels * 4, usage, false, "izb sorted list counts");
   list_cursor = Buffer(ctx, (texels + scan_blocks) * 4, usage, false, "izb sorted list fill cursors and block sums");

@@ -21,9 +21,9 @@ inline uint32_t izb_sample_count(const IzbSettings& s) { return s.samples_per_pi
 struct IzbResources {
   explicit IzbResources(engine::gpu::Context& c);
 
-  // Sizes everything for this record's grid (`grid_resolution` texels a side), view and sample count,
-  // and the node pool for `s`. The grid's buffers keep the largest resolution asked for so far: a
-  // smaller grid (a point light's face beside the sun's) uses their first texels, not new buffers.
+  // Sizes everything for this record's grid (`grid_resolution` texels a side, at most s.resolution),
+  // view and sample count, and the node pool for `s`. The grid's buffers hold s.resolution: a smaller
+  // grid (a point light's face) uses their first texels, not buffers of its own.
   void ensure_buffers(const Frame& frame, const IzbSettings& s, uint32_t grid_resolution);
   // The bytes of this grid's lists (heads, or counts) and of its farthest depths (texels, then tiles).
   VkDeviceSize list_bytes() const { return VkDeviceSize(resolution) * resolution * 4; }
@@ -69,7 +69,7 @@ struct IzbResources {
   uint32_t tiles_per_side = 0;
   engine::gpu::Sampler nearest;
   uint32_t resolution = 0;           // this record's grid, texels a side
-  uint32_t allocated_resolution = 0;  // the grid the buffers hold (at least `resolution`)
+  uint32_t allocated_resolution = 0;  // the grid the buffers hold (IzbSettings::resolution, at least `resolution`)
   uint32_t samples = 0;
   VkExtent2D extent{};
   uint64_t pool_size = 0;
@@ -77,7 +77,8 @@ struct IzbResources {
 
  private:
   void make_frame_data(VkDeviceSize fit_groups);
-  void ensure_grid(VkCommandBuffer cmd, uint32_t grid_resolution);
+  void allocate_grid(VkCommandBuffer cmd, uint32_t grid_resolution);
+  void use_grid(uint32_t grid_resolution);  // resolution and what follows from it, in the buffers there are
   void ensure_view(VkExtent2D e, uint32_t spp);
   void ensure_node_pool(const IzbSettings& s, VkDeviceSize pixels, uint32_t spp);
 };
