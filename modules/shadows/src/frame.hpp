@@ -144,9 +144,10 @@ class ReadbackRing {
  public:
   // After `writers` / `writes` (the stages and accesses that produced `source`), copies `bytes` of it
   // into a host-visible copy of the frame's and makes that visible to the host. A frame may record
-  // several copies (one per light, or per cone of a point light): each gets its own.
+  // several copies (one per light): each gets its own. A copy may hold `records` records of
+  // bytes / records bytes each (a point light's faces' counters, copied at once).
   void record_copy(const Frame& frame, const engine::gpu::Buffer& source, VkDeviceSize bytes,
-                   VkPipelineStageFlags2 writers, VkAccessFlags2 writes, const char* name) {
+                   VkPipelineStageFlags2 writers, VkAccessFlags2 writes, const char* name, uint32_t records = 1) {
     if (slots_.size() != frame.slots) {
       slots_.clear();
       slots_.resize(frame.slots);
@@ -154,40 +155,57 @@ class ReadbackRing {
     Slot& slot = slots_[frame.slot];
     if (slot.count == 0 || slot.frame != frame.view.frame_index) {
       slot.count = 0;
+      slot.records = 0;
       slot.frame = frame.view.frame_index;
     }
     if (slot.copies.size() <= slot.count) slot.copies.emplace_back();
-    engine::gpu::Buffer& copy = slot.copies[slot.count++];
-    if (!copy.valid() || copy.size() < bytes)
-      copy = engine::gpu::Buffer(frame.ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, name);
+    Copy& copy = slot.copies[slot.count++];
+    slot.records += records;
+    copy.records = records;
+    if (!copy.buffer.valid() || copy.buffer.size() < bytes)
+      copy.buffer = engine::gpu::Buffer(frame.ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, name);
+    copy.stride = bytes / records;
     engine::gpu::memory_barrier(frame.cmd, writers, writes, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
     const VkBufferCopy region{0, 0, bytes};
-    vkCmdCopyBuffer(frame.cmd, source.handle(), copy.handle(), 1, &region);
+    vkCmdCopyBuffer(frame.cmd, source.handle(), copy.buffer.handle(), 1, &region);
     engine::gpu::memory_barrier(frame.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                                 VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
   }
-  // How many copies the slot's frame `frame_index` has recorded so far.
+  // How many records the slot's frame `frame_index` has copied so far.
   uint32_t recorded(uint32_t slot, uint64_t frame_index) const {
-    return slot < slots_.size() && slots_[slot].frame == frame_index ? slots_[slot].count : 0u;
+    return slot < slots_.size() && slots_[slot].frame == frame_index ? slots_[slot].records : 0u;
   }
-  // The slot's copies, in the order its frame recorded them, when not taken yet; else none.
-  std::vector<const engine::gpu::Buffer*> take_all(uint32_t slot) {
-    std::vector<const engine::gpu::Buffer*> out;
+  // The slot's records, in the order its frame copied them, when not taken yet; else none.
+  std::vector<const void*> take_records(uint32_t slot) {
+    std::vector<const void*> out;
     if (slot >= slots_.size()) return out;
-    for (uint32_t i = 0; i < slots_[slot].count; ++i) out.push_back(&slots_[slot].copies[i]);
+    for (uint32_t i = 0; i < slots_[slot].count; ++i) {
+      const Copy& copy = slots_[slot].copies[i];
+      for (uint32_t r = 0; r < copy.records; ++r) out.push_back(copy.buffer.as<uint8_t>() + r * copy.stride);
+    }
     slots_[slot].count = 0;
+    slots_[slot].records = 0;
     return out;
   }
   // The last copy of the slot's frame, when not taken yet; else null.
   const engine::gpu::Buffer* take(uint32_t slot) {
-    const auto all = take_all(slot);
-    return all.empty() ? nullptr : all.back();
+    if (slot >= slots_.size() || slots_[slot].count == 0) return nullptr;
+    const engine::gpu::Buffer* last = &slots_[slot].copies[slots_[slot].count - 1].buffer;
+    slots_[slot].count = 0;
+    slots_[slot].records = 0;
+    return last;
   }
 
  private:
+  struct Copy {
+    engine::gpu::Buffer buffer;
+    uint32_t records = 1;
+    VkDeviceSize stride = 0;
+  };
   struct Slot {
-    std::vector<engine::gpu::Buffer> copies;
-    uint32_t count = 0;  // recorded and not taken
+    std::vector<Copy> copies;
+    uint32_t count = 0;    // copies recorded and not taken
+    uint32_t records = 0;  // the records they hold
     uint64_t frame = 0;
   };
   std::vector<Slot> slots_;

@@ -42,18 +42,23 @@ void record_face_tiles(IzbState& s, Frame& frame, const gpu_shared::IzbComputePu
 
 }  // namespace
 
-void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan) {
+void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan, const gpu_shared::IzbParams& params) {
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_reset");
-  vkCmdFillBuffer(cmd, s.res.counters.handle(), 0, VK_WHOLE_SIZE, 0);
+  // The previous record's shader reads and its readback's copy before these transfer writes (its
+  // writes were made visible by the barrier after it).
+  engine::gpu::memory_barrier(cmd, pass_shader_stages(s.ctx) | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0,
+                              VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
+  vkCmdUpdateBuffer(cmd, s.res.params.handle(), 0, sizeof(params), &params);
+  vkCmdFillBuffer(cmd, s.res.counters.handle(), s.res.counters_offset(), IzbResources::counter_bytes(), 0);
   // (With IZB_FLAG_FIT_CLEARS_GRID the fit empties the grid: izb_fit.comp.)
   if (!plan.fit_clears_grid) {
-    if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, s.res.list_bytes(), 0);
-    else vkCmdFillBuffer(cmd, s.res.heads.handle(), 0, s.res.list_bytes(), gpu_shared::kIzbEndOfList);
+    if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, s.res.texel_word_bytes(), 0);
+    else vkCmdFillBuffer(cmd, s.res.heads.handle(), 0, s.res.texel_word_bytes(), gpu_shared::kIzbEndOfList);
     vkCmdFillBuffer(cmd, s.res.farthest.handle(), 0, s.res.farthest_bytes(), 0);
   }
-  // Transfer writes before the fit's shader reads and writes; the previous light's shader reads of
-  // the grid before the fit's stores into it.
+  // Transfer writes before the fit's shader reads and writes (the parameters' uniform reads too); the
+  // previous light's shader reads of the grid before the fit's stores into it.
   pass_barrier(frame.ctx, cmd);
 }
 

@@ -21,13 +21,12 @@ void upload_csm_draw_flags(IzbState& s, const Frame& frame) {
 void record_csm_prepass(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
                         const gpu_shared::IzbComputePush& push, bool collect_stats) {
   if (plan.compute_csm) {
-    const VkDeviceSize grid_bytes = VkDeviceSize(s.res.resolution) * s.res.resolution * 4;
     const uint32_t mode = settings.csm_test == CsmTest::Hertel ? gpu_shared::IZB_WORK_CSM_HERTEL
                                                                : gpu_shared::IZB_WORK_CSM_BARYCENTRIC;
     s.csm->record(
         frame, settings, s.res.frame_data, s.res.resolution, collect_stats,
         [&](VkCommandBuffer c) {
-          vkCmdFillBuffer(c, s.res.csm_texels.handle(), 0, grid_bytes, 0x3f800000u);  // 1.0: nothing stored
+          vkCmdFillBuffer(c, s.res.csm_texels.handle(), 0, s.res.texel_word_bytes(), 0x3f800000u);  // 1.0: nothing stored
           pass_barrier(frame.ctx, c);
           s.record_tile_work(c, frame, push, mode, "csm", settings.step_timings);
         },

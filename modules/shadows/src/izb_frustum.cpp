@@ -63,8 +63,8 @@ IzbLightView izb_light_view(const Frame& frame) {
   return light;
 }
 
-void write_izb_params(IzbState& s, const Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
-                      const IzbLightView& light) {
+gpu_shared::IzbParams izb_params(IzbState& s, const Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
+                                 const IzbLightView& light) {
   const IzbResources& r = s.res;
   gpu_shared::IzbParams p{};
   p.light_view = light.light_view;
@@ -88,7 +88,7 @@ void write_izb_params(IzbState& s, const Frame& frame, const IzbSettings& settin
   const glm::mat4& inverse_vp = frame.view.inverse_view_projection;
   if (plan.constant_ray_w) set_ray_scales(p, inverse_vp);
   if (plan.bounded_fit) set_corner_rays(p, inverse_vp, frame.view.extent);
-  record_update(s.ctx, frame.cmd, r.params, &p, sizeof(p));
+  return p;
 }
 
 void record_light_frustum(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,

@@ -27,9 +27,9 @@ struct IzbLightView {
 };
 IzbLightView izb_light_view(const Frame& frame);
 
-// The frame's IzbParams, written in the command stream.
-void write_izb_params(IzbState& s, const Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
-                      const IzbLightView& light);
+// The record's IzbParams (record_izb_reset writes them in the command stream).
+gpu_shared::IzbParams izb_params(IzbState& s, const Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
+                                 const IzbLightView& light);
 
 // GPU light-frustum fit (a per-block reduction whose last workgroup fits the grid and culls the
 // caster draws by their world bounds), then the caster triangles into grid space.

@@ -42,7 +42,7 @@ void record_hybrid_blend(IzbState& s, Frame& frame) {
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "hybrid_blend");
   blend.bind(cmd);
   s.push_all(cmd, frame, blend);
-  vkCmdDispatchIndirect(cmd, s.res.counters.handle(), (gpu_shared::IZB_COUNTER_HYBRID + 1) * 4);
+  vkCmdDispatchIndirect(cmd, s.res.counters.handle(), s.res.counters_offset() + (gpu_shared::IZB_COUNTER_HYBRID + 1) * 4);
 }
 
 void record_hybrid_penumbra(IzbState& s, Frame& frame, bool step_timings) {

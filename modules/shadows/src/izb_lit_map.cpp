@@ -12,9 +12,9 @@ using namespace engine::gpu;
 void record_lit_map(IzbState& s, Frame& frame, const IzbSettings& settings, const gpu_shared::IzbComputePush& push) {
   // The barrier after it orders it with the compute CSM, which shares its work lists. The build reads it.
   VkCommandBuffer cmd = frame.cmd;
-  const VkDeviceSize grid_bytes = VkDeviceSize(s.res.resolution) * s.res.resolution * 4;
+  const VkDeviceSize csm_depth_bytes = s.res.texel_word_bytes();  // the lit map's words follow them
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "lit_map");
-  vkCmdFillBuffer(cmd, s.res.csm_texels.handle(), grid_bytes, s.res.csm_texel_bytes() - grid_bytes,
+  vkCmdFillBuffer(cmd, s.res.csm_texels.handle(), csm_depth_bytes, s.res.csm_texel_bytes() - csm_depth_bytes,
                   gpu_shared::kIzbLitEmpty);
   pass_barrier(frame.ctx, cmd);
   s.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_LIT, "lit", settings.step_timings);

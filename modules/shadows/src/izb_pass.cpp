@@ -42,6 +42,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (settings.resolution == 0 || settings.resolution > 16384)
     throw std::invalid_argument("IZB resolution must be in 1..16384");
   s.res.ensure_buffers(frame, settings, izb_grid_resolution(frame.view, settings));
+  const bool later_face = frame.view.light_face && !frame.view.first_light_face;
+  s.res.counter_slice = later_face ? std::min(s.res.counter_slice + 1, IzbResources::kCounterSlices - 1) : 0;
   s.res.ensure_hybrid(frame.cmd, frame.view.extent, hybrid, settings.max_distance > 0.0f);
   s.casters.update(frame, s.pipelines);
   IzbPlan plan;
@@ -56,10 +58,9 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   s.last.penumbra = plan.penumbra;
   s.res.ensure_resolve_list(frame.view.extent, plan.listed_resolve, plan.face_tiles);
   s.p = &s.pipelines.set(s.res.samples, plan.flags);  // specialized for every flag of the plan
-  write_izb_params(s, frame, settings, plan, light);
   const gpu_shared::IzbComputePush push{hybrid ? 1u : 0u, plan.debug, s.casters.triangle_count, 0u};
 
-  record_izb_reset(s, frame, plan);
+  record_izb_reset(s, frame, plan, izb_params(s, frame, settings, plan, light));
   record_light_frustum(s, frame, settings, plan, push);
   pass_barrier(frame.ctx, frame.cmd);
   if (plan.lit) record_lit_map(s, frame, settings, push);
@@ -71,7 +72,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   record_overflow_fallback(s, frame, plan, push);
   record_izb_resolve(s, frame, plan, hybrid, push);
   if (collect_stats) record_izb_stats(s, frame, plan, raster, push);
-  record_counters_readback(s, frame);
+  // A point light's faces: every face's counters at once, after the last.
+  if (!frame.view.light_face || frame.view.last_light_face) record_counters_readback(s, frame);
 }
 
 bool IzbPass::writes_every_pixel(const IzbSettings& settings, float max_distance, DebugView debug, bool hybrid) const {

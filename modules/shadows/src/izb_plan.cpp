@@ -41,6 +41,13 @@ uint64_t probe_key(const IzbState& s, const Frame& frame, const IzbSettings& set
   return key;
 }
 
+// A probe's pick for this record, within its frame (every record of a frame gets the frame's choice).
+PassBackend pick_for_frame(BackendProbe& probe, PassBackend requested, bool raster_ok, bool compute_ok, uint64_t key,
+                           const Frame& frame) {
+  return probe.pick(requested, raster_ok, compute_ok, key, frame.profiler, frame.slot, frame.view.frame_index,
+                    frame.slots);
+}
+
 // A spot light's perspective grid is traced and culled by the compute passes, which read the
 // grid-space triangles (the raster passes' geometry stage assumes the sun's orthographic one).
 void choose_trace_backend(IzbState& s, const Frame& frame, const IzbSettings& settings, uint64_t key, IzbPlan& plan) {
@@ -52,8 +59,8 @@ void choose_trace_backend(IzbState& s, const Frame& frame, const IzbSettings& se
     throw std::runtime_error("spot lights take the compute CSM, which CSM test " + csm_test_name(settings.csm_test) +
                              " does not have");
   plan.compute_trace =
-      plan.spot || s.probes.trace.pick(settings.trace, raster_trace_available, true, key, frame.profiler, frame.slot,
-                                       frame.view.frame_index, frame.slots) == PassBackend::Compute;
+      plan.spot ||
+      pick_for_frame(s.probes.trace, settings.trace, raster_trace_available, true, key, frame) == PassBackend::Compute;
   if (!plan.compute_trace && !raster_trace_available)
     throw std::runtime_error("the raster IZB trace needs geometry shaders, which " + s.ctx.device_name() +
                              " lacks (use the compute trace)");
@@ -68,9 +75,9 @@ void choose_csm_backend(IzbState& s, const Frame& frame, const IzbSettings& sett
   if (settings.csm_backend == PassBackend::Raster && !raster_ok)
     throw std::runtime_error("CSM test " + csm_test_name(settings.csm_test) + " has no raster pass on " +
                              s.ctx.device_name() + " (it needs geometry shaders)");
-  plan.compute_csm = plan.spot || s.probes.csm.pick(settings.csm_backend, raster_ok, compute_ok, key, frame.profiler,
-                                                    frame.slot, frame.view.frame_index,
-                                                    frame.slots) == PassBackend::Compute;
+  plan.compute_csm =
+      plan.spot ||
+      pick_for_frame(s.probes.csm, settings.csm_backend, raster_ok, compute_ok, key, frame) == PassBackend::Compute;
 }
 
 // Step 1's shape (izb.h, kIzbStepOne*): on a GPU timed both ways once the backends are chosen, where
@@ -83,8 +90,7 @@ void choose_step_one_shape(IzbState& s, const Frame& frame, const IzbSettings& s
   } else if (s.pipelines.cpu_device()) {
     plan.step_one_shape = gpu_shared::kIzbStepOneCpu;
   } else if (backends_chosen && (plan.compute_trace || plan.compute_csm) &&
-             s.probes.shape.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot,
-                                 frame.view.frame_index, frame.slots) == PassBackend::Compute) {
+             pick_for_frame(s.probes.shape, PassBackend::Auto, true, true, key, frame) == PassBackend::Compute) {
     plan.step_one_shape = gpu_shared::kIzbStepOneNarrow;
   }
 }
@@ -93,8 +99,7 @@ void choose_step_one_shape(IzbState& s, const Frame& frame, const IzbSettings& s
 void time_csm_prepass(IzbState& s, const Frame& frame, const IzbSettings& settings, uint64_t key,
                       bool backends_chosen, IzbPlan& plan) {
   if (plan.run_csm && settings.csm_timed && s.csm->automatic_only() && backends_chosen && !s.probes.shape.probing() &&
-      s.probes.csm_run.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot, frame.view.frame_index,
-                            frame.slots) == PassBackend::Compute) {
+      pick_for_frame(s.probes.csm_run, PassBackend::Auto, true, true, key, frame) == PassBackend::Compute) {
     s.csm->skip("skipped: the IZB's passes timed faster without it (IzbSettings::csm_timed)");
     plan.run_csm = false;
     plan.compute_csm = false;
@@ -128,8 +133,7 @@ void choose_lit_culling(IzbState& s, const Frame& frame, const IzbSettings& sett
     plan.lit = true;
   } else if (settings.lit_culling == LitCulling::Auto && backends_chosen && !s.probes.shape.probing() &&
              !s.probes.csm_run.probing()) {
-    plan.lit = s.probes.lit.pick(PassBackend::Auto, true, true, key, frame.profiler, frame.slot, frame.view.frame_index,
-                                 frame.slots) == PassBackend::Raster;
+    plan.lit = pick_for_frame(s.probes.lit, PassBackend::Auto, true, true, key, frame) == PassBackend::Raster;
   }
 }
 

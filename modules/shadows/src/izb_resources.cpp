@@ -14,8 +14,9 @@ IzbResources::IzbResources(Context& c) : ctx(c) {
   params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                   false, "izb params");
   make_frame_data(0);
-  const VkDeviceSize counter_bytes = gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t);
-  counters = Buffer(c, counter_bytes,
+  const VkDeviceSize alignment = std::max<VkDeviceSize>(c.properties().limits.minStorageBufferOffsetAlignment, 4);
+  counter_stride = (counter_bytes() + alignment - 1) / alignment * alignment;
+  counters = Buffer(c, counter_stride * kCounterSlices,
                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                         VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
                     false, "izb counters");

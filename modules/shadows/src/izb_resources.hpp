@@ -4,6 +4,7 @@
 #include "gpu/resources.hpp"
 #include "frame.hpp"
 #include "shadows/settings.hpp"
+#include "shared/izb.h"
 
 namespace shadows::detail {
 
@@ -25,8 +26,9 @@ struct IzbResources {
   // view and sample count, and the node pool for `s`. The grid's buffers hold s.resolution: a smaller
   // grid (a point light's face) uses their first texels, not buffers of its own.
   void ensure_buffers(const Frame& frame, const IzbSettings& s, uint32_t grid_resolution);
-  // The bytes of this grid's lists (heads, or counts) and of its farthest depths (texels, then tiles).
-  VkDeviceSize list_bytes() const { return VkDeviceSize(resolution) * resolution * 4; }
+  // The bytes of a word per texel of this grid (its lists' heads or counts, the compute CSM's depths)
+  // and of its farthest depths (texels, then tiles).
+  VkDeviceSize texel_word_bytes() const { return VkDeviceSize(resolution) * resolution * 4; }
   VkDeviceSize farthest_bytes() const {
     return (VkDeviceSize(resolution) * resolution + VkDeviceSize(tiles_per_side) * tiles_per_side) * 4;
   }
@@ -58,7 +60,16 @@ struct IzbResources {
   VkExtent2D hybrid_extent{};
   bool hybrid_limited = false;  // the hybrid's range is limited: the list's pixels and the soft term
   engine::gpu::Image trace_depth;
-  engine::gpu::Buffer params, counters;
+  engine::gpu::Buffer params;
+  // The counters: a record's in a slice of its own, at `counter_stride` bytes per slice, so that a
+  // point light's faces are read back with one copy after the last (a face's record takes the slice
+  // after the previous face's; any other record the first).
+  static constexpr uint32_t kCounterSlices = 6;
+  engine::gpu::Buffer counters;
+  VkDeviceSize counter_stride = 0;
+  uint32_t counter_slice = 0;
+  static constexpr VkDeviceSize counter_bytes() { return gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t); }
+  VkDeviceSize counters_offset() const { return counter_stride * counter_slice; }
   // The frame the fit writes (IzbFrame), then its per-workgroup bounds from vec4 kIzbPartialsAt on
   // (izb.h): storage for the fit, a uniform buffer's range for the passes after it.
   engine::gpu::Buffer frame_data;

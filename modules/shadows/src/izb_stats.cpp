@@ -101,19 +101,20 @@ void record_izb_stats(IzbState& s, Frame& frame, const IzbPlan& plan, const IzbR
 
 void record_counters_readback(IzbState& s, const Frame& frame) {
   ScopedGpuRegion region(s.ctx, frame.profiler, frame.cmd, "izb_readback");
-  s.res.counters_readback.record_copy(frame, s.res.counters, s.res.counters.size(),
+  const uint32_t slices = s.res.counter_slice + 1;  // this record's and the light's faces' before it
+  s.res.counters_readback.record_copy(frame, s.res.counters, s.res.counter_stride * slices,
                                       pass_shader_stages(s.ctx) | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
                                       VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                                      "izb counters readback");
+                                      "izb counters readback", slices);
 }
 
 void read_izb_counters(IzbState& s, std::vector<Stats>& records, uint32_t slot) {
   s.csm->frame_completed(slot);
-  const auto readbacks = s.res.counters_readback.take_all(slot);
+  const auto readbacks = s.res.counters_readback.take_records(slot);
   if (readbacks.empty()) return;
   IzbDemand demand;
-  for (const Buffer* readback : readbacks) {
-    const auto* c = readback->as<uint32_t>();
+  for (const void* readback : readbacks) {
+    const auto* c = static_cast<const uint32_t*>(readback);
     records.push_back(stats_from_counters(s, c));
     demand.add(c);
   }

@@ -440,8 +440,8 @@ void RayTracedPass::record(Frame& frame, uint32_t samples_per_pixel, uint32_t li
 
 void RayTracedPass::after_frame(std::vector<Stats>& records, uint32_t slot) {
   Impl& m = *impl_;
-  for (const Buffer* readback : m.counters_readback.take_all(slot)) {
-    const auto* c = readback->as<uint32_t>();
+  for (const void* readback : m.counters_readback.take_records(slot)) {
+    const auto* c = static_cast<const uint32_t*>(readback);
     Stats& s = records.emplace_back();
     s.rt_instances = m.instance_count;
     s.rt_triangles = m.bottom_triangles;
