@@ -155,12 +155,10 @@ class ReadbackRing {
     Slot& slot = slots_[frame.slot];
     if (slot.count == 0 || slot.frame != frame.view.frame_index) {
       slot.count = 0;
-      slot.records = 0;
       slot.frame = frame.view.frame_index;
     }
     if (slot.copies.size() <= slot.count) slot.copies.emplace_back();
     Copy& copy = slot.copies[slot.count++];
-    slot.records += records;
     copy.records = records;
     if (!copy.buffer.valid() || copy.buffer.size() < bytes)
       copy.buffer = engine::gpu::Buffer(frame.ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, name);
@@ -173,7 +171,10 @@ class ReadbackRing {
   }
   // How many records the slot's frame `frame_index` has copied so far.
   uint32_t recorded(uint32_t slot, uint64_t frame_index) const {
-    return slot < slots_.size() && slots_[slot].frame == frame_index ? slots_[slot].records : 0u;
+    if (slot >= slots_.size() || slots_[slot].frame != frame_index) return 0u;
+    uint32_t records = 0;
+    for (uint32_t i = 0; i < slots_[slot].count; ++i) records += slots_[slot].copies[i].records;
+    return records;
   }
   // The slot's records, in the order its frame copied them, when not taken yet; else none.
   std::vector<const void*> take_records(uint32_t slot) {
@@ -184,7 +185,6 @@ class ReadbackRing {
       for (uint32_t r = 0; r < copy.records; ++r) out.push_back(copy.buffer.as<uint8_t>() + r * copy.stride);
     }
     slots_[slot].count = 0;
-    slots_[slot].records = 0;
     return out;
   }
   // The last copy of the slot's frame, when not taken yet; else null.
@@ -192,7 +192,6 @@ class ReadbackRing {
     if (slot >= slots_.size() || slots_[slot].count == 0) return nullptr;
     const engine::gpu::Buffer* last = &slots_[slot].copies[slots_[slot].count - 1].buffer;
     slots_[slot].count = 0;
-    slots_[slot].records = 0;
     return last;
   }
 
@@ -204,8 +203,7 @@ class ReadbackRing {
   };
   struct Slot {
     std::vector<Copy> copies;
-    uint32_t count = 0;    // copies recorded and not taken
-    uint32_t records = 0;  // the records they hold
+    uint32_t count = 0;  // copies recorded and not taken
     uint64_t frame = 0;
   };
   std::vector<Slot> slots_;

@@ -50,7 +50,7 @@ void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan, cons
   engine::gpu::memory_barrier(cmd, pass_shader_stages(s.ctx) | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0,
                               VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
   vkCmdUpdateBuffer(cmd, s.res.params.handle(), 0, sizeof(params), &params);
-  vkCmdFillBuffer(cmd, s.res.counters.handle(), s.res.counters_offset(), IzbResources::counter_bytes(), 0);
+  vkCmdFillBuffer(cmd, s.res.counters.handle(), s.res.counter_slice_offset(), IzbResources::counter_bytes(), 0);
   // (With IZB_FLAG_FIT_CLEARS_GRID the fit empties the grid: izb_fit.comp.)
   if (!plan.fit_clears_grid) {
     if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, s.res.texel_word_bytes(), 0);

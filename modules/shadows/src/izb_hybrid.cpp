@@ -33,7 +33,7 @@ void IzbResources::ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid,
 }
 
 PixelList izb_hybrid_list(const IzbResources& res) {
-  return {res.hybrid_list.handle(), res.counters.handle(), gpu_shared::IZB_COUNTER_HYBRID};
+  return {res.hybrid_list.handle(), res.counters.handle(), uint32_t(res.counter_at(gpu_shared::IZB_COUNTER_HYBRID) / 4)};
 }
 
 void record_hybrid_blend(IzbState& s, Frame& frame) {
@@ -42,7 +42,7 @@ void record_hybrid_blend(IzbState& s, Frame& frame) {
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "hybrid_blend");
   blend.bind(cmd);
   s.push_all(cmd, frame, blend);
-  vkCmdDispatchIndirect(cmd, s.res.counters.handle(), s.res.counters_offset() + (gpu_shared::IZB_COUNTER_HYBRID + 1) * 4);
+  vkCmdDispatchIndirect(cmd, s.res.counters.handle(), s.res.counter_at(gpu_shared::IZB_COUNTER_HYBRID + 1));
 }
 
 void record_hybrid_penumbra(IzbState& s, Frame& frame, bool step_timings) {

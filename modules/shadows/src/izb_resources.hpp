@@ -69,7 +69,9 @@ struct IzbResources {
   VkDeviceSize counter_stride = 0;
   uint32_t counter_slice = 0;
   static constexpr VkDeviceSize counter_bytes() { return gpu_shared::IZB_COUNTER_COUNT * sizeof(uint32_t); }
-  VkDeviceSize counters_offset() const { return counter_stride * counter_slice; }
+  VkDeviceSize counter_slice_offset() const { return counter_stride * counter_slice; }
+  // The byte offset of this record's counter word `counter` in `counters`.
+  VkDeviceSize counter_at(uint32_t counter) const { return counter_slice_offset() + VkDeviceSize(counter) * 4; }
   // The frame the fit writes (IzbFrame), then its per-workgroup bounds from vec4 kIzbPartialsAt on
   // (izb.h): storage for the fit, a uniform buffer's range for the passes after it.
   engine::gpu::Buffer frame_data;

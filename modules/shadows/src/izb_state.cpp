@@ -28,7 +28,7 @@ void IzbState::push_all(VkCommandBuffer cmd, const Frame& frame, const Pipeline&
   DescriptorWriter()
       .uniform_buffer(gpu_shared::IZB_BINDING_PARAMS, res.params.handle())
       .uniform_buffer(gpu_shared::IZB_BINDING_FRAME, res.frame_data.handle(), 0, sizeof(gpu_shared::IzbFrame))
-      .storage_buffer(gpu_shared::IZB_BINDING_COUNTERS, res.counters.handle(), res.counters_offset(),
+      .storage_buffer(gpu_shared::IZB_BINDING_COUNTERS, res.counters.handle(), res.counter_slice_offset(),
                       IzbResources::counter_bytes())
       .storage_buffer(gpu_shared::IZB_BINDING_HEADS, res.heads.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_FARTHEST, res.farthest.handle())
@@ -90,7 +90,7 @@ void IzbState::size_list_dispatch(VkCommandBuffer cmd, const Frame& frame, gpu_s
 void IzbState::dispatch_indirect(VkCommandBuffer cmd, const Frame& frame, const Pipeline& pipeline,
                                  gpu_shared::IzbComputePush push, uint32_t counter) {
   bind_compute(cmd, frame, pipeline, push);
-  vkCmdDispatchIndirect(cmd, res.counters.handle(), res.counters_offset() + VkDeviceSize(counter) * 4);
+  vkCmdDispatchIndirect(cmd, res.counters.handle(), res.counter_at(counter));
 }
 
 void IzbState::dispatch_face_tiles(VkCommandBuffer cmd, const Frame& frame, const Pipeline& pipeline,
