@@ -45,6 +45,7 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_MAP) uniform sampler2D shado
 layout(set = 0, binding = SM_RESOLVE_BINDING_SHADOW_TERM, r32f) writeonly uniform image2D shadow_term;
 layout(set = 0, binding = SM_RESOLVE_BINDING_RECEIVERS, rgba8) readonly uniform image2D receivers;
 layout(set = 0, binding = SM_RESOLVE_BINDING_BLOCKS, std430) readonly buffer Blocks { vec4 blocks[]; };
+layout(set = 0, binding = SM_RESOLVE_BINDING_BLOCK_TEXELS) uniform samplerBuffer block_texels;
 layout(set = 0, binding = SM_RESOLVE_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
 // SM_STAGE_*: its count, the listed pass's dispatch (x, y, z), then a pixel an entry (x | y << 16).
 layout(set = 0, binding = SM_RESOLVE_BINDING_LIST, std430) buffer TapList { uint tap_list[]; };
@@ -57,7 +58,9 @@ float pcss_map_depth(int layer, ivec2 texel) { return texelFetch(shadow_map, tex
 
 vec4 depth_block(int layer, ivec2 block) {
   int blocks_x = (int(params.extent.z) + int(kSmBlock) - 1) / int(kSmBlock);
-  return blocks[block.y * blocks_x + block.x];
+  int index = block.y * blocks_x + block.x;
+  // A CPU device gathers a texel fetch's lanes at once, where it would load a buffer's lane by lane.
+  return kCpuDevice ? texelFetch(block_texels, index) : blocks[index];
 }
 #define DEPTH_BLOCKS_SETTLE
 #include "depth_blocks.glsl"

@@ -41,6 +41,7 @@ SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_MAP = 3u;
 SHARED_CONST uint SM_RESOLVE_BINDING_SHADOW_TERM = 4u;
 SHARED_CONST uint SM_RESOLVE_BINDING_RECEIVERS = 5u;  // RGBA8, a > 0.5: receives shadows
 SHARED_CONST uint SM_RESOLVE_BINDING_BLOCKS = 6u;     // kSmBlock² depth blocks' planes (shadow_map_blocks.comp)
+SHARED_CONST uint SM_RESOLVE_BINDING_BLOCK_TEXELS = 10u;  // the same, as an RGBA32F texel buffer (a CPU device reads it)
 SHARED_CONST uint SM_RESOLVE_BINDING_COUNTERS = 7u;   // SM_COUNTER_* (with stats)
 SHARED_CONST uint SM_RESOLVE_BINDING_LIST = 8u;       // the CPU device's list of pixels to tap (SM_STAGE_*)
 // A point light's faces (a spot light's one cone on a CPU device): the tiles each resolves

@@ -1,6 +1,8 @@
 #include "barriers.hpp"
 #include "shadow_map_pass.hpp"
 
+#include <algorithm>
+
 #include "light_space.hpp"
 #include "shared/local_light.h"
 #include "shared/shadows.h"
@@ -27,6 +29,17 @@ void set_pcss_params(gpu_shared::ShadowMapResolveParams& p, const View& view, co
   p.pcss_texel = glm::vec4(2.0f / (row_norm(0) * float(size)), 2.0f / (row_norm(1) * float(size)),
                            gpu_shared::kPcssMaxTexels, perspective ? 1.0f : 0.0f);
 }
+
+// The depth blocks (shadow_map_blocks.comp), a vec4 each: a storage buffer, and a texel view through
+// which a CPU device reads them (lavapipe loads a storage buffer's words lane by lane, each behind a
+// branch; a texel fetch gathers them).
+Buffer blocks_buffer(Context& ctx, VkDeviceSize bytes) {
+  Buffer blocks(ctx, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, false,
+                "sm depth blocks");
+  blocks.make_texel_view(VK_FORMAT_R32G32B32A32_SFLOAT,
+                         std::min<VkDeviceSize>(bytes / 16, ctx.properties().limits.maxTexelBufferElements), 16);
+  return blocks;
+}
 }  // namespace
 
 ShadowMapPass::ShadowMapPass(Context& ctx, bool cpu_paths) : ctx_(ctx), cpu_paths_(cpu_paths) {
@@ -49,7 +62,7 @@ ShadowMapPass::ShadowMapPass(Context& ctx, bool cpu_paths) : ctx_(ctx), cpu_path
                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                      false, "sm counters");
   // Placeholders that keep the resolve's bindings valid until a frame needs the real ones.
-  blocks_ = Buffer(ctx, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
+  blocks_ = blocks_buffer(ctx, 16);
   tap_list_ = Buffer(ctx, 16, kListUsage, false, "sm tap list");
   light_tiles_ = Buffer(ctx, 16, kListUsage, false, "sm light tiles");
 }
@@ -69,7 +82,8 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
         {gpu_shared::SM_RESOLVE_BINDING_BLOCKS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
         {gpu_shared::SM_RESOLVE_BINDING_COUNTERS, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
         {gpu_shared::SM_RESOLVE_BINDING_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-        {gpu_shared::SM_RESOLVE_BINDING_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}},
+        {gpu_shared::SM_RESOLVE_BINDING_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+        {gpu_shared::SM_RESOLVE_BINDING_BLOCK_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}},
        0,
        {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage},
         {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u}}});
@@ -80,7 +94,7 @@ void ShadowMapPass::record_blocks(Frame& frame, uint32_t size) {
   VkCommandBuffer cmd = frame.cmd;
   const uint32_t blocks = (size + gpu_shared::kSmBlock - 1) / gpu_shared::kSmBlock;
   const VkDeviceSize bytes = VkDeviceSize(blocks) * blocks * 16;
-  if (blocks_.size() < bytes) blocks_ = Buffer(ctx_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "sm depth blocks");
+  if (blocks_.size() < bytes) blocks_ = blocks_buffer(ctx_, bytes);
   if (!blocks_pipeline_.valid())
     blocks_pipeline_ = PipelineFactory(ctx_).compute(
         {"shadow_map_blocks.comp",
@@ -215,6 +229,7 @@ void ShadowMapPass::record_resolve(Frame& frame, ResolveVariant variant, bool sp
         .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_COUNTERS, counters_.handle())
         .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_LIST, tap_list_.handle())
         .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_TILES, light_tiles_.handle())
+        .uniform_texel_buffer(gpu_shared::SM_RESOLVE_BINDING_BLOCK_TEXELS, blocks_.texel_view())
         .push(ctx_, cmd, resolve);
   };
   const auto over_frame = [&] {
