@@ -35,6 +35,10 @@ layout(constant_id = 5) const bool kLocalLight = false;
 layout(constant_id = 6) const bool kTiles = false;
 // A CPU device (uniform_branch.glsl).
 layout(constant_id = 7) const bool kCpuDevice = false;
+// The blocks read through SM_RESOLVE_BINDING_BLOCK_TEXELS: a CPU device, whose driver gathers a
+// texel fetch's lanes at once where it loads a storage buffer's lane by lane, where the view reaches
+// every block (maxTexelBufferElements).
+layout(constant_id = 8) const bool kBlockFetch = false;
 #define UNIFORM_BRANCH_CPU kCpuDevice
 #include "shadows/uniform_branch.glsl"
 
@@ -59,8 +63,7 @@ float pcss_map_depth(int layer, ivec2 texel) { return texelFetch(shadow_map, tex
 vec4 depth_block(int layer, ivec2 block) {
   int blocks_x = (int(params.extent.z) + int(kSmBlock) - 1) / int(kSmBlock);
   int index = block.y * blocks_x + block.x;
-  // A CPU device gathers a texel fetch's lanes at once, where it would load a buffer's lane by lane.
-  return kCpuDevice ? texelFetch(block_texels, index) : blocks[index];
+  return kBlockFetch ? texelFetch(block_texels, index) : blocks[index];
 }
 #define DEPTH_BLOCKS_SETTLE
 #include "depth_blocks.glsl"

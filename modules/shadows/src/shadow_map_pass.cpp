@@ -31,8 +31,8 @@ void set_pcss_params(gpu_shared::ShadowMapResolveParams& p, const View& view, co
 }
 
 // The depth blocks (shadow_map_blocks.comp), a vec4 each: a storage buffer, and a texel view through
-// which a CPU device reads them (lavapipe loads a storage buffer's words lane by lane, each behind a
-// branch; a texel fetch gathers them).
+// which a CPU device reads them where it reaches them all (lavapipe loads a storage buffer's words
+// lane by lane, each behind a branch; a texel fetch gathers them).
 Buffer blocks_buffer(Context& ctx, VkDeviceSize bytes) {
   Buffer blocks(ctx, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, false,
                 "sm depth blocks");
@@ -86,7 +86,7 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
         {gpu_shared::SM_RESOLVE_BINDING_BLOCK_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}},
        0,
        {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage},
-        {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u}}});
+        {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u}, {8, v.block_fetch ? 1u : 0u}}});
   return pipeline;
 }
 
@@ -203,8 +203,11 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
   // light on a CPU device, which would pay for every pixel outside its cone too.
   const bool tiles = settings.local_light_tiles && (frame.view.light_face || (frame.view.local_light && cpu_paths_));
   if (tiles && first_map) record_light_tiles(frame);
+  const uint64_t blocks_side = (settings.size + gpu_shared::kSmBlock - 1) / gpu_shared::kSmBlock;
+  const bool block_fetch = cpu_paths_ && masking && blocks_side * blocks_side <= ctx_.properties().limits.maxTexelBufferElements;
   record_resolve(frame,
-                 {sized, filter_texels > 0.0f, masking, count && sized, gpu_shared::SM_STAGE_WHOLE, frame.view.local_light, tiles},
+                 {sized, filter_texels > 0.0f, masking, count && sized, gpu_shared::SM_STAGE_WHOLE, frame.view.local_light, tiles,
+                  block_fetch},
                  split);
   // The counts are read on the host once this frame has completed.
   if (count && last_map)

@@ -36,9 +36,10 @@ class ShadowMapPass {
     uint32_t stage = 0;    // SM_STAGE_*
     bool local = false;    // a spot light or a point light's face (a perspective map), not the sun
     bool tiles = false;    // over the tiles of the light's list (record_light_tiles), not the frame
+    bool block_fetch = false;  // the blocks read through their texel view (a CPU device, the view whole)
     uint32_t key() const {
       return uint32_t(pcss) | uint32_t(pcf) << 1 | uint32_t(masking) << 2 | uint32_t(count) << 3 | uint32_t(local) << 4 |
-             uint32_t(tiles) << 5 | stage << 6;
+             uint32_t(tiles) << 5 | uint32_t(block_fetch) << 6 | stage << 7;
     }
   };
   const engine::gpu::Pipeline& resolve_pipeline(const ResolveVariant& variant);
