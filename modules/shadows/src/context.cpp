@@ -951,7 +951,7 @@ void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_fac
     const uint32_t face = faces[k];
     face_view.light_direction = kPointLightFaceAxes[face];
     face_view.light_face_index = face;
-    face_view.first_light_face = k == 0;
+    face_view.light_face_order = uint32_t(k);
     face_view.last_light_face = k + 1 == faces.size();
     Frame f{frame.ctx, frame.cmd, frame.profiler, face_view, frame.gbuffer, frame.shadow_term, frame.overlay,
             frame.geometry, frame.draws, frame.slot, frame.slots};

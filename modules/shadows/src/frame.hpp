@@ -24,10 +24,11 @@ struct View {
   float light_cos_outer = -1.0f;   // spot: cosine of the outer cone; point: -1 (every direction)
   bool light_face = false;         // one of a point light's six faces, shadowed as a spot light (IZB)
   uint32_t light_face_index = 0;   // which: +x, -x, +y, -y, +z, -z (the order they are recorded in)
-  // Whether this face is the first or the last of the light's faces recorded this frame (a face whose
-  // cone no visible point lies in is skipped: cone_may_reach_view).
-  bool first_light_face = true;
+  // This face's place among the light's faces recorded this frame (0 the first), and whether it is
+  // the last (a face whose cone no visible point lies in is skipped: cone_may_reach_view).
+  uint32_t light_face_order = 0;
   bool last_light_face = true;
+  bool first_light_face() const { return light_face_order == 0; }
   // The light's size (Light::angular_diameter_degrees, radius): the sun's tangent of its angular
   // radius; a spot or point light's sphere radius in world units. 0: a point, hard shadows.
   float light_tan_half_angle = 0.0f;

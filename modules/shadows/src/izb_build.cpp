@@ -65,7 +65,7 @@ void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan, cons
 void record_izb_build(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
                       const gpu_shared::IzbComputePush& push) {
   VkCommandBuffer cmd = frame.cmd;
-  if (plan.face_tiles && frame.view.first_light_face) record_face_tiles(s, frame, push);
+  if (plan.face_tiles && frame.view.first_light_face()) record_face_tiles(s, frame, push);
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_build");
   {
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "build_classify");

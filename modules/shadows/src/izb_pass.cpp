@@ -42,8 +42,8 @@ void IzbPass::record(Frame& frame, const IzbSettings& settings, DebugView debug,
   if (settings.resolution == 0 || settings.resolution > 16384)
     throw std::invalid_argument("IZB resolution must be in 1..16384");
   s.res.ensure_buffers(frame, settings, izb_grid_resolution(frame.view, settings));
-  const bool later_face = frame.view.light_face && !frame.view.first_light_face;
-  s.res.counter_slice = later_face ? std::min(s.res.counter_slice + 1, IzbResources::kCounterSlices - 1) : 0;
+  // A point light's faces count in slices of one buffer, read back together after the last.
+  s.res.counter_slice = frame.view.light_face ? std::min(frame.view.light_face_order, IzbResources::kCounterSlices - 1) : 0;
   s.res.ensure_hybrid(frame.cmd, frame.view.extent, hybrid, settings.max_distance > 0.0f);
   s.casters.update(frame, s.pipelines);
   IzbPlan plan;

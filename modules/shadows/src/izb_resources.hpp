@@ -63,7 +63,7 @@ struct IzbResources {
   engine::gpu::Buffer params;
   // The counters: a record's in a slice of its own, at `counter_stride` bytes per slice, so that a
   // point light's faces are read back with one copy after the last (a face's record takes the slice
-  // after the previous face's; any other record the first).
+  // of its place among the faces recorded, View::light_face_order; any other record the first).
   static constexpr uint32_t kCounterSlices = 6;
   engine::gpu::Buffer counters;
   VkDeviceSize counter_stride = 0;

@@ -160,7 +160,7 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
     return fit_orthographic(light_view, bounds, 0.01f * glm::length(bounds.extent())) * light_view;
   }();
   // A point light's faces count into one total: zeroed before the first, read after the last.
-  const bool first_map = !frame.view.light_face || frame.view.first_light_face;
+  const bool first_map = !frame.view.light_face || frame.view.first_light_face();
   const bool last_map = !frame.view.light_face || frame.view.last_light_face;
   if (count && first_map) vkCmdFillBuffer(cmd, counters_.handle(), 0, VK_WHOLE_SIZE, 0);
 
