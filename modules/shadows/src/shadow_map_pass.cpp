@@ -30,7 +30,10 @@ void set_pcss_params(gpu_shared::ShadowMapResolveParams& p, const View& view, co
                            gpu_shared::kPcssMaxTexels, perspective ? 1.0f : 0.0f);
 }
 
-// The depth blocks (shadow_map_blocks.comp), a vec4 each: a storage buffer, and a texel view through
+// The depth blocks a side of a map of `size` texels (shadow_map_blocks.comp).
+uint32_t blocks_per_side(uint32_t size) { return (size + gpu_shared::kSmBlock - 1) / gpu_shared::kSmBlock; }
+
+// The depth blocks, a vec4 each: a storage buffer, and a texel view through
 // which a CPU device reads them where it reaches them all (lavapipe loads a storage buffer's words
 // lane by lane, each behind a branch; a texel fetch gathers them).
 Buffer blocks_buffer(Context& ctx, VkDeviceSize bytes) {
@@ -92,7 +95,7 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
 
 void ShadowMapPass::record_blocks(Frame& frame, uint32_t size) {
   VkCommandBuffer cmd = frame.cmd;
-  const uint32_t blocks = (size + gpu_shared::kSmBlock - 1) / gpu_shared::kSmBlock;
+  const uint32_t blocks = blocks_per_side(size);
   const VkDeviceSize bytes = VkDeviceSize(blocks) * blocks * 16;
   if (blocks_.size() < bytes) blocks_ = blocks_buffer(ctx_, bytes);
   if (!blocks_pipeline_.valid())
@@ -203,8 +206,8 @@ void ShadowMapPass::record(Frame& frame, const ShadowMapSettings& settings, floa
   // light on a CPU device, which would pay for every pixel outside its cone too.
   const bool tiles = settings.local_light_tiles && (frame.view.light_face || (frame.view.local_light && cpu_paths_));
   if (tiles && first_map) record_light_tiles(frame);
-  const uint64_t blocks_side = (settings.size + gpu_shared::kSmBlock - 1) / gpu_shared::kSmBlock;
-  const bool block_fetch = cpu_paths_ && masking && blocks_side * blocks_side <= ctx_.properties().limits.maxTexelBufferElements;
+  const uint64_t blocks = blocks_per_side(settings.size);
+  const bool block_fetch = cpu_paths_ && masking && blocks * blocks <= ctx_.properties().limits.maxTexelBufferElements;
   record_resolve(frame,
                  {sized, filter_texels > 0.0f, masking, count && sized, gpu_shared::SM_STAGE_WHOLE, frame.view.local_light, tiles,
                   block_fetch},
