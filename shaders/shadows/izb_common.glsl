@@ -126,8 +126,8 @@ uint caster_draw(uint t) { return floatBitsToUint(casters[t].p0.w); }
 // The caster draws' words (IZB_BINDING_CASTER_DRAWS): where each section starts.
 uint caster_draw_count() { return params.capacities.z; }
 uint draw_bounds_word(uint draw) { return caster_draw_count() + 8u * draw; }
-uint frustum_draw_word(uint slot) { return 9u * caster_draw_count() + 2u * slot; }
-uint listed_triangle_word(uint slot) { return 11u * caster_draw_count() + slot; }
+uint frustum_draw_word(uint slot) { return 9u * caster_draw_count() + params.face_sections.x + 2u * slot; }
+uint listed_triangle_word(uint slot) { return 11u * caster_draw_count() + params.face_sections.x + slot; }
 // The triangles listed this frame (izb_triangles.comp): those of draws in the light frustum that reach
 // the grid, in no particular order. Every pass that walks caster triangles walks these.
 uint listed_triangle_count() { return counters[IZB_COUNTER_LISTED_TRIANGLES]; }

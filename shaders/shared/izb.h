@@ -42,6 +42,10 @@ struct IzbParams {
   // from the camera (2 tan(fov_y / 2) / height).
   mat4 view_projection;
   vec4 penumbra;
+  // A point light's faces recorded together (their passes interleaved): x, this face's section of the
+  // caster draws' words (its frustum draws, then its listed triangles) starts this many words after the
+  // first face's; 0 for any other record.
+  uvec4 face_sections;
 };
 
 // (For the raster trace, depth culling and the rasterizer choice are pipeline state.)
@@ -432,7 +436,7 @@ SHARED_END
 
 #ifdef __cplusplus
 static_assert(sizeof(gpu_shared::IzbFrame) == 80);
-static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 3 * 16 + 6 * 16 + 64 + 16);
+static_assert(sizeof(gpu_shared::IzbParams) == 128 + 3 * 16 + 3 * 16 + 3 * 16 + 6 * 16 + 64 + 16 + 16);
 static_assert(sizeof(gpu_shared::IzbDrawPush) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterTriangle) == 80);
 static_assert(sizeof(gpu_shared::IzbCasterDraw) == 96);

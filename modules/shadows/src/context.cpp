@@ -935,26 +935,42 @@ constexpr float kSpotFilterTexels = 2.5f;
 // of the view can lie within the light's range (cone_may_reach_view) is skipped: none of its points
 // is seen. The first face recorded also lists every face's tiles and writes the term of the points
 // beyond the range, so one runs even when no cone reaches the view.
-template <typename RecordFace>
-void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_face) {
-  View face_view = frame.view;
+std::vector<View> ContextImpl::point_light_face_views(const View& view) {
+  View face_view = view;
   face_view.light_face = true;
   face_view.light_cos_outer = point_light_face_cos_outer();
   std::vector<uint32_t> faces;
   for (uint32_t face = 0; face < 6; ++face)
-    if (cone_may_reach_view(frame.view.view_projection, frame.view.light_position, kPointLightFaceAxes[face],
-                            face_view.light_cos_outer, frame.view.light_range))
+    if (cone_may_reach_view(view.view_projection, view.light_position, kPointLightFaceAxes[face],
+                            face_view.light_cos_outer, view.light_range))
       faces.push_back(face);
   if (faces.empty()) faces.push_back(0);
   point_light_faces_recorded_ = uint32_t(faces.size());
+  std::vector<View> views;
   for (size_t k = 0; k < faces.size(); ++k) {
     const uint32_t face = faces[k];
     face_view.light_direction = kPointLightFaceAxes[face];
     face_view.light_face_index = face;
     face_view.light_face_order = uint32_t(k);
     face_view.last_light_face = k + 1 == faces.size();
-    Frame f{frame.ctx, frame.cmd, frame.profiler, face_view, frame.gbuffer, frame.shadow_term, frame.overlay,
-            frame.geometry, frame.draws, frame.slot, frame.slots};
+    views.push_back(face_view);
+  }
+  return views;
+}
+
+std::vector<Frame> ContextImpl::point_light_face_frames(const Frame& frame, const std::vector<View>& views) {
+  std::vector<Frame> frames;
+  frames.reserve(views.size());
+  for (const View& v : views)
+    frames.push_back(Frame{frame.ctx, frame.cmd, frame.profiler, v, frame.gbuffer, frame.shadow_term, frame.overlay,
+                           frame.geometry, frame.draws, frame.slot, frame.slots});
+  return frames;
+}
+
+template <typename RecordFace>
+void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_face) {
+  const std::vector<View> views = point_light_face_views(frame.view);
+  for (Frame& f : point_light_face_frames(frame, views)) {
     record_face(f);
     pass_barrier(*gpu_, frame.cmd);
   }
@@ -984,9 +1000,14 @@ void ContextImpl::record_local_light(Frame& frame, const Settings& settings) {
     case Technique::Hybrid: {
       // The hybrid shadows a local light with the IZB alone: its range bounds the work, and every point
       // it reaches gets the exact term.
-      auto izb_pass = [&](Frame& f) { izb().record(f, settings.izb, settings.debug, false, collect_stats_); };
-      if (point) record_point_light_faces(frame, izb_pass);
-      else izb_pass(frame);
+      if (point) {
+        // The faces' steps interleaved where they can be (IzbPass::record_faces).
+        const std::vector<View> views = point_light_face_views(frame.view);
+        std::vector<Frame> faces = point_light_face_frames(frame, views);
+        izb().record_faces(faces, settings.izb, settings.debug, collect_stats_);
+      } else {
+        izb().record(frame, settings.izb, settings.debug, false, collect_stats_);
+      }
       break;
     }
   }

@@ -42,45 +42,58 @@ void record_face_tiles(IzbState& s, Frame& frame, const gpu_shared::IzbComputePu
 
 }  // namespace
 
-void record_izb_reset(IzbState& s, const Frame& frame, const IzbPlan& plan, const gpu_shared::IzbParams& params) {
+void record_izb_reset(IzbState& s, IzbBatch& batch) {
+  Frame& frame = batch.frame();
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_reset");
   // The previous record's shader reads and its readback's copy before these transfer writes (its
   // writes were made visible by the barrier after it).
   engine::gpu::memory_barrier(cmd, pass_shader_stages(s.ctx) | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0,
                               VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
-  vkCmdUpdateBuffer(cmd, s.res.params.handle(), 0, sizeof(params), &params);
-  vkCmdFillBuffer(cmd, s.res.counters.handle(), s.res.counter_slice_offset(), IzbResources::counter_bytes(), 0);
-  // (With IZB_FLAG_FIT_CLEARS_GRID the fit empties the grid: izb_fit.comp.)
-  if (!plan.fit_clears_grid) {
-    if (plan.sorted) vkCmdFillBuffer(cmd, s.res.list_counts.handle(), 0, s.res.texel_word_bytes(), 0);
-    else vkCmdFillBuffer(cmd, s.res.heads.handle(), 0, s.res.texel_word_bytes(), gpu_shared::kIzbEndOfList);
-    vkCmdFillBuffer(cmd, s.res.farthest.handle(), 0, s.res.farthest_bytes(), 0);
-  }
+  for_each_record(s, batch, [&](const IzbRecord& r) {
+    const IzbResources& res = s.res;
+    vkCmdUpdateBuffer(cmd, res.params.handle(), res.slice_at(res.params_stride), sizeof(r.params), &r.params);
+    vkCmdFillBuffer(cmd, res.counters.handle(), res.counter_slice_offset(), IzbResources::counter_bytes(), 0);
+    // (With IZB_FLAG_FIT_CLEARS_GRID the fit empties the grid: izb_fit.comp.)
+    if (r.plan.fit_clears_grid) return;
+    if (r.plan.sorted) vkCmdFillBuffer(cmd, res.list_counts.handle(), 0, res.texel_word_bytes(), 0);
+    else
+      vkCmdFillBuffer(cmd, res.heads.handle(), res.slice_at(res.heads_stride()), res.texel_word_bytes(),
+                      gpu_shared::kIzbEndOfList);
+    vkCmdFillBuffer(cmd, res.farthest.handle(), res.slice_at(res.farthest_stride()), res.farthest_bytes(), 0);
+  });
   // Transfer writes before the fit's shader reads and writes (the parameters' uniform reads too); the
   // previous light's shader reads of the grid before the fit's stores into it.
   pass_barrier(frame.ctx, cmd);
 }
 
-void record_izb_build(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
-                      const gpu_shared::IzbComputePush& push) {
+void record_izb_build(IzbState& s, IzbBatch& batch, const IzbSettings& settings) {
+  Frame& frame = batch.frame();
+  const IzbPlan& plan = batch.plan();
   VkCommandBuffer cmd = frame.cmd;
-  if (plan.face_tiles && frame.view.first_light_face()) record_face_tiles(s, frame, push);
+  if (plan.face_tiles && frame.view.first_light_face()) {
+    select_record(s, batch.records.front());
+    record_face_tiles(s, frame, batch.records.front().push);
+  }
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_build");
   {
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "build_classify");
-    if (plan.face_tiles) s.dispatch_face_tiles(cmd, frame, s.p->build, push);
-    else s.dispatch_pixels(cmd, frame, s.p->build, push);
+    for_each_record(s, batch, [&](IzbRecord& r) {
+      if (plan.face_tiles) s.dispatch_face_tiles(cmd, *r.frame, s.p->build, r.push);
+      else s.dispatch_pixels(cmd, *r.frame, s.p->build, r.push);
+    });
   }
-  if (plan.sorted) record_counting_sort(s, frame, push);
+  if (plan.sorted) for_each_record(s, batch, [&](IzbRecord& r) { record_counting_sort(s, *r.frame, r.push); });
   pass_barrier(frame.ctx, cmd);
   // A CPU device sizes the lists' dispatches in a pass of their own (izb_list_dispatch.comp), then
-  // inserts the listed pixels' nodes where the build runs in two steps.
+  // inserts the listed pixels' nodes where the build runs in two steps. (The sun's alone.)
   if (plan.listed_resolve && plan.cpu) {
+    IzbRecord& r = batch.records.front();
+    select_record(s, r);
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "build_insert");
-    s.size_list_dispatch(cmd, frame, push, gpu_shared::IZB_LIST_RESOLVE);
+    s.size_list_dispatch(cmd, frame, r.push, gpu_shared::IZB_LIST_RESOLVE);
     if (s.p->build_insert.valid()) {
-      s.dispatch_indirect(cmd, frame, s.p->build_insert, push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
+      s.dispatch_indirect(cmd, frame, s.p->build_insert, r.push, gpu_shared::IZB_COUNTER_RESOLVE_LIST + 1);
       pass_barrier(frame.ctx, cmd);
     }
   }

@@ -59,8 +59,10 @@ void IzbCasters::list_caster_draws(const Frame& frame) {
 }
 
 void IzbCasters::ensure_draw_words() {
-  // Flags, bounds and the frustum's draws per caster draw, then the listed triangles (izb.h).
-  const uint64_t words = 11 * uint64_t(caster_table_.size()) + triangle_count;
+  // Flags, bounds and the frustum's draws per caster draw, then the listed triangles (izb.h); then
+  // the other faces' frustum draws and listed triangles.
+  const uint64_t words = 11 * uint64_t(caster_table_.size()) + triangle_count +
+                         uint64_t(kSections - 1) * (2 * uint64_t(caster_table_.size()) + triangle_count);
   if (words > caster_draw_word_capacity_ || !caster_draw_words.valid()) {
     caster_draw_word_capacity_ = std::max<uint64_t>(words, 1);
     caster_draw_words = Buffer(ctx_, caster_draw_word_capacity_ * sizeof(uint32_t),
@@ -85,10 +87,21 @@ void IzbCasters::ensure_triangle_buffers() {
     triangle_capacity_ = std::max<size_t>(triangle_count, 1);
     triangles = Buffer(ctx_, triangle_capacity_ * sizeof(gpu_shared::IzbCasterTriangle),
                        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "izb caster triangles");
-    // 3 vec4 per triangle, then (spot lights) a list of the triangles traced apart.
-    grid_triangles = Buffer(ctx_, triangle_capacity_ * 4 * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
-                            "izb grid-space caster triangles");
+    ensure_grid_sections(grid_sections_);
   }
+}
+
+void IzbCasters::ensure_grid_sections(uint32_t sections) {
+  // 3 vec4 per triangle, then (spot lights) a list of the triangles traced apart; a section starts
+  // where a storage buffer binding may.
+  const VkDeviceSize alignment = std::max<VkDeviceSize>(ctx_.properties().limits.minStorageBufferOffsetAlignment, 16);
+  const VkDeviceSize stride = (std::max<size_t>(triangle_capacity_, 1) * 4 * sizeof(glm::vec4) + alignment - 1) /
+                              alignment * alignment;
+  if (grid_triangles.valid() && stride == grid_triangle_stride_ && sections <= grid_sections_) return;
+  grid_sections_ = std::max(grid_sections_, sections);
+  grid_triangle_stride_ = stride;
+  grid_triangles = Buffer(ctx_, stride * grid_sections_, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false,
+                          "izb grid-space caster triangles");
 }
 
 // The light-frustum cull's bounds, in the command stream (earlier frames' passes still read the old

@@ -20,6 +20,15 @@ class IzbCasters {
  public:
   explicit IzbCasters(engine::gpu::Context& ctx) : ctx_(ctx) {}
   void update(const Frame& frame, IzbPipelineCache& pipelines);
+  // A point light's faces recorded together (IzbPass::record_faces) each write their own grid-space
+  // triangles and their own section of the caster draws' words (frustum draws and listed triangles,
+  // IzbParams::face_sections): up to kSections of them, one per face.
+  static constexpr uint32_t kSections = 6;
+  // Room for `sections` faces' grid-space triangles (one's at least), each grid_triangle_stride() apart.
+  void ensure_grid_sections(uint32_t sections);
+  VkDeviceSize grid_triangle_stride() const { return grid_triangle_stride_; }
+  // Where section `section`'s words start, after the first's (IzbParams::face_sections.x).
+  uint32_t face_section_words(uint32_t section) const { return section * (2 * caster_draws + triangle_count); }
 
   engine::gpu::Buffer triangles, grid_triangles, caster_draw_words;
   std::vector<uint32_t> first_triangle;  // per frame draw: its first caster triangle (casters only)
@@ -41,6 +50,8 @@ class IzbCasters {
 
   engine::gpu::Context& ctx_;
   size_t triangle_capacity_ = 0;
+  uint32_t grid_sections_ = 1;
+  VkDeviceSize grid_triangle_stride_ = 0;
   uint64_t caster_draw_word_capacity_ = 0;
   std::vector<gpu_shared::IzbCasterDraw> caster_table_;  // this frame's caster draws
   std::vector<gpu_shared::IzbCasterDraw> built_table_;   // the caster draws `triangles` was built from

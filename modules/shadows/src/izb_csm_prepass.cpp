@@ -1,6 +1,8 @@
 #include "barriers.hpp"
 #include "izb_csm_prepass.hpp"
 
+#include "izb_batch.hpp"
+
 #include <cstring>
 
 namespace shadows::detail {
@@ -18,8 +20,9 @@ void upload_csm_draw_flags(IzbState& s, const Frame& frame) {
     record_update(s.ctx, frame.cmd, s.casters.caster_draw_words, flags.data(), flags.size() * sizeof(uint32_t));
 }
 
-void record_csm_prepass(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
-                        const gpu_shared::IzbComputePush& push, bool collect_stats) {
+void record_csm_prepass(IzbState& s, IzbBatch& batch, const IzbSettings& settings, bool collect_stats) {
+  Frame& frame = batch.frame();
+  const IzbPlan& plan = batch.plan();
   if (plan.compute_csm) {
     const uint32_t mode = settings.csm_test == CsmTest::Hertel ? gpu_shared::IZB_WORK_CSM_HERTEL
                                                                : gpu_shared::IZB_WORK_CSM_BARYCENTRIC;
@@ -28,7 +31,7 @@ void record_csm_prepass(IzbState& s, Frame& frame, const IzbSettings& settings, 
         [&](VkCommandBuffer c) {
           vkCmdFillBuffer(c, s.res.csm_texels.handle(), 0, s.res.texel_word_bytes(), 0x3f800000u);  // 1.0: nothing stored
           pass_barrier(frame.ctx, c);
-          s.record_tile_work(c, frame, push, mode, "csm", settings.step_timings);
+          s.record_tile_work(c, batch, mode, "csm", settings.step_timings);
         },
         &s.res.csm_texels);
   } else {

@@ -91,8 +91,9 @@ gpu_shared::IzbParams izb_params(IzbState& s, const Frame& frame, const IzbSetti
   return p;
 }
 
-void record_light_frustum(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
-                          const gpu_shared::IzbComputePush& push) {
+void record_light_frustum(IzbState& s, IzbBatch& batch, const IzbSettings& settings) {
+  Frame& frame = batch.frame();
+  const IzbPlan& plan = batch.plan();
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "light_frustum");
   {
@@ -101,25 +102,31 @@ void record_light_frustum(IzbState& s, Frame& frame, const IzbSettings& settings
     // A spot light's grid spans its whole cone whatever the points' bounds (izb_setup.glsl): one
     // workgroup that reads no pixel sets it up.
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "light_frustum_fit");
-    if (plan.spot) s.dispatch(cmd, frame, s.p->fit, push, 1, 1);
-    else s.dispatch(cmd, frame, s.p->fit, push, fit_columns(frame.view.extent.width), fit_rows(frame.view.extent.height));
+    for_each_record(s, batch, [&](IzbRecord& r) {
+      if (plan.spot) s.dispatch(cmd, *r.frame, s.p->fit, r.push, 1, 1);
+      else
+        s.dispatch(cmd, *r.frame, s.p->fit, r.push, fit_columns(frame.view.extent.width),
+                   fit_rows(frame.view.extent.height));
+    });
   }
   if (plan.cpu) {
     pass_barrier(frame.ctx, cmd);
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "light_frustum_cull");
-    s.dispatch(cmd, frame, s.p->setup, push, 1);
+    for_each_record(s, batch, [&](IzbRecord& r) { s.dispatch(cmd, *r.frame, s.p->setup, r.push, 1); });
   }
   // The triangles into grid space, listed where they reach it: those of the listed draws, or with
   // few casters every one (where nothing before the compute trace reads them, in its step 1).
   if (!plan.triangles_in_trace) {
     pass_barrier(frame.ctx, cmd);
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "light_frustum_triangles");
-    if (plan.all_triangles) {
-      const uint32_t groups = (s.casters.triangle_count + 63) / 64;
-      if (groups > 0) s.dispatch(cmd, frame, s.p->grid_setup, push, groups);
-    } else {
-      s.dispatch_indirect(cmd, frame, s.p->grid_setup, push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
-    }
+    for_each_record(s, batch, [&](IzbRecord& r) {
+      if (plan.all_triangles) {
+        const uint32_t groups = (s.casters.triangle_count + 63) / 64;
+        if (groups > 0) s.dispatch(cmd, *r.frame, s.p->grid_setup, r.push, groups);
+      } else {
+        s.dispatch_indirect(cmd, *r.frame, s.p->grid_setup, r.push, gpu_shared::IZB_COUNTER_GRID_SETUP_DISPATCH);
+      }
+    });
   }
 }
 

@@ -4,6 +4,7 @@
 #include <glm/glm.hpp>
 
 #include "frame.hpp"
+#include "izb_batch.hpp"
 #include "izb_plan.hpp"
 #include "izb_state.hpp"
 #include "shadows/settings.hpp"
@@ -33,7 +34,6 @@ gpu_shared::IzbParams izb_params(IzbState& s, const Frame& frame, const IzbSetti
 
 // GPU light-frustum fit (a per-block reduction whose last workgroup fits the grid and culls the
 // caster draws by their world bounds), then the caster triangles into grid space.
-void record_light_frustum(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
-                          const gpu_shared::IzbComputePush& push);
+void record_light_frustum(IzbState& s, IzbBatch& batch, const IzbSettings& settings);
 
 }  // namespace shadows::detail

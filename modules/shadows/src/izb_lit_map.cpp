@@ -1,6 +1,8 @@
 #include "barriers.hpp"
 #include "izb_lit_map.hpp"
 
+#include "izb_batch.hpp"
+
 #include <cstring>
 
 #include "gpu/profiler.hpp"
@@ -9,7 +11,8 @@ namespace shadows::detail {
 
 using namespace engine::gpu;
 
-void record_lit_map(IzbState& s, Frame& frame, const IzbSettings& settings, const gpu_shared::IzbComputePush& push) {
+void record_lit_map(IzbState& s, IzbBatch& batch, const IzbSettings& settings) {
+  Frame& frame = batch.frame();
   // The barrier after it orders it with the compute CSM, which shares its work lists. The build reads it.
   VkCommandBuffer cmd = frame.cmd;
   const VkDeviceSize csm_depth_bytes = s.res.texel_word_bytes();  // the lit map's words follow them
@@ -17,7 +20,7 @@ void record_lit_map(IzbState& s, Frame& frame, const IzbSettings& settings, cons
   vkCmdFillBuffer(cmd, s.res.csm_texels.handle(), csm_depth_bytes, s.res.csm_texel_bytes() - csm_depth_bytes,
                   gpu_shared::kIzbLitEmpty);
   pass_barrier(frame.ctx, cmd);
-  s.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_LIT, "lit", settings.step_timings);
+  s.record_tile_work(cmd, batch, gpu_shared::IZB_WORK_LIT, "lit", settings.step_timings);
   pass_barrier(frame.ctx, cmd);
 }
 

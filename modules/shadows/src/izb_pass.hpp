@@ -1,5 +1,6 @@
 #pragma once
 #include <memory>
+#include <vector>
 
 #include "cascades_pass.hpp"
 #include "gpu/resources.hpp"
@@ -33,6 +34,11 @@ class IzbPass {
   // into soft_term(), and record_hybrid_blend() mixes them into the term.
   void record(Frame& frame, const IzbSettings& settings, DebugView debug, bool hybrid,
               bool collect_stats);
+  // A point light's faces (View::light_face, in the order recorded, each writing only its own points):
+  // where nothing they write is shared, each step for all faces before the barrier after it, each
+  // face's grid, parameters and work lists in slices of their own (IzbResources::grid_slice); else
+  // one face after another. Leaves every face's writes visible to what follows.
+  void record_faces(std::vector<Frame>& faces, const IzbSettings& settings, DebugView debug, bool collect_stats);
   // Whether record() with these settings (`max_distance`: the range it is given) writes every pixel of
   // the term, so that it need not start lit: on a GPU, where the build stores each pixel's 1 or 0.
   // (A point light's faces together: each writes its own points, light_tiles.glsl's point_light_face_of.)

@@ -7,10 +7,9 @@
 namespace shadows::detail {
 
 // The exact overflow fallback for the pixels whose nodes did not fit the pool (izb_fallback.comp).
-void record_overflow_fallback(IzbState& s, Frame& frame, const IzbPlan& plan, const gpu_shared::IzbComputePush& push);
+void record_overflow_fallback(IzbState& s, IzbBatch& batch);
 // The resolve: the visibility masks into the shadow term, the hybrid's list or a debug view
 // (izb_resolve.comp); skipped where the build and trace wrote the term themselves.
-void record_izb_resolve(IzbState& s, Frame& frame, const IzbPlan& plan, bool hybrid,
-                        const gpu_shared::IzbComputePush& push);
+void record_izb_resolve(IzbState& s, IzbBatch& batch, bool hybrid);
 
 }  // namespace shadows::detail

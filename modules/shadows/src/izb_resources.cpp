@@ -11,10 +11,14 @@ namespace shadows::detail {
 using namespace engine::gpu;
 
 IzbResources::IzbResources(Context& c) : ctx(c) {
-  params = Buffer(c, sizeof(gpu_shared::IzbParams), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                  false, "izb params");
+  const VkPhysicalDeviceLimits& limits = c.properties().limits;
+  storage_alignment = std::max<VkDeviceSize>(
+      {limits.minStorageBufferOffsetAlignment, limits.minUniformBufferOffsetAlignment, 16});
+  params_stride = aligned(sizeof(gpu_shared::IzbParams));
+  params = Buffer(c, params_stride * kCounterSlices,
+                  VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "izb params");
   make_frame_data(0);
-  const VkDeviceSize alignment = std::max<VkDeviceSize>(c.properties().limits.minStorageBufferOffsetAlignment, 4);
+  const VkDeviceSize alignment = std::max<VkDeviceSize>(limits.minStorageBufferOffsetAlignment, 4);
   counter_stride = (counter_bytes() + alignment - 1) / alignment * alignment;
   counters = Buffer(c, counter_stride * kCounterSlices,
                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
@@ -24,7 +28,8 @@ IzbResources::IzbResources(Context& c) : ctx(c) {
 }
 
 void IzbResources::make_frame_data(VkDeviceSize fit_groups) {
-  frame_data = Buffer(ctx, (gpu_shared::kIzbPartialsAt + fit_groups) * 16,
+  frame_stride = aligned((gpu_shared::kIzbPartialsAt + fit_groups) * 16);
+  frame_data = Buffer(ctx, frame_stride * kCounterSlices,
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT |
                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                       false, "izb frame and fit bounds per workgroup");
@@ -118,18 +123,41 @@ void IzbResources::ensure_node_pool(const IzbSettings& s, VkDeviceSize pixels, u
   }
 }
 
+void IzbResources::allocate_work_list(IzbWorkList& list, uint64_t capacity, uint32_t slices, VkDeviceSize entry_bytes,
+                                      const char* name) {
+  list.capacity = capacity;
+  list.slices = slices;
+  list.stride = aligned(capacity * entry_bytes);
+  list.buffer = Buffer(ctx, list.stride * slices, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, name);
+}
+
 void IzbResources::ensure_work_lists(bool used, uint32_t triangle_count) {
   auto ensure = [&](IzbWorkList& list, uint64_t initial, VkDeviceSize stride, const char* name) {
     const uint64_t want = used ? std::max(initial, list.demand) : 1;
     if (list.buffer.valid() && want <= list.capacity) return;
-    list.capacity = want;
-    list.buffer = Buffer(ctx, want * stride, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, name);
+    allocate_work_list(list, want, list.slices, stride, name);
   };
   const uint64_t tiles = uint64_t(tiles_per_side) * tiles_per_side;
   ensure(records, std::max<uint64_t>(uint64_t(triangle_count) * 2, 16384), 16, "izb tile-row records");
   ensure(tile_pairs, std::max<uint64_t>({uint64_t(triangle_count) * 4, tiles * 4, 65536}), 8, "izb tile pairs");
   ensure(pairs, std::max<uint64_t>({uint64_t(triangle_count) * 4, uint64_t(resolution) * resolution / 2, 65536}), 8,
          "izb texel pairs");
+}
+
+void IzbResources::ensure_grid_slices(uint32_t slices) {
+  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  // (Below a whole grid's size, allocate_grid's buffers serve; they only grow.)
+  if (heads.size() < heads_stride() * slices)
+    heads = Buffer(ctx, heads_stride() * slices, usage, false, "izb heads");
+  if (farthest.size() < farthest_stride() * slices)
+    farthest = Buffer(ctx, farthest_stride() * slices, usage | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false,
+                      "izb farthest node depth per texel and tile");
+  auto ensure = [&](IzbWorkList& list, VkDeviceSize entry_bytes, const char* name) {
+    if (list.slices < slices) allocate_work_list(list, list.capacity, slices, entry_bytes, name);
+  };
+  ensure(records, 16, "izb tile-row records");
+  ensure(tile_pairs, 8, "izb tile pairs");
+  ensure(pairs, 8, "izb texel pairs");
 }
 
 void IzbResources::ensure_resolve_list(VkExtent2D e, bool listed, bool face_tiles) {

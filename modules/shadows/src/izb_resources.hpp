@@ -9,9 +9,12 @@
 namespace shadows::detail {
 
 // A compute trace / CSM work list (see izb.h), grown to the demand a frame measured.
+// A point light's faces recorded together each take a slice of `capacity` entries.
 struct IzbWorkList {
   engine::gpu::Buffer buffer;
   uint64_t capacity = 0, demand = 0;
+  uint32_t slices = 1;
+  VkDeviceSize stride = 0;  // bytes per slice
 };
 
 // The IZB's buffers and images: per grid (lists, farthest depths, lit map), per view (pixels' nodes
@@ -44,6 +47,17 @@ struct IzbResources {
   // Hybrid: the list frame-sized (its pixels only with a limited range, which the soft term needs
   // too); otherwise 1x1 placeholders keep the bindings valid (izb_hybrid.cpp).
   void ensure_hybrid(VkCommandBuffer cmd, VkExtent2D e, bool hybrid, bool limited_range);
+  // A point light's faces recorded together (IzbPass::record_faces): each face's grid (list heads,
+  // farthest depths), parameters, fit frame and work lists in a slice of their own; `grid_slice` is the
+  // one this record's passes bind (0 for any other record). Grows the grid's and the work lists'
+  // buffers to `slices` slices of this record's sizes; after ensure_buffers and ensure_work_lists.
+  void ensure_grid_slices(uint32_t slices);
+  uint32_t grid_slice = 0;
+  // Bytes between slices, and where this record's starts.
+  VkDeviceSize params_stride = 0, frame_stride = 0;
+  VkDeviceSize heads_stride() const { return aligned(texel_word_bytes()); }
+  VkDeviceSize farthest_stride() const { return aligned(farthest_bytes()); }
+  VkDeviceSize slice_at(VkDeviceSize stride) const { return stride * grid_slice; }
   // Whether csm_texels' texel view reaches all of its words (IZB_FLAG_LIT_FETCH).
   bool lit_view_whole() const { return csm_texel_bytes() / 4 <= ctx.properties().limits.maxTexelBufferElements; }
 
@@ -73,7 +87,7 @@ struct IzbResources {
   // The byte offset of this record's counter word `counter` in `counters`.
   VkDeviceSize counter_at(uint32_t counter) const { return counter_slice_offset() + VkDeviceSize(counter) * 4; }
   // The frame the fit writes (IzbFrame), then its per-workgroup bounds from vec4 kIzbPartialsAt on
-  // (izb.h): storage for the fit, a uniform buffer's range for the passes after it.
+  // (izb.h): storage for the fit, a uniform buffer's range for the passes after it; a slice per face.
   engine::gpu::Buffer frame_data;
   ReadbackRing counters_readback;
   engine::gpu::Buffer heads, farthest, nodes, mask, pixel_state, quads, overflow_list, occluder_distance;
@@ -89,7 +103,11 @@ struct IzbResources {
   uint64_t pool_demand = 0;
 
  private:
+  VkDeviceSize aligned(VkDeviceSize bytes) const { return (bytes + storage_alignment - 1) / storage_alignment * storage_alignment; }
   void make_frame_data(VkDeviceSize fit_groups);
+  void allocate_work_list(IzbWorkList& list, uint64_t capacity, uint32_t slices, VkDeviceSize entry_bytes,
+                          const char* name);
+  VkDeviceSize storage_alignment = 16;  // of a storage or uniform buffer binding's offset
   void allocate_grid(VkCommandBuffer cmd, uint32_t grid_resolution);
   void use_grid(uint32_t grid_resolution);  // resolution and what follows from it, in the buffers there are
   void ensure_view(VkExtent2D e, uint32_t spp);

@@ -1,6 +1,8 @@
 #include "barriers.hpp"
 #include "izb_state.hpp"
 
+#include "izb_batch.hpp"
+
 #include <cstring>
 
 #include "gpu/profiler.hpp"
@@ -26,12 +28,16 @@ IzbState::IzbState(Context& c, bool cpu_paths)
 
 void IzbState::push_all(VkCommandBuffer cmd, const Frame& frame, const Pipeline& pipeline) {
   DescriptorWriter()
-      .uniform_buffer(gpu_shared::IZB_BINDING_PARAMS, res.params.handle())
-      .uniform_buffer(gpu_shared::IZB_BINDING_FRAME, res.frame_data.handle(), 0, sizeof(gpu_shared::IzbFrame))
+      .uniform_buffer(gpu_shared::IZB_BINDING_PARAMS, res.params.handle(), res.slice_at(res.params_stride),
+                      sizeof(gpu_shared::IzbParams))
+      .uniform_buffer(gpu_shared::IZB_BINDING_FRAME, res.frame_data.handle(), res.slice_at(res.frame_stride),
+                      sizeof(gpu_shared::IzbFrame))
       .storage_buffer(gpu_shared::IZB_BINDING_COUNTERS, res.counters.handle(), res.counter_slice_offset(),
                       IzbResources::counter_bytes())
-      .storage_buffer(gpu_shared::IZB_BINDING_HEADS, res.heads.handle())
-      .storage_buffer(gpu_shared::IZB_BINDING_FARTHEST, res.farthest.handle())
+      .storage_buffer(gpu_shared::IZB_BINDING_HEADS, res.heads.handle(), res.slice_at(res.heads_stride()),
+                      res.heads_stride())
+      .storage_buffer(gpu_shared::IZB_BINDING_FARTHEST, res.farthest.handle(), res.slice_at(res.farthest_stride()),
+                      res.farthest_stride())
       .storage_buffer(gpu_shared::IZB_BINDING_NODES, res.nodes.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_MASK, res.mask.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_PIXEL_STATE, res.pixel_state.handle())
@@ -46,15 +52,20 @@ void IzbState::push_all(VkCommandBuffer cmd, const Frame& frame, const Pipeline&
       .storage_buffer(gpu_shared::IZB_BINDING_TRIANGLES, casters.triangles.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_OVERFLOW_LIST, res.overflow_list.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_OCCLUDER_DISTANCE, res.occluder_distance.handle())
-      .storage_buffer(gpu_shared::IZB_BINDING_GRID_TRIANGLES, casters.grid_triangles.handle())
-      .storage_buffer(gpu_shared::IZB_BINDING_RECORDS, res.records.buffer.handle())
-      .storage_buffer(gpu_shared::IZB_BINDING_TILE_PAIRS, res.tile_pairs.buffer.handle())
-      .storage_buffer(gpu_shared::IZB_BINDING_PAIRS, res.pairs.buffer.handle())
+      .storage_buffer(gpu_shared::IZB_BINDING_GRID_TRIANGLES, casters.grid_triangles.handle(),
+                      res.slice_at(casters.grid_triangle_stride()), casters.grid_triangle_stride())
+      .storage_buffer(gpu_shared::IZB_BINDING_RECORDS, res.records.buffer.handle(), res.slice_at(res.records.stride),
+                      res.records.stride)
+      .storage_buffer(gpu_shared::IZB_BINDING_TILE_PAIRS, res.tile_pairs.buffer.handle(),
+                      res.slice_at(res.tile_pairs.stride), res.tile_pairs.stride)
+      .storage_buffer(gpu_shared::IZB_BINDING_PAIRS, res.pairs.buffer.handle(), res.slice_at(res.pairs.stride),
+                      res.pairs.stride)
       .uniform_texel_buffer(gpu_shared::IZB_BINDING_LIT_WORDS, res.csm_texels.texel_view())
       .storage_buffer(gpu_shared::IZB_BINDING_LIST_COUNTS, res.list_counts.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_LIST_CURSOR, res.list_cursor.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_RESOLVE_LIST, res.resolve_list.handle())
-      .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, res.frame_data.handle())
+      .storage_buffer(gpu_shared::IZB_BINDING_BOUNDS_PARTIALS, res.frame_data.handle(), res.slice_at(res.frame_stride),
+                      res.frame_stride)
       .storage_buffer(gpu_shared::IZB_BINDING_MATERIAL_TEXTURES, frame.geometry.textures().handle())
       .storage_buffer(gpu_shared::IZB_BINDING_CASTER_DRAWS, casters.caster_draw_words.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_CSM_TEXELS, res.csm_texels.handle())
@@ -99,26 +110,28 @@ void IzbState::dispatch_face_tiles(VkCommandBuffer cmd, const Frame& frame, cons
   vkCmdDispatchIndirect(cmd, res.resolve_list.handle(), VkDeviceSize(4 * frame.view.light_face_index + 1) * 4);
 }
 
-void IzbState::record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,
-                                uint32_t mode, const std::string& region, bool time_steps) {
-  push.mode = mode;
+void IzbState::record_tile_work(VkCommandBuffer cmd, IzbBatch& batch, uint32_t mode, const std::string& region,
+                                bool time_steps) {
+  const Frame& frame = batch.frame();
   // The dispatches of steps 2 and 3 (and the trace's step 4) are raised by the steps before them as
   // they append (izb_group_reserve.glsl): no pass between sizes them.
   const uint32_t records_dispatch = gpu_shared::izb_step_dispatch_at(mode);
-  const IzbPipelines::TileWork& tile_work = pipelines.tile_work(*p, mode);
-  {
-    OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_records");
-    // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
-    dispatch_indirect(cmd, frame, tile_work.records, push, gpu_shared::IZB_COUNTER_STEP_ONE_DISPATCH);
-  }
+  const auto step = [&](const char* name, auto&& pipeline_of, uint32_t counter) {
+    OptionalGpuRegion timed(time_steps, ctx, frame.profiler, cmd, region + name);
+    for_each_record(*this, batch, [&](IzbRecord& r) {
+      gpu_shared::IzbComputePush push = r.push;
+      push.mode = mode;
+      dispatch_indirect(cmd, *r.frame, pipeline_of(pipelines.tile_work(*p, mode)), push, counter);
+    });
+  };
+  // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
+  step("_records", [](const IzbPipelines::TileWork& w) -> const Pipeline& { return w.records; },
+       gpu_shared::IZB_COUNTER_STEP_ONE_DISPATCH);
   pass_barrier(frame.ctx, cmd);
-  {
-    OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_tiles");
-    dispatch_indirect(cmd, frame, tile_work.tile_bin, push, records_dispatch);
-  }
+  step("_tiles", [](const IzbPipelines::TileWork& w) -> const Pipeline& { return w.tile_bin; }, records_dispatch);
   pass_barrier(frame.ctx, cmd);
-  OptionalGpuRegion step(time_steps, ctx, frame.profiler, cmd, region + "_texels");
-  dispatch_indirect(cmd, frame, tile_work.texel_bin, push, records_dispatch + 3u);
+  step("_texels", [](const IzbPipelines::TileWork& w) -> const Pipeline& { return w.texel_bin; },
+       records_dispatch + 3u);
 }
 
 glm::mat4 IzbState::read_light_view_projection() const {

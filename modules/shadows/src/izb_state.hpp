@@ -13,6 +13,8 @@
 
 namespace shadows::detail {
 
+struct IzbBatch;
+
 // The IZB's timed choices. Each compares the IZB's own passes, timed by these regions.
 struct IzbProbes {
   static std::vector<std::string> izb_regions() {
@@ -71,11 +73,12 @@ struct IzbState {
                            gpu_shared::IzbComputePush push);
   // A CPU device: the dispatch over list `which` (IZB_LIST_*) from its length, visible to what follows.
   void size_list_dispatch(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push, uint32_t which);
-  // Compute trace / compute CSM / lit map, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*); with
-  // `time_steps` (IzbSettings::step_timings) each step in a nested profiler region "<region>_records",
+  // Compute trace / compute CSM / lit map, steps 1-3 (see izb.h) for `mode` (IZB_WORK_*), each step
+  // for every record of `batch` before the barrier after it; with `time_steps`
+  // (IzbSettings::step_timings) each step in a nested profiler region "<region>_records",
   // "<region>_tiles", "<region>_texels".
-  void record_tile_work(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push, uint32_t mode,
-                        const std::string& region, bool time_steps);
+  void record_tile_work(VkCommandBuffer cmd, IzbBatch& batch, uint32_t mode, const std::string& region,
+                        bool time_steps);
   // The light view-projection the last frame's fit wrote (izb_fit.comp), for the snapshots.
   glm::mat4 read_light_view_projection() const;
 

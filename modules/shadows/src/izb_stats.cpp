@@ -1,6 +1,8 @@
 #include "barriers.hpp"
 #include "izb_stats.hpp"
 
+#include "izb_batch.hpp"
+
 #include <algorithm>
 
 #include "gpu/profiler.hpp"
@@ -87,21 +89,23 @@ void grow_to_demand(IzbState& s, const IzbDemand& demand, uint32_t slot) {
 
 }  // namespace
 
-void record_izb_stats(IzbState& s, Frame& frame, const IzbPlan& plan, const IzbRasterTrace& raster,
-                      const gpu_shared::IzbComputePush& push) {
+void record_izb_stats(IzbState& s, IzbBatch& batch) {
   // (The compute trace counts fragments before the cull as it bins.)
+  Frame& frame = batch.frame();
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_stats");
-  if (!plan.compute_trace) {
-    draw_raster_trace(s, frame, raster, true, VK_COMPARE_OP_ALWAYS, false);
+  if (!batch.plan().compute_trace) {
+    select_record(s, batch.records.front());
+    draw_raster_trace(s, frame, batch.records.front().raster, true, VK_COMPARE_OP_ALWAYS, false);
     pass_barrier(frame.ctx, cmd);
   }
-  s.dispatch(cmd, frame, s.p->list_stats, push, (s.res.resolution + 7) / 8, (s.res.resolution + 7) / 8);
+  for_each_record(s, batch, [&](IzbRecord& r) {
+    s.dispatch(cmd, *r.frame, s.p->list_stats, r.push, (s.res.resolution + 7) / 8, (s.res.resolution + 7) / 8);
+  });
 }
 
-void record_counters_readback(IzbState& s, const Frame& frame) {
+void record_counters_readback(IzbState& s, const Frame& frame, uint32_t slices) {
   ScopedGpuRegion region(s.ctx, frame.profiler, frame.cmd, "izb_readback");
-  const uint32_t slices = s.res.counter_slice + 1;  // this record's and the light's faces' before it
   s.res.counters_readback.record_copy(frame, s.res.counters, s.res.counter_stride * slices,
                                       pass_shader_stages(s.ctx) | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
                                       VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,

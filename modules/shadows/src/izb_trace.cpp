@@ -1,6 +1,8 @@
 #include "barriers.hpp"
 #include "izb_trace.hpp"
 
+#include "izb_batch.hpp"
+
 #include <algorithm>
 
 #include "gpu/profiler.hpp"
@@ -84,19 +86,24 @@ void draw_raster_trace(IzbState& s, Frame& frame, const IzbRasterTrace& trace, b
   vkCmdEndRendering(cmd);
 }
 
-void record_frustum_trace(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
-                          const IzbRasterTrace& raster, const gpu_shared::IzbComputePush& push) {
+void record_frustum_trace(IzbState& s, IzbBatch& batch, const IzbSettings& settings) {
+  Frame& frame = batch.frame();
   VkCommandBuffer cmd = frame.cmd;
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "frustum_trace");
-  if (plan.compute_trace) {
+  if (batch.plan().compute_trace) {
     // Tiles' farthest nodes -> (triangle, tile) pairs not culled -> (triangle, texel) pairs that touch
     // and survive the texel's cull -> one thread per pair walks the texel's list.
-    s.record_tile_work(cmd, frame, push, gpu_shared::IZB_WORK_TRACE, "trace", settings.step_timings);
+    s.record_tile_work(cmd, batch, gpu_shared::IZB_WORK_TRACE, "trace", settings.step_timings);
     pass_barrier(frame.ctx, cmd);
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "trace_pairs");
-    s.dispatch_indirect(cmd, frame, s.p->trace_compute, push, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
+    for_each_record(s, batch, [&](IzbRecord& r) {
+      s.dispatch_indirect(cmd, *r.frame, s.p->trace_compute, r.push, gpu_shared::IZB_COUNTER_PAIR_DISPATCH);
+    });
   } else {
-    draw_raster_trace(s, frame, raster, false, settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
+    // (The raster trace has one depth image: its records are the sun's, one a batch.)
+    select_record(s, batch.records.front());
+    draw_raster_trace(s, frame, batch.records.front().raster, false,
+                      settings.depth_cull ? VK_COMPARE_OP_LESS : VK_COMPARE_OP_ALWAYS, true);
   }
 }
 

@@ -28,7 +28,6 @@ void draw_raster_trace(IzbState& s, Frame& frame, const IzbRasterTrace& trace, b
 
 // The frustum trace: every caster triangle against the nodes of the texels it touches, as compute
 // work (tile work, then one thread per surviving (triangle, texel) pair) or as the raster trace.
-void record_frustum_trace(IzbState& s, Frame& frame, const IzbSettings& settings, const IzbPlan& plan,
-                          const IzbRasterTrace& raster, const gpu_shared::IzbComputePush& push);
+void record_frustum_trace(IzbState& s, IzbBatch& batch, const IzbSettings& settings);
 
 }  // namespace shadows::detail
