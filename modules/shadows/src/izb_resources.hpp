@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <cstdint>
 
 #include "gpu/resources.hpp"
@@ -58,6 +59,10 @@ struct IzbResources {
   VkDeviceSize heads_stride() const { return aligned(texel_word_bytes()); }
   VkDeviceSize farthest_stride() const { return aligned(farthest_bytes()); }
   VkDeviceSize slice_at(VkDeviceSize stride) const { return stride * grid_slice; }
+  // This record's slice of `buffer` (a whole grid's buffer may end short of its last stride).
+  VkDeviceSize slice_range(const engine::gpu::Buffer& buffer, VkDeviceSize stride) const {
+    return std::min(stride, buffer.size() - slice_at(stride));
+  }
   // Whether csm_texels' texel view reaches all of its words (IZB_FLAG_LIT_FETCH).
   bool lit_view_whole() const { return csm_texel_bytes() / 4 <= ctx.properties().limits.maxTexelBufferElements; }
 

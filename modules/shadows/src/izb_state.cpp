@@ -35,9 +35,9 @@ void IzbState::push_all(VkCommandBuffer cmd, const Frame& frame, const Pipeline&
       .storage_buffer(gpu_shared::IZB_BINDING_COUNTERS, res.counters.handle(), res.counter_slice_offset(),
                       IzbResources::counter_bytes())
       .storage_buffer(gpu_shared::IZB_BINDING_HEADS, res.heads.handle(), res.slice_at(res.heads_stride()),
-                      res.heads_stride())
+                      res.slice_range(res.heads, res.heads_stride()))
       .storage_buffer(gpu_shared::IZB_BINDING_FARTHEST, res.farthest.handle(), res.slice_at(res.farthest_stride()),
-                      res.farthest_stride())
+                      res.slice_range(res.farthest, res.farthest_stride()))
       .storage_buffer(gpu_shared::IZB_BINDING_NODES, res.nodes.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_MASK, res.mask.handle())
       .storage_buffer(gpu_shared::IZB_BINDING_PIXEL_STATE, res.pixel_state.handle())
