@@ -929,12 +929,12 @@ void ContextImpl::record(VkCommandBuffer cmd, const FrameDesc& f) {
 // The PCF radius of a spot light's filtered map (Technique::Cascades), in map texels.
 constexpr float kSpotFilterTexels = 2.5f;
 
-// A point light's six cones (kPointLightFaceAxes), each shadowed as a spot light by `record_face`; a
-// face's passes write only its own points, those in its cube face's pyramid (point_light_face_of in
-// light_tiles.glsl), which its cone holds. A cone in which no point
-// of the view can lie within the light's range (cone_may_reach_view) is skipped: none of its points
-// is seen. The first face recorded also lists every face's tiles and writes the term of the points
-// beyond the range, so one runs even when no cone reaches the view.
+// A point light's six cones (kPointLightFaceAxes), each shadowed as a spot light; a face's passes
+// write only its own points, those in its cube face's pyramid (point_light_face_of in
+// light_tiles.glsl), which its cone holds. A cone in which no point of the view can lie within the
+// light's range (cone_may_reach_view) is skipped: none of its points is seen. The first face recorded
+// also lists every face's tiles and writes the term of the points beyond the range, so one runs even
+// when no cone reaches the view.
 std::vector<View> ContextImpl::point_light_face_views(const View& view) {
   View face_view = view;
   face_view.light_face = true;
@@ -967,6 +967,7 @@ std::vector<Frame> ContextImpl::point_light_face_frames(const Frame& frame, cons
   return frames;
 }
 
+// Each face recorded by `record_face`, one after another.
 template <typename RecordFace>
 void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_face) {
   const std::vector<View> views = point_light_face_views(frame.view);
