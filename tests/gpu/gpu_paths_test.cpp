@@ -2,7 +2,8 @@
 // light's term the same, bit for bit, for every technique. A GPU's paths differ where a CPU device pays
 // for every lane of a SIMD row: the IZB's build stores every pixel's term itself (no fill), its lists
 // grow by subgroup, the light frustum culls the casters in its fit's last workgroup, the compute trace
-// and CSM take other workgroup shapes, and the term starts lit by compute stores instead of a clear.
+// and CSM take other workgroup shapes, the term starts lit by compute stores instead of a clear, and a
+// point light's faces record each IZB step together.
 // CI has no GPU: this is where those paths meet the validation layer and the CPU paths' answers.
 #include <cstdlib>
 #include <string>
@@ -52,8 +53,10 @@ TEST_P(GpuPathsTest, EveryTechniqueGivesTheCpuPathsTerms) {
   base.izb.step_timings = true;  // names the CPU paths' own step (terms())
   base.shadow_map.size = 512;
   base.cascades.map_size = 512;
-  // (`izb` alone takes no path `izb+csm` does not.)
-  const TechniqueCase techniques[] = {{"izb+csm", shadows::Technique::Izb, 1, true},
+  // `izb` alone records a point light's faces together on a GPU's paths (IzbPass::record_faces), one
+  // after another on a CPU device's and with the CSM.
+  const TechniqueCase techniques[] = {{"izb", shadows::Technique::Izb, 1, false},
+                                      {"izb+csm", shadows::Technique::Izb, 1, true},
                                       {"izb 32 spp", shadows::Technique::Izb, 32, false},
                                       {"sm", shadows::Technique::ShadowMap, 1, false},
                                       {"cascades", shadows::Technique::Cascades, 1, false},
