@@ -958,23 +958,16 @@ std::vector<View> ContextImpl::point_light_face_views(const View& view) {
   return views;
 }
 
-std::vector<Frame> ContextImpl::point_light_face_frames(const Frame& frame, const std::vector<View>& views) {
-  std::vector<Frame> frames;
-  frames.reserve(views.size());
+// The faces' Frames (the rest as `frame`'s), all given to `record_faces` at once.
+template <typename RecordFaces>
+void ContextImpl::record_point_light_faces(Frame& frame, RecordFaces&& record_faces) {
+  const std::vector<View> views = point_light_face_views(frame.view);  // (the Frames refer to them)
+  std::vector<Frame> faces;
+  faces.reserve(views.size());
   for (const View& v : views)
-    frames.push_back(Frame{frame.ctx, frame.cmd, frame.profiler, v, frame.gbuffer, frame.shadow_term, frame.overlay,
-                           frame.geometry, frame.draws, frame.slot, frame.slots});
-  return frames;
-}
-
-// Each face recorded by `record_face`, one after another.
-template <typename RecordFace>
-void ContextImpl::record_point_light_faces(Frame& frame, RecordFace&& record_face) {
-  const std::vector<View> views = point_light_face_views(frame.view);
-  for (Frame& f : point_light_face_frames(frame, views)) {
-    record_face(f);
-    pass_barrier(*gpu_, frame.cmd);
-  }
+    faces.push_back(Frame{frame.ctx, frame.cmd, frame.profiler, v, frame.gbuffer, frame.shadow_term, frame.overlay,
+                          frame.geometry, frame.draws, frame.slot, frame.slots});
+  record_faces(faces);
 }
 
 // The techniques whose passes differ for a spot or point light (off and rt take every light alike).
@@ -992,9 +985,16 @@ void ContextImpl::record_local_light(Frame& frame, const Settings& settings) {
       const float filter = settings.technique == Technique::Cascades ? kSpotFilterTexels : 0.0f;
       // (The counts are sm's: the cascades report their own filter's.)
       const bool count = collect_stats_ && settings.technique == Technique::ShadowMap;
-      auto map = [&](Frame& f) { shadow_map_->record(f, settings.shadow_map, filter, count); };
-      if (point) record_point_light_faces(frame, map);
-      else map(frame);
+      if (point) {
+        record_point_light_faces(frame, [&](std::vector<Frame>& faces) {
+          for (Frame& f : faces) {
+            shadow_map_->record(f, settings.shadow_map, filter, count);
+            pass_barrier(*gpu_, f.cmd);
+          }
+        });
+      } else {
+        shadow_map_->record(frame, settings.shadow_map, filter, count);
+      }
       break;
     }
     case Technique::Izb:
@@ -1003,9 +1003,9 @@ void ContextImpl::record_local_light(Frame& frame, const Settings& settings) {
       // it reaches gets the exact term.
       if (point) {
         // The faces' steps interleaved where they can be (IzbPass::record_faces).
-        const std::vector<View> views = point_light_face_views(frame.view);
-        std::vector<Frame> faces = point_light_face_frames(frame, views);
-        izb().record_faces(faces, settings.izb, settings.debug, collect_stats_);
+        record_point_light_faces(frame, [&](std::vector<Frame>& faces) {
+          izb().record_faces(faces, settings.izb, settings.debug, collect_stats_);
+        });
       } else {
         izb().record(frame, settings.izb, settings.debug, false, collect_stats_);
       }

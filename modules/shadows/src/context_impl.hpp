@@ -64,13 +64,11 @@ class ContextImpl final : public Context {
   void ensure_targets(VkExtent2D extent);
   // `clear`: `term` to 1 and (with a debug view) the overlay to 0, where no input pass does.
   void prepare_targets(VkCommandBuffer cmd, bool clear, const TermImage& term);
-  template <typename RecordFace>
-  void record_point_light_faces(Frame& frame, RecordFace&& record_face);
+  template <typename RecordFaces>
+  void record_point_light_faces(Frame& frame, RecordFaces&& record_faces);
   // A point light's cones that may reach the view (at least one), each a View of one face; sets
   // point_light_faces_recorded_.
   std::vector<View> point_light_face_views(const View& view);
-  // A Frame per view of `views` (which must outlive them), the rest as `frame`'s.
-  static std::vector<Frame> point_light_face_frames(const Frame& frame, const std::vector<View>& views);
   void record_local_light(Frame& frame, const Settings& settings);  // settings in world units
   static void set_light(View& view, const Light& light);
   // Between two lights: the previous light's accesses done; with `lit_start` `term` lit again.

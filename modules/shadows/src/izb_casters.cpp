@@ -94,9 +94,9 @@ void IzbCasters::ensure_triangle_buffers() {
 void IzbCasters::ensure_grid_sections(uint32_t sections) {
   // 3 vec4 per triangle, then (spot lights) a list of the triangles traced apart; a section starts
   // where a storage buffer binding may.
-  const VkDeviceSize alignment = std::max<VkDeviceSize>(ctx_.properties().limits.minStorageBufferOffsetAlignment, 16);
-  const VkDeviceSize stride = (std::max<size_t>(triangle_capacity_, 1) * 4 * sizeof(glm::vec4) + alignment - 1) /
-                              alignment * alignment;
+  const VkDeviceSize stride =
+      align_up(std::max<size_t>(triangle_capacity_, 1) * 4 * sizeof(glm::vec4),
+               std::max<VkDeviceSize>(ctx_.properties().limits.minStorageBufferOffsetAlignment, 16));
   if (grid_triangles.valid() && stride == grid_triangle_stride_ && sections <= grid_sections_) return;
   grid_sections_ = std::max(grid_sections_, sections);
   grid_triangle_stride_ = stride;

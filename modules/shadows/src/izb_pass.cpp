@@ -50,8 +50,6 @@ IzbRecord plan_izb_record(IzbState& s, Frame& frame, const IzbSettings& settings
   s.res.ensure_buffers(frame, settings, izb_grid_resolution(frame.view, settings));
   // A point light's faces count in slices of one buffer, read back together after the last.
   r.counter_slice = frame.view.light_face ? std::min(frame.view.light_face_order, IzbResources::kCounterSlices - 1) : 0;
-  s.res.counter_slice = r.counter_slice;
-  s.res.grid_slice = 0;
   s.res.ensure_hybrid(frame.cmd, frame.view.extent, hybrid, settings.max_distance > 0.0f);
   s.casters.update(frame, s.pipelines);
   IzbPlan& plan = r.plan;
@@ -66,7 +64,7 @@ IzbRecord plan_izb_record(IzbState& s, Frame& frame, const IzbSettings& settings
   s.last.penumbra = plan.penumbra;
   s.res.ensure_resolve_list(frame.view.extent, plan.listed_resolve, plan.face_tiles);
   r.pipelines = &s.pipelines.set(s.res.samples, plan.flags);  // specialized for every flag of the plan
-  s.p = r.pipelines;
+  s.p = r.pipelines;  // (the raster trace's pipelines come from it)
   r.push = gpu_shared::IzbComputePush{hybrid ? 1u : 0u, plan.debug, s.casters.triangle_count, 0u};
   r.params = izb_params(s, frame, settings, plan, light);
   r.raster = prepare_raster_trace(s, frame, settings, plan, light.light_view);

@@ -18,8 +18,7 @@ IzbResources::IzbResources(Context& c) : ctx(c) {
   params = Buffer(c, params_stride * kCounterSlices,
                   VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "izb params");
   make_frame_data(0);
-  const VkDeviceSize alignment = std::max<VkDeviceSize>(limits.minStorageBufferOffsetAlignment, 4);
-  counter_stride = (counter_bytes() + alignment - 1) / alignment * alignment;
+  counter_stride = align_up(counter_bytes(), std::max<VkDeviceSize>(limits.minStorageBufferOffsetAlignment, 4));
   counters = Buffer(c, counter_stride * kCounterSlices,
                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                         VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,

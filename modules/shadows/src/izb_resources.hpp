@@ -108,7 +108,7 @@ struct IzbResources {
   uint64_t pool_demand = 0;
 
  private:
-  VkDeviceSize aligned(VkDeviceSize bytes) const { return (bytes + storage_alignment - 1) / storage_alignment * storage_alignment; }
+  VkDeviceSize aligned(VkDeviceSize bytes) const { return engine::gpu::align_up(bytes, storage_alignment); }
   void make_frame_data(VkDeviceSize fit_groups);
   void allocate_work_list(IzbWorkList& list, uint64_t capacity, uint32_t slices, VkDeviceSize entry_bytes,
                           const char* name);

@@ -116,22 +116,20 @@ void IzbState::record_tile_work(VkCommandBuffer cmd, IzbBatch& batch, uint32_t m
   // The dispatches of steps 2 and 3 (and the trace's step 4) are raised by the steps before them as
   // they append (izb_group_reserve.glsl): no pass between sizes them.
   const uint32_t records_dispatch = gpu_shared::izb_step_dispatch_at(mode);
-  const auto step = [&](const char* name, auto&& pipeline_of, uint32_t counter) {
+  const auto step = [&](const char* name, Pipeline IzbPipelines::TileWork::*pipeline, uint32_t counter) {
     OptionalGpuRegion timed(time_steps, ctx, frame.profiler, cmd, region + name);
     for_each_record(*this, batch, [&](IzbRecord& r) {
       gpu_shared::IzbComputePush push = r.push;
       push.mode = mode;
-      dispatch_indirect(cmd, *r.frame, pipeline_of(pipelines.tile_work(*p, mode)), push, counter);
+      dispatch_indirect(cmd, *r.frame, pipelines.tile_work(*p, mode).*pipeline, push, counter);
     });
   };
   // Over the frustum's triangles: the listed ones are fewer (izb_triangles.comp).
-  step("_records", [](const IzbPipelines::TileWork& w) -> const Pipeline& { return w.records; },
-       gpu_shared::IZB_COUNTER_STEP_ONE_DISPATCH);
+  step("_records", &IzbPipelines::TileWork::records, gpu_shared::IZB_COUNTER_STEP_ONE_DISPATCH);
   pass_barrier(frame.ctx, cmd);
-  step("_tiles", [](const IzbPipelines::TileWork& w) -> const Pipeline& { return w.tile_bin; }, records_dispatch);
+  step("_tiles", &IzbPipelines::TileWork::tile_bin, records_dispatch);
   pass_barrier(frame.ctx, cmd);
-  step("_texels", [](const IzbPipelines::TileWork& w) -> const Pipeline& { return w.texel_bin; },
-       records_dispatch + 3u);
+  step("_texels", &IzbPipelines::TileWork::texel_bin, records_dispatch + 3u);
 }
 
 glm::mat4 IzbState::read_light_view_projection() const {
