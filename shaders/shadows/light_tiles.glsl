@@ -35,15 +35,16 @@ uint local_light_faces(vec3 light_position, float range, vec3 spot_direction, fl
   return 1u << point_light_face_of(from_light);
 }
 
-// This invocation's pixel in list `list` of a render of `extent` pixels, a workgroup of 8x8 a tile
-// (the list's indirect dispatch); false for a workgroup past the list's end.
+// This invocation's pixel in list `list` of a render of `extent` pixels, a workgroup of 64 a tile of
+// 8x8 (the list's indirect dispatch; an 8x8 or a 64x1 workgroup, by its index); false for a workgroup
+// past the list's end.
 bool light_tile_pixel(uint list, uvec2 extent, out ivec2 pixel) {
   uint slot = gl_WorkGroupID.y * kLightTileRow + gl_WorkGroupID.x;
   pixel = ivec2(0);
   if (slot >= LIGHT_TILES_LIST[4u * list]) return false;
   uint tile = LIGHT_TILES_LIST[kLightTilesAt + list * light_tiles(extent.x, extent.y) + slot];
   uint tiles_x = light_tiles_x(extent.x);
-  pixel = ivec2(tile % tiles_x, tile / tiles_x) * 8 + ivec2(gl_LocalInvocationID.xy);
+  pixel = ivec2(tile % tiles_x, tile / tiles_x) * 8 + ivec2(gl_LocalInvocationIndex % 8u, gl_LocalInvocationIndex / 8u);
   return true;
 }
 #endif

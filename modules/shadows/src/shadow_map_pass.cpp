@@ -89,7 +89,8 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
         {gpu_shared::SM_RESOLVE_BINDING_BLOCK_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}},
        0,
        {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage},
-        {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u}, {8, v.block_fetch ? 1u : 0u}}});
+        {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u}, {8, v.block_fetch ? 1u : 0u},
+        {9, resolve_group_width()}, {10, 64u / resolve_group_width()}}});
   return pipeline;
 }
 
@@ -244,7 +245,8 @@ void ShadowMapPass::record_resolve(Frame& frame, ResolveVariant variant, bool sp
       vkCmdDispatchIndirect(cmd, light_tiles_.handle(), VkDeviceSize(4 * list + 1) * 4);
       return;
     }
-    vkCmdDispatch(cmd, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8, 1);
+    const uint32_t width = resolve_group_width(), height = 64 / width;
+    vkCmdDispatch(cmd, (frame.view.extent.width + width - 1) / width, (frame.view.extent.height + height - 1) / height, 1);
   };
   if (!split) {
     bind(variant);
