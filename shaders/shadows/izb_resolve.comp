@@ -2,7 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
 #include "shadows/izb_pixel.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+// 64 invocations a workgroup, 8x8 or a row of 64 pixels (IzbPipelineCache::with_pixel_group).
+layout(local_size_x = 8, local_size_y = 8, local_size_x_id = 20, local_size_y_id = 21) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 #include "shadows/izb_straddlers.glsl"

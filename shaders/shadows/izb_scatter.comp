@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "shadows/izb_prelude.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+// 64 invocations a workgroup, 8x8 or a row of 64 pixels (IzbPipelineCache::with_pixel_group).
+layout(local_size_x = 8, local_size_y = 8, local_size_x_id = 20, local_size_y_id = 21) in;
 
 // Sorted lists (counting sort), step 3: each candidate pixel that was counted places its nodes at its
 // texels' fill cursors (which start at each list's first node after the prefix sum).

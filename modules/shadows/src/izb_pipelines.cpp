@@ -70,14 +70,14 @@ IzbPipelines& IzbPipelineCache::set(uint32_t samples_per_pixel, uint32_t flags) 
   // inserts the listed ones' nodes in a dispatch over the list (izb_build.comp, kBuildStep).
   const bool build_apart = (flags & gpu_shared::IZB_FLAG_CPU_DEVICE) && (flags & gpu_shared::IZB_FLAG_DIRECT_NODES) &&
                            (flags & gpu_shared::IZB_FLAG_LISTED_RESOLVE);
-  ps.build = compute("izb_build.comp", {{14, build_apart ? 1u : 0u}});
-  if (build_apart) ps.build_insert = compute("izb_build.comp", {{14, 2u}});
+  ps.build = compute("izb_build.comp", with_pixel_group({{14, build_apart ? 1u : 0u}}));
+  if (build_apart) ps.build_insert = compute("izb_build.comp", with_pixel_group({{14, 2u}}));
   if (flags & gpu_shared::IZB_FLAG_FACE_TILES) ps.face_tiles = compute("izb_face_tiles.comp");
   ps.fallback = compute("izb_fallback.comp");
   ps.list_stats = compute("izb_list_stats.comp");
   ps.grid_setup = compute("izb_triangles.comp");
   ps.scan = compute("izb_scan.comp");
-  ps.scatter = compute("izb_scatter.comp");
+  ps.scatter = compute("izb_scatter.comp", with_pixel_group({}));
   // Workgroup shapes of the compute trace and CSM (see izb.h): a CPU device pays per workgroup.
   const bool cpu = cpu_device();
   const std::vector<SpecializationConstant> shape = {
@@ -142,8 +142,9 @@ const Pipeline& IzbPipelineCache::resolve(uint32_t samples_per_pixel, uint32_t f
   auto& pipeline = resolve_pipelines_[(uint64_t(samples_per_pixel) << 40) | (uint64_t(debug) << 33) |
                                       (uint64_t(hybrid) << 32) | flags];
   if (!pipeline.valid())
-    pipeline = factory_.compute({"izb_resolve.comp", izb_bindings(), sizeof(gpu_shared::IzbComputePush),
-                                 {{10, samples_per_pixel}, {11, flags}, {12, debug}, {13, hybrid ? 1u : 0u}}});
+    pipeline = factory_.compute(
+        {"izb_resolve.comp", izb_bindings(), sizeof(gpu_shared::IzbComputePush),
+         with_pixel_group({{10, samples_per_pixel}, {11, flags}, {12, debug}, {13, hybrid ? 1u : 0u}})});
   return pipeline;
 }
 

@@ -88,7 +88,9 @@ void IzbState::dispatch(VkCommandBuffer cmd, const Frame& frame, const Pipeline&
 
 void IzbState::dispatch_pixels(VkCommandBuffer cmd, const Frame& frame, const Pipeline& pipeline,
                                gpu_shared::IzbComputePush push) {
-  dispatch(cmd, frame, pipeline, push, (frame.view.extent.width + 7) / 8, (frame.view.extent.height + 7) / 8);
+  const uint32_t width = pipelines.pixel_group_width(), height = 64 / width;
+  dispatch(cmd, frame, pipeline, push, (frame.view.extent.width + width - 1) / width,
+           (frame.view.extent.height + height - 1) / height);
 }
 
 void IzbState::size_list_dispatch(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,

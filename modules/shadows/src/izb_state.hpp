@@ -61,7 +61,7 @@ struct IzbState {
                     const gpu_shared::IzbComputePush& push);
   void dispatch(VkCommandBuffer cmd, const Frame& frame, const engine::gpu::Pipeline& pipeline,
                 gpu_shared::IzbComputePush push, uint32_t x, uint32_t y = 1);
-  // One invocation per pixel of the view, in 8x8 workgroups.
+  // One invocation per pixel of the view, in workgroups of IzbPipelineCache::with_pixel_group.
   void dispatch_pixels(VkCommandBuffer cmd, const Frame& frame, const engine::gpu::Pipeline& pipeline,
                        gpu_shared::IzbComputePush push);
   // The dispatch's size from counter `counter` (IZB_COUNTER_*), which an earlier pass raised.
