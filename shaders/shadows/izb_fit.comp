@@ -3,7 +3,9 @@
 #include "shadows/izb_prelude.glsl"
 #define IZB_RAY_BLOCK 16u  // the workgroup's pixels at each k of fit_pixel
 #include "shadows/izb_pixel.glsl"
-layout(local_size_x = 16, local_size_y = 16) in;  // a block of kIzbFitBlockWidth x kIzbFitBlockHeight pixels
+// 256 invocations over a block of kIzbFitBlockWidth x kIzbFitBlockHeight pixels: 16x16 (make_block_rays'
+// IZB_RAY_BLOCK), or 32x8 on a CPU device where no block rays are made (IzbPipelineCache::fit_group).
+layout(local_size_x = 16, local_size_y = 16, local_size_x_id = 20, local_size_y_id = 21) in;
 
 layout(push_constant) uniform Push { IzbComputePush push; };
 // Coherent: the last workgroup reads every other workgroup's.
@@ -13,12 +15,12 @@ layout(set = 0, binding = IZB_BINDING_BOUNDS_PARTIALS, std430) coherent buffer B
 shared bool last_workgroup;
 
 // The invocation's k-th pixel: neighbouring invocations read neighbouring pixels at each k.
-const uint kFitColumns = kIzbFitBlockWidth / 16u;
-const uint kFitPixels = kFitColumns * (kIzbFitBlockHeight / 16u);
+const uint kFitPixels = kIzbFitBlockWidth * kIzbFitBlockHeight / 256u;
 const uint kBoundedFitBatch = 2u;
 ivec2 fit_pixel(uint k) {
   uvec2 block = gl_WorkGroupID.xy * uvec2(kIzbFitBlockWidth, kIzbFitBlockHeight);
-  return ivec2(block + gl_LocalInvocationID.xy + 16u * uvec2(k % kFitColumns, k / kFitColumns));
+  uint columns = kIzbFitBlockWidth / gl_WorkGroupSize.x;
+  return ivec2(block + gl_LocalInvocationID.xy + gl_WorkGroupSize.xy * uvec2(k % columns, k / columns));
 }
 
 // IZB_FLAG_FIT_CLEARS_GRID: this workgroup's slice of the grid emptied (every list's head, or its

@@ -49,6 +49,11 @@ bool IzbPipelineCache::hardware_trace_available() const {
 bool IzbPipelineCache::raster_trace_available() const { return ctx_.features().geometry_shader; }
 bool IzbPipelineCache::cpu_device() const { return cpu_paths_; }
 
+std::vector<SpecializationConstant> IzbPipelineCache::fit_group(uint32_t samples_per_pixel, uint32_t flags) const {
+  const bool rows = cpu_paths_ && (samples_per_pixel == 1 || (flags & gpu_shared::IZB_FLAG_BOUNDED_FIT));
+  return {{20, rows ? 32u : 16u}, {21, rows ? 8u : 16u}};
+}
+
 IzbPipelines& IzbPipelineCache::set(uint32_t samples_per_pixel, uint32_t flags) {
   auto& slot = sets_[(uint64_t(samples_per_pixel) << 32) | flags];
   if (slot) return *slot;
@@ -61,7 +66,7 @@ IzbPipelines& IzbPipelineCache::set(uint32_t samples_per_pixel, uint32_t flags) 
     constants.insert(constants.end(), variant.begin(), variant.end());
     return factory_.compute({shader, bindings, push, constants});
   };
-  ps.fit = compute("izb_fit.comp");
+  ps.fit = compute("izb_fit.comp", fit_group(samples_per_pixel, flags));
   if (flags & gpu_shared::IZB_FLAG_CPU_DEVICE) {
     ps.setup = compute("izb_setup.comp");
     ps.list_dispatch = compute("izb_list_dispatch.comp");
