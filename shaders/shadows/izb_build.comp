@@ -377,11 +377,11 @@ void main() {
     // What izb_resolve.comp would write before the trace: candidates lit unless the CSM settled them,
     // surfaces facing away shadowed, the others lit; beyond the range the term already there stays.
     bool facing = (state & IZB_PIXEL_FACING) != 0u;
-    // On a CPU device only its zeros (the sun's term starts lit: write_pixel_term); on a GPU every
-    // pixel's 1 or 0, so the term needs no fill before (the trace then darkens the shadowed).
-    // A point-light face leaves the other faces' points alone (write_pixel_term).
+    // Every pixel's 1 or 0, so the term needs no fill before (IzbPass::writes_every_pixel; the trace
+    // then darkens the shadowed). A point-light face leaves the other faces' points alone
+    // (write_pixel_term).
     bool shadowed = covered != 0u && (candidate != 0u ? mask != 0u : !facing);
-    if (direct_term && (shadowed || !izb_flag(IZB_FLAG_CPU_DEVICE)) && (state & IZB_PIXEL_OTHER_FACE) == 0u)
+    if (direct_term && (state & IZB_PIXEL_OTHER_FACE) == 0u)
       imageStore(shadow_term, pixel, vec4(shadowed ? 0.0 : 1.0));
     bool mask_read = (!direct_term && !listed_resolve) || sorted_lists() ||
                      (count != 0u && (listed_resolve || izb_flag(IZB_FLAG_PROGRESSIVE) || !izb_flag(IZB_FLAG_DIRECT_NODES)));

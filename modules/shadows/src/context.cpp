@@ -757,9 +757,9 @@ bool ContextImpl::writes_every_pixel(const Light& light) {
   // Both take a local light with the IZB alone (record_local_light).
   const bool local = light.type != LightType::Directional;
   if (settings_.technique == Technique::Izb || (settings_.technique == Technique::Hybrid && local))
-    return izb().writes_every_pixel(settings_.izb, settings_.izb.max_distance, settings_.debug, false);
+    return izb().writes_every_pixel(settings_.izb, settings_.izb.max_distance, settings_.debug, false, !local);
   if (settings_.technique == Technique::Hybrid)
-    return izb().writes_every_pixel(settings_.izb, settings_.hybrid_izb_distance, settings_.debug, true);
+    return izb().writes_every_pixel(settings_.izb, settings_.hybrid_izb_distance, settings_.debug, true, true);
   // The sun's map and cascades resolve every pixel of the frame (shadow_map_resolve.glsl,
   // cascade_filter.comp), and so does a spot light's map on a GPU; a point light's cone maps (and on a
   // CPU device a spot light's map) resolve only the tiles their cones reach.

@@ -148,8 +148,9 @@ void IzbPass::record_faces(std::vector<Frame>& faces, const IzbSettings& setting
   pass_barrier(all.frame().ctx, all.frame().cmd);
 }
 
-bool IzbPass::writes_every_pixel(const IzbSettings& settings, float max_distance, DebugView debug, bool hybrid) const {
-  return !state_->pipelines.cpu_device() &&
+bool IzbPass::writes_every_pixel(const IzbSettings& settings, float max_distance, DebugView debug, bool hybrid,
+                                 bool directional) const {
+  return (directional || !state_->pipelines.cpu_device()) &&
          izb_direct_term(izb_sample_count(settings), hybrid, max_distance, izb_debug_code(debug), false);
 }
 

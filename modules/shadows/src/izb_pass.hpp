@@ -40,9 +40,12 @@ class IzbPass {
   // one face after another. Leaves every face's writes visible to what follows.
   void record_faces(std::vector<Frame>& faces, const IzbSettings& settings, DebugView debug, bool collect_stats);
   // Whether record() with these settings (`max_distance`: the range it is given) writes every pixel of
-  // the term, so that it need not start lit: on a GPU, where the build stores each pixel's 1 or 0.
-  // (A point light's faces together: each writes its own points, light_tiles.glsl's point_light_face_of.)
-  bool writes_every_pixel(const IzbSettings& settings, float max_distance, DebugView debug, bool hybrid) const;
+  // the term for a light (`directional`: the sun), so that it need not start lit: where the build
+  // stores each pixel's 1 or 0 (a direct term), for any light on a GPU (a point light's faces
+  // together: each writes its own points, light_tiles.glsl's point_light_face_of) and for the sun on
+  // a CPU device, whose build runs over the whole frame.
+  bool writes_every_pixel(const IzbSettings& settings, float max_distance, DebugView debug, bool hybrid,
+                          bool directional) const;
   engine::gpu::Image& soft_term();
   PixelList hybrid_list() const;
   void record_hybrid_blend(Frame& frame);
