@@ -11,7 +11,7 @@
 #include "shadow_common.h"
 #include "local_light.h"
 // 64 invocations: 8x8 on a GPU; 64x1 on a CPU device (specialization constants 9 and 10,
-// ShadowMapPass::resolve_group_width), where lavapipe ran a row of 64 pixels about a fifth faster
+// barriers.hpp's pixel_group_width), where lavapipe ran a row of 64 pixels about a fifth faster
 // than 8 rows of 8 (16x16, 32x2 and 256x1 were no faster).
 layout(local_size_x = 8, local_size_y = 8, local_size_x_id = 9, local_size_y_id = 10) in;
 

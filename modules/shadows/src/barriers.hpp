@@ -17,6 +17,19 @@ VkPipelineStageFlags2 pass_shader_stages(const engine::gpu::Context& ctx);
 // the same pixels). Read once, when a module is created (its passes, made later, take that answer).
 bool takes_cpu_paths(const engine::gpu::Context& ctx);
 
+// Workgroups of `size` that cover `n`.
+constexpr uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
+
+// The per-pixel passes' workgroup of 64 invocations (sm's resolve; the IZB's build, scatter and
+// resolve): 8 wide (8x8) on a GPU, 64 wide (a row) with the CPU-device paths, where lavapipe ran a row
+// about a tenth (the IZB's build) to a fifth (sm's resolve) faster; and the workgroups that cover a
+// view of `extent` pixels in that shape.
+constexpr uint32_t pixel_group_width(bool cpu_paths) { return cpu_paths ? 64u : 8u; }
+inline VkExtent2D pixel_groups(VkExtent2D extent, bool cpu_paths) {
+  const uint32_t width = pixel_group_width(cpu_paths);
+  return {groups(extent.width, width), groups(extent.height, 64u / width)};
+}
+
 // The compute shader `stem` (e.g. "shadow_map_resolve") for this device: `stem`.comp, or on a device
 // without subgroup arithmetic and ballot operations its variant without them, `stem`_portable.comp
 // (only the passes every technique or the plain shadow map needs have one).

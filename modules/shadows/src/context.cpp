@@ -25,7 +25,6 @@ namespace detail {
 
 namespace {
 
-uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / size; }
 
 bool is_depth(VkFormat f) {
   return f == VK_FORMAT_D32_SFLOAT || f == VK_FORMAT_D24_UNORM_S8_UINT || f == VK_FORMAT_D32_SFLOAT_S8_UINT ||

@@ -1,5 +1,7 @@
 #include "izb_pipelines.hpp"
 
+#include "barriers.hpp"
+
 #include "shared/izb.h"
 
 namespace shadows::detail {
@@ -48,6 +50,12 @@ bool IzbPipelineCache::hardware_trace_available() const {
 }
 bool IzbPipelineCache::raster_trace_available() const { return ctx_.features().geometry_shader; }
 bool IzbPipelineCache::cpu_device() const { return cpu_paths_; }
+
+std::vector<SpecializationConstant> IzbPipelineCache::with_pixel_group(std::vector<SpecializationConstant> constants) const {
+  constants.push_back({20, pixel_group_width(cpu_paths_)});
+  constants.push_back({21, 64u / pixel_group_width(cpu_paths_)});
+  return constants;
+}
 
 std::vector<SpecializationConstant> IzbPipelineCache::fit_group(uint32_t samples_per_pixel, uint32_t flags) const {
   const bool rows = cpu_paths_ && (samples_per_pixel == 1 || (flags & gpu_shared::IZB_FLAG_BOUNDED_FIT));

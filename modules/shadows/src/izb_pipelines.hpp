@@ -58,20 +58,14 @@ class IzbPipelineCache {
   bool raster_trace_available() const;
   // A CPU device (lavapipe) pays for every workgroup, idle lane and barrier: it takes other shapes.
   bool cpu_device() const;
-  // The per-pixel passes' workgroup (build, scatter, resolve: specialization constants 20 and 21), 64
-  // invocations: 8x8 on a GPU, a row of 64 pixels on a CPU device, where lavapipe ran the build's
-  // classify about a tenth faster so (BENCHMARKS.md, "A row of 64 pixels a workgroup").
-  uint32_t pixel_group_width() const { return cpu_paths_ ? 64u : 8u; }
   // The fit's workgroup of 256 (izb_fit.comp, specialization constants 20 and 21): 16x16, or on a CPU
   // device, where it makes no block of corner rays (1 spp, or IZB_FLAG_BOUNDED_FIT), 32x8, whose rows
   // lavapipe ran the fit about a third faster with.
   std::vector<engine::gpu::SpecializationConstant> fit_group(uint32_t samples_per_pixel, uint32_t flags) const;
+  // `constants` and the per-pixel passes' workgroup (build, scatter, resolve: specialization constants
+  // 20 and 21; barriers.hpp's pixel_group_width).
   std::vector<engine::gpu::SpecializationConstant> with_pixel_group(
-      std::vector<engine::gpu::SpecializationConstant> constants) const {
-    constants.push_back({20, pixel_group_width()});
-    constants.push_back({21, 64u / pixel_group_width()});
-    return constants;
-  }
+      std::vector<engine::gpu::SpecializationConstant> constants) const;
 
  private:
   IzbTracePipelines trace_pipelines(uint32_t samples_per_pixel, uint32_t flags);

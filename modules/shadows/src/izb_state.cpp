@@ -88,9 +88,8 @@ void IzbState::dispatch(VkCommandBuffer cmd, const Frame& frame, const Pipeline&
 
 void IzbState::dispatch_pixels(VkCommandBuffer cmd, const Frame& frame, const Pipeline& pipeline,
                                gpu_shared::IzbComputePush push) {
-  const uint32_t width = pipelines.pixel_group_width(), height = 64 / width;
-  dispatch(cmd, frame, pipeline, push, (frame.view.extent.width + width - 1) / width,
-           (frame.view.extent.height + height - 1) / height);
+  const VkExtent2D covering = pixel_groups(frame.view.extent, pipelines.cpu_device());
+  dispatch(cmd, frame, pipeline, push, covering.width, covering.height);
 }
 
 void IzbState::size_list_dispatch(VkCommandBuffer cmd, const Frame& frame, gpu_shared::IzbComputePush push,

@@ -90,7 +90,7 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
        0,
        {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage},
         {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u}, {8, v.block_fetch ? 1u : 0u},
-        {9, resolve_group_width()}, {10, 64u / resolve_group_width()}}});
+        {9, pixel_group_width(cpu_paths_)}, {10, 64u / pixel_group_width(cpu_paths_)}}});
   return pipeline;
 }
 
@@ -245,8 +245,8 @@ void ShadowMapPass::record_resolve(Frame& frame, ResolveVariant variant, bool sp
       vkCmdDispatchIndirect(cmd, light_tiles_.handle(), VkDeviceSize(4 * list + 1) * 4);
       return;
     }
-    const uint32_t width = resolve_group_width(), height = 64 / width;
-    vkCmdDispatch(cmd, (frame.view.extent.width + width - 1) / width, (frame.view.extent.height + height - 1) / height, 1);
+    const VkExtent2D covering = pixel_groups(frame.view.extent, cpu_paths_);
+    vkCmdDispatch(cmd, covering.width, covering.height, 1);
   };
   if (!split) {
     bind(variant);

@@ -43,9 +43,6 @@ class ShadowMapPass {
     }
   };
   const engine::gpu::Pipeline& resolve_pipeline(const ResolveVariant& variant);
-  // The resolve's workgroup of 64 invocations: 8 wide (8x8) on a GPU, 64 wide (a row) on a CPU device,
-  // where a row runs about a fifth faster (shadow_map_resolve.glsl).
-  uint32_t resolve_group_width() const { return cpu_paths_ ? 64u : 8u; }
   // The resolve's passes over the frame (a CPU device with masking: listing, then the listed taps).
   void record_resolve(Frame& frame, ResolveVariant variant, bool split);
   // PCSS's masking: the depth map's block planes (shadow_map_blocks.comp), before the resolve.
