@@ -142,17 +142,20 @@ bool stage_pixel(out ivec2 pixel) {
   return true;
 }
 
-// The listing pass: a listed pixel's entry, a slot a subgroup reserved (or, without subgroup operations,
-// its own).
+// The listing pass: a listed pixel's entry, a slot a subgroup reserved (on a CPU device or without
+// subgroup operations, its own: lavapipe runs the subgroup's sums, election and broadcast for every
+// lane, and its atomic only for the few listed ones, 1.2 ms less at 1280x720).
 void list_pixel(bool listed, ivec2 pixel) {
-#ifdef SHADOWS_WITHOUT_SUBGROUP_OPS
-  if (listed) tap_list[kListHeader + atomicAdd(tap_list[0], 1u)] = uint(pixel.x) | (uint(pixel.y) << 16u);
-#else
-  uint count = subgroupAdd(listed ? 1u : 0u), base = 0u;
-  if (subgroupElect() && count != 0u) base = atomicAdd(tap_list[0], count);
-  uint slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(listed ? 1u : 0u);
-  if (listed) tap_list[kListHeader + slot] = uint(pixel.x) | (uint(pixel.y) << 16u);
+#ifndef SHADOWS_WITHOUT_SUBGROUP_OPS
+  if (!kCpuDevice) {
+    uint count = subgroupAdd(listed ? 1u : 0u), base = 0u;
+    if (subgroupElect() && count != 0u) base = atomicAdd(tap_list[0], count);
+    uint slot = subgroupBroadcastFirst(base) + subgroupExclusiveAdd(listed ? 1u : 0u);
+    if (listed) tap_list[kListHeader + slot] = uint(pixel.x) | (uint(pixel.y) << 16u);
+    return;
+  }
 #endif
+  if (listed) tap_list[kListHeader + atomicAdd(tap_list[0], 1u)] = uint(pixel.x) | (uint(pixel.y) << 16u);
 }
 
 // The statistics (SM_COUNTER_*): the facing receivers and those whose PCSS taps ran, added a subgroup
