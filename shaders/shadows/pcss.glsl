@@ -162,9 +162,11 @@ float pcss_visibility(PcssMap m, PcssReceiver r, vec2 rotation, float max_texels
 
 // The receiver's tangent plane in a map (`plane_matrix`: the transpose of the inverse of the map's
 // world -> clip transform, which carries world planes to clip-space planes, perspective or not): light
-// depth per texel along x and y, each clamped to +-max_slope.
-vec2 pcss_plane_gradient(mat4 plane_matrix, vec3 p, vec3 n, int size, float max_slope) {
-  vec4 plane = plane_matrix * vec4(n, -dot(n, p));
+// depth per texel along x and y, each clamped to +-max_slope. An orthographic map's plane matrix has
+// zeros in its last column's first three rows, so there the slope does not depend on the plane's
+// offset and only nine values are read.
+vec2 pcss_plane_gradient(mat4 plane_matrix, bool perspective, vec3 p, vec3 n, int size, float max_slope) {
+  vec3 plane = perspective ? (plane_matrix * vec4(n, -dot(n, p))).xyz : mat3(plane_matrix) * n;
   vec2 slope = abs(plane.z) > 1.0e-20 ? -plane.xy / plane.z * (2.0 / float(size)) : vec2(0.0);
   return clamp(slope, vec2(-max_slope), vec2(max_slope));
 }

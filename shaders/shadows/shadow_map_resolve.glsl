@@ -63,9 +63,9 @@ layout(set = 0, binding = SM_RESOLVE_BINDING_TILES, std430) readonly buffer Tile
 float pcss_map_depth(int layer, ivec2 texel) { return texelFetch(shadow_map, texel, 0).r; }
 #include "pcss.glsl"
 
+int map_blocks_x;  // the depth blocks a row, read from the parameters once a pixel (soft_visibility)
 vec4 depth_block(int layer, ivec2 block) {
-  int blocks_x = (int(params.extent.z) + int(kSmBlock) - 1) / int(kSmBlock);
-  int index = block.y * blocks_x + block.x;
+  int index = block.y * map_blocks_x + block.x;
   return kBlockFetch ? texelFetch(block_texels, index) : blocks[index];
 }
 #define DEPTH_BLOCKS_SETTLE
@@ -95,7 +95,8 @@ float soft_visibility(ivec2 pixel, vec3 p, vec3 n, vec2 uv, float z, float hard)
   PcssReceiver r;
   r.t = uv * vec2(params.extent.zw);
   r.z = z;
-  r.gradient = pcss_plane_gradient(params.light_plane_matrix, p, n, m.size, pcss_max_slope(m, z));
+  r.gradient = pcss_plane_gradient(params.light_plane_matrix, m.perspective, p, n, m.size, pcss_max_slope(m, z));
+  map_blocks_x = (m.size + int(kSmBlock) - 1) / int(kSmBlock);
   r.bias = params.bias.x;
   // Settled lit, PCSS would find no blocker and leave `hard`; settled shadowed, it would give 0 or
   // leave `hard`, which is then 0 too. (The listed pass takes only pixels the first did not settle.)
@@ -206,8 +207,11 @@ void main() {
     visibility = 1.0;
   } else if (facing) {
     vec3 origin = shadow_ray_origin(p.xyz, n, shadow_ray_offset(p.xyz, params.camera_position.xyz));
-    vec4 light = params.light_view_projection * vec4(origin, 1.0);
-    light.xyz /= light.w;  // 1 for the sun's orthographic map
+    // The sun's map is orthographic (fit_orthographic times a rigid view): its last row is (0, 0, 0, 1), so w is
+    // 1 and only three rows are read (lavapipe loads each uniform value again for every invocation).
+    vec4 light = kLocalLight ? params.light_view_projection * vec4(origin, 1.0)
+                             : vec4(mat4x3(params.light_view_projection) * vec4(origin, 1.0), 1.0);
+    light.xyz /= light.w;
     vec2 uv = light.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) {
       visibility = 1.0;

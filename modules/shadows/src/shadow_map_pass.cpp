@@ -24,6 +24,10 @@ void set_pcss_params(gpu_shared::ShadowMapResolveParams& p, const View& view, co
   const auto row_norm = [&](int i) { return glm::length(glm::vec3(light_vp[0][i], light_vp[1][i], light_vp[2][i])); };
   const bool perspective = view.local_light;
   p.light_plane_matrix = glm::transpose(glm::inverse(light_vp));
+  // An orthographic map's world -> clip transform is affine, so a plane's slope in it does not depend on
+  // the plane's offset: exact zeros, which the resolve relies on to read only nine values
+  // (pcss_plane_gradient).
+  if (!perspective) p.light_plane_matrix[3] = glm::vec4(0.0f, 0.0f, 0.0f, p.light_plane_matrix[3].w);
   p.pcss = glm::vec4(perspective ? view.light_radius : view.light_tan_half_angle, 1.0f / row_norm(2), 0.0f, 0.0f);
   if (perspective) p.pcss = glm::vec4(p.pcss.x, 0.0f, gpu_shared::local_light_bulb(view.light_range), view.light_range);
   p.pcss_texel = glm::vec4(2.0f / (row_norm(0) * float(size)), 2.0f / (row_norm(1) * float(size)),
