@@ -27,20 +27,21 @@ void record_counting_sort(IzbState& s, Frame& frame, const gpu_shared::IzbComput
   s.dispatch_pixels(cmd, frame, s.p->scatter, push);
 }
 
-// A point light's faces (IZB_FLAG_FACE_TILES), before the first face's build: the six tile lists
-// (their counts and dispatches zeroed first) and the term of the points no face reaches.
-void record_face_tiles(IzbState& s, Frame& frame, const gpu_shared::IzbComputePush& push) {
-  VkCommandBuffer cmd = frame.cmd;
-  ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "point_light_tiles");
-  vkCmdFillBuffer(cmd, s.res.resolve_list.handle(), 0, VkDeviceSize(gpu_shared::kLightTilesAt) * 4, 0);
-  pass_barrier(frame.ctx, cmd);
-  const uint32_t block = gpu_shared::light_tile_listing_block(s.pipelines.cpu_device());
-  s.dispatch(cmd, frame, s.p->face_tiles, push, (frame.view.extent.width + block - 1) / block,
-             (frame.view.extent.height + block - 1) / block);
-  pass_barrier(frame.ctx, cmd);
-}
+// Whether the batch lists a point light's face tiles (or a CPU device's spot light's): once, before
+// its first face.
+bool lists_face_tiles(IzbBatch& batch) { return batch.plan().face_tiles && batch.frame().view.first_light_face(); }
 
 }  // namespace
+
+void record_face_tiles(IzbState& s, IzbBatch& batch) {
+  if (!lists_face_tiles(batch)) return;
+  Frame& frame = batch.frame();
+  select_record(s, batch.records.front());
+  ScopedGpuRegion region(s.ctx, frame.profiler, frame.cmd, "point_light_tiles");
+  const uint32_t block = gpu_shared::light_tile_listing_block(s.pipelines.cpu_device());
+  s.dispatch(frame.cmd, frame, s.p->face_tiles, batch.records.front().push,
+             (frame.view.extent.width + block - 1) / block, (frame.view.extent.height + block - 1) / block);
+}
 
 void record_izb_reset(IzbState& s, IzbBatch& batch) {
   Frame& frame = batch.frame();
@@ -50,6 +51,9 @@ void record_izb_reset(IzbState& s, IzbBatch& batch) {
   // writes were made visible by the barrier after it).
   engine::gpu::memory_barrier(cmd, pass_shader_stages(s.ctx) | VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0,
                               VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0);
+  // The face tiles' lists start empty (their counts and dispatches; record_face_tiles).
+  if (lists_face_tiles(batch))
+    vkCmdFillBuffer(cmd, s.res.resolve_list.handle(), 0, VkDeviceSize(gpu_shared::kLightTilesAt) * 4, 0);
   for_each_record(s, batch, [&](const IzbRecord& r) {
     const IzbResources& res = s.res;
     vkCmdUpdateBuffer(cmd, res.params.handle(), res.slice_at(res.params_stride), sizeof(r.params), &r.params);
@@ -71,10 +75,6 @@ void record_izb_build(IzbState& s, IzbBatch& batch, const IzbSettings& settings)
   Frame& frame = batch.frame();
   const IzbPlan& plan = batch.plan();
   VkCommandBuffer cmd = frame.cmd;
-  if (plan.face_tiles && frame.view.first_light_face()) {
-    select_record(s, batch.records.front());
-    record_face_tiles(s, frame, batch.records.front().push);
-  }
   ScopedGpuRegion region(s.ctx, frame.profiler, cmd, "izb_build");
   {
     OptionalGpuRegion step(settings.step_timings, s.ctx, frame.profiler, cmd, "build_classify");

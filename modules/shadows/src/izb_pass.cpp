@@ -75,6 +75,7 @@ void record_izb_batch(IzbState& s, IzbBatch& batch, const IzbSettings& settings,
   Frame& frame = batch.frame();
   const IzbPlan& plan = batch.plan();
   record_izb_reset(s, batch);
+  record_face_tiles(s, batch);
   record_light_frustum(s, batch, settings);
   pass_barrier(frame.ctx, frame.cmd);
   if (plan.lit) record_lit_map(s, batch, settings);
