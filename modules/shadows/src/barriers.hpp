@@ -3,8 +3,10 @@
 // (geometry and ray tracing stages only where enabled) and the accesses they make; none is an
 // ALL_COMMANDS barrier.
 #include <string>
+#include <vector>
 
 #include "gpu/context.hpp"
+#include "gpu/pipeline.hpp"
 
 namespace shadows::detail {
 
@@ -25,6 +27,14 @@ constexpr uint32_t groups(uint32_t n, uint32_t size) { return (n + size - 1) / s
 // about a tenth (the IZB's build) to a fifth (sm's resolve) faster; and the workgroups that cover a
 // view of `extent` pixels in that shape.
 constexpr uint32_t pixel_group_width(bool cpu_paths) { return cpu_paths ? 64u : 8u; }
+// `constants` and that workgroup's width and height as specialization constants `first_id` and the
+// next.
+inline std::vector<engine::gpu::SpecializationConstant> with_pixel_group(
+    std::vector<engine::gpu::SpecializationConstant> constants, uint32_t first_id, bool cpu_paths) {
+  constants.push_back({first_id, pixel_group_width(cpu_paths)});
+  constants.push_back({first_id + 1, 64u / pixel_group_width(cpu_paths)});
+  return constants;
+}
 inline VkExtent2D pixel_groups(VkExtent2D extent, bool cpu_paths) {
   const uint32_t width = pixel_group_width(cpu_paths);
   return {groups(extent.width, width), groups(extent.height, 64u / width)};

@@ -25,7 +25,6 @@ constexpr uint32_t kTexelBase = 1 + gpu_shared::kTextureHeaderWords * kMaxTextur
 constexpr VkAccessFlags2 kGeometryReads = VK_ACCESS_2_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_2_INDEX_READ_BIT |
                                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT;
 
-
 }  // namespace
 
 // Every stage that reads the module's geometry on this device: vertex fetch and shader storage reads

@@ -39,8 +39,8 @@ void record_face_tiles(IzbState& s, IzbBatch& batch) {
   select_record(s, batch.records.front());
   ScopedGpuRegion region(s.ctx, frame.profiler, frame.cmd, "point_light_tiles");
   const uint32_t block = gpu_shared::light_tile_listing_block(s.pipelines.cpu_device());
-  s.dispatch(frame.cmd, frame, s.p->face_tiles, batch.records.front().push,
-             (frame.view.extent.width + block - 1) / block, (frame.view.extent.height + block - 1) / block);
+  s.dispatch(frame.cmd, frame, s.p->face_tiles, batch.records.front().push, groups(frame.view.extent.width, block),
+             groups(frame.view.extent.height, block));
 }
 
 void record_izb_reset(IzbState& s, IzbBatch& batch) {

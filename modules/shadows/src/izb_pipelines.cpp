@@ -52,9 +52,7 @@ bool IzbPipelineCache::raster_trace_available() const { return ctx_.features().g
 bool IzbPipelineCache::cpu_device() const { return cpu_paths_; }
 
 std::vector<SpecializationConstant> IzbPipelineCache::with_pixel_group(std::vector<SpecializationConstant> constants) const {
-  constants.push_back({20, pixel_group_width(cpu_paths_)});
-  constants.push_back({21, 64u / pixel_group_width(cpu_paths_)});
-  return constants;
+  return detail::with_pixel_group(std::move(constants), 20, cpu_paths_);
 }
 
 std::vector<SpecializationConstant> IzbPipelineCache::fit_group(uint32_t samples_per_pixel, uint32_t flags) const {

@@ -92,9 +92,10 @@ const Pipeline& ShadowMapPass::resolve_pipeline(const ResolveVariant& v) {
         {gpu_shared::SM_RESOLVE_BINDING_TILES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
         {gpu_shared::SM_RESOLVE_BINDING_BLOCK_TEXELS, VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER}},
        0,
-       {{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u}, {4, v.stage},
-        {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u}, {8, v.block_fetch ? 1u : 0u},
-        {9, pixel_group_width(cpu_paths_)}, {10, 64u / pixel_group_width(cpu_paths_)}}});
+       with_pixel_group({{0, v.pcss ? 1u : 0u}, {1, v.pcf ? 1u : 0u}, {2, v.masking ? 1u : 0u}, {3, v.count ? 1u : 0u},
+                         {4, v.stage}, {5, v.local ? 1u : 0u}, {6, v.tiles ? 1u : 0u}, {7, cpu_paths_ ? 1u : 0u},
+                         {8, v.block_fetch ? 1u : 0u}},
+                        9, cpu_paths_)});
   return pipeline;
 }
 
@@ -147,7 +148,7 @@ void ShadowMapPass::record_light_tiles(Frame& frame) {
       .storage_buffer(gpu_shared::SM_RESOLVE_BINDING_TILES, light_tiles_.handle())
       .push(ctx_, cmd, light_tiles_pipeline_);
   const uint32_t block = gpu_shared::light_tile_listing_block(cpu_paths_);
-  vkCmdDispatch(cmd, (e.width + block - 1) / block, (e.height + block - 1) / block, 1);
+  vkCmdDispatch(cmd, groups(e.width, block), groups(e.height, block), 1);
   // The lists and the term's stores before the faces' indirect dispatches and resolves.
   pass_barrier(ctx_, cmd);
 }
